@@ -1,0 +1,228 @@
+"""The brushed DC motor model and the figures derived from it.
+
+Equations (all quantities at the shaft whose encoder is counted, SI units)::
+
+    L·di/dt = V − R·i − K·ω                       (4) of seed 1
+    J·dω/dt = K·i − b·ω − Tf·sgn(ω)               (3) of seed 1 plus Coulomb friction
+    τ = K·i,  e = K·ω                              (1), (2): Kt = Ke = K in SI
+
+with stiction: at rest the shaft stays at rest while |K·i| ≤ Tf (static = Coulomb level).
+Simulation lives in :mod:`motorlab.simulate`; this module holds the parameters and closed forms.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from motorlab.errors import OptionError
+from motorlab.units import SI_UNITS
+
+PARAMETER_NAMES = ("K", "R", "L", "J", "b", "Tf")
+
+
+@dataclass(frozen=True)
+class MotorParams:
+    """Parameters of a brushed DC (gear)motor at the shaft whose encoder is counted.
+
+    Parameters
+    ----------
+    K
+        Back-EMF / torque constant [V·s/rad] = [N·m/A].
+    R
+        Winding (terminal) resistance [Ω].
+    L
+        Winding inductance [H].
+    J
+        Moment of inertia, everything rigidly coupled to the shaft [kg·m²].
+    b
+        Viscous friction [N·m·s/rad].
+    Tf
+        Coulomb (and static) friction torque [N·m].
+    """
+
+    K: float
+    R: float
+    L: float
+    J: float
+    b: float = 0.0
+    Tf: float = 0.0
+
+    def __post_init__(self) -> None:
+        for name in PARAMETER_NAMES:
+            value = getattr(self, name)
+            if not math.isfinite(value):
+                raise OptionError(f"motor parameter {name} = {value} is not finite")
+        for name in ("K", "R", "J"):
+            if getattr(self, name) <= 0:
+                raise OptionError(f"motor parameter {name} must be positive, got {getattr(self, name)}")
+        for name in ("L", "b", "Tf"):
+            if getattr(self, name) < 0:
+                raise OptionError(f"motor parameter {name} must not be negative, got {getattr(self, name)}")
+
+    # ---- construction -----------------------------------------------------------------------
+    @classmethod
+    def from_dict(cls, values: dict[str, Any]) -> MotorParams:
+        """From ``{"K": 0.37, ...}`` or from an ``analyze --json`` style ``{"K": {"value": ...}}``."""
+        kwargs = {}
+        for name in PARAMETER_NAMES:
+            if name in values:
+                v = values[name]
+                kwargs[name] = float(v["value"] if isinstance(v, dict) else v)
+        missing = [n for n in ("K", "R", "J") if n not in kwargs]
+        if missing:
+            raise OptionError("motor parameters missing: " + ", ".join(missing))
+        kwargs.setdefault("L", 0.0)
+        return cls(**kwargs)
+
+    def to_dict(self) -> dict[str, float]:
+        """Plain dict of SI values."""
+        return asdict(self)
+
+    def units(self) -> dict[str, str]:
+        """SI unit of each parameter."""
+        return {name: SI_UNITS[name] for name in PARAMETER_NAMES}
+
+    def with_load(self, inertia: float, *, ratio: float = 1.0, friction: float = 0.0) -> MotorParams:
+        """Add a load inertia turning ``ratio`` times faster than this shaft (reflected as J·N²).
+
+        Parameters
+        ----------
+        inertia
+            Load inertia on its own shaft [kg·m²].
+        ratio
+            Load speed / shaft speed (25 for the seed's 25:1 step-up to the flywheel) [-].
+        friction
+            Extra viscous friction at the load shaft [N·m·s/rad], reflected as b·N².
+        """
+        if inertia < 0 or ratio <= 0:
+            raise OptionError("load inertia must be ≥ 0 and gear ratio > 0")
+        return replace(self, J=self.J + inertia * ratio**2, b=self.b + friction * ratio**2)
+
+    def scaled(self, **changes: float) -> MotorParams:
+        """A copy with some parameters replaced (e.g. ``b=2*p.b`` for a worn unit)."""
+        return replace(self, **changes)
+
+    # ---- time constants ---------------------------------------------------------------------
+    @property
+    def electrical_time_constant(self) -> float:
+        """τe = L/R [s]."""
+        return self.L / self.R
+
+    @property
+    def mechanical_time_constant(self) -> float:
+        """τm = J·R/(K² + R·b) [s]: the speed time constant with the winding shorted through R."""
+        return self.J * self.R / (self.K**2 + self.R * self.b)
+
+    # ---- steady state at a supply voltage -----------------------------------------------------
+    def free_speed(self, voltage: float) -> float:
+        """Steady no-load speed ω = (K·V − R·Tf)/(K² + R·b) [rad/s] (0 if V cannot break away)."""
+        w = (self.K * abs(voltage) - self.R * self.Tf) / (self.K**2 + self.R * self.b)
+        return math.copysign(max(w, 0.0), voltage)
+
+    def free_current(self, voltage: float) -> float:
+        """Steady no-load current i = (b·ω + Tf)/K [A] (the stall current if the motor cannot turn)."""
+        w = self.free_speed(voltage)
+        if w == 0:
+            return voltage / self.R
+        return math.copysign((self.b * abs(w) + self.Tf) / self.K, voltage)
+
+    def stall_current(self, voltage: float) -> float:
+        """i = V/R [A]."""
+        return voltage / self.R
+
+    def stall_torque(self, voltage: float) -> float:
+        """Shaft torque at stall, K·V/R − Tf [N·m] (electromagnetic torque minus Coulomb friction)."""
+        return math.copysign(max(self.K * abs(voltage) / self.R - self.Tf, 0.0), voltage)
+
+    def steady_current(self, voltage: float, speed: float) -> float:
+        """Winding current at steady speed ω: i = (V − K·ω)/R [A]."""
+        return (voltage - self.K * speed) / self.R
+
+    def curves(self, voltage: float, *, points: int = 201) -> dict[str, np.ndarray]:
+        """Torque–speed, current, power and efficiency curves at ``voltage`` (motoring quadrant).
+
+        Returns
+        -------
+        dict
+            ``speed`` [rad/s] from 0 to free speed, ``torque`` shaft output [N·m], ``current`` [A],
+            ``power`` mechanical output [W], ``efficiency`` output/input [-].
+        """
+        v = abs(voltage)
+        w_free = self.free_speed(v)
+        speed = np.linspace(0.0, w_free, points)
+        current = (v - self.K * speed) / self.R
+        torque = np.clip(self.K * current - self.b * speed - self.Tf, 0.0, None)
+        power = torque * speed
+        p_in = v * current
+        with np.errstate(divide="ignore", invalid="ignore"):
+            efficiency = np.where(p_in > 0, power / p_in, 0.0)
+        return {"speed": speed, "torque": torque, "current": current, "power": power, "efficiency": efficiency}
+
+    def peak_power(self, voltage: float) -> tuple[float, float]:
+        """Maximum mechanical output power [W] and the speed at which it occurs [rad/s].
+
+        Notes
+        -----
+        P(ω) = (K·(V − K·ω)/R − b·ω − Tf)·ω is a parabola: its peak is at ω = (K·V/R − Tf)/(2·(K²/R + b)).
+        """
+        v = abs(voltage)
+        a = self.K**2 / self.R + self.b
+        c = self.K * v / self.R - self.Tf
+        if c <= 0:
+            return 0.0, 0.0
+        w = c / (2 * a)
+        return c * w - a * w * w, w
+
+    def peak_efficiency(self, voltage: float) -> tuple[float, float]:
+        """Maximum efficiency [-] and the speed at which it occurs [rad/s] (numerically, on a fine grid)."""
+        c = self.curves(voltage, points=4001)
+        k = int(np.argmax(c["efficiency"]))
+        return float(c["efficiency"][k]), float(c["speed"][k])
+
+    def figures(self, voltage: float) -> dict[str, tuple[float, str]]:
+        """The derived figures at ``voltage``, each as (value, SI unit), for tables and reports."""
+        peak_p, w_p = self.peak_power(voltage)
+        peak_e, w_e = self.peak_efficiency(voltage)
+        return {
+            "stall torque": (self.stall_torque(voltage), "N*m"),
+            "stall current": (self.stall_current(voltage), "A"),
+            "free speed": (self.free_speed(voltage), "rad/s"),
+            "free current": (self.free_current(voltage), "A"),
+            "electrical time constant": (self.electrical_time_constant, "s"),
+            "mechanical time constant": (self.mechanical_time_constant, "s"),
+            "peak power": (peak_p, "W"),
+            "speed at peak power": (w_p, "rad/s"),
+            "peak efficiency": (peak_e, "1"),
+            "speed at peak efficiency": (w_e, "rad/s"),
+        }
+
+
+def feedforward_from_params(p: MotorParams) -> dict[str, float]:
+    """WPILib-style feedforward gains from motor parameters.
+
+    Notes
+    -----
+    Steady state and acceleration of the model with L neglected:
+    V = R·Tf/K·sgn(ω) + (K + R·b/K)·ω + R·J/K·α, so kS = R·Tf/K [V], kV = K + R·b/K [V·s/rad],
+    kA = R·J/K [V·s²/rad].
+    """
+    return {"kS": p.R * p.Tf / p.K, "kV": p.K + p.R * p.b / p.K, "kA": p.R * p.J / p.K}
+
+
+def params_from_feedforward(
+    kS: float, kV: float, kA: float, *, R: float, K: float | None = None, L: float = 0.0
+) -> MotorParams:
+    """(K, R, J, b, Tf) from (kS, kV, kA) and the winding resistance R.
+
+    Notes
+    -----
+    Inverting kS = R·Tf/K, kV = K + R·b/K, kA = R·J/K: with K known, Tf = kS·K/R,
+    b = (kV − K)·K/R and J = kA·K/R. kV alone cannot separate K from b; without K the viscous
+    friction is taken as zero (K = kV), which callers must say when they report b.
+    """
+    k = kV if K is None else K
+    return MotorParams(K=k, R=R, L=L, J=kA * k / R, b=max((kV - k) * k / R, 0.0), Tf=max(kS * k / R, 0.0))

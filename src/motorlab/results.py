@@ -1,0 +1,235 @@
+"""The one result type every analysis returns.
+
+A :class:`FitResult` holds estimates (value, standard error, unit), the correlation of the fitted
+parameters, residual statistics, the data and model curves needed to plot, and warnings. Its
+:meth:`FitResult.report` is modelled on lmfit's ``fit_report``: value ± stderr (percent),
+correlations above a threshold, and an explicit line for every parameter the data do not determine.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from motorlab.units import format_unit
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """One estimated parameter.
+
+    Parameters
+    ----------
+    name
+        Symbol used in reports and JSON (``K``, ``R``, ``L``, ``J``, ``b``, ``Tf``, ``gamma`` ...).
+    value
+        Best estimate in SI units, or NaN when the data do not determine it.
+    stderr
+        One standard error in the same unit; NaN when it could not be estimated.
+    unit
+        SI unit string (``"V*s/rad"``).
+    determined
+        False when the data cannot determine this parameter (singular or near-singular
+        information); ``value`` is then not to be used.
+    note
+        Short explanation (source, or why undetermined).
+    """
+
+    name: str
+    value: float
+    stderr: float
+    unit: str
+    determined: bool = True
+    note: str = ""
+
+    @property
+    def relative_error(self) -> float:
+        """``stderr / |value|`` (NaN if either is unavailable or value is 0)."""
+        if not (math.isfinite(self.value) and math.isfinite(self.stderr)) or self.value == 0:
+            return math.nan
+        return abs(self.stderr / self.value)
+
+    def interval(self, k: float = 1.96) -> tuple[float, float]:
+        """``value ± k·stderr``."""
+        return self.value - k * self.stderr, self.value + k * self.stderr
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dict ``{"value", "stderr", "unit"}`` (plus ``determined``/``note`` when relevant)."""
+        out: dict[str, Any] = {
+            "value": _json_float(self.value) if self.determined else None,
+            "stderr": _json_float(self.stderr),
+            "unit": self.unit,
+        }
+        if not self.determined:
+            out["determined"] = False
+        if self.note:
+            out["note"] = self.note
+        return out
+
+    def __str__(self) -> str:
+        unit = format_unit(self.unit)
+        if not self.determined:
+            return f"{self.name} = not determined by these data [{unit}]" + (
+                f" ({self.note})" if self.note else ""
+            )
+        if not math.isfinite(self.stderr):
+            return f"{self.name} = {self.value:.6g} ± ? {unit} (uncertainty could not be estimated)"
+        return f"{self.name} = {self.value:.6g} ± {self.stderr:.2g} {unit} ({100 * self.relative_error:.2f} %)"
+
+
+@dataclass
+class Series:
+    """One curve: x and y arrays with a label; ``kind`` is ``"data"`` or ``"model"``."""
+
+    x: np.ndarray
+    y: np.ndarray
+    label: str
+    kind: str = "data"
+
+
+@dataclass
+class Panel:
+    """One plot: data against model, with axis labels carrying units.
+
+    When ``data`` and ``model`` share the same x, :func:`motorlab.plot.plot_fit` draws their
+    residuals beneath.
+    """
+
+    title: str
+    x_label: str
+    y_label: str
+    data: Series | None = None
+    model: Series | None = None
+    extra: list[Series] = field(default_factory=list)
+
+
+@dataclass
+class FitResult:
+    """What every analysis returns.
+
+    Attributes
+    ----------
+    experiment
+        Name of the experiment (``"spindown"``, ``"lcr"`` ...).
+    parameters
+        Estimates by symbol, in SI.
+    correlation
+        Correlation matrix of the fitted parameters named in ``correlation_names`` (or None).
+    rmse, r2
+        Residual root-mean-square (in ``rmse_unit``) and coefficient of determination of the main fit.
+    n_points
+        Number of samples the main fit used.
+    panels
+        Data-vs-model plots.
+    warnings
+        Things the user must know (e.g. "Coulomb friction folded into b").
+    details
+        Further numbers worth reporting (model-selection table, per-row values ...), JSON-ready.
+    sources
+        Paths of the files analysed.
+    """
+
+    experiment: str
+    parameters: dict[str, Estimate]
+    correlation: np.ndarray | None = None
+    correlation_names: list[str] = field(default_factory=list)
+    rmse: float = math.nan
+    rmse_unit: str = ""
+    r2: float = math.nan
+    n_points: int = 0
+    panels: list[Panel] = field(default_factory=list)
+    warnings: list[str] = field(default_factory=list)
+    details: dict[str, Any] = field(default_factory=dict)
+    sources: list[str] = field(default_factory=list)
+
+    def __getitem__(self, name: str) -> Estimate:
+        return self.parameters[name]
+
+    def __contains__(self, name: object) -> bool:
+        return name in self.parameters
+
+    def value(self, name: str) -> float:
+        """The value of parameter ``name`` in SI."""
+        return self.parameters[name].value
+
+    def correlations(self, threshold: float = 0.1) -> list[tuple[str, str, float]]:
+        """Pairs of parameters whose |correlation| exceeds ``threshold``, largest first."""
+        if self.correlation is None:
+            return []
+        names = self.correlation_names
+        pairs = [
+            (names[i], names[j], float(self.correlation[i, j]))
+            for i in range(len(names))
+            for j in range(i + 1, len(names))
+            if math.isfinite(self.correlation[i, j]) and abs(self.correlation[i, j]) > threshold
+        ]
+        return sorted(pairs, key=lambda p: -abs(p[2]))
+
+    def report(self, *, min_correl: float = 0.1) -> str:
+        """A plain-text report in the manner of lmfit's ``fit_report``."""
+        lines = [f"[[{self.experiment}]]"]
+        if self.sources:
+            lines.append("    files:  " + ", ".join(self.sources))
+        lines.append("[[Fit statistics]]")
+        lines.append(f"    data points      = {self.n_points}")
+        if math.isfinite(self.rmse):
+            lines.append(f"    residual RMS     = {self.rmse:.4g} {format_unit(self.rmse_unit)}")
+        if math.isfinite(self.r2):
+            lines.append(f"    R²               = {self.r2:.6f}")
+        lines.append("[[Parameters]]")
+        lines.extend(f"    {est}" for est in self.parameters.values())
+        pairs = self.correlations(min_correl)
+        if pairs:
+            lines.append(f"[[Correlations]] (unreported correlations are < {min_correl})")
+            lines.extend(f"    C({a}, {b}) = {c:+.4f}" for a, b, c in pairs)
+        if self.warnings:
+            lines.append("[[Warnings]]")
+            lines.extend(f"    - {w}" for w in self.warnings)
+        return "\n".join(lines)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON object of ``motorlab analyze --json`` (SI units)."""
+        fit: dict[str, Any] = {
+            "rmse": _json_float(self.rmse),
+            "rmse_unit": self.rmse_unit,
+            "r2": _json_float(self.r2),
+            "n_points": self.n_points,
+        }
+        if self.correlation is not None:
+            fit["correlation"] = {
+                "names": list(self.correlation_names),
+                "matrix": [[_json_float(v) for v in row] for row in np.asarray(self.correlation)],
+            }
+        out: dict[str, Any] = {
+            "experiment": self.experiment,
+            "parameters": {name: est.to_dict() for name, est in self.parameters.items()},
+            "fit": fit,
+            "warnings": list(self.warnings),
+        }
+        if self.details:
+            out["details"] = _jsonable(self.details)
+        if self.sources:
+            out["sources"] = list(self.sources)
+        return out
+
+
+def _json_float(x: float) -> float | None:
+    x = float(x)
+    return x if math.isfinite(x) else None
+
+
+def _jsonable(obj: Any) -> Any:
+    if isinstance(obj, dict):
+        return {str(k): _jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [_jsonable(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return [_jsonable(v) for v in obj.tolist()]
+    if isinstance(obj, np.generic):
+        return _jsonable(obj.item())
+    if isinstance(obj, float):
+        return _json_float(obj)
+    return obj
