@@ -27,7 +27,12 @@ def build_parser() -> Parser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=Parser)
     sub.required = True
     for name in COMMANDS:
-        module = importlib.import_module(f"motorlab.cli.{name}")
+        try:
+            module = importlib.import_module(f"motorlab.cli.{name}")
+        except ModuleNotFoundError as exc:  # TODO(lead): remove once every command module exists
+            if exc.name == f"motorlab.cli.{name}":
+                continue
+            raise
         module.register(sub)
     return parser
 

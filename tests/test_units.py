@@ -1,0 +1,49 @@
+"""Quantities given by people become SI floats, with clear errors otherwise."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from motorlab.errors import OptionError
+from motorlab.units import format_unit, parse_quantity
+
+
+@pytest.mark.parametrize(
+    ("text", "unit", "expected"),
+    [
+        ("0.0124 kg*m^2", "kg*m^2", 0.0124),
+        ("130 rpm", "rad/s", 130 * 2 * math.pi / 60),
+        # Seed 1's hand conversion: 400 in·oz = 2.83 N·m (ounce-force inch).
+        ("400 in*oz", "N*m", 400 * 0.0254 * 0.028349523125 * 9.80665),
+        ("700 uH", "H", 700e-6),
+        ("250 mA", "A", 0.25),
+        ("1 kHz", "Hz", 1000.0),
+        ("7.8", "kg*m^2", 7.8),
+        (0.5, "A", 0.5),
+        ("150 g", "N", 0.150 * 9.80665),
+    ],
+)
+def test_parses_quantities_to_si(text, unit, expected):
+    assert parse_quantity(text, unit) == pytest.approx(expected, rel=1e-9)
+
+
+def test_seed_worked_conversion_of_stall_torque():
+    assert parse_quantity("400 in*oz", "N*m") == pytest.approx(2.83, abs=0.01)
+
+
+@pytest.mark.parametrize(
+    ("text", "unit"),
+    [("12 furlongs", "kg*m^2"), ("3 V", "A"), ("abc", "A"), ("nan", "A"), ("inf A", "A"), (True, "A")],
+)
+def test_rejects_wrong_units_and_garbage(text, unit):
+    with pytest.raises(OptionError) as err:
+        parse_quantity(text, unit, name="--current")
+    assert "\n" not in str(err.value)
+
+
+def test_format_unit_for_people():
+    assert format_unit("N*m*s/rad") == "N·m·s/rad"
+    assert format_unit("kg*m^2") == "kg·m²"
+    assert format_unit("ohm") == "Ω"
