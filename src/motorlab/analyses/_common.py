@@ -1,0 +1,370 @@
+"""Helpers shared by the analyses: option checks, position from a recording, motion closed forms.
+
+Small on purpose; every analysis module may use it.
+
+- :func:`check_positive`, :func:`check_stderr`, :func:`check_finite_signals`: bad options and NaN
+  become one-line :class:`~motorlab.errors.OptionError` / :class:`~motorlab.errors.LogFormatError`.
+- :func:`position_of`: the encoder angle [rad] of a :class:`~motorlab.recording.Recording`, from a
+  ``position`` signal or from ``counts`` and ``cpr``; works for row logs and tick-timestamp logs.
+- :func:`ramp_position`, :func:`ramp_speed`, :func:`stop_time`: the exact solution of
+  J·dω/dt = J·(A − γ·ω) (viscous drag γ = b/J and constant torque A = (K·i − Tf)/J), safe at γ → 0.
+- :func:`speed_noise_sigma`: per-sample standard deviation σ² = σ_q² + (σ_t·ω)² of an encoder
+  position (quantisation plus timing jitter), estimated from fit residuals.
+- :func:`disc_inertia`: J = ½·π·r⁴·ρ·h·N² of the seed's flywheel, reflected through a gear ratio N.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import optimize
+
+from motorlab.errors import LogFormatError, OptionError
+from motorlab.fitting import LeastSquares, fit_least_squares
+from motorlab.recording import Recording
+
+#: Mass densities of flywheel materials [kg/m³] (seed 1, "First Experiment": steel ≈ 7850).
+MATERIAL_DENSITY: dict[str, float] = {"steel": 7850.0, "aluminium": 2700.0, "aluminum": 2700.0}
+
+
+# ---- option checks -------------------------------------------------------------------------------
+def check_positive(value: float | None, name: str, *, allow_none: bool = True) -> None:
+    """Raise :class:`OptionError` unless ``value`` is a finite number > 0 (or None when allowed)."""
+    if value is None:
+        if allow_none:
+            return
+        raise OptionError(f"{name} is required")
+    if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
+        raise OptionError(f"{name} must be a finite number > 0, got {value!r}")
+
+
+def check_nonnegative(value: float | None, name: str) -> None:
+    """Raise :class:`OptionError` unless ``value`` is None or a finite number ≥ 0."""
+    if value is None:
+        return
+    if not (isinstance(value, int | float) and math.isfinite(value) and value >= 0):
+        raise OptionError(f"{name} must be a finite number ≥ 0, got {value!r}")
+
+
+def check_stderr(value: float | None, name: str) -> float:
+    """A standard error option: None → 0 (exact); otherwise it must be finite and ≥ 0."""
+    check_nonnegative(value, name)
+    return 0.0 if value is None else float(value)
+
+
+def check_finite_signals(recording: Recording, names: Iterable[str]) -> None:
+    """Raise :class:`LogFormatError` (file and line) at the first NaN/inf of time or a named signal."""
+    arrays = [("time", recording.time)] + [(n, recording.signals[n]) for n in names if n in recording.signals]
+    for name, values in arrays:
+        bad = np.flatnonzero(~np.isfinite(values))
+        if bad.size:
+            k = int(bad[0])
+            raise LogFormatError(
+                f"{name} is not a finite number in sample {k + 1}",
+                path=recording.source or None,
+                line=recording.line_of(k),
+            )
+
+
+# ---- position -----------------------------------------------------------------------------------
+def position_of(recording: Recording, *, cpr: float | None = None) -> tuple[np.ndarray, float]:
+    """Encoder angle [rad] of every sample and the quantum (one count) [rad].
+
+    Parameters
+    ----------
+    recording
+        A row log (``time_ms counts voltage current``) or a tick-timestamp log (one row per count):
+        both are a time and an encoder signal; what differs is only which of them is quantised.
+    cpr
+        Encoder counts per revolution of the shaft whose quantities are reported [count/rev]. Needed
+        when the recording holds ``counts``; a ``position`` signal [rad] is used as it is.
+
+    Returns
+    -------
+    position, quantum
+        Angle [rad] per sample and 2π/cpr [rad] (NaN when unknown).
+
+    Raises
+    ------
+    OptionError
+        ``cpr`` missing (for counts) or not a positive finite number.
+    LogFormatError
+        The recording has neither position nor counts, or a NaN in them.
+    """
+    if cpr is not None:
+        check_positive(cpr, "cpr (encoder counts per revolution)")
+    cpr = cpr if cpr is not None else recording.metadata.get("cpr")
+    if "counts" in recording.signals and cpr is not None:
+        check_positive(float(cpr), "cpr (encoder counts per revolution)")
+        check_finite_signals(recording, ["counts"])
+        quantum = 2.0 * math.pi / float(cpr)
+        return recording.signals["counts"] * quantum, quantum
+    if "position" in recording.signals:
+        check_finite_signals(recording, ["position"])
+        quantum = 2.0 * math.pi / float(cpr) if cpr is not None else math.nan
+        return recording.signals["position"], quantum
+    if "counts" in recording.signals:
+        raise OptionError("this log holds encoder counts: give the encoder's counts per revolution (--cpr)")
+    recording.require("position")  # raises LogFormatError naming the file
+    raise AssertionError("unreachable")  # pragma: no cover
+
+
+def is_tick_log(recording: Recording) -> bool:
+    """True for a tick-timestamp log (seed 1, "First Motor Test"): one row per encoder count.
+
+    Such a log has exact positions and quantised times (the error is in time, not in angle).
+    """
+    if recording.metadata.get("variant") == "ticks":  # motorlab.io.read_ftc_log's two-column layout
+        return True
+    if recording.has("voltage") or recording.has("current") or "counts" not in recording.signals:
+        return False
+    steps = np.abs(np.diff(recording.signals["counts"]))
+    return steps.size > 2 and bool(np.median(steps) == 1)
+
+
+# ---- motion under constant torque and viscous drag ---------------------------------------------
+def _phi1(x: np.ndarray) -> np.ndarray:
+    """(1 − e^(−x))/x, equal to 1 at x = 0 (no division by zero)."""
+    x = np.asarray(x, dtype=float)
+    small = np.abs(x) < 1e-8
+    safe = np.where(small, 1.0, x)
+    return np.where(small, 1.0 - x / 2.0, -np.expm1(-safe) / safe)
+
+
+def _phi2(x: np.ndarray) -> np.ndarray:
+    """(x − 1 + e^(−x))/x², equal to ½ at x = 0; a series where the direct form cancels."""
+    x = np.asarray(x, dtype=float)
+    small = np.abs(x) < 1e-2
+    safe = np.where(small, 1.0, x)
+    direct = (safe + np.expm1(-safe)) / safe**2
+    series = 0.5 - x / 6.0 + x**2 / 24.0 - x**3 / 120.0 + x**4 / 720.0
+    return np.where(small, series, direct)
+
+
+def ramp_speed(tau: np.ndarray, omega0: float, gamma: float, accel: float) -> np.ndarray:
+    """ω(τ) solving dω/dt = accel − γ·ω with ω(0) = ω0 [rad/s] (no clamping at zero)."""
+    tau = np.asarray(tau, dtype=float)
+    return omega0 * np.exp(-gamma * tau) + accel * tau * _phi1(gamma * tau)
+
+
+def ramp_position(tau: np.ndarray, omega0: float, gamma: float, accel: float) -> np.ndarray:
+    """θ(τ) − θ(0) for dω/dt = accel − γ·ω, ω(0) = ω0 [rad] (no clamping at zero).
+
+    Notes
+    -----
+    θ(τ) = ω0·τ·φ1(γτ) + accel·τ²·φ2(γτ), with φ1(x) = (1 − e^(−x))/x and
+    φ2(x) = (x − 1 + e^(−x))/x²; this is ((ω0 + c)/γ)(1 − e^(−γτ)) − c·τ with c = −accel/γ, written
+    so that γ → 0 (pure Coulomb friction: θ = ω0·τ + ½·accel·τ²) needs no special case.
+    """
+    tau = np.asarray(tau, dtype=float)
+    x = gamma * tau
+    return omega0 * tau * _phi1(x) + accel * tau**2 * _phi2(x)
+
+
+def stop_time(omega0: float, gamma: float, decel: float) -> float:
+    """Time [s] at which a coast dω/dt = −decel − γ·ω from ω0 > 0 reaches ω = 0 (inf if never).
+
+    τ_s = ln(1 + γ·ω0/decel)/γ, written as (ω0/decel)·ln(1 + x)/x with x = γ·ω0/decel.
+    """
+    if decel <= 0 or omega0 <= 0:
+        return math.inf
+    x = gamma * omega0 / decel
+    if x <= -1.0:
+        return math.inf
+    ratio = 1.0 - x / 2.0 + x * x / 3.0 if abs(x) < 1e-6 else math.log1p(x) / x
+    return omega0 / decel * ratio
+
+
+def coast_position(tau: np.ndarray, omega0: float, gamma: float, decel: float) -> np.ndarray:
+    """θ(τ) − θ(0) of a coast J·dω/dt = −b·ω − Tf (γ = b/J, decel = Tf/J) that stays at rest after ω = 0."""
+    t_stop = stop_time(omega0, gamma, decel)
+    return ramp_position(np.minimum(tau, t_stop), omega0, gamma, -decel)
+
+
+def coast_speed(tau: np.ndarray, omega0: float, gamma: float, decel: float) -> np.ndarray:
+    """ω(τ) of the coast of :func:`coast_position` (zero after the stop)."""
+    t_stop = stop_time(omega0, gamma, decel)
+    tau = np.asarray(tau, dtype=float)
+    return np.where(tau < t_stop, ramp_speed(np.minimum(tau, t_stop), omega0, gamma, -decel), 0.0)
+
+
+# ---- noise model --------------------------------------------------------------------------------
+def speed_noise_sigma(residuals: np.ndarray, speed: np.ndarray, *, dof: int) -> np.ndarray:
+    """Per-sample σ [rad] of an encoder position, σ² = σ_q² + (σ_t·ω)², fitted to residuals².
+
+    Quantisation of counts gives a constant σ_q ≈ quantum/√12; timing jitter (a log whose time stamp
+    is not the instant the encoder was read, or a tick log whose times are rounded to 1 ms) gives an
+    error σ_t·|ω| that grows with speed. Both variances are found by non-negative least squares of the
+    squared residuals on [1, ω²], then scaled so that Σ(r/σ)² = dof.
+    """
+    r2 = np.asarray(residuals, dtype=float) ** 2
+    w2 = np.asarray(speed, dtype=float) ** 2
+    design = np.column_stack([np.ones_like(w2), w2])
+    scale = np.array([1.0, 1.0 / max(float(np.mean(w2)), 1e-300)])
+    coef, _ = optimize.nnls(design * scale, r2)
+    var = design @ (coef * scale)
+    floor = 1e-3 * float(np.mean(r2)) if np.mean(r2) > 0 else 1e-300
+    var = np.maximum(var, floor)
+    # Rescale so the weighted residuals have unit variance per degree of freedom.
+    var *= float(np.sum(r2 / var)) / max(dof, 1)
+    return np.sqrt(var)
+
+
+# ---- flywheel -----------------------------------------------------------------------------------
+def disc_inertia(radius: float, thickness: float, *, density: float, ratio: float = 1.0) -> float:
+    """Inertia of a uniform disc reflected to the encoder shaft [kg·m²].
+
+    Parameters
+    ----------
+    radius
+        Disc radius r [m].
+    thickness
+        Disc thickness h [m].
+    density
+        Mass density ρ [kg/m³] (see :data:`MATERIAL_DENSITY`).
+    ratio
+        Flywheel speed / encoder-shaft speed N (25 for the seed's step-up gearbox) [-].
+
+    Notes
+    -----
+    J = ½·m·r² = ½·π·r⁴·ρ·h at the disc, times N² at the encoder shaft (seed 1, "First Experiment":
+    r = 0.075 m, h = 0.05 m of steel gives 0.0124 kg·m²). The motor's own armature and the gearbox
+    are not included.
+    """
+    for value, name in ((radius, "disc radius"), (thickness, "disc thickness"), (density, "density"),
+                        (ratio, "gear ratio")):
+        check_positive(value, name, allow_none=False)
+    return 0.5 * math.pi * radius**4 * density * thickness * ratio**2
+
+
+# ---- command line -------------------------------------------------------------------------------
+def add_cpr_argument(parser: argparse.ArgumentParser, *, required: bool = False) -> None:
+    """``--cpr``: encoder counts per revolution of the counted shaft."""
+    from motorlab.cli.common import quantity
+
+    parser.add_argument(
+        "--cpr", type=quantity("count", positive=True), required=required,
+        help="encoder counts per revolution of the counted shaft (e.g. 560 for a NeveRest 20)",
+    )
+
+
+def add_inertia_arguments(parser: argparse.ArgumentParser) -> None:
+    """``--inertia``/``--inertia-stderr`` or a flywheel description (disc radius, thickness, material, ratio)."""
+    from motorlab.cli.common import quantity
+
+    group = parser.add_argument_group("inertia at the encoder shaft (give --inertia or a disc)")
+    group.add_argument("--inertia", type=quantity("kg*m^2", positive=True),
+                       help='total inertia at the encoder shaft, e.g. "0.0124 kg*m^2"')
+    group.add_argument("--inertia-stderr", type=quantity("kg*m^2", nonnegative=True),
+                       help="standard error of the inertia [kg·m²] (default: exact)")
+    group.add_argument("--disc-radius", type=quantity("m", positive=True), help='flywheel disc radius, e.g. "75 mm"')
+    group.add_argument("--disc-thickness", type=quantity("m", positive=True), help="flywheel disc thickness [m]")
+    group.add_argument("--material", choices=sorted(MATERIAL_DENSITY), default="steel",
+                       help="flywheel material (default steel, 7850 kg/m³)")
+    group.add_argument("--ratio", type=quantity("", positive=True), default=1.0,
+                       help="flywheel speed / encoder-shaft speed (25 for the seed's step-up gearbox)")
+
+
+def inertia_from_args(args: argparse.Namespace) -> tuple[float | None, float | None]:
+    """The inertia [kg·m²] and its standard error from ``--inertia`` or the disc options (or None)."""
+    disc = args.disc_radius is not None or args.disc_thickness is not None
+    if args.inertia is not None and disc:
+        raise OptionError("give either --inertia or the flywheel disc (--disc-radius, --disc-thickness), not both")
+    if disc:
+        if args.disc_radius is None or args.disc_thickness is None:
+            raise OptionError("a flywheel disc needs both --disc-radius and --disc-thickness")
+        inertia = disc_inertia(args.disc_radius, args.disc_thickness,
+                               density=MATERIAL_DENSITY[args.material], ratio=args.ratio)
+        return inertia, args.inertia_stderr
+    return args.inertia, args.inertia_stderr
+
+
+def read_position_log(paths: list[str], *, cpr: float | None) -> Recording:
+    """Read one run: FTC OpMode log(s) (possibly split over several files) or one CSV file."""
+    if not paths:
+        raise OptionError("give the log file(s) to analyse")
+    if all(str(p).lower().endswith(".csv") for p in paths):
+        if len(paths) != 1:
+            raise OptionError("give one CSV file per run")
+        from motorlab.io.csv_table import read_csv
+
+        return read_csv(paths[0], cpr=cpr)
+    from motorlab.io.ftc import read_ftc_log
+
+    return read_ftc_log(paths, cpr=cpr)
+
+
+# ---- fits with known inputs that carry an uncertainty ---------------------------------------------
+@dataclass
+class Prior:
+    """Known value(s) of some fit parameters with their covariance (a measurement made elsewhere).
+
+    A prior with zero variance fixes the parameter; otherwise it adds the residual
+    L⁻¹·(x − mean) (L the Cholesky factor of ``covariance``) so that its uncertainty is propagated
+    into every other estimate, correlations included.
+    """
+
+    names: list[str]
+    mean: np.ndarray
+    covariance: np.ndarray
+
+
+def fit_with_priors(
+    data_residual: Callable[[np.ndarray], np.ndarray],
+    x0: np.ndarray,
+    names: list[str],
+    priors: list[Prior],
+) -> tuple[LeastSquares, np.ndarray]:
+    """Least squares of ``data_residual(x)`` (already divided by its σ) plus prior residuals.
+
+    Returns the fit over the free parameters (``sigma_known`` covariance) and the full parameter
+    vector at the optimum (fixed parameters included).
+    """
+    x_full = np.array(x0, dtype=float)
+    fixed: dict[int, float] = {}
+    blocks: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+    for prior in priors:
+        index = np.array([names.index(n) for n in prior.names])
+        mean = np.asarray(prior.mean, dtype=float)
+        cov = np.atleast_2d(np.asarray(prior.covariance, dtype=float))
+        var = np.diag(cov)
+        for k, m, v in zip(index, mean, var, strict=True):
+            x_full[k] = m
+            if v <= 0:
+                fixed[int(k)] = float(m)
+        keep = var > 0
+        if keep.any():
+            chol = np.linalg.cholesky(cov[np.ix_(keep, keep)])
+            blocks.append((index[keep], mean[keep], np.linalg.inv(chol)))
+    free = [k for k in range(len(names)) if k not in fixed]
+
+    def full(xf: np.ndarray) -> np.ndarray:
+        x = x_full.copy()
+        x[free] = xf
+        return x
+
+    def residual(xf: np.ndarray) -> np.ndarray:
+        x = full(xf)
+        parts = [data_residual(x)] + [inv_l @ (x[index] - mean) for index, mean, inv_l in blocks]
+        return np.concatenate(parts)
+
+    fit = fit_least_squares(residual, x_full[free].tolist(), [names[k] for k in free], sigma_known=True)
+    return fit, full(fit.values)
+
+
+def derived_stderr(fit: LeastSquares, x_full: np.ndarray, names: list[str],
+                   func: Callable[[np.ndarray], float]) -> float:
+    """Standard error of ``func(x_full)`` by first-order propagation of the fit's covariance."""
+    free = [names.index(n) for n in fit.names]
+    grad = np.empty(len(free))
+    for j, k in enumerate(free):
+        h = 1e-6 * max(abs(x_full[k]), 1e-12)
+        up, down = x_full.copy(), x_full.copy()
+        up[k] += h
+        down[k] -= h
+        grad[j] = (func(up) - func(down)) / (2 * h)
+    return float(math.sqrt(max(grad @ fit.covariance @ grad, 0.0)))

@@ -1,0 +1,258 @@
+"""Free spin-up of the bare motor at constant current: the armature inertia J from encoder edge times.
+
+Seed 1, "Free Motor Spin-Up Experiment": the motor, without flywheel, is given a turn by hand and
+then accelerates on a small constant current I; an oscilloscope gives the times of the rising
+edges of one encoder channel (one edge every fourth count). With K known, J = (K·I − Tf)/α.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+from typing import Any
+
+import numpy as np
+
+from motorlab.analyses import _common as common
+from motorlab.errors import FitError, OptionError
+from motorlab.fitting import r_squared
+from motorlab.recording import Recording
+from motorlab.results import Estimate, FitResult, Panel, Series
+from motorlab.units import SI_UNITS
+
+_MIN_EDGES = 5
+_NAMES = ["P0", "omega0", "J", "K", "I", "Tf", "b"]
+_UNITS = {"P0": "rad", "omega0": "rad/s", "J": SI_UNITS["J"], "K": SI_UNITS["K"], "I": "A",
+          "Tf": SI_UNITS["Tf"], "b": SI_UNITS["b"]}
+
+
+def free_spinup(
+    edges: Recording,
+    *,
+    torque_constant: float,
+    current: float,
+    cpr: float | None = None,
+    edges_per_revolution: float | None = None,
+    torque_constant_stderr: float | None = None,
+    current_stderr: float | None = None,
+    viscous_friction: float | None = None,
+    viscous_friction_stderr: float | None = None,
+    coulomb_friction: float | None = None,
+    coulomb_friction_stderr: float | None = None,
+) -> FitResult:
+    """Fit the armature inertia J from the edge times of a free constant-current spin-up.
+
+    Parameters
+    ----------
+    edges
+        Edge times (``time`` [s], one rising edge of one channel per sample), as
+        :func:`motorlab.io.scope.read_scope_times` or :func:`~motorlab.io.scope.read_scope_waveform`
+        return them.
+    torque_constant
+        K [V·s/rad] = [N·m/A] at the counted shaft.
+    current
+        The constant current I [A].
+    cpr
+        Encoder counts per revolution [count/rev]; one channel's rising edges are cpr/4 per turn.
+    edges_per_revolution
+        Rising edges per revolution, overriding cpr/4 [1/rev].
+    torque_constant_stderr, current_stderr
+        Standard errors of K [V·s/rad] and I [A], propagated into J (default: exact).
+    viscous_friction, coulomb_friction
+        b [N·m·s/rad] and Tf [N·m] of the bare motor, if known (default 0).
+    viscous_friction_stderr, coulomb_friction_stderr
+        Their standard errors (default: exact).
+
+    Returns
+    -------
+    FitResult
+        ``J`` [kg·m²] and ``alpha`` (the acceleration at zero speed, (K·I − Tf)/J) [rad/s²];
+        ``details`` holds ω0 and the speed range.
+
+    Raises
+    ------
+    OptionError
+        Missing or impossible K, I, cpr, friction.
+    FitError
+        Too few edges, or a motor that does not accelerate.
+
+    Notes
+    -----
+    Position at edge k is P_k = k·2π/n_e (n_e edges per revolution). The seed fits
+    P = P0 + K·I·(t − t0)²/J, which drops the ½ of constant acceleration (P = P0 + ½·α·τ²) and so
+    gives a J twice too large; it also makes t0 free to absorb the hand start. With the initial
+    speed free as well, t0 and ω0 describe the same thing (any point of a parabola can be its
+    origin), so t0 is fixed at the first edge and P0, ω0 and α = (K·I − Tf)/J are fitted:
+
+        P = P0 + ω0·τ + ½·α·τ²,  τ = t − t0.
+
+    With b given the exact solution with viscous drag is fitted instead,
+    ω(τ) = ω∞ + (ω0 − ω∞)·e^(−τ·b/J), ω∞ = (K·I − Tf)/b, and its integral. The errors are in the
+    times (cursor placement), so position residuals are weighted by 1/ω; K, I, b and Tf enter as
+    priors so that their standard errors reach J.
+
+    References
+    ----------
+    Seed 1, "Free Motor Spin-Up Experiment", "Data Analysis".
+    """
+    source = edges.source or "edge times"
+    common.check_positive(torque_constant, "K (torque constant)", allow_none=False)
+    common.check_positive(current, "current", allow_none=False)
+    common.check_positive(cpr, "cpr (encoder counts per revolution)")
+    common.check_positive(edges_per_revolution, "edges per revolution")
+    common.check_nonnegative(viscous_friction, "viscous friction b")
+    common.check_nonnegative(coulomb_friction, "Coulomb friction Tf")
+    se = {
+        "K": common.check_stderr(torque_constant_stderr, "standard error of K"),
+        "I": common.check_stderr(current_stderr, "standard error of the current"),
+        "b": common.check_stderr(viscous_friction_stderr, "standard error of b"),
+        "Tf": common.check_stderr(coulomb_friction_stderr, "standard error of Tf"),
+    }
+    if cpr is None and edges.metadata.get("cpr") is not None:  # a "# cpr: 1120" line of the CSV
+        try:
+            cpr = float(edges.metadata["cpr"])
+        except (TypeError, ValueError):
+            raise OptionError(f"{source}: the file's cpr {edges.metadata['cpr']!r} is not a number") from None
+        common.check_positive(cpr, "cpr (encoder counts per revolution)")
+    if edges_per_revolution is None:
+        if cpr is None:
+            raise OptionError("give the encoder's counts per revolution (--cpr) or --edges-per-rev")
+        edges_per_revolution = cpr / 4.0
+    common.check_finite_signals(edges, [])
+    t_edges = np.asarray(edges.time, dtype=float)
+    if t_edges.size < _MIN_EDGES:
+        raise FitError(f"{source}: {t_edges.size} edges are too few to fit a spin-up (need {_MIN_EDGES})")
+    if np.any(np.diff(t_edges) <= 0):
+        raise FitError(f"{source}: the edge times do not increase")
+    index = edges.signals.get("counts", np.arange(t_edges.size, dtype=float))
+    theta = (index - index[0]) * (2.0 * math.pi / edges_per_revolution)
+    tau = t_edges - t_edges[0]
+    b_given = viscous_friction or 0.0
+    tf_given = coulomb_friction or 0.0
+    warnings: list[str] = []
+
+    quad = np.polyfit(tau, theta, 2)
+    alpha0 = 2.0 * quad[0]
+    if alpha0 <= 0:
+        raise FitError(f"{source}: the motor is not accelerating (fitted α = {alpha0:.3g} rad/s²)")
+    torque = torque_constant * current - tf_given
+    if torque <= 0:
+        raise OptionError(f"K·I = {torque_constant * current:.3g} N·m does not exceed Tf = {tf_given:.3g} N·m")
+    mean_speed = float(theta[-1] / tau[-1])
+    j0 = max(torque - b_given * mean_speed, 0.1 * torque) / alpha0
+
+    def rates(x: np.ndarray) -> tuple[float, float]:
+        """γ = b/J [1/s] and A = (K·I − Tf)/J [rad/s²]."""
+        j, k, i, tf, b = x[2], x[3], x[4], x[5], x[6]
+        return b / j, (k * i - tf) / j
+
+    def position(x: np.ndarray) -> np.ndarray:
+        gamma, accel = rates(x)
+        return x[0] + common.ramp_position(tau, x[1], gamma, accel)
+
+    def speed(x: np.ndarray) -> np.ndarray:
+        return common.ramp_speed(tau, x[1], *rates(x))
+
+    x0 = np.array([quad[2], quad[1], j0, torque_constant, current, tf_given, b_given])
+    priors = [
+        common.Prior([name], np.array([x0[_NAMES.index(name)]]), np.array([[se[name] ** 2]]))
+        for name in ("K", "I", "Tf", "b")
+    ]
+    sigma = np.ones_like(theta)
+    fit, x_full = common.fit_with_priors(lambda x: (position(x) - theta) / sigma, x0, _NAMES, priors)
+    # Cursor errors are errors in time: a position error ω·δt (plus a constant part).
+    sigma = common.speed_noise_sigma(position(x_full) - theta, speed(x_full), dof=max(theta.size - 3, 1))
+    fit, x_full = common.fit_with_priors(lambda x: (position(x) - theta) / sigma, x_full, _NAMES, priors)
+
+    est = fit.estimates({n: _UNITS[n] for n in fit.names})
+    alpha = rates(x_full)[1]
+    alpha_se = common.derived_stderr(fit, x_full, _NAMES, lambda x: rates(x)[1])
+    parameters: dict[str, Estimate] = {
+        "J": est["J"],
+        "alpha": Estimate("alpha", alpha, alpha_se, "rad/s^2", note="acceleration at zero speed, (K·I − Tf)/J"),
+    }
+    if t_edges.size < 10:
+        warnings.append(f"only {t_edges.size} edges: the estimate is fragile")
+    if viscous_friction is None:
+        warnings.append("no viscous friction given (--b): the drag b·ω is folded into J (J is overestimated)")
+    model_theta = position(x_full)
+    model_speed = speed(x_full)
+    mid = 0.5 * (t_edges[1:] + t_edges[:-1])
+    panels = [
+        Panel("Free spin-up: position", "time [s]", "position since the first edge [rad]",
+              data=Series(t_edges, theta, "edges"), model=Series(t_edges, model_theta, "model", kind="model")),
+        Panel("Free spin-up: speed", "time [s]", "speed [rad/s]",
+              data=Series(mid, np.diff(theta) / np.diff(t_edges), "edge-to-edge speed (display only)"),
+              model=Series(mid, common.ramp_speed(mid - t_edges[0], x_full[1], *rates(x_full)), "model",
+                           kind="model")),
+    ]
+    details: dict[str, Any] = {
+        "t0_s": float(t_edges[0]),
+        "edges_per_revolution": float(edges_per_revolution),
+        "omega0_rad_per_s": float(x_full[1]),
+        "omega_end_rad_per_s": float(model_speed[-1]),
+        "model": "viscous drag (exact solution)" if b_given > 0 else "constant acceleration",
+    }
+    return FitResult(
+        experiment="free-spinup",
+        parameters=parameters,
+        correlation=fit.correlation,
+        correlation_names=list(fit.names),
+        rmse=float(np.sqrt(np.mean((theta - model_theta) ** 2))),
+        rmse_unit="rad",
+        r2=r_squared(theta, model_theta),
+        n_points=int(theta.size),
+        panels=panels,
+        warnings=list(edges.metadata.get("warnings", [])) + warnings,
+        details=details,
+        sources=[edges.source] if edges.source else [],
+    )
+
+
+# ---- command line ---------------------------------------------------------------------------------
+def add_arguments(parser: argparse.ArgumentParser, experiment: str) -> None:
+    """Options of ``motorlab analyze free-spinup``."""
+    from motorlab.cli.common import quantity
+
+    common.add_cpr_argument(parser)
+    parser.add_argument("--edges-per-rev", type=quantity("", positive=True),
+                        help="rising edges per revolution (default cpr/4: one channel, every fourth count)")
+    parser.add_argument("--K", type=quantity("V*s/rad", positive=True), required=True,
+                        help="torque constant K [V·s/rad] = [N·m/A]")
+    parser.add_argument("--K-stderr", type=quantity("V*s/rad", nonnegative=True), help="standard error of K")
+    parser.add_argument("--current", type=quantity("A", positive=True), required=True,
+                        help='the constant current, e.g. "0.5 A"')
+    parser.add_argument("--current-stderr", type=quantity("A", nonnegative=True),
+                        help="standard error of the current")
+    parser.add_argument("--b", type=quantity("N*m*s/rad", nonnegative=True), help="viscous friction b [N·m·s/rad]")
+    parser.add_argument("--b-stderr", type=quantity("N*m*s/rad", nonnegative=True), help="standard error of b")
+    parser.add_argument("--Tf", type=quantity("N*m", nonnegative=True), help="Coulomb friction Tf [N·m]")
+    parser.add_argument("--Tf-stderr", type=quantity("N*m", nonnegative=True), help="standard error of Tf")
+
+
+def read_edges(path: str) -> Recording:
+    """Edge times from a scope cursor-times CSV or a waveform export (told apart by their columns)."""
+    from motorlab.io.scope import read_scope_times, read_scope_waveform
+
+    with open(path, encoding="utf-8", errors="replace") as handle:
+        for raw in handle:
+            line = raw.strip()
+            if not line or line.startswith("#"):
+                continue
+            fields = [f for f in line.replace(";", ",").split(",") if f.strip()]
+            if len(fields) > 1:
+                return read_scope_waveform(path)
+            break
+    return read_scope_times(path)
+
+
+def from_cli(experiment: str, paths: list[str], args: argparse.Namespace) -> FitResult:
+    """Read the edge times (one file) and fit J."""
+    if len(paths) != 1:
+        raise OptionError(f"free-spinup analyses one file of edge times, got {len(paths)}")
+    return free_spinup(
+        read_edges(paths[0]), torque_constant=args.K, current=args.current, cpr=args.cpr,
+        edges_per_revolution=args.edges_per_rev, torque_constant_stderr=args.K_stderr,
+        current_stderr=args.current_stderr, viscous_friction=args.b, viscous_friction_stderr=args.b_stderr,
+        coulomb_friction=args.Tf, coulomb_friction_stderr=args.Tf_stderr,
+    )

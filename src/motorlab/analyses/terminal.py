@@ -1,0 +1,249 @@
+"""Terminal (steady) speed at constant current: viscous friction b and Coulomb friction Tf.
+
+Seed 1, "Terminal Velocity Experiment": the bare motor runs on a constant current until its speed
+stops rising; the oscilloscope's frequency counter gives the frequency f of one encoder channel and
+the supply's display the current I. At steady state the torque K·I balances the friction:
+
+    K·I = b·ω + Tf,   ω = 2π·4·f/cpr
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+from typing import Any
+
+import numpy as np
+
+from motorlab.analyses import _common as common
+from motorlab.errors import FitError, OptionError
+from motorlab.fitting import fit_linear, r_squared
+from motorlab.recording import Recording
+from motorlab.results import Estimate, FitResult, Panel, Series
+from motorlab.units import SI_UNITS
+
+#: Speeds spreading less than this fraction of their mean count as one operating point.
+_MIN_SPREAD = 0.01
+
+
+def speeds_of(recording: Recording, *, cpr: float | None = None) -> np.ndarray:
+    """Shaft speed [rad/s] of every row: from ``frequency`` (one encoder channel) and cpr, or a speed column.
+
+    Raises
+    ------
+    OptionError
+        A frequency column without ``cpr``.
+    LogFormatError
+        No frequency or speed column.
+    """
+    if "frequency" in recording.signals:
+        if cpr is None:
+            cpr = recording.metadata.get("cpr")
+        if cpr is None:
+            raise OptionError("the rows hold encoder channel frequencies: give the counts per revolution (--cpr)")
+        common.check_positive(float(cpr), "cpr (encoder counts per revolution)")
+        # One cycle of one channel spans four quadrature counts (seed 1, step 2).
+        return 2.0 * math.pi * 4.0 * recording.signals["frequency"] / float(cpr)
+    for name in ("speed", "velocity"):
+        if name in recording.signals:
+            return np.asarray(recording.signals[name], dtype=float)
+    recording.require("frequency")
+    raise AssertionError("unreachable")  # pragma: no cover
+
+
+def terminal(
+    recording: Recording,
+    *,
+    torque_constant: float,
+    cpr: float | None = None,
+    torque_constant_stderr: float | None = None,
+    coulomb_friction: float | None = None,
+    coulomb_friction_stderr: float | None = None,
+    current_stderr: float | None = None,
+) -> FitResult:
+    """Viscous (and Coulomb) friction from steady speeds at constant currents.
+
+    Parameters
+    ----------
+    recording
+        One row per operating point: ``current`` [A] and ``frequency`` [Hz] of one encoder channel
+        (or ``speed``/``velocity`` [rad/s]).
+    torque_constant
+        K [V·s/rad] = [N·m/A] at the counted shaft.
+    cpr
+        Encoder counts per revolution [count/rev] (needed with frequencies).
+    torque_constant_stderr
+        Standard error of K [V·s/rad], propagated into b and Tf (default: exact).
+    coulomb_friction, coulomb_friction_stderr
+        A known Tf [N·m] (and its standard error): then only b is fitted.
+    current_stderr
+        Standard error of one current reading [A], used when a single row leaves no residuals
+        (default: 0, i.e. only K's uncertainty).
+
+    Returns
+    -------
+    FitResult
+        ``b`` [N·m·s/rad] and, with two or more distinct speeds, ``Tf`` [N·m].
+
+    Raises
+    ------
+    OptionError
+        Missing or impossible K or cpr.
+    LogFormatError
+        NaN in the rows, no current or no speed.
+    FitError
+        No row, a zero or negative speed.
+
+    Notes
+    -----
+    The seed writes the steady state as "ω = Ke·J/b", which is garbled (J does not enter a steady
+    state): it is ω = (K·I − Tf)/b. With several currents the current is regressed on the speed,
+    I = (b/K)·ω + Tf/K, by ordinary least squares: the frequency counter reads to ~0.02 % while the
+    supply's ammeter reads to ~1 mA and ±0.2 %, so the errors are in I and the small error in ω is
+    neglected. K's uncertainty is then propagated (it scales b and Tf alike). With a single current
+    b = (K·I − Tf)/ω, and without Tf the Coulomb friction is folded into b.
+
+    References
+    ----------
+    Seed 1, "Terminal Velocity Experiment", "Data Analysis" steps 1–3.
+    """
+    source = recording.source or "rows"
+    common.check_positive(torque_constant, "K (torque constant)", allow_none=False)
+    common.check_positive(cpr, "cpr (encoder counts per revolution)")
+    k_se = common.check_stderr(torque_constant_stderr, "standard error of K")
+    common.check_nonnegative(coulomb_friction, "Coulomb friction Tf")
+    tf_se = common.check_stderr(coulomb_friction_stderr, "standard error of Tf")
+    i_se_given = common.check_stderr(current_stderr, "standard error of the current")
+    common.check_finite_signals(recording, ["current", "frequency", "speed", "velocity"])
+    current = np.abs(recording.require("current"))
+    omega = np.abs(speeds_of(recording, cpr=cpr))
+    if current.size == 0:
+        raise FitError(f"{source}: no rows")
+    if np.any(omega <= 0):
+        k = int(np.flatnonzero(omega <= 0)[0])
+        raise FitError(f"{source}: row {k + 1} has zero speed: the motor did not turn at {current[k]:.3g} A")
+    K = torque_constant
+    warnings: list[str] = []
+    spread = float(np.ptp(omega) / np.mean(omega))
+    several = current.size >= 2 and spread >= _MIN_SPREAD
+    details: dict[str, Any] = {
+        "rows": [{"current_A": float(i), "speed_rad_per_s": float(w)} for i, w in zip(current, omega, strict=True)]
+    }
+    parameters: dict[str, Estimate] = {}
+    correlation = None
+    correlation_names: list[str] = []
+    if several and coulomb_friction is None:
+        # I = β1·ω + β0 with β1 = b/K, β0 = Tf/K.
+        fit = fit_linear(np.column_stack([omega, np.ones_like(omega)]), current, ["b_over_K", "Tf_over_K"])
+        (beta1, beta0), cov = fit.values, fit.covariance
+        if current.size == 2:
+            warnings.append("two rows determine b and Tf exactly: their uncertainty cannot be estimated")
+            cov = np.full((2, 2), np.nan)
+        b = K * beta1
+        tf = K * beta0
+        b_se = math.sqrt(K**2 * cov[0, 0] + beta1**2 * k_se**2)
+        tf_se_out = math.sqrt(K**2 * cov[1, 1] + beta0**2 * k_se**2)
+        cov_bt = K**2 * cov[0, 1] + beta1 * beta0 * k_se**2
+        parameters["b"] = Estimate("b", b, b_se, SI_UNITS["b"], bool(fit.determined[0]))
+        parameters["Tf"] = Estimate("Tf", tf, tf_se_out, SI_UNITS["Tf"], bool(fit.determined[1]))
+        rho = cov_bt / (b_se * tf_se_out) if b_se > 0 and tf_se_out > 0 else math.nan
+        correlation = np.array([[1.0, rho], [rho, 1.0]])
+        correlation_names = ["b", "Tf"]
+        if tf < 0:
+            warnings.append(f"the fitted Coulomb friction is negative ({tf:.3g} N·m): check the rows")
+        model_current = beta1 * omega + beta0
+    else:
+        tf = coulomb_friction or 0.0
+        if current.size >= 2 and coulomb_friction is not None:
+            # (K·I − Tf) = b·ω through the origin.
+            fit = fit_linear(omega[:, None], K * current - tf, ["b"])
+            b = float(fit.values[0])
+            var_fit = float(fit.covariance[0, 0]) if current.size > 1 else 0.0
+            # K and Tf errors move every row alike: propagate them through b = (K·Ī − Tf)·ω̄/ω̄².
+            w2 = float(np.sum(omega**2))
+            db_dk = float(np.sum(current * omega)) / w2
+            db_dtf = -float(np.sum(omega)) / w2
+            b_se = math.sqrt(var_fit + db_dk**2 * k_se**2 + db_dtf**2 * tf_se**2)
+        else:
+            if current.size >= 2:
+                warnings.append(
+                    f"the rows span only {100 * spread:.2g} % in speed: b and Tf cannot be separated; "
+                    "rows treated as repeats of one operating point"
+                )
+            i_mean = float(np.mean(current))
+            w_mean = float(np.mean(omega))
+            i_se = (float(np.std(current, ddof=1)) / math.sqrt(current.size) if current.size > 1 else i_se_given)
+            b = (K * i_mean - tf) / w_mean
+            b_se = math.sqrt((i_mean * k_se) ** 2 + (K * i_se) ** 2 + tf_se**2) / w_mean
+            if coulomb_friction is None:
+                warnings.append(
+                    "one operating point: Coulomb friction is folded into b (b = K·I/ω); "
+                    "measure at several currents to separate b and Tf"
+                )
+        parameters["b"] = Estimate("b", b, b_se, SI_UNITS["b"])
+        if coulomb_friction is not None:
+            parameters["Tf"] = Estimate("Tf", tf, tf_se, SI_UNITS["Tf"], note="given")
+        model_current = (b * omega + tf) / K
+    order = np.argsort(omega)
+    panels = [
+        Panel("Terminal speed: friction", "speed [rad/s]", "current [A]",
+              data=Series(omega[order], current[order], "steady current"),
+              model=Series(omega[order], model_current[order], "(b·ω + Tf)/K", kind="model")),
+    ]
+    return FitResult(
+        experiment="terminal",
+        parameters=parameters,
+        correlation=correlation,
+        correlation_names=correlation_names,
+        rmse=float(np.sqrt(np.mean((current - model_current) ** 2))),
+        rmse_unit="A",
+        r2=r_squared(current, model_current) if current.size > 2 else math.nan,
+        n_points=int(current.size),
+        panels=panels,
+        warnings=list(recording.metadata.get("warnings", [])) + warnings,
+        details=details,
+        sources=[recording.source] if recording.source else [],
+    )
+
+
+# ---- command line ---------------------------------------------------------------------------------
+def add_arguments(parser: argparse.ArgumentParser, experiment: str) -> None:
+    """Options of ``motorlab analyze terminal``."""
+    from motorlab.cli.common import quantity
+
+    common.add_cpr_argument(parser)
+    parser.add_argument("--K", type=quantity("V*s/rad", positive=True), required=True,
+                        help="torque constant K [V·s/rad] = [N·m/A]")
+    parser.add_argument("--K-stderr", type=quantity("V*s/rad", nonnegative=True), help="standard error of K")
+    parser.add_argument("--Tf", type=quantity("N*m", nonnegative=True), help="known Coulomb friction Tf [N·m]")
+    parser.add_argument("--Tf-stderr", type=quantity("N*m", nonnegative=True), help="standard error of Tf")
+    parser.add_argument("--current-stderr", type=quantity("A", nonnegative=True),
+                        help="standard error of one current reading (used with a single row)")
+
+
+def from_cli(experiment: str, paths: list[str], args: argparse.Namespace) -> FitResult:
+    """Read the rows (CSV files, concatenated) and fit b (and Tf)."""
+    from motorlab.io.csv_table import read_csv
+
+    if not paths:
+        raise OptionError("give the CSV file(s) of steady currents and frequencies")
+    recordings = [read_csv(p, cpr=args.cpr) for p in paths]
+    recording = recordings[0] if len(recordings) == 1 else _concatenate(recordings)
+    return terminal(
+        recording, torque_constant=args.K, cpr=args.cpr, torque_constant_stderr=args.K_stderr,
+        coulomb_friction=args.Tf, coulomb_friction_stderr=args.Tf_stderr, current_stderr=args.current_stderr,
+    )
+
+
+def _concatenate(recordings: list[Recording]) -> Recording:
+    """Rows of several tables with the same columns, one after the other."""
+    names = set(recordings[0].signals)
+    for rec in recordings[1:]:
+        if set(rec.signals) != names:
+            raise OptionError(f"{rec.source}: its columns differ from those of {recordings[0].source}")
+    return Recording(
+        time=np.arange(sum(len(r) for r in recordings), dtype=float),
+        signals={n: np.concatenate([r.signals[n] for r in recordings]) for n in names},
+        metadata=dict(recordings[0].metadata),
+        source=" + ".join(r.source for r in recordings),
+    )

@@ -1,0 +1,104 @@
+"""Terminal-velocity analysis: b and Tf from steady speeds at constant currents."""
+
+from __future__ import annotations
+
+import argparse
+import math
+
+import numpy as np
+import pytest
+
+from motorlab.analyses.terminal import add_arguments, from_cli, terminal
+from motorlab.errors import FitError, LogFormatError, OptionError
+from motorlab.recording import Recording
+
+CPR = 28.0
+K, B, TF = 0.0185, 1e-5, 2e-3
+
+
+def rows(seed: int, currents=(0.2, 0.25, 0.3, 0.35, 0.4, 0.45)) -> Recording:
+    """Steady rows: the supply's ammeter (1 mA, ±0.2 %) and the scope's frequency counter (5 digits)."""
+    rng = np.random.default_rng(seed)
+    i_true = np.asarray(currents, dtype=float)
+    omega = (K * i_true - TF) / B
+    f = omega * CPR / (8 * math.pi) * (1 + rng.normal(0, 2e-4, i_true.size))
+    f = np.array([round(v, 4 - math.floor(math.log10(v))) for v in f])
+    i_read = np.round(i_true * (1 + rng.uniform(-2e-3, 2e-3, i_true.size)) / 1e-3) * 1e-3
+    return Recording(np.arange(i_true.size, dtype=float), {"current": i_read, "frequency": f}, source="rows.csv")
+
+
+def test_round_trip_several_currents() -> None:
+    covered = {"b": 0, "Tf": 0}
+    for seed in range(10):
+        result = terminal(rows(seed), torque_constant=K, cpr=CPR)
+        for name, truth, rel in (("b", B, 0.06), ("Tf", TF, 0.12)):
+            est = result[name]
+            assert est.value == pytest.approx(truth, rel=rel), (seed, name)
+            covered[name] += abs(est.value - truth) <= 3 * est.stderr
+        assert result.correlation_names == ["b", "Tf"]
+        assert result.panels[0].x_label == "speed [rad/s]"
+    assert min(covered.values()) >= 9
+
+
+def test_k_uncertainty_scales_both() -> None:
+    data = rows(20)
+    exact = terminal(data, torque_constant=K, cpr=CPR)
+    loose = terminal(data, torque_constant=K, cpr=CPR, torque_constant_stderr=0.03 * K)
+    assert loose["b"].relative_error == pytest.approx(math.hypot(exact["b"].relative_error, 0.03), rel=1e-6)
+
+
+def test_single_row_folds_coulomb_into_b() -> None:
+    one = rows(21, currents=(0.3,))
+    result = terminal(one, torque_constant=K, cpr=CPR, current_stderr=1e-3)
+    omega = (K * 0.3 - TF) / B
+    assert result["b"].value == pytest.approx(K * 0.3 / omega, rel=0.01)  # > B: Tf folded in
+    assert "Tf" not in result.parameters
+    assert any("folded into b" in w for w in result.warnings)
+    given = terminal(one, torque_constant=K, cpr=CPR, coulomb_friction=TF)
+    assert given["b"].value == pytest.approx(B, rel=0.03)
+
+
+def test_speed_conversion_uses_four_counts_per_cycle() -> None:
+    # ω = 2π·4·f/cpr: f = 100 Hz on a 28-count encoder is 89.76 rad/s.
+    data = Recording(np.arange(1.0), {"current": np.array([0.3]), "frequency": np.array([100.0])})
+    result = terminal(data, torque_constant=K, cpr=CPR)
+    assert result["b"].value == pytest.approx(K * 0.3 / (2 * math.pi * 4 * 100 / 28))
+
+
+def test_bad_input() -> None:
+    data = rows(22)
+    with pytest.raises(OptionError, match="cpr"):
+        terminal(data, torque_constant=K)
+    with pytest.raises(OptionError):
+        terminal(data, torque_constant=-1.0, cpr=CPR)
+    data.signals["frequency"][2] = 0.0
+    with pytest.raises(FitError, match=r"rows\.csv: row 3"):
+        terminal(data, torque_constant=K, cpr=CPR)
+    data.signals["frequency"][2] = math.nan
+    with pytest.raises(LogFormatError, match=r"rows\.csv"):
+        terminal(data, torque_constant=K, cpr=CPR)
+
+
+def test_cli_reads_csv(tmp_path) -> None:
+    data = rows(23)
+    path = tmp_path / "terminal.csv"
+    path.write_text("current_A,frequency_Hz\n" + "".join(
+        f"{i:.3f},{f}\n" for i, f in zip(data["current"], data["frequency"], strict=True)))
+    parser = argparse.ArgumentParser()
+    add_arguments(parser, "terminal")
+    result = from_cli("terminal", [str(path)], parser.parse_args(["--cpr", "28", "--K", "0.0185 N*m/A"]))
+    assert result["b"].value == pytest.approx(B, rel=0.06)
+    assert result["Tf"].value == pytest.approx(TF, rel=0.12)
+
+
+def test_virtual_rig_round_trip(tmp_path) -> None:
+    from motorlab.rig import VirtualRig
+
+    rig = VirtualRig("neverest40", unit_seed=4, noise_seed=4)
+    run = rig.terminal(tmp_path / "terminal.csv")
+    expected = run.truth["expected"]
+    parser = argparse.ArgumentParser()
+    add_arguments(parser, "terminal")
+    result = from_cli("terminal", [str(run.paths[0])], parser.parse_args(["--K", str(expected["K"])]))
+    assert result["b"].value == pytest.approx(expected["b"], rel=0.06)
+    assert result["Tf"].value == pytest.approx(expected["Tf"], rel=0.12)
