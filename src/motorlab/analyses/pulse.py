@@ -1,0 +1,653 @@
+"""Inertia J and friction from a square-wave-driven speed trace (seed 2, "Motor Mechanical Properties").
+
+A servo amplifier (current source, I = Ka·V) drives the motor with a unipolar square wave; a
+tachometer records the speed. During each pulse the shaft accelerates, between pulses it coasts
+to rest. The seed takes the slopes Ω̇1 (accelerate) and Ω̇2 (coast) with scope cursors and solves
+eqs. (3)–(5). Here every accelerate and coast region of every pulse is fitted, and the seed's
+question "Is the shaft friction viscous?" is answered by comparing three friction models on the
+coast-downs with information criteria (AIC, BIC).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from motorlab.analyses._common import ramp_speed
+from motorlab.analyses.gains import metadata_quantity, read_tables, sources_of
+from motorlab.errors import FitError, LogFormatError, OptionError
+from motorlab.fitting import LeastSquares, fit_least_squares, fit_linear, r_squared
+from motorlab.recording import Recording
+from motorlab.results import Estimate, FitResult, Panel, Series
+from motorlab.units import SI_UNITS
+
+#: Default time skipped after each command edge [s] (amplifier and tachometer-filter settling).
+DEFAULT_SKIP = 0.002
+#: Fewest samples a region needs to be fitted.
+MIN_REGION_SAMPLES = 8
+#: Friction models compared on the coast-downs, in the order of the table.
+FRICTION_MODELS = ("viscous", "coulomb", "both")
+_MODEL_LABELS = {"viscous": "viscous", "coulomb": "Coulomb", "both": "viscous + Coulomb"}
+
+
+@dataclass
+class _Region:
+    """One accelerate or coast stretch: samples, held command and the torque it gives."""
+
+    kind: str  # "accelerate" or "coast"
+    pulse: int
+    time: np.ndarray  # absolute [s]
+    speed: np.ndarray  # [rad/s], mirrored so that pulses drive it positive
+    command: float  # held command level [V]
+    edge_time: float  # time of the edge that starts the region [s]
+    source: str
+
+    @property
+    def s(self) -> np.ndarray:
+        """Time since the first fitted sample [s]."""
+        return self.time - self.time[0]
+
+
+def _noise_sigma(speed: np.ndarray) -> float:
+    """Speed noise σ [rad/s] from second differences (insensitive to slopes): MAD(Δ²ω)/√6·1.4826."""
+    d2 = np.diff(speed, 2)
+    if d2.size < 3:
+        return 0.0
+    return float(1.4826 * np.median(np.abs(d2 - np.median(d2))) / math.sqrt(6.0))
+
+
+def _levels(command: np.ndarray) -> tuple[np.ndarray, float, float]:
+    """High/low state of the command with hysteresis, and the low and high levels [V]."""
+    lo, hi = float(np.percentile(command, 2)), float(np.percentile(command, 98))
+    if not hi > lo:
+        raise FitError("the command never changes: no pulses to analyse (expected a square wave)")
+    up, down = lo + 0.6 * (hi - lo), lo + 0.4 * (hi - lo)
+    state = np.empty(command.size, dtype=bool)
+    high = bool(command[0] > 0.5 * (lo + hi))
+    for k, v in enumerate(command):
+        if high and v < down:
+            high = False
+        elif not high and v > up:
+            high = True
+        state[k] = high
+    return state, lo, hi
+
+
+def _regions(
+    rec: Recording, speed_name: str, *, skip: float, tach_gain: float | None
+) -> tuple[list[_Region], list[str], float, np.ndarray, np.ndarray]:
+    """Cut one recording into accelerate and coast regions; returns regions, warnings, σ, t, ω."""
+    t = rec.time
+    command = rec.require("command")
+    raw = rec.require(speed_name)
+    speed = raw / tach_gain if speed_name == "tach_voltage" and tach_gain is not None else raw.copy()
+    for name, values in (("time", t), ("command", command), (speed_name, raw)):
+        bad = np.flatnonzero(~np.isfinite(values))
+        if bad.size:
+            raise LogFormatError(
+                f"{name} is not a finite number in this row", path=rec.source or None, line=rec.line_of(int(bad[0]))
+            )
+    if t.size < 3 * MIN_REGION_SAMPLES:
+        raise FitError(f"{rec.source or 'recording'}: {t.size} samples are too few for a pulse response")
+    steps = np.diff(t)
+    if np.any(steps <= 0):
+        k = int(np.flatnonzero(steps <= 0)[0]) + 1
+        raise LogFormatError("time does not increase", path=rec.source or None, line=rec.line_of(k))
+    if rec.metadata.get("time") == "row index":
+        raise LogFormatError("the pulse analysis needs a time column (time_s or time_ms)", path=rec.source or None)
+    warnings: list[str] = []
+    state, _, _ = _levels(command)
+    change = np.flatnonzero(np.diff(state.astype(np.int8))) + 1
+    rises = [int(k) for k in change if state[k]]
+    falls = [int(k) for k in change if not state[k]]
+    if not rises or not falls:
+        raise FitError(f"{rec.source or 'recording'}: no complete pulse (a rising and a falling edge) in the command")
+    # Pulse direction: torque ∝ V_high − V_low; mirror the speed so that the pulses drive it positive.
+    v_high = float(np.median(command[state]))
+    v_low = float(np.median(command[~state]))
+    drive_sign = 1.0 if v_high > v_low else -1.0
+    accel_mask = np.zeros(t.size, dtype=bool)
+    for r in rises:
+        f = next((f for f in falls if f > r), None)
+        if f is not None:
+            accel_mask[r:f] = True
+    speed_sign = 1.0 if np.median(speed[accel_mask]) >= 0 else -1.0
+    if speed_sign != drive_sign and np.any(accel_mask):
+        warnings.append(
+            f"{rec.source or 'recording'}: the speed runs opposite to the command: tachometer or motor leads "
+            "reversed? The trace was analysed mirrored"
+        )
+    speed = speed * speed_sign
+    sigma = _noise_sigma(speed)
+    stop_level = max(5.0 * sigma, 0.02 * float(np.max(speed)))
+    regions: list[_Region] = []
+    not_at_rest = 0
+    for n, r in enumerate(rises):
+        f = next((f for f in falls if f > r), None)
+        if f is None:
+            continue  # the record ends during a pulse
+        nxt = next((k for k in rises if k > f), t.size)
+        level_hi = float(np.median(command[r:f]))
+        level_lo = float(np.median(command[f:nxt]))
+        if speed[r] > stop_level:
+            not_at_rest += 1
+        a = np.flatnonzero((t >= t[r] + skip) & (np.arange(t.size) < f))
+        c = np.arange(f, nxt)
+        c = c[t[c] >= t[f] + skip]
+        below = np.flatnonzero(speed[c] < stop_level)
+        if below.size:
+            c = c[: below[0]]
+        if a.size >= MIN_REGION_SAMPLES and float(np.max(speed[a])) > stop_level:
+            regions.append(_Region("accelerate", n + 1, t[a], speed[a], level_hi, float(t[r]), rec.source))
+        if c.size >= MIN_REGION_SAMPLES:
+            regions.append(_Region("coast", n + 1, t[c], speed[c], level_lo, float(t[f]), rec.source))
+    if not_at_rest:
+        warnings.append(
+            f"{rec.source or 'recording'}: in {not_at_rest} pulse(s) the shaft was still turning at the rising "
+            "edge (the seed lowers the duty cycle so that it comes to rest); the fit allows for it"
+        )
+    return regions, warnings, sigma, t, speed
+
+
+# ---- coast-down friction models ------------------------------------------------------------------
+
+
+@dataclass
+class _CoastFit:
+    model: str
+    fit: LeastSquares
+    gamma: float  # b/J [1/s]
+    decel: float  # (Tf − τ2)/J [rad/s²]
+    ssr: float
+    n: int
+    k: int
+
+    @property
+    def aic(self) -> float:
+        return self.n * math.log(self.ssr / self.n) + 2 * self.k
+
+    @property
+    def bic(self) -> float:
+        return self.n * math.log(self.ssr / self.n) + self.k * math.log(self.n)
+
+
+def _fit_coasts(coasts: list[_Region], model: str, decel0: float, gamma0: float) -> _CoastFit:
+    """Fit dω/dt = −decel − γ·ω to every coast (shared γ, decel; one start speed per coast)."""
+    n_c = len(coasts)
+    w0 = [float(c.speed[0]) for c in coasts]
+    use_gamma = model in ("viscous", "both")
+    use_decel = model in ("coulomb", "both")
+
+    def unpack(x: np.ndarray) -> tuple[float, float, np.ndarray]:
+        j = 0
+        gamma = decel = 0.0
+        if use_gamma:
+            gamma, j = x[j], j + 1
+        if use_decel:
+            decel, j = x[j], j + 1
+        return gamma, decel, x[j:]
+
+    def residual(x: np.ndarray) -> np.ndarray:
+        gamma, decel, starts = unpack(x)
+        return np.concatenate(
+            [ramp_speed(c.s, starts[i], gamma, -decel) - c.speed for i, c in enumerate(coasts)]
+        )
+
+    x0: list[float] = []
+    lo: list[float] = []
+    names: list[str] = []
+    if use_gamma:
+        x0.append(gamma0 if model == "both" else max(gamma0, 0.1 * decel0 / max(float(np.mean(w0)), 1e-9) + gamma0))
+        lo.append(0.0)
+        names.append("gamma")
+    if use_decel:
+        x0.append(decel0)
+        lo.append(-np.inf)
+        names.append("decel")
+    x0 += w0
+    lo += [-np.inf] * n_c
+    names += [f"w0_{i}" for i in range(n_c)]
+    fit = fit_least_squares(residual, x0, names, bounds=(lo, [np.inf] * len(x0)))
+    gamma, decel, _ = unpack(fit.values)
+    ssr = float(fit.residuals @ fit.residuals)
+    n = int(fit.residuals.size)
+    return _CoastFit(model, fit, float(gamma), float(decel), max(ssr, 1e-300), n, len(x0))
+
+
+def _model_sentence(table: dict[str, _CoastFit], best: str) -> str:
+    ordered = sorted(table.values(), key=lambda m: m.bic)
+    runner_up = ordered[1]
+    delta = runner_up.bic - table[best].bic
+    strength = "decisively" if delta > 10 else "clearly" if delta > 6 else "weakly"
+    names = {"viscous": "viscous only", "coulomb": "Coulomb only", "both": "viscous + Coulomb"}
+    if best == "coulomb":
+        answer = "No: the coast-downs are straight lines, the friction is Coulomb (constant torque)"
+    elif best == "viscous":
+        answer = "Yes: the coast-downs decay exponentially, the friction is viscous"
+    else:
+        answer = "Partly: the coast-downs need both viscous and Coulomb friction"
+    return (
+        f"Is the shaft friction viscous? {answer} (BIC {strength} favours {names[best]} over "
+        f"{names[runner_up.model]}, ΔBIC = {delta:.1f})"
+    )
+
+
+# ---- the analysis -----------------------------------------------------------------------------------
+
+
+def pulse(
+    recordings: Recording | Sequence[Recording],
+    *,
+    amplifier_gain: float,
+    torque_constant: float,
+    amplifier_offset: float = 0.0,
+    skip: float = DEFAULT_SKIP,
+    tach_gain: float | None = None,
+    friction: str = "auto",
+) -> FitResult:
+    """J and friction from the response to a square-wave current command.
+
+    Parameters
+    ----------
+    recordings
+        One or more recordings with ``time`` [s], ``command`` [V] (the square wave) and the speed:
+        ``velocity`` or ``speed`` [rad/s], or ``tach_voltage`` [V] with ``tach_gain``.
+    amplifier_gain
+        Servo-amplifier gain Ka [A/V] (seed 2's ``analyze amplifier``; nominal 2 A/V).
+    torque_constant
+        Motor torque constant Km = K [N·m/A] (``analyze torque``).
+    amplifier_offset
+        Amplifier output current at zero command, I0 [A] (the intercept of ``analyze amplifier``).
+        It keeps a small torque Km·I0 on during the coasts; left out, it shows up as a Tf too low
+        by Km·I0.
+    skip
+        Time left out after each command edge [s] (amplifier and tachometer settling).
+    tach_gain
+        Tachometer gain Kt_tach [V·s/rad], needed only when the speed is a tachometer voltage.
+    friction
+        ``"auto"`` (choose by BIC on the coast-downs), ``"coulomb"`` (the seed's eq. (2)),
+        ``"viscous"`` or ``"both"``: the friction model of the final fit.
+
+    Returns
+    -------
+    FitResult
+        ``J`` [kg·m²], ``Tf`` [N·m] and, when viscous friction is in the model, ``b`` [N·m·s/rad]
+        and ``gamma`` = b/J [1/s]. ``details["friction_models"]`` is the AIC/BIC table,
+        ``details["slopes"]`` the seed's per-pulse slope method; the first warning answers the
+        seed's question "Is the shaft friction viscous?".
+
+    Raises
+    ------
+    OptionError
+        For non-positive gains or a negative skip, or an unknown friction model.
+    LogFormatError
+        For a missing column, a non-finite sample or time that does not increase.
+    FitError
+        When the command holds no complete pulse or the regions are too short to fit.
+
+    Notes
+    -----
+    The torque is τ = Km·(Ka·V + I0) (current drive, I0 the amplifier offset; below V stands for
+    V + I0/Ka). With Coulomb friction only, the accelerate and coast slopes are
+    Ω̇1 = (Ka·Km·V1 − Tf)/J and Ω̇2 = (Ka·Km·V2 − Tf)/J (seed 2, eqs. (3), (4);
+    V2 = 0 for a unipolar wave, so Ω̇2 = −Tf/J < 0), hence J = Ka·Km·(V1 − V2)/(Ω̇1 − Ω̇2)
+    (eq. (5)) and Tf = Ka·Km·V2 − J·Ω̇2. The per-pulse slopes are kept in ``details["slopes"]``.
+    The reported estimates come from one fit of every region with the exact solution of
+    J·dω/dt = τ − b·ω − Tf: ω(s) = ω0·e^(−γs) + (τ − Tf)/J·(1 − e^(−γs))/γ, γ = b/J, one free start
+    speed per region (the first milliseconds after each edge are skipped), which reduces to the
+    seed's straight lines when b = 0. A coast is fitted until the speed first falls below
+    max(5σ, 2 % of the peak): once stopped, Coulomb friction holds the shaft and no model applies.
+    On the coasts alone three models are compared: viscous ω = ω0·e^(−γt), Coulomb
+    ω = ω0 − (Tf/J)·t, and both ω = (ω0 + c)·e^(−γt) − c with c = Tf/b; AIC = n·ln(SSR/n) + 2k and
+    BIC = n·ln(SSR/n) + k·ln(n) (k counts the start speeds too). Both assume independent residuals;
+    tachometer ripple correlates them and makes the criteria over-eager for the richer model.
+
+    References
+    ----------
+    Seed 2 (MIT 2.010 Lab 2), "Motor Mechanical Properties (Shaft Inertia and Friction)", eqs. (1)–(5).
+    """
+    if not (math.isfinite(amplifier_gain) and amplifier_gain > 0):
+        raise OptionError(f"the amplifier gain Ka must be positive, got {amplifier_gain} A/V")
+    if not (math.isfinite(torque_constant) and torque_constant > 0):
+        raise OptionError(f"the torque constant Km must be positive, got {torque_constant} N·m/A")
+    if not (math.isfinite(skip) and skip >= 0):
+        raise OptionError(f"the time skipped after edges must be ≥ 0, got {skip} s")
+    if friction not in ("auto", *FRICTION_MODELS):
+        raise OptionError(f"friction model must be auto, viscous, coulomb or both, got {friction!r}")
+    if tach_gain is not None and not (math.isfinite(tach_gain) and tach_gain > 0):
+        raise OptionError(f"the tachometer gain must be positive, got {tach_gain} V·s/rad")
+    recs = [recordings] if isinstance(recordings, Recording) else list(recordings)
+    if not recs:
+        raise OptionError("no recording given")
+    if not math.isfinite(amplifier_offset):
+        raise OptionError(f"the amplifier offset must be a finite current, got {amplifier_offset} A")
+    gain = amplifier_gain * torque_constant  # torque per command volt [N·m/V]
+    # An amplifier offset I0 acts as a command offset I0/Ka: τ = Ka·Km·(V + I0/Ka).
+    command_offset = amplifier_offset / amplifier_gain
+    regions: list[_Region] = []
+    warnings: list[str] = []
+    traces = []
+    sigmas = []
+    for rec in recs:
+        speed_name = _speed_signal(rec, tach_gain)
+        rr, ww, sigma, t, speed = _regions(rec, speed_name, skip=skip, tach_gain=tach_gain)
+        for region in rr:
+            region.command += command_offset
+        regions += rr
+        warnings += ww
+        sigmas.append(sigma)
+        traces.append((rec, t, speed))
+    accel = [r for r in regions if r.kind == "accelerate"]
+    coasts = [r for r in regions if r.kind == "coast"]
+    if not accel or not coasts:
+        raise FitError(
+            "no usable accelerate and coast regions (pulses too short, or the shaft never moves: is Ka·Km·V "
+            "above the friction torque?)"
+        )
+
+    # The seed's slope method, pulse by pulse (also the starting point of the fit).
+    slopes = _slope_table(accel, coasts, gain)
+    a1 = float(np.median([s["accel_slope"] for s in slopes])) if slopes else _slope(accel[0])
+    a2 = float(np.median([s["coast_slope"] for s in slopes])) if slopes else _slope(coasts[0])
+    v1 = float(np.median([r.command for r in accel]))
+    v2 = float(np.median([r.command for r in coasts]))
+    if not a1 > a2:
+        raise FitError("the shaft does not accelerate faster during the pulses than between them")
+    j0 = gain * (v1 - v2) / (a1 - a2)
+    tf0 = gain * v2 - j0 * a2
+
+    # Friction models on the coast-downs.
+    decel0 = max(-a2, 1e-6)
+    coulomb = _fit_coasts(coasts, "coulomb", decel0, 0.0)
+    gamma0 = _gamma_guess(coasts)
+    viscous = _fit_coasts(coasts, "viscous", decel0, gamma0)
+    both_start = min(gamma0, 0.5 * decel0 / max(float(np.mean([c.speed[0] for c in coasts])), 1e-9))
+    both = _fit_coasts(coasts, "both", coulomb.decel, max(both_start, 1e-3))
+    both_alt = _fit_coasts(coasts, "both", max(decel0 * 0.1, 1e-6), gamma0)
+    if both_alt.ssr < both.ssr:
+        both = both_alt
+    table = {"viscous": viscous, "coulomb": coulomb, "both": both}
+    best = min(table, key=lambda m: table[m].bic)
+    sentence = _model_sentence(table, best)
+    chosen = best if friction == "auto" else friction
+    if friction != "auto" and friction != best:
+        sentence += f"; the final fit uses {friction} friction as asked"
+
+    # Final fit of every region with the chosen friction model.
+    with_b = chosen in ("viscous", "both")
+    # Tf stays free unless viscous-only friction was asked for: when the data prefer the viscous model
+    # the fitted Tf is then small, with its standard error, rather than a bare 0.
+    with_tf = friction != "viscous"
+    fit = _joint_fit(regions, gain, j0, tf0, max(both.gamma * j0, 0.0), with_b, with_tf)
+    units = {"J": SI_UNITS["J"], "Tf": SI_UNITS["Tf"], "b": SI_UNITS["b"]}
+    est = fit.estimates({n: units.get(n, "rad/s") for n in fit.names})
+    parameters: dict[str, Estimate] = {"J": est["J"]}
+    if with_tf:
+        parameters["Tf"] = est["Tf"]
+    else:
+        parameters["Tf"] = Estimate("Tf", 0.0, math.nan, SI_UNITS["Tf"], True, "fixed at 0 (viscous model)")
+    if with_b:
+        parameters["b"] = est["b"]
+        jb = [fit.names.index("J"), fit.names.index("b")]
+        cov = fit.covariance[np.ix_(jb, jb)]
+        jv, bv = float(fit.values[jb[0]]), float(fit.values[jb[1]])
+        grad = np.array([-bv / jv**2, 1.0 / jv])
+        g_err = float(np.sqrt(max(grad @ cov @ grad, 0.0)))
+        parameters["gamma"] = Estimate("gamma", bv / jv, g_err, SI_UNITS["gamma"], bool(est["b"].determined), "b/J")
+    all_t = np.concatenate([r.time for r in regions])
+    all_w = np.concatenate([r.speed for r in regions])
+    model_w = all_w + fit.residuals
+    warnings.insert(0, sentence)
+    if chosen == "coulomb" and best != "coulomb":
+        warnings.append("viscous friction is left out of the final fit as asked: J and Tf are biased")
+
+    details: dict[str, object] = {
+        "friction_model": chosen,
+        "friction_models": [
+            {
+                "model": m,
+                "n": table[m].n,
+                "k": table[m].k,
+                "rms_rad_per_s": math.sqrt(table[m].ssr / table[m].n),
+                "AIC": table[m].aic,
+                "BIC": table[m].bic,
+                "dAIC": table[m].aic - min(x.aic for x in table.values()),
+                "dBIC": table[m].bic - table[best].bic,
+                "gamma_per_s": table[m].gamma,
+                "Tf_over_J_rad_per_s2": table[m].decel + (gain * v2 / j0),
+            }
+            for m in FRICTION_MODELS
+        ],
+        "slopes": slopes,
+        "slope_method": {"J": j0, "Tf": tf0, "accel_slope": a1, "coast_slope": a2},
+        "torque_per_volt": gain,
+        "command_high_V": v1,
+        "command_low_V": v2,
+        "speed_noise_rad_per_s": float(np.median(sigmas)),
+        "pulses": len(accel),
+        "coasts": len(coasts),
+    }
+    panels = _panels(traces, regions, model_w, table, best, coasts, chosen)
+    fitted_names = ["J"] + (["b"] if with_b else []) + (["Tf"] if with_tf else [])
+    idx = [fit.names.index(n) for n in fitted_names]
+    return FitResult(
+        experiment="pulse",
+        parameters=parameters,
+        correlation=fit.correlation[np.ix_(idx, idx)],
+        correlation_names=fitted_names,
+        rmse=fit.rmse,
+        rmse_unit="rad/s",
+        r2=r_squared(all_w, model_w),
+        n_points=int(all_t.size),
+        panels=panels,
+        warnings=warnings,
+        details=details,
+        sources=sources_of(recs),
+    )
+
+
+def _speed_signal(rec: Recording, tach_gain: float | None) -> str:
+    for name in ("velocity", "speed"):
+        if name in rec:
+            return name
+    if "tach_voltage" in rec:
+        if tach_gain is None:
+            raise OptionError(
+                f"{rec.source or 'recording'}: the speed is a tachometer voltage: give the tachometer gain "
+                "(--tach-gain, from 'motorlab analyze tachometer')"
+            )
+        return "tach_voltage"
+    have = ", ".join(sorted(rec.signals)) or "none"
+    raise LogFormatError(
+        f"no speed column (velocity_rad_per_s, speed_rpm or tach_voltage_V; this file has: {have})",
+        path=rec.source or None,
+    )
+
+
+def _slope(region: _Region) -> float:
+    design = np.column_stack([region.s, np.ones_like(region.s)])
+    return float(fit_linear(design, region.speed, ["slope", "start"]).values[0])
+
+
+def _slope_table(accel: list[_Region], coasts: list[_Region], gain: float) -> list[dict[str, float]]:
+    rows = []
+    by_pulse = {(c.source, c.pulse): c for c in coasts}
+    for a in accel:
+        c = by_pulse.get((a.source, a.pulse))
+        if c is None:
+            continue
+        s1, s2 = _slope(a), _slope(c)
+        if not s1 > s2:
+            continue
+        j = gain * (a.command - c.command) / (s1 - s2)
+        rows.append(
+            {"pulse": a.pulse, "accel_slope": s1, "coast_slope": s2, "J": j, "Tf": gain * c.command - j * s2}
+        )
+    return rows
+
+
+def _gamma_guess(coasts: list[_Region]) -> float:
+    """γ from a straight line through ln ω of each coast (viscous start value) [1/s]."""
+    rates = []
+    for c in coasts:
+        keep = c.speed > 0.05 * np.max(c.speed)
+        if np.count_nonzero(keep) > 3:
+            design = np.column_stack([c.s[keep], np.ones(np.count_nonzero(keep))])
+            rates.append(-fit_linear(design, np.log(c.speed[keep]), ["rate", "log0"]).values[0])
+    return max(float(np.median(rates)), 1e-3) if rates else 1.0
+
+
+def _joint_fit(
+    regions: list[_Region], gain: float, j0: float, tf0: float, b0: float, with_b: bool, with_tf: bool
+) -> LeastSquares:
+    """One fit of every region: shared J (and b, Tf), one start speed per region."""
+    names = ["J"] + (["b"] if with_b else []) + (["Tf"] if with_tf else [])
+    scale = np.array([j0] + ([max(b0, j0 * 0.1)] if with_b else []) + ([max(abs(tf0), gain * 0.01)] if with_tf else []))
+
+    def unpack(x: np.ndarray) -> tuple[float, float, float, np.ndarray]:
+        j = x[0] * scale[0]
+        k = 1
+        b = tf = 0.0
+        if with_b:
+            b, k = x[k] * scale[k], k + 1
+        if with_tf:
+            tf, k = x[k] * scale[k], k + 1
+        return j, b, tf, x[k:]
+
+    def model(x: np.ndarray) -> np.ndarray:
+        j, b, tf, starts = unpack(x)
+        return np.concatenate(
+            [ramp_speed(r.s, starts[i], b / j, (gain * r.command - tf) / j) for i, r in enumerate(regions)]
+        )
+
+    data = np.concatenate([r.speed for r in regions])
+    x0 = [1.0] + ([max(b0, 1e-6 * j0) / scale[1]] if with_b else []) + ([tf0 / scale[-1]] if with_tf else [])
+    x0 += [float(r.speed[0]) for r in regions]
+    lo = [1e-9] + ([0.0] if with_b else []) + ([-np.inf] if with_tf else []) + [-np.inf] * len(regions)
+    hi = [np.inf] * len(x0)
+    fit = fit_least_squares(
+        lambda x: model(x) - data, x0, names + [f"w0_{i}" for i in range(len(regions))], bounds=(lo, hi)
+    )
+    # Back to physical units: values, standard errors and covariance of the scaled parameters.
+    full_scale = np.concatenate([scale, np.ones(len(regions))])
+    fit.values = fit.values * full_scale
+    fit.stderr = fit.stderr * full_scale
+    fit.covariance = fit.covariance * np.outer(full_scale, full_scale)
+    return fit
+
+
+def _panels(
+    traces: list[tuple[Recording, np.ndarray, np.ndarray]],
+    regions: list[_Region],
+    model_w: np.ndarray,
+    table: dict[str, _CoastFit],
+    best: str,
+    coasts: list[_Region],
+    chosen: str,
+) -> list[Panel]:
+    panels = []
+    offset = 0
+    fitted = {}
+    for r in regions:
+        fitted[(r.source, float(r.time[0]))] = model_w[offset : offset + r.time.size]
+        offset += r.time.size
+    for rec, t, speed in traces:
+        model_full = np.full(t.size, np.nan)
+        for r in regions:
+            if r.source != rec.source:
+                continue
+            idx = np.searchsorted(t, r.time)
+            model_full[idx] = fitted[(r.source, float(r.time[0]))]
+        name = rec.source.rsplit("/", 1)[-1] if rec.source else ""
+        panels.append(
+            Panel(
+                title=f"Angular velocity vs time {name}".strip(),
+                x_label="time [s]",
+                y_label="angular velocity Ω [rad/s]",
+                data=Series(t, speed, "tachometer", "data"),
+                model=Series(t, model_full, f"fit ({_MODEL_LABELS[chosen]} friction)", "model"),
+                extra=[],
+            )
+        )
+    # Coast-downs against the three friction models, time measured from the falling edge.
+    xs, ys = [], []
+    models: dict[str, list[np.ndarray]] = {m: [] for m in FRICTION_MODELS}
+    for c in coasts:
+        xs += [c.time - c.edge_time, np.array([np.nan])]
+        ys += [c.speed, np.array([np.nan])]
+    for m, cf in table.items():
+        off = 0
+        for c in coasts:
+            pred = c.speed + cf.fit.residuals[off : off + c.time.size]
+            off += c.time.size
+            models[m] += [pred, np.array([np.nan])]
+    x = np.concatenate(xs)
+    labels = {"viscous": "viscous e^(−γt)", "coulomb": "Coulomb (straight line)", "both": "viscous + Coulomb"}
+    panels.append(
+        Panel(
+            title="Coast-downs: which friction model? (best by BIC: " + best + ")",
+            x_label="time since the falling edge [s]",
+            y_label="angular velocity Ω [rad/s]",
+            data=Series(x, np.concatenate(ys), "coast-downs", "data"),
+            model=Series(x, np.concatenate(models[best]), labels[best] + " (best)", "model"),
+            extra=[Series(x, np.concatenate(models[m]), labels[m], "model") for m in FRICTION_MODELS if m != best],
+        )
+    )
+    return panels
+
+
+# ---- command line -------------------------------------------------------------------------------------
+
+
+def add_arguments(parser: argparse.ArgumentParser, experiment: str) -> None:
+    """Options of ``motorlab analyze pulse``."""
+    from motorlab.cli.common import quantity
+
+    parser.add_argument(
+        "--Ka", dest="amplifier_gain", type=quantity("A/V", positive=True), default=None, metavar="GAIN",
+        help="servo-amplifier gain [A/V] (measure with 'analyze amplifier'; seed 2's nominal is 2; "
+        "default: '# Ka_A_per_V:' in the file)",
+    )
+    parser.add_argument(
+        "--I0", dest="amplifier_offset", type=quantity("A"), default=0.0, metavar="CURRENT",
+        help="amplifier output current at zero command [A] (the intercept I0 of 'analyze amplifier'; default 0)",
+    )
+    parser.add_argument(
+        "--Km", "--K", dest="torque_constant", type=quantity("N*m/A", positive=True), required=True,
+        metavar="K", help="motor torque constant Km = K [N·m/A] ('analyze torque')",
+    )
+    parser.add_argument(
+        "--skip", type=quantity("s", nonnegative=True), default=DEFAULT_SKIP, metavar="TIME",
+        help=f"time left out after each command edge [s] (default {DEFAULT_SKIP * 1000:g} ms)",
+    )
+    parser.add_argument(
+        "--tach-gain", type=quantity("V*s/rad", positive=True), default=None, metavar="GAIN",
+        help="tachometer gain [V·s/rad], when the file holds tach_voltage_V instead of a speed",
+    )
+    parser.add_argument(
+        "--friction", choices=("auto", *FRICTION_MODELS), default="auto",
+        help="friction model of the final fit (default auto: the best by BIC on the coast-downs)",
+    )
+
+
+def from_cli(experiment: str, paths: list[str], args: argparse.Namespace) -> FitResult:
+    """Run ``motorlab analyze pulse FILE...``."""
+    recs = read_tables(paths)
+    ka = args.amplifier_gain
+    if ka is None:
+        ka = metadata_quantity(recs[0], ["Ka_A_per_V", "Ka"], "A/V")
+        if ka is None:
+            raise OptionError("give the amplifier gain --Ka [A/V] (measure it with 'motorlab analyze amplifier')")
+    return pulse(
+        recs,
+        amplifier_gain=ka,
+        torque_constant=args.torque_constant,
+        amplifier_offset=args.amplifier_offset,
+        skip=args.skip,
+        tach_gain=args.tach_gain,
+        friction=args.friction,
+    )
