@@ -1,0 +1,164 @@
+"""Readers (and the writers the virtual rig uses): one module per file format, one shape for all.
+
+Every reader is ``read_<format>(path, *, ...) -> Recording`` with SI arrays under the canonical
+signal names of :data:`motorlab.recording.SIGNALS`; problems raise
+:class:`~motorlab.errors.LogFormatError` naming the file and line. :func:`read_any` picks the reader
+from the extension and the content. See ``docs/formats.md``.
+
+========================  ======================================  ==================================
+format                    reader                                  writer
+========================  ======================================  ==================================
+FTC OpMode log (.txt)     :func:`read_ftc_log`                    :func:`write_ftc_log`
+CSV with unit header      :func:`read_csv`                        :func:`write_csv`
+scope cursor times        :func:`read_scope_times`                :func:`write_csv` (``time_ms``)
+scope waveform (Rigol)    :func:`read_scope_waveform`
+SysId JSON                :func:`read_sysid_json`
+frc-characterization      :func:`read_frc_char_json`
+WPILib data log           :func:`read_wpilog`                     :func:`write_wpilog`,
+                                                                  :func:`write_sysid_wpilog`
+========================  ======================================  ==================================
+"""
+
+from __future__ import annotations
+
+import inspect
+import os
+import re
+from collections.abc import Callable, Sequence
+from typing import Any
+
+from motorlab.errors import LogFormatError, OptionError
+from motorlab.io._text import PathArg, is_number, read_bytes
+from motorlab.io.csv_table import COLUMNS, guess_delimiter, is_known_header, read_csv, split_fields, write_csv
+from motorlab.io.frc_json import read_frc_char_json, read_sysid_json
+from motorlab.io.ftc import read_ftc_log, write_ftc_log
+from motorlab.io.scope import find_rising_edges, read_scope_times, read_scope_waveform
+from motorlab.io.wpilog import (
+    WpilogEntry,
+    read_wpilog,
+    read_wpilog_entries,
+    write_sysid_wpilog,
+    write_wpilog,
+)
+from motorlab.recording import Recording
+
+#: Format name (as in ``metadata["format"]``) -> reader.
+READERS: dict[str, Callable[..., Recording]] = {
+    "ftc-log": read_ftc_log,
+    "csv": read_csv,
+    "scope-times": read_scope_times,
+    "scope-waveform": read_scope_waveform,
+    "sysid-json": read_sysid_json,
+    "frc-char-json": read_frc_char_json,
+    "wpilog": read_wpilog,
+}
+
+_CHANNEL = re.compile(r"^ch\d+(_v)?$", re.IGNORECASE)
+_SYSID_FLAG = re.compile(r'"sysid"\s*:\s*true')
+
+
+def detect_format(path: PathArg) -> str:
+    """The format of ``path`` (a key of :data:`READERS`), from its extension and content.
+
+    Raises
+    ------
+    LogFormatError
+        Missing, empty or binary file that is not a data log; text in no known layout.
+    """
+    name, raw = read_bytes(path)
+    extension = os.path.splitext(name)[1].lower()
+    if raw[:6] == b"WPILOG" or extension == ".wpilog":
+        return "wpilog"
+    if not raw.strip():
+        raise LogFormatError("the file is empty", path=name)
+    if b"\0" in raw:
+        raise LogFormatError("not a text file (it contains binary data) and not a WPILib data log", path=name)
+    text = raw.decode("utf-8-sig", errors="replace")
+    if extension == ".json" or text.lstrip().startswith("{"):
+        return "sysid-json" if _SYSID_FLAG.search(text) else "frc-char-json"
+    lines = [line.strip() for line in text.splitlines()]
+    lines = [line for line in lines if line and not line.startswith("#")]
+    if not lines:
+        raise LogFormatError("no data (only comments)", path=name)
+    first = lines[0]
+    comma = [f.lower() for f in split_fields(first, ",")]
+    if comma and comma[0] == "x" and "increment" in comma:
+        return "scope-waveform"
+    fields = split_fields(first, guess_delimiter(first))
+    lower = [f.lower() for f in fields]
+    if len(lower) == 1 and lower[0] in ("time_ms", "time_s"):
+        return "scope-times"
+    if len(lower) > 1 and lower[0] in ("time_ms", "time_s") and all(_CHANNEL.match(f) for f in lower[1:]):
+        return "scope-waveform"
+    if is_known_header(fields):
+        return "csv"
+    if all(is_number(f) for f in fields):
+        if len(fields) == 1:
+            return "scope-times"
+        if guess_delimiter(first) is None:
+            return "ftc-log"
+    if extension == ".csv":
+        return "csv"  # read_csv explains which columns it knows
+    return "ftc-log"
+
+
+def read_any(path: PathArg | Sequence[PathArg], *, cpr: float | None = None, **options: Any) -> Recording:
+    """Read a log of any supported format, choosing the reader with :func:`detect_format`.
+
+    Parameters
+    ----------
+    path
+        One file, or the files of one FTC run in order (``[testFile.txt, testFile2.txt]``).
+    cpr
+        Encoder counts per revolution [count/rev], for the readers that use it (FTC log, CSV).
+    **options
+        Passed to the reader (``current_unit=``, ``side=``, ``threshold=`` …).
+
+    Raises
+    ------
+    LogFormatError
+        As the chosen reader; or an unknown layout.
+    OptionError
+        An option the chosen reader does not take (e.g. ``cpr`` for a SysId JSON file).
+    """
+    if isinstance(path, str | os.PathLike):
+        fmt = detect_format(path)
+        target: Any = path
+    else:
+        files = list(path)
+        if len(files) == 1:
+            return read_any(files[0], cpr=cpr, **options)
+        formats = {detect_format(p) for p in files}
+        if formats != {"ftc-log"}:
+            raise OptionError("several files are read together only for a split FTC log (testFile.txt + testFile2.txt)")
+        fmt, target = "ftc-log", files
+    reader = READERS[fmt]
+    accepted = inspect.signature(reader).parameters
+    if cpr is not None:
+        options["cpr"] = cpr
+    for key in options:
+        if key not in accepted:
+            raise OptionError(f"option {key!r} does not apply to {fmt} files")
+    return reader(target, **options)
+
+
+__all__ = [
+    "COLUMNS",
+    "READERS",
+    "WpilogEntry",
+    "detect_format",
+    "find_rising_edges",
+    "read_any",
+    "read_csv",
+    "read_frc_char_json",
+    "read_ftc_log",
+    "read_scope_times",
+    "read_scope_waveform",
+    "read_sysid_json",
+    "read_wpilog",
+    "read_wpilog_entries",
+    "write_csv",
+    "write_ftc_log",
+    "write_sysid_wpilog",
+    "write_wpilog",
+]

@@ -1,0 +1,315 @@
+"""CSV tables whose header names each column with its unit (``time_s,voltage_V,current_mA``).
+
+The header is the contract: each known column name maps to a canonical signal and the unit it is
+written in (:data:`COLUMNS`); values are converted to SI with pint factors, never by code per column.
+Leading ``# key: value`` lines are metadata (``# cpr: 1120``, ``# experiment: terminal``).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from motorlab.errors import LogFormatError, OptionError
+from motorlab.io._text import PathArg, TextFile, check_cpr, is_number, parse_number, read_text, unit_factor
+from motorlab.recording import SIGNALS, Recording
+
+#: Known column names -> (canonical signal, unit as written). ``"time"`` is the time axis [s].
+COLUMNS: dict[str, tuple[str, str]] = {
+    "time_s": ("time", "s"),
+    "time_ms": ("time", "ms"),
+    "voltage_V": ("voltage", "V"),
+    "current_A": ("current", "A"),
+    "current_mA": ("current", "mA"),
+    "position_counts": ("counts", "count"),
+    "position_rad": ("position", "rad"),
+    "position_rev": ("position", "revolution"),
+    "velocity_rad_per_s": ("velocity", "rad/s"),
+    "velocity_rpm": ("velocity", "rpm"),
+    "command_V": ("command", "V"),
+    "mass_kg": ("mass", "kg"),
+    "mass_g": ("mass", "g"),
+    "torque_Nm": ("torque", "N*m"),
+    "L_uH": ("inductance", "uH"),
+    "L_mH": ("inductance", "mH"),
+    "L_H": ("inductance", "H"),
+    "Q": ("quality_factor", "dimensionless"),
+    "DCR_ohm": ("dc_resistance", "ohm"),
+    "frequency_Hz": ("frequency", "Hz"),
+    "speed_rpm": ("speed", "rpm"),
+    "speed_rad_per_s": ("speed", "rad/s"),
+    "tach_voltage_V": ("tach_voltage", "V"),
+    "battery_V": ("battery", "V"),
+}
+
+#: Prefix of user columns that the reader skips (notes, extra instruments).
+EXTRA_PREFIX = "x_"
+
+_BY_LOWER = {name.lower(): name for name in COLUMNS}
+
+
+def column_name(name: str) -> str | None:
+    """The known column ``name`` refers to (case-insensitive), or None."""
+    return _BY_LOWER.get(name.strip().lower())
+
+
+def is_known_header(fields: list[str]) -> bool:
+    """True when ``fields`` look like a header of this format (every name known or an ``x_`` extra)."""
+    names = [f for f in fields if f]
+    return bool(names) and all(column_name(f) or f.startswith(EXTRA_PREFIX) for f in names) and any(
+        column_name(f) for f in names
+    )
+
+
+def split_fields(line: str, delimiter: str | None, *, width: int = 0) -> list[str]:
+    """Fields of ``line`` (``delimiter=None`` splits on whitespace).
+
+    Trailing empty fields beyond ``width`` are removed (a trailing delimiter, as Rigol scopes write);
+    empty fields within the first ``width`` are kept, so that a missing value is noticed.
+    """
+    fields = line.split() if delimiter is None else [f.strip().strip('"') for f in line.split(delimiter)]
+    while len(fields) > width and fields[-1] == "":
+        fields.pop()
+    return fields
+
+
+def guess_delimiter(header: str) -> str | None:
+    """Comma, semicolon or tab if the header holds one (in that order), else whitespace (None)."""
+    for delimiter in (",", ";", "\t"):
+        if delimiter in header:
+            return delimiter
+    return None
+
+
+def parse_comments(text: TextFile) -> tuple[dict[str, Any], list[str], int]:
+    """Leading ``# key: value`` metadata, other leading comment lines, and the index of the first data line.
+
+    Values that read as numbers become floats; everything else stays a string.
+    """
+    metadata: dict[str, Any] = {}
+    comments: list[str] = []
+    for index, raw in enumerate(text.lines):
+        line = raw.strip()
+        if not line:
+            continue
+        if not line.startswith("#"):
+            return metadata, comments, index
+        body = line.lstrip("#").strip()
+        key, sep, value = body.partition(":")
+        if sep and key.strip() and " " not in key.strip():
+            value = value.strip()
+            metadata[key.strip()] = float(value) if is_number(value) else value
+        elif body:
+            comments.append(body)
+    return metadata, comments, len(text.lines)
+
+
+def read_csv(path: PathArg, *, cpr: float | None = None) -> Recording:
+    """Read a CSV table whose header names the columns with their units.
+
+    Parameters
+    ----------
+    path
+        The file. Comma-separated; semicolons, tabs or whitespace are accepted too.
+    cpr
+        Encoder counts per revolution [count/rev]; overrides a ``# cpr:`` metadata line. With a
+        ``position_counts`` column and a cpr, ``position`` [rad] = counts·2π/cpr is added.
+
+    Returns
+    -------
+    Recording
+        Signals in SI under canonical names (see :data:`COLUMNS`); ``time`` [s] from ``time_s`` or
+        ``time_ms``, else the row index (``metadata["time"] == "row index"``). ``metadata`` holds the
+        ``# key: value`` lines, ``format="csv"``, ``columns`` (header as written), ``units``
+        (signal -> unit as written), ``cpr``, ``comments`` and ``warnings``.
+
+    Raises
+    ------
+    LogFormatError
+        Empty or binary file, no header, an unknown column (the message lists the known ones; user
+        columns must start with ``x_``), two columns for one signal, a missing or non-numeric value,
+        NaN/inf, time going backwards. A truncated last line is dropped with a warning.
+    OptionError
+        Impossible ``cpr`` (argument or metadata).
+    """
+    text = read_text(path)
+    name = text.path
+    metadata, comments, start = parse_comments(text)
+    if start >= len(text.lines):
+        raise LogFormatError("no header line naming the columns (only comments)", path=name)
+    header_line = text.lines[start].strip()
+    delimiter = guess_delimiter(header_line)
+    header = split_fields(header_line, delimiter)
+    header_no = start + 1
+    if all(is_number(f) for f in header):
+        raise LogFormatError(
+            "no header line naming the columns (e.g. time_s,voltage_V,current_A)", path=name, line=header_no
+        )
+    targets = _resolve_header(header, path=name, line=header_no)
+
+    rows: list[list[float]] = []
+    lines: list[int] = []
+    warnings: list[str] = []
+    used = [i for i, t in enumerate(targets) if t is not None]
+    for number, raw in enumerate(text.lines[start + 1 :], start=start + 2):
+        line = raw.strip()
+        if not line or line.startswith("#"):
+            continue
+        fields = split_fields(line, delimiter, width=len(header))
+        if len(fields) != len(header):
+            if text.may_be_truncated(number) and len(fields) < len(header):
+                warnings.append(f"{name}:{number}: truncated last line dropped ({line[:40]!r})")
+                break
+            raise LogFormatError(
+                f"expected {len(header)} columns ({', '.join(header)}), found {len(fields)}",
+                path=name,
+                line=number,
+            )
+        try:
+            rows.append([parse_number(fields[i], path=name, line=number, column=header[i]) for i in used])
+        except LogFormatError:
+            if text.may_be_truncated(number) and all(is_number(fields[i]) for i in used[:-1]):
+                warnings.append(f"{name}:{number}: truncated last line dropped ({line[:40]!r})")
+                break
+            raise
+        lines.append(number)
+    if not rows:
+        raise LogFormatError("no data rows after the header", path=name, line=header_no)
+
+    data = np.array(rows, dtype=float)
+    line_arr = np.asarray(lines, dtype=int)
+    signals: dict[str, np.ndarray] = {}
+    units: dict[str, str] = {}
+    time: np.ndarray | None = None
+    for col, index in enumerate(used):
+        target = targets[index]
+        assert target is not None  # used holds only resolved columns
+        signal, unit = target
+        si = "s" if signal == "time" else SIGNALS[signal]
+        values = data[:, col] * unit_factor(unit, si)
+        units[signal] = unit
+        if signal == "time":
+            time = values
+        else:
+            signals[signal] = values
+    if time is None:
+        time = np.arange(data.shape[0], dtype=float)
+        metadata["time"] = "row index"
+    else:
+        backwards = np.flatnonzero(np.diff(time) < 0)
+        if backwards.size:
+            i = int(backwards[0]) + 1
+            raise LogFormatError("time goes backwards", path=name, line=int(line_arr[i]))
+
+    if cpr is None and "cpr" in metadata:
+        try:
+            cpr = check_cpr(metadata["cpr"])
+        except OptionError as exc:
+            raise LogFormatError(f"# cpr: {exc.message.removeprefix('cpr: ')}", path=name) from None
+    cpr = check_cpr(cpr)
+    if cpr is not None and "counts" in signals and "position" not in signals:
+        signals["position"] = signals["counts"] * (2.0 * math.pi / cpr)
+    metadata.update(
+        {
+            "format": "csv",
+            "columns": header,
+            "units": units,
+            "cpr": cpr,
+            "comments": comments,
+            "warnings": warnings,
+        }
+    )
+    return Recording(time=time, signals=signals, metadata=metadata, source=name, lines=line_arr)
+
+
+def _resolve_header(header: list[str], *, path: str, line: int) -> list[tuple[str, str] | None]:
+    """Map each header field to (signal, unit), None for ``x_`` extras; errors for unknown/duplicates."""
+    targets: list[tuple[str, str] | None] = []
+    seen: dict[str, str] = {}
+    for field in header:
+        if field.startswith(EXTRA_PREFIX):
+            targets.append(None)
+            continue
+        known = column_name(field)
+        if known is None:
+            shown = field if field else "(empty)"
+            raise LogFormatError(
+                f"unknown column {shown!r}; known columns: {', '.join(COLUMNS)} "
+                f"(prefix your own columns with {EXTRA_PREFIX!r} to have them skipped)",
+                path=path,
+                line=line,
+            )
+        signal, unit = COLUMNS[known]
+        if signal in seen:
+            raise LogFormatError(f"columns {seen[signal]!r} and {field!r} both give {signal}", path=path, line=line)
+        seen[signal] = field
+        targets.append((signal, unit))
+    return targets
+
+
+def write_csv(
+    path: PathArg,
+    columns: Mapping[str, Any],
+    *,
+    metadata: Mapping[str, Any] | None = None,
+) -> None:
+    """Write a table :func:`read_csv` reads back (for the virtual rig and for tests).
+
+    Parameters
+    ----------
+    path
+        File to create (overwritten if it exists).
+    columns
+        Header name -> values, e.g. ``{"time_s": t, "voltage_V": v}``; values in the unit the name
+        says. Names must be known (:data:`COLUMNS`) or start with ``x_``.
+    metadata
+        Written first as ``# key: value`` lines (e.g. ``{"cpr": 1120, "experiment": "terminal"}``).
+
+    Raises
+    ------
+    OptionError
+        Unknown column name, columns of different lengths, non-finite values, a metadata key or
+        value that would not read back (newline, colon in the key).
+    """
+    names = list(columns)
+    if not names:
+        raise OptionError("write_csv: no columns")
+    arrays = []
+    for key in names:
+        if column_name(key) is None and not key.startswith(EXTRA_PREFIX):
+            raise OptionError(f"write_csv: unknown column {key!r}; known columns: {', '.join(COLUMNS)}")
+        if any(c in key for c in ",;\t\n "):
+            raise OptionError(f"write_csv: column name {key!r} contains a delimiter")
+        values = np.asarray(columns[key])
+        if values.ndim != 1:
+            raise OptionError(f"write_csv: column {key!r} must be one-dimensional")
+        if not key.startswith(EXTRA_PREFIX) and not np.all(np.isfinite(values.astype(float))):
+            raise OptionError(f"write_csv: column {key!r} holds NaN or inf")
+        arrays.append(values)
+    size = arrays[0].size
+    for key, values in zip(names, arrays, strict=True):
+        if values.size != size:
+            raise OptionError(f"write_csv: column {key!r} has {values.size} values, {names[0]!r} has {size}")
+    out = []
+    for key, value in (metadata or {}).items():
+        text = str(value)
+        if ":" in str(key) or "\n" in str(key) + text or not str(key).strip() or " " in str(key):
+            raise OptionError(f"write_csv: metadata {key!r}: {text!r} cannot be written as '# key: value'")
+        out.append(f"# {key}: {text}")
+    out.append(",".join(names))
+    for k in range(size):
+        out.append(",".join(_format(values[k]) for values in arrays))
+    with open(os.fspath(path), "w", encoding="utf-8", newline="") as handle:
+        handle.write("\n".join(out) + "\n")
+
+
+def _format(value: Any) -> str:
+    if isinstance(value, float | np.floating):
+        return repr(float(value))
+    if isinstance(value, int | np.integer):
+        return str(int(value))
+    return str(value)

@@ -1,0 +1,381 @@
+"""JSON logs of the FRC characterization tools: WPILib SysId (JSON era) and frc-characterization.
+
+Both store four tests, ``slow-forward``, ``slow-backward`` (quasistatic voltage ramps) and
+``fast-forward``, ``fast-backward`` (dynamic voltage steps), as lists of rows, with the mechanism's
+``units`` and ``unitsPerRotation``. The readers return one :class:`~motorlab.recording.Recording`
+holding the tests one after the other, with ``segments`` so that ``Recording.split()`` gives them
+back separately. See ``docs/formats.md`` and ``shared/data/real/README.md``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from motorlab.errors import LogFormatError, OptionError
+from motorlab.io._text import PathArg, read_bytes, unit_factor
+from motorlab.recording import Recording
+
+#: The four tests, in the order the tools run them (segments keep this order).
+TESTS = ("slow-forward", "slow-backward", "fast-forward", "fast-backward")
+
+#: Mechanism units the tools write -> (pint unit, SI unit of the stored signals).
+UNITS: dict[str, tuple[str, str]] = {
+    "meters": ("m", "m"),
+    "feet": ("ft", "m"),
+    "inches": ("inch", "m"),
+    "radians": ("rad", "rad"),
+    "rotations": ("revolution", "rad"),
+    "degrees": ("degree", "rad"),
+}
+
+_SIDES = ("left", "right")
+
+
+def test_kind(name: str) -> dict[str, Any]:
+    """``{"kind": "quasistatic"|"dynamic"|None, "direction": +1|-1|0}`` of a test name.
+
+    Accepts the JSON names (``slow-forward``, ``fast-backward``) and the data-log names
+    (``quasistatic-forward``, ``dynamic-reverse``).
+    """
+    tokens = name.split("#")[0].split("-")
+    kinds = {"slow": "quasistatic", "quasistatic": "quasistatic", "fast": "dynamic", "dynamic": "dynamic"}
+    directions = {"forward": 1, "backward": -1, "reverse": -1}
+    return {"kind": kinds.get(tokens[0]), "direction": directions.get(tokens[-1], 0)}
+
+
+@dataclass
+class _Test:
+    name: str
+    rows: np.ndarray
+    lines: np.ndarray
+
+
+def _load(path: PathArg) -> tuple[str, dict[str, Any], str]:
+    name, raw = read_bytes(path)
+    if not raw.strip():
+        raise LogFormatError("the file is empty", path=name)
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError:
+        raise LogFormatError("not a text file (invalid UTF-8)", path=name) from None
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise LogFormatError(f"not valid JSON ({exc.msg})", path=name, line=exc.lineno) from None
+    if not isinstance(data, dict):
+        raise LogFormatError("expected a JSON object with test names as keys", path=name, line=1)
+    return name, data, text
+
+
+_TOKEN = re.compile(r'"(?:[^"\\]|\\.)*"|[\[\]{}]')
+
+
+def _row_lines(text: str) -> dict[str, list[int]]:
+    """1-based line of each row of each top-level list (``{"slow-forward": [12, 23, ...]}``)."""
+    starts: dict[str, list[int]] = {}
+    depth = 0
+    last_string = ""
+    current: list[int] | None = None
+    positions: list[int] = []
+    for match in _TOKEN.finditer(text):
+        token = match.group()
+        if token[0] == '"':
+            if depth == 1:
+                last_string = token[1:-1]
+            continue
+        if token in "[{":
+            if depth == 1 and token == "[":
+                current = starts.setdefault(last_string, [])
+            elif depth == 2 and token == "[" and current is not None:
+                current.append(len(positions))
+                positions.append(match.start())
+            depth += 1
+        else:
+            depth -= 1
+            if depth == 1:
+                current = None
+    if text.isascii():  # fast path; character and byte offsets agree
+        newlines = np.flatnonzero(np.frombuffer(text.encode("ascii"), dtype=np.uint8) == ord("\n"))
+    else:
+        newlines = np.fromiter((m.start() for m in re.finditer("\n", text)), dtype=int)
+    lines = np.searchsorted(newlines, np.asarray(positions, dtype=int), side="left") + 1
+    return {key: [int(lines[i]) for i in idx] for key, idx in starts.items()}
+
+
+def _tests(name: str, data: dict[str, Any], text: str, columns: tuple[int, ...]) -> tuple[list[_Test], list[str]]:
+    """The standard tests present, as float arrays, checked (numbers, finite, column count, time order)."""
+    line_map = _row_lines(text)
+    tests: list[_Test] = []
+    warnings: list[str] = []
+    for key in TESTS:
+        if key not in data:
+            continue
+        rows = data[key]
+        lines = line_map.get(key, [])
+        if not isinstance(rows, list):
+            raise LogFormatError(f"{key!r} should be a list of rows", path=name)
+        if not rows:
+            warnings.append(f"test {key!r} is empty")
+            continue
+        ncol = len(rows[0]) if isinstance(rows[0], list) else -1
+        if ncol not in columns:
+            raise LogFormatError(
+                f"test {key!r}: rows should have {' or '.join(map(str, columns))} columns, found {ncol}",
+                path=name,
+                line=lines[0] if lines else None,
+            )
+        for k, row in enumerate(rows):
+            line = lines[k] if k < len(lines) else None
+            if not isinstance(row, list) or len(row) != ncol:
+                found = len(row) if isinstance(row, list) else type(row).__name__
+                message = f"test {key!r} row {k}: expected {ncol} values, found {found}"
+                raise LogFormatError(message, path=name, line=line)
+            for value in row:
+                if isinstance(value, bool) or not isinstance(value, int | float):
+                    raise LogFormatError(f"test {key!r} row {k}: {value!r} is not a number", path=name, line=line)
+                if not math.isfinite(value):
+                    message = f"test {key!r} row {k}: {value!r} is not a finite number"
+                    raise LogFormatError(message, path=name, line=line)
+        array = np.asarray(rows, dtype=float)
+        line_arr = np.asarray(lines if len(lines) == len(rows) else np.zeros(len(rows)), dtype=int)
+        back = np.flatnonzero(np.diff(array[:, 0]) < 0)
+        if back.size:
+            i = int(back[0]) + 1
+            raise LogFormatError(f"test {key!r}: time goes backwards at row {i}", path=name, line=int(line_arr[i]))
+        tests.append(_Test(key, array, line_arr))
+    if not tests:
+        raise LogFormatError(f"no test data: none of {', '.join(TESTS)} is in the file", path=name)
+    return tests, warnings
+
+
+def _units(name: str, data: dict[str, Any]) -> tuple[str, float, str, float]:
+    """(units as written, unitsPerRotation, SI unit of position, factor rotations -> SI)."""
+    units = data.get("units")
+    upr = data.get("unitsPerRotation")
+    if not isinstance(units, str) or units.lower() not in UNITS:
+        known = ", ".join(u.title() for u in UNITS)
+        raise LogFormatError(f"units {units!r} unknown; expected one of {known}", path=name)
+    if isinstance(upr, bool) or not isinstance(upr, int | float) or not math.isfinite(upr) or upr <= 0:
+        raise LogFormatError(f"unitsPerRotation {upr!r} is not a positive number", path=name)
+    pint_unit, si_unit = UNITS[units.lower()]
+    return units, float(upr), si_unit, float(upr) * unit_factor(pint_unit, si_unit)
+
+
+def _check_side(side: str) -> int:
+    if side not in _SIDES:
+        raise OptionError(f"side must be 'left' or 'right', got {side!r}")
+    return _SIDES.index(side)
+
+
+def _assemble(
+    name: str,
+    parts: list[tuple[str, dict[str, np.ndarray], np.ndarray]],
+    metadata: dict[str, Any],
+) -> Recording:
+    """Concatenate per-test signals (with ``time``) into one recording with segments."""
+    segments: dict[str, tuple[int, int]] = {}
+    start = 0
+    for key, signals, _ in parts:
+        stop = start + signals["time"].size
+        segments[key] = (start, stop)
+        start = stop
+    names = [k for k in parts[0][1] if k != "time"]
+    time = np.concatenate([s["time"] for _, s, _ in parts])
+    signals = {k: np.concatenate([s[k] for _, s, _ in parts]) for k in names}
+    metadata["segment_kinds"] = {key: test_kind(key) for key, _, _ in parts}
+    return Recording(
+        time=time,
+        signals=signals,
+        metadata=metadata,
+        source=name,
+        lines=np.concatenate([lines for _, _, lines in parts]),
+        segments=segments,
+    )
+
+
+def _direction_warnings(key: str, voltage: np.ndarray, velocity: np.ndarray) -> list[str]:
+    """A warning when the motion of a test mostly opposes its applied voltage (inverted sensor?)."""
+    moving = (np.abs(velocity) > 0) & (voltage != 0)
+    if moving.sum() < 10:
+        return []
+    agree = np.mean(np.sign(velocity[moving]) == np.sign(voltage[moving]))
+    if agree < 0.5:
+        return [f"test {key!r}: velocity opposes the voltage in {100 * (1 - agree):.0f} % of moving samples"]
+    return []
+
+
+def read_sysid_json(path: PathArg, *, side: str = "left") -> Recording:
+    """Read a WPILib SysId JSON log (``"sysid": true``; the format before data logs).
+
+    Parameters
+    ----------
+    path
+        The JSON file.
+    side
+        For drivetrain tests (rows of 9 values), which side to take: ``"left"`` or ``"right"``.
+
+    Returns
+    -------
+    Recording
+        The four tests one after the other, ``segments`` per test. Signals: ``voltage`` [V] (signed,
+        as SysId logs it), ``position`` and ``velocity`` = row value × ``unitsPerRotation`` converted to
+        SI: [rad], [rad/s] for angular units, [m], [m/s] for linear ones. ``metadata``: ``format``
+        ``"sysid-json"``, ``test`` (``Simple``, ``Arm``, ``Elevator``, ``Drivetrain`` …), ``units`` as
+        written, ``unitsPerRotation``, ``position_unit``/``velocity_unit`` (SI), ``side`` (drivetrain),
+        ``segment_kinds``, ``repeated_fraction`` (share of rows whose position and velocity repeat
+        the previous row's: the controller's status frame is slower than the logging loop) and
+        ``repeated_fraction_by_test``.
+
+    Raises
+    ------
+    LogFormatError
+        Not JSON, no ``"sysid"`` key, unknown units, rows of the wrong length, non-numbers, NaN,
+        time going backwards.
+    OptionError
+        Bad ``side``.
+
+    Notes
+    -----
+    Rows are ``timestamp, voltage, position, velocity`` or, for drivetrains, ``timestamp, l voltage,
+    r voltage, l position, r position, l velocity, r velocity, angle, angular rate``; positions and
+    velocities are in rotations of the encoder shaft, and SysId's loader multiplies them by
+    ``unitsPerRotation``. Repeated rows are kept as recorded: dropping them would bias the sampling.
+    """
+    side_index = _check_side(side)
+    name, data, text = _load(path)
+    if not data.get("sysid"):
+        raise LogFormatError(
+            'not a SysId JSON file (no "sysid": true); frc-characterization files are read by read_frc_char_json',
+            path=name,
+        )
+    units, upr, si_unit, factor = _units(name, data)
+    tests, warnings = _tests(name, data, text, (4, 9))
+    drivetrain = tests[0].rows.shape[1] == 9
+    if drivetrain:
+        cols = {"voltage": 1 + side_index, "position": 3 + side_index, "velocity": 5 + side_index}
+    else:
+        cols = {"voltage": 1, "position": 2, "velocity": 3}
+    parts = []
+    repeated: dict[str, float] = {}
+    n_repeated = 0
+    for test in tests:
+        if test.rows.shape[1] != tests[0].rows.shape[1]:
+            raise LogFormatError(f"test {test.name!r} has rows of another length than {tests[0].name!r}", path=name)
+        rows = test.rows
+        signals = {
+            "time": rows[:, 0],
+            "voltage": rows[:, cols["voltage"]],
+            "position": rows[:, cols["position"]] * factor,
+            "velocity": rows[:, cols["velocity"]] * factor,
+        }
+        same = np.all(np.diff(rows[:, [cols["position"], cols["velocity"]]], axis=0) == 0, axis=1)
+        repeated[test.name] = float(same.mean()) if same.size else 0.0
+        n_repeated += int(same.sum())
+        warnings += _direction_warnings(test.name, signals["voltage"], signals["velocity"])
+        parts.append((test.name, signals, test.lines))
+    total = sum(max(t.rows.shape[0] - 1, 0) for t in tests)
+    metadata = {
+        "format": "sysid-json",
+        "test": data.get("test"),
+        "units": units,
+        "unitsPerRotation": upr,
+        "position_unit": si_unit,
+        "velocity_unit": f"{si_unit}/s",
+        "side": side if drivetrain else None,
+        "repeated_fraction": n_repeated / total if total else 0.0,
+        "repeated_fraction_by_test": repeated,
+        "other_keys": [k for k in data if isinstance(data[k], list) and k not in TESTS],
+        "warnings": warnings,
+    }
+    return _assemble(name, parts, metadata)
+
+
+def read_frc_char_json(path: PathArg, *, side: str = "left") -> Recording:
+    """Read a frc-characterization JSON log (WPILib's Python-era tool, before SysId).
+
+    Parameters
+    ----------
+    path
+        The JSON file.
+    side
+        For drivetrain data (rows of 10 values), which side to take: ``"left"`` or ``"right"``.
+
+    Returns
+    -------
+    Recording
+        The four tests one after the other, ``segments`` per test. Signals: ``voltage`` [V] signed to
+        match the motion (negative in the backward tests), ``battery`` [V], ``position``,
+        ``velocity`` (row × ``unitsPerRotation`` in SI: [m], [m/s] or [rad], [rad/s]).
+        ``metadata``: ``format`` ``"frc-char-json"``, ``test``, ``units`` as written,
+        ``unitsPerRotation``, ``position_unit``/``velocity_unit``, ``side`` (drivetrain),
+        ``segment_kinds``, ``stale_rows_dropped`` ({test: rows}), ``other_keys`` (e.g.
+        ``track-width``, not read) and ``warnings``.
+
+    Raises
+    ------
+    LogFormatError
+        Not JSON, a SysId file, unknown units, rows of the wrong length, non-numbers, NaN, time going
+        backwards.
+    OptionError
+        Bad ``side``.
+
+    Notes
+    -----
+    Drivetrain rows are ``time, battery, autospeed, l_volts, r_volts, l_pos, r_pos, l_vel, r_vel,
+    gyro_angle``; other mechanisms ``time, battery, autospeed, volts, pos, vel``. Quirks handled:
+
+    * the applied voltage is logged as a magnitude; the sign is the test's direction (backward
+      tests negative), so that voltage and velocity agree as in the model V = kS·sgn(v) + kV·v + kA·a;
+    * the first row of a test can carry a stale voltage from the previous test (``autospeed`` is 0
+      but the voltage is not): such a row is dropped and counted in ``stale_rows_dropped``.
+    """
+    side_index = _check_side(side)
+    name, data, text = _load(path)
+    if data.get("sysid"):
+        raise LogFormatError('this is a SysId JSON file ("sysid": true): use read_sysid_json', path=name)
+    units, upr, si_unit, factor = _units(name, data)
+    tests, warnings = _tests(name, data, text, (6, 10))
+    drivetrain = tests[0].rows.shape[1] == 10
+    if drivetrain:
+        cols = {"voltage": 3 + side_index, "position": 5 + side_index, "velocity": 7 + side_index}
+    else:
+        cols = {"voltage": 3, "position": 4, "velocity": 5}
+    parts = []
+    stale: dict[str, int] = {}
+    for test in tests:
+        if test.rows.shape[1] != tests[0].rows.shape[1]:
+            raise LogFormatError(f"test {test.name!r} has rows of another length than {tests[0].name!r}", path=name)
+        rows, lines = test.rows, test.lines
+        first = rows[0]
+        if rows.shape[0] > 1 and first[2] == 0 and first[cols["voltage"]] != 0:
+            rows, lines = rows[1:], lines[1:]
+            stale[test.name] = 1
+        direction = test_kind(test.name)["direction"]
+        signals = {
+            "time": rows[:, 0],
+            "voltage": direction * np.abs(rows[:, cols["voltage"]]) + 0.0,  # + 0.0: no -0.0
+            "battery": rows[:, 1],
+            "position": rows[:, cols["position"]] * factor,
+            "velocity": rows[:, cols["velocity"]] * factor,
+        }
+        warnings += _direction_warnings(test.name, signals["voltage"], signals["velocity"])
+        parts.append((test.name, signals, lines))
+    metadata = {
+        "format": "frc-char-json",
+        "test": data.get("test"),
+        "units": units,
+        "unitsPerRotation": upr,
+        "position_unit": si_unit,
+        "velocity_unit": f"{si_unit}/s",
+        "side": side if drivetrain else None,
+        "stale_rows_dropped": stale,
+        "other_keys": [k for k in data if isinstance(data[k], list) and k not in TESTS],
+        "warnings": warnings,
+    }
+    return _assemble(name, parts, metadata)
