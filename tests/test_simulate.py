@@ -172,3 +172,27 @@ def test_rejects_bad_supply_and_schedule():
         simulate(MOTOR, [(1.0, OpenCircuit()), (0.5, VoltageDrive(1.0))], duration=2.0)
     with pytest.raises(OptionError):
         simulate(MOTOR, VoltageDrive(lambda t: np.full_like(t, np.nan)), duration=0.1)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_modal_step_equals_the_matrix_exponential(seed):
+    from scipy import linalg
+
+    from motorlab.simulate import _continuous, _discretise, _Regime
+
+    rng = np.random.default_rng(seed)
+    p = MotorParams(K=rng.uniform(0.05, 1), R=rng.uniform(0.5, 5), L=rng.uniform(1e-4, 2e-3),
+                    J=10 ** rng.uniform(-5, 0), b=rng.uniform(0, 1e-2), Tf=rng.uniform(0, 0.1))
+    for reg in (_Regime("V", 1), _Regime("V", 0), _Regime("I", -1), _Regime("O", 1)):
+        names, a, bm = _continuous(p, reg)
+        n = len(names)
+        m = np.zeros((n + 3, n + 3))
+        m[:n, :n] = a
+        m[:n, n + 1 :] = bm
+        if "w" in names:
+            m[n, names.index("w")] = 1.0
+        e = linalg.expm(m * 1e-3)
+        lin = _discretise(p, reg, 1e-3)
+        assert lin.ad == pytest.approx(e[:n, :n], rel=1e-9, abs=1e-12)
+        assert lin.bd == pytest.approx(e[:n, n + 1 :], rel=1e-9, abs=1e-12)
+        assert lin.theta_u == pytest.approx(e[n, n + 1 :], rel=1e-8, abs=1e-15)

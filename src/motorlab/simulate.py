@@ -184,6 +184,7 @@ class _Linear:
     theta_x: np.ndarray  # Δθ = theta_x·x_k + theta_u·u_k
     theta_u: np.ndarray
     modal: tuple[np.ndarray, np.ndarray, np.ndarray] | None  # (eigvals of ad, W, W⁻¹)
+    lam: np.ndarray | None = None  # eigenvalues of a (when diagonalisable)
 
 
 def _continuous(p: MotorParams, reg: _Regime) -> tuple[tuple[str, ...], np.ndarray, np.ndarray]:
@@ -204,11 +205,46 @@ def _continuous(p: MotorParams, reg: _Regime) -> tuple[tuple[str, ...], np.ndarr
     return ("w",), np.array([[-b / J]]), np.array([[0.0, fr]])
 
 
+def _phi(lam: np.ndarray, tau: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """e^(λτ), φ1 = ∫₀^τ e^(λs) ds and φ2 = ∫₀^τ φ1(s) ds, accurate for small |λτ| and λ = 0."""
+    lam = np.asarray(lam)
+    x = lam * tau
+    e = np.exp(x)
+    small = np.abs(x) < 1e-3
+    safe = np.where(small, 1.0, lam)
+    phi1 = np.where(small, tau * (1 + x / 2 + x * x / 6 + x**3 / 24), np.expm1(x) / safe)
+    phi2 = np.where(small, tau * tau * (0.5 + x / 6 + x * x / 24 + x**3 / 120), (np.expm1(x) - x) / (safe * safe))
+    return e, phi1, phi2
+
+
+def _modal_maps(
+    lin_a: np.ndarray, lin_b: np.ndarray, names: tuple[str, ...], lam: np.ndarray, w: np.ndarray,
+    winv: np.ndarray, tau: float,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Exact ZOH maps over ``tau`` from the eigen-decomposition: x⁺ = Ad·x + Bd·u, Δθ = θx·x + θu·u."""
+    e, phi1, phi2 = _phi(lam, tau)
+    ad = np.real((w * e) @ winv)
+    bd = np.real((w * phi1) @ winv @ lin_b)
+    if "w" in names:
+        row = w[names.index("w")]
+        theta_x = np.real((row * phi1) @ winv)
+        theta_u = np.real((row * phi2) @ winv @ lin_b)
+    else:
+        theta_x, theta_u = np.zeros(len(names)), np.zeros(2)
+    return ad, bd, theta_x, theta_u
+
+
 @lru_cache(maxsize=256)
 def _discretise(p: MotorParams, reg: _Regime, dt: float) -> _Linear:
     names, a, bm = _continuous(p, reg)
     n = len(names)
-    # Augment with θ (θ' = ω) and the two inputs, then one matrix exponential gives the exact ZOH step.
+    if n:
+        lam, w = np.linalg.eig(a)
+        if np.linalg.cond(w) < 1e10:
+            winv = np.linalg.inv(w)
+            ad, bd, theta_x, theta_u = _modal_maps(a, bm, names, lam, w, winv, dt)
+            return _Linear(names, a, bm, ad, bd, theta_x, theta_u, (np.exp(lam * dt), w, winv), lam)
+    # Defective or empty: augment with θ (θ' = ω) and the inputs; one matrix exponential is the exact step.
     m = np.zeros((n + 3, n + 3))
     m[:n, :n] = a
     m[:n, n + 1 : n + 3] = bm
@@ -217,12 +253,7 @@ def _discretise(p: MotorParams, reg: _Regime, dt: float) -> _Linear:
     e = linalg.expm(m * dt)
     ad, bd = e[:n, :n], e[:n, n + 1 : n + 3]
     theta_x, theta_u = e[n, :n], e[n, n + 1 : n + 3]
-    modal = None
-    if n:
-        lam, w = np.linalg.eig(a)
-        if np.linalg.cond(w) < 1e10:
-            modal = (np.exp(lam * dt), w, np.linalg.inv(w))
-    return _Linear(names, a, bm, ad, bd, theta_x, theta_u, modal)
+    return _Linear(names, a, bm, ad, bd, theta_x, theta_u, None)
 
 
 def _propagate_chunk(lin: _Linear, x0: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -254,6 +285,12 @@ def _propagate_chunk(lin: _Linear, x0: np.ndarray, u: np.ndarray) -> tuple[np.nd
 def _flow(lin: _Linear, x0: np.ndarray, u: np.ndarray, tau: float) -> tuple[np.ndarray, float]:
     """Exact state and θ increment after a time ``tau`` (0 ≤ tau ≤ dt) from ``x0`` with input ``u``."""
     n = len(lin.names)
+    if n == 0:
+        return np.zeros(0), 0.0
+    if lin.modal is not None and lin.lam is not None:
+        _, w, winv = lin.modal
+        ad, bd, theta_x, theta_u = _modal_maps(lin.a, lin.b, lin.names, lin.lam, w, winv, tau)
+        return ad @ x0 + bd @ u, float(theta_x @ x0 + theta_u @ u)
     m = np.zeros((n + 2, n + 2))
     m[:n, :n] = lin.a
     m[:n, n + 1] = lin.b @ u

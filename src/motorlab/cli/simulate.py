@@ -1,0 +1,214 @@
+"""``motorlab simulate EXPERIMENT --motor NAME [--unit-seed N] [--noise-seed N] [settings] -o FILE``.
+
+Runs one experiment of the seeds on the virtual dynamometer (:mod:`motorlab.rig`) and writes the
+file(s) a real rig gives plus ``truth.json`` beside them. ``spindown --split`` writes ``FILE`` and
+``<stem>2<suffix>`` (``testFile.txt`` + ``testFile2.txt``). ``motorlab simulate session --motor NAME
+--units 3 -o DIR`` writes a whole session (every experiment for several units) with its TOML file.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+from collections.abc import Callable
+from typing import Any
+
+from motorlab.cli.common import positive_int, quantity
+from motorlab.errors import OptionError
+
+#: Sub-command help per experiment (seed section it reproduces).
+_HELP = {
+    "spindown": "seed 1 'Flywheel and INA219 Experiment': spin up the flywheel, coast (FTC log)",
+    "spinup": "seed 1 'First Experiment': constant current into the flywheel (FTC log)",
+    "free-spinup": "seed 1 'Free Motor Spin-Up': scope times of 20 rising edges (time_ms CSV)",
+    "terminal": "seed 1 'Terminal Velocity': steady current and encoder frequency (CSV)",
+    "lcr": "seed 1 'LCR Meter Experiment': L, Q, DCR at 10 positions, 1 kHz (CSV)",
+    "torque": "seed 2 torque constant: lever arm on a scale (current_A,mass_kg CSV)",
+    "amplifier": "seed 2 amplifier gain Ka (command_V,current_A CSV)",
+    "tachometer": "seed 2 tachometer gain (speed_rpm,tach_voltage_V CSV)",
+    "pulse": "seed 2 square-wave pulse through the amplifier, tachometer speed (CSV)",
+    "transient": "voltage steps/ramps/random steps sampled at a fixed rate (CSV)",
+    "sysid": "WPILib SysId quasistatic and dynamic tests (SysId JSON)",
+}
+
+
+def _list_of(unit: str) -> Callable[[str], list[float]]:
+    """argparse type: comma-separated quantities in ``unit`` (``"0.25,0.3,0.35"`` or ``"250 mA, 0.3 A"``)."""
+    single = quantity(unit)
+
+    def convert(text: str) -> list[float]:
+        parts = [p for p in text.split(",") if p.strip()]
+        if not parts:
+            raise argparse.ArgumentTypeError("expected a comma-separated list")
+        return [single(p) for p in parts]
+
+    convert.__name__ = f"list of quantities in {unit}"
+    return convert
+
+
+def _nonnegative_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"{text!r} must not be negative")
+    return value
+
+
+def _common(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--motor", required=True, help="catalogue key or name, e.g. neverest40")
+    parser.add_argument("--unit-seed", type=_nonnegative_int, default=0,
+                        help="which unit: 0 is unit A, 1 is B … (draws its true parameters; default 0)")
+    parser.add_argument("--noise-seed", type=_nonnegative_int, default=0,
+                        help="seed of the reading noise and timing jitter (default 0)")
+    parser.add_argument("-o", "--output", required=True, metavar="FILE", help="file to write")
+
+
+def register(subparsers: Any) -> None:
+    """Add the ``simulate`` sub-command and one sub-parser per experiment."""
+    parser = subparsers.add_parser(
+        "simulate",
+        help="run an experiment on the virtual dynamometer",
+        description="Run one experiment of the seeds on a simulated unit of a catalogue motor and write "
+        "the files a real rig gives, plus truth.json (true parameters, expected results, settings).",
+    )
+    sub = parser.add_subparsers(dest="experiment", metavar="EXPERIMENT", parser_class=type(parser))
+    sub.required = True
+    a = {name: sub.add_parser(name, help=text, description=text) for name, text in _HELP.items()}
+    for p in a.values():
+        _common(p)
+
+    p = a["spindown"]
+    p.add_argument("--voltage", type=quantity("V", positive=True), default=12.0,
+                   help="supply voltage [V] (≤ 16 V: the INA219 is in circuit; default 12)")
+    p.add_argument("--current-limit", type=quantity("A", positive=True), default=4.0,
+                   help="supply current limit [A] (default 4)")
+    p.add_argument("--on-time", type=quantity("s", positive=True), default=30.0, help="relay closed [s] (30)")
+    p.add_argument("--coast-time", type=quantity("s", positive=True), default=60.0, help="coast logged [s] (60)")
+    p.add_argument("--split", action="store_true",
+                   help="write FILE and <stem>2<suffix> with blank lines and placeholder rows, as the OpMode")
+    p.add_argument("--crlf", action="store_true", help="Windows line endings")
+
+    p = a["spinup"]
+    p.add_argument("--current", type=quantity("A"), default=2.0, help="supply current limit [A] (2)")
+    p.add_argument("--voltage", type=quantity("V", positive=True), default=12.0, help="supply voltage [V] (12)")
+    p.add_argument("--duration", type=quantity("s", positive=True), default=30.0, help="relay closed [s] (30)")
+    p.add_argument("--coast-time", type=quantity("s", nonnegative=True), default=0.0, help="coast logged [s] (0)")
+
+    p = a["free-spinup"]
+    p.add_argument("--current", type=quantity("A"), default=0.5, help="supply current limit [A] (0.5)")
+    p.add_argument("--voltage", type=quantity("V", positive=True), default=18.0, help="supply voltage [V] (18)")
+    p.add_argument("--hand-speed", type=quantity("rad/s", nonnegative=True), default=None,
+                   help="speed of the hand start [rad/s] (default 5 %% of the free speed)")
+    p.add_argument("--edges", type=positive_int, default=20, help="rising edges recorded (20)")
+    p.add_argument("--timebase", type=quantity("s", positive=True), default=None,
+                   help="scope horizontal scale [s/div] (default: fine enough for the edges)")
+    p.add_argument("--waveform", metavar="FILE", default=None, help="also write the Rigol waveform CSV")
+
+    p = a["terminal"]
+    p.add_argument("--currents", type=_list_of("A"), default=None, help="current settings [A], comma-separated")
+    p.add_argument("--voltage", type=quantity("V", positive=True), default=18.0, help="supply voltage [V] (18)")
+
+    a["lcr"].add_argument("--positions", type=positive_int, default=10, help="shaft positions (10)")
+
+    p = a["torque"]
+    p.add_argument("--currents", type=_list_of("A"), default=None, help="currents [A], comma-separated")
+    p.add_argument("--arm", type=quantity("m", positive=True), default=0.15, help="lever arm [m] (0.15)")
+    p.add_argument("--no-dither", action="store_true", help="no dither: stiction biases the readings")
+
+    a["amplifier"].add_argument("--commands", type=_list_of("V"), default=None, help="commands [V], comma-separated")
+    a["tachometer"].add_argument("--commands", type=_list_of("V"), default=None,
+                                 help="amplifier commands [V], comma-separated")
+
+    p = a["pulse"]
+    p.add_argument("--amplitude", type=quantity("V", positive=True), default=1.0, help="high level [V] (1)")
+    p.add_argument("--period", type=quantity("s", positive=True), default=2.0, help="period [s] (2)")
+    p.add_argument("--duty", type=float, default=0.12, help="duty cycle (0.12)")
+    p.add_argument("--periods", type=positive_int, default=1, help="periods recorded (1)")
+    p.add_argument("--sample-interval", type=quantity("s", positive=True), default=1e-3,
+                   help="scope sample interval [s] (1 ms)")
+    p.add_argument("--flywheel", action="store_true", help="attach the flywheel")
+    p.add_argument("--raw-tach", action="store_true", help="write tach_voltage_V instead of the speed")
+
+    p = a["transient"]
+    p.add_argument("--profile", choices=("steps", "ramps", "random"), default="steps", help="voltage profile")
+    p.add_argument("--rate", type=quantity("Hz", positive=True), default=1000.0, help="sample rate [Hz] (1000)")
+    p.add_argument("--duration", type=quantity("s", positive=True), default=4.0, help="length [s] (4)")
+    p.add_argument("--max-voltage", type=quantity("V", positive=True), default=12.0, help="largest |V| (12)")
+    p.add_argument("--no-current", action="store_true", help="do not log the current")
+    p.add_argument("--flywheel", action="store_true", help="attach the flywheel")
+
+    p = a["sysid"]
+    p.add_argument("--ramp-rate", type=quantity("V/s", positive=True), default=0.25, help="quasistatic [V/s]")
+    p.add_argument("--step-voltage", type=quantity("V", positive=True), default=7.0, help="dynamic step [V]")
+    p.add_argument("--quasistatic-duration", type=quantity("s", positive=True), default=30.0, help="[s] (30)")
+    p.add_argument("--dynamic-duration", type=quantity("s", positive=True), default=10.0, help="[s] (10)")
+    p.add_argument("--no-flywheel", action="store_true", help="bare motor (kA hard to observe)")
+
+    for p in a.values():
+        p.set_defaults(func=run)
+
+    session = sub.add_parser("session", help="a whole session: every experiment for several units",
+                             description="Write a simulated session folder (data files, truth.json and "
+                             "the session TOML) for several units of one motor.")
+    session.add_argument("--motor", required=True, help="catalogue key or name")
+    session.add_argument("--units", type=positive_int, default=3, help="number of units (3: A, B, C)")
+    session.add_argument("--seed", type=_nonnegative_int, default=0, help="noise seed (0)")
+    session.add_argument("-o", "--output", required=True, metavar="DIR", help="folder to write")
+    session.set_defaults(func=run_session)
+
+
+def _settings(args: argparse.Namespace) -> dict[str, Any]:
+    """The experiment method's keyword settings from the parsed options."""
+    e = args.experiment
+    if e == "spindown":
+        return {"voltage": args.voltage, "current_limit": args.current_limit, "on_time": args.on_time,
+                "coast_time": args.coast_time, "split": args.split, "crlf": args.crlf}
+    if e == "spinup":
+        return {"current": args.current, "voltage": args.voltage, "duration": args.duration,
+                "coast_time": args.coast_time}
+    if e == "free-spinup":
+        return {"current": args.current, "voltage": args.voltage, "hand_speed": args.hand_speed,
+                "edges": args.edges, "timebase": args.timebase, "waveform": args.waveform}
+    if e == "terminal":
+        return {"currents": args.currents, "voltage": args.voltage}
+    if e == "lcr":
+        return {"positions": args.positions}
+    if e == "torque":
+        return {"currents": args.currents, "arm": args.arm, "dither": not args.no_dither}
+    if e in ("amplifier", "tachometer"):
+        return {"commands": args.commands}
+    if e == "pulse":
+        return {"amplitude": args.amplitude, "period": args.period, "duty": args.duty, "periods": args.periods,
+                "sample_interval": args.sample_interval, "flywheel": args.flywheel, "raw_tach": args.raw_tach}
+    if e == "transient":
+        return {"profile": args.profile, "rate": args.rate, "duration": args.duration,
+                "max_voltage": args.max_voltage, "include_current": not args.no_current, "flywheel": args.flywheel}
+    if e == "sysid":
+        return {"ramp_rate": args.ramp_rate, "step_voltage": args.step_voltage,
+                "quasistatic_duration": args.quasistatic_duration, "dynamic_duration": args.dynamic_duration,
+                "flywheel": not args.no_flywheel}
+    raise OptionError(f"unknown experiment {e!r}")  # pragma: no cover - argparse restricts the choices
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run the experiment; print the files written (errors: MotorlabError -> exit code 2)."""
+    from motorlab.rig import VirtualRig
+
+    rig = VirtualRig(args.motor, unit_seed=args.unit_seed, noise_seed=args.noise_seed)
+    result = rig.run(args.experiment, args.output, **_settings(args))
+    files = " + ".join(str(p) for p in result.paths)
+    print(f"{args.experiment}: {rig.motor.key} unit {rig.unit}: wrote {files}; truth in {result.truth_path}")
+    return 0
+
+
+def run_session(args: argparse.Namespace) -> int:
+    """Write a simulated session with :func:`motorlab.session.write_simulated_session`."""
+    session = importlib.import_module("motorlab.session")
+    writer = getattr(session, "write_simulated_session", None)
+    if writer is None:
+        raise OptionError("simulated sessions are not available in this version of motorlab.session")
+    result = writer(args.motor, units=args.units, out_dir=args.output, seed=args.seed)
+    print(f"session: wrote {result if result is not None else args.output}")
+    return 0

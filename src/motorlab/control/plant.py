@@ -1,0 +1,201 @@
+"""The plant to tune for: feedforward constants and (when known) the full motor model, and the user's units.
+
+SI inside (rad, V·s/rad); :class:`MechanismUnits` converts lengths to what the user counts in: radians,
+rotations, degrees, encoder ticks, or metres of a wheel of given radius.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass
+from os import PathLike
+from pathlib import Path
+from typing import Any
+
+from motorlab.control.design import Feedforward
+from motorlab.errors import LogFormatError, OptionError
+from motorlab.model import PARAMETER_NAMES, MotorParams, feedforward_from_params
+
+UNIT_NAMES = ("rad", "rotations", "degrees", "ticks", "m")
+
+
+@dataclass(frozen=True)
+class MechanismUnits:
+    """A length unit of the mechanism and its size.
+
+    Parameters
+    ----------
+    name
+        ``"rad"``, ``"rotations"``, ``"degrees"``, ``"ticks"`` or ``"m"`` (a wheel's rim).
+    per_radian
+        How many of these units the shaft covers per radian [unit/rad] (cpr/2π for ticks, the wheel
+        radius for metres).
+    cpr
+        Encoder counts per revolution of the shaft, when known [-].
+    """
+
+    name: str
+    per_radian: float
+    cpr: float | None = None
+
+    @classmethod
+    def from_options(
+        cls, units: str = "rad", *, cpr: float | None = None, wheel_radius: float | None = None
+    ) -> MechanismUnits:
+        """Units from ``--units``, ``--cpr`` and ``--wheel-radius`` [m].
+
+        Raises
+        ------
+        OptionError
+            For an unknown unit, ticks without a cpr, or a non-positive radius or cpr.
+        """
+        if cpr is not None and not (cpr > 0 and math.isfinite(cpr)):
+            raise OptionError(f"--cpr must be positive, got {cpr}")
+        if wheel_radius is not None:
+            if not (wheel_radius > 0 and math.isfinite(wheel_radius)):
+                raise OptionError(f"--wheel-radius must be positive, got {wheel_radius}")
+            if units not in ("rad", "m"):
+                raise OptionError("--wheel-radius gives lengths in metres; do not combine it with --units " + units)
+            return cls("m", wheel_radius, cpr)
+        if units == "m":
+            raise OptionError("--units m needs --wheel-radius")
+        if units == "rad":
+            return cls("rad", 1.0, cpr)
+        if units == "rotations":
+            return cls("rotations", 1.0 / (2 * math.pi), cpr)
+        if units == "degrees":
+            return cls("degrees", 180.0 / math.pi, cpr)
+        if units == "ticks":
+            if cpr is None:
+                raise OptionError("--units ticks needs --cpr (encoder counts per revolution)")
+            return cls("ticks", cpr / (2 * math.pi), cpr)
+        raise OptionError(f"unknown unit {units!r} (expected one of {', '.join(UNIT_NAMES)})")
+
+    @property
+    def short(self) -> str:
+        """Abbreviation for unit strings (``rad``, ``rot``, ``deg``, ``tick``, ``m``)."""
+        return {"rotations": "rot", "degrees": "deg", "ticks": "tick"}.get(self.name, self.name)
+
+    def to_si(self, value: float) -> float:
+        """A length (or length per second ...) in this unit → radians."""
+        return value / self.per_radian
+
+    def from_si(self, value: float) -> float:
+        """Radians → this unit."""
+        return value * self.per_radian
+
+
+@dataclass(frozen=True)
+class Plant:
+    """What the tuner knows about the motor.
+
+    Parameters
+    ----------
+    feedforward
+        kS [V], kV [V·s/rad], kA [V·s²/rad] used for the design.
+    params
+        The full motor model, when K, R, J are known (simulated instead of the feedforward plant).
+    source
+        Where the numbers came from (for reports).
+    """
+
+    feedforward: Feedforward
+    params: MotorParams | None = None
+    source: str = ""
+
+    @property
+    def simulated(self) -> MotorParams | Feedforward:
+        """The model the closed loop is simulated on."""
+        return self.params if self.params is not None else self.feedforward
+
+    @classmethod
+    def from_params(cls, params: MotorParams, *, source: str = "motor parameters") -> Plant:
+        """Plant of a known motor: feedforward from :func:`motorlab.model.feedforward_from_params`."""
+        ff = feedforward_from_params(params)
+        return cls(Feedforward(ff["kS"], ff["kV"], ff["kA"]), params, source)
+
+
+def _value(entry: Any) -> float | None:
+    value = entry.get("value") if isinstance(entry, dict) else entry
+    if value is None:
+        return None  # "not determined" in analyze --json
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise TypeError(f"not a number: {value!r}")
+    return float(value)
+
+
+def _collect(obj: Any, found: list[dict[str, Any]]) -> None:
+    """Every object whose ``parameters`` is an object, in document order."""
+    if isinstance(obj, dict):
+        params = obj.get("parameters")
+        if isinstance(params, dict):
+            found.append(params)
+        for key, value in obj.items():
+            if key != "parameters":
+                _collect(value, found)
+    elif isinstance(obj, list):
+        for item in obj:
+            _collect(item, found)
+
+
+def load_plant(paths: list[str | PathLike[str]]) -> Plant:
+    """The plant from ``motorlab analyze --json`` / ``characterize`` JSON files.
+
+    Parameters
+    ----------
+    paths
+        JSON files: an ``analyze --json`` object (``{"parameters": {"K": {"value": ...}, ...}}``),
+        a list of such objects, or any document (``results.json`` of ``characterize``) holding
+        objects with a ``"parameters"`` member. Later values override earlier ones.
+
+    Returns
+    -------
+    Plant
+        kS/kV/kA taken as given when present (a feedforward analysis), else derived from K, R, J,
+        b, Tf; the motor model is kept for simulation whenever K, R, J are known.
+
+    Raises
+    ------
+    LogFormatError
+        For unreadable JSON, non-numeric values, or files without usable parameters.
+    """
+    merged: dict[str, float] = {}
+    names = (*PARAMETER_NAMES, "kS", "kV", "kA")
+    for path in paths:
+        try:
+            doc = json.loads(Path(path).read_text(encoding="utf-8"))
+        except json.JSONDecodeError as exc:
+            raise LogFormatError(f"not valid JSON ({exc.msg})", path=path, line=exc.lineno) from None
+        except UnicodeDecodeError:
+            raise LogFormatError("not a text (JSON) file", path=path) from None
+        found: list[dict[str, Any]] = []
+        _collect(doc, found)
+        before = len(merged)
+        for entry in found:
+            for name in names:
+                if name in entry:
+                    try:
+                        value = _value(entry[name])
+                    except TypeError as exc:
+                        raise LogFormatError(f"parameter {name}: {exc}", path=path) from None
+                    if value is not None:
+                        if not math.isfinite(value):
+                            raise LogFormatError(f"parameter {name} is not finite", path=path)
+                        merged[name] = value
+        if not found or (len(merged) == before and not any(n in merged for n in names)):
+            raise LogFormatError(
+                'no "parameters" object with K, R, J or kS, kV, kA (expected motorlab analyze --json output)',
+                path=path,
+            )
+    source = ", ".join(str(p) for p in paths)
+    params: MotorParams | None = None
+    if all(n in merged for n in ("K", "R", "J")):
+        params = MotorParams.from_dict(merged)
+    if "kV" in merged and "kA" in merged:
+        ff = Feedforward(max(merged.get("kS", 0.0), 0.0), merged["kV"], merged["kA"])
+        return Plant(ff, params, source)
+    if params is not None:
+        return Plant.from_params(params, source=source)
+    missing = "kV, kA" if ("kV" in merged or "kA" in merged) else "K, R, J (or kV, kA)"
+    raise LogFormatError(f"the parameters lack {missing}", path=paths[-1] if paths else None)

@@ -1,0 +1,405 @@
+"""From a plant to checked gains: design, convert to a target, simulate, measure.
+
+:func:`tune` is what ``motorlab tune`` runs; :func:`tune_summary` is the one-call version the report
+and ``motorlab demo`` use.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+from motorlab.control.design import (
+    LOOPS,
+    Feedforward,
+    Gains,
+    closed_loop_poles,
+    design_pid_poles,
+    design_position_lqr,
+    design_velocity_lqr,
+)
+from motorlab.control.plant import MechanismUnits, Plant
+from motorlab.control.simulation import (
+    ClosedLoopResponse,
+    ProfileLimits,
+    max_profile,
+    plot_response,
+    simulate_closed_loop,
+    step_reference,
+    trapezoid,
+    velocity_ramp,
+)
+from motorlab.control.targets import TargetGains, to_target
+from motorlab.errors import OptionError
+from motorlab.model import MotorParams
+
+METHODS = ("lqr", "poles")
+
+#: Longest closed-loop run simulated [s] (a very slow loop is reported as not settled).
+MAX_DURATION = 20.0
+
+
+@dataclass
+class TuneResult:
+    """Everything ``motorlab tune`` reports.
+
+    Attributes
+    ----------
+    gains
+        Designed gains in SI (V per rad ...).
+    target
+        The gains in the target's units.
+    step, profile
+        Simulated closed-loop step and trapezoidal-profile responses (SI).
+    limits
+        The fastest profile the motor can follow at the supply voltage.
+    plant
+        The plant designed for.
+    units
+        The user's length unit.
+    warnings
+        Design targets not met, oscillation, saturation.
+    """
+
+    gains: Gains
+    target: TargetGains
+    step: ClosedLoopResponse
+    profile: ClosedLoopResponse
+    limits: ProfileLimits
+    plant: Plant
+    units: MechanismUnits
+    warnings: list[str] = field(default_factory=list)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON of ``motorlab tune --json`` (lengths in the target's units; see ``units``)."""
+        per = self._display_per_radian()
+        u = self.target.units
+        m = self.profile.metrics
+        return {
+            "loop": self.gains.loop,
+            "method": self.gains.method,
+            "target": self.target.target,
+            "gains": dict(self.target.gains),
+            "feedforward": dict(self.target.feedforward),
+            "units": {
+                **u,
+                "rise_time": "s",
+                "overshoot": "%",
+                "settling_time": "s",
+                "steady_state_error": u["velocity"] if self.gains.loop == "velocity" else u["position"],
+            },
+            "response": self.step.response_dict(per),
+            "step": {
+                "size": self.step.target * per,
+                "saturated_fraction": self.step.metrics["saturated_fraction"],
+                "sustained_oscillation": self.step.metrics["sustained_oscillation"],
+            },
+            "profile": {
+                "max_tracking_error": m["max_tracking_error"] * per,
+                "final_error": m["steady_state_error"] * per,
+                "sustained_oscillation": m["sustained_oscillation"],
+            },
+            "max_profile": {
+                **self.limits.to_dict(per),
+                "unit": f"{u['position']}/s, {u['position']}/s^2",
+            },
+            "design": {
+                "period": self.gains.period,
+                "delay": self.gains.delay,
+                **self.gains.settings,
+                "si_gains": self.gains.to_dict(),
+                "plant": {**self.plant.feedforward.to_dict(), "unit": "V, V*s/rad, V*s^2/rad"},
+                "simulated_on": self.step.settings["plant"],
+            },
+            "conversion": list(self.target.conversion),
+            "notes": list(self.target.notes),
+            "warnings": list(self.warnings),
+        }
+
+    def _display_per_radian(self) -> float:
+        if self.target.target.startswith("ftc"):
+            return (self.units.cpr or 2 * math.pi) / (2 * math.pi)
+        return self.units.per_radian
+
+    def plot(self, *, fig: Any = None) -> Any:
+        """A figure with the step and profile responses (display units)."""
+        import matplotlib.pyplot as plt
+
+        if fig is None:
+            fig = plt.figure(figsize=(8, 6.5))
+        axes = fig.subplots(2, 1)
+        per = self._display_per_radian()
+        unit = self.target.units["position"]
+        plot_response(self.step, ax=axes[0], per_radian=per, unit=unit)
+        plot_response(self.profile, ax=axes[1], per_radian=per, unit=unit)
+        g = self.target.gains
+        fig.suptitle(
+            f"{self.gains.loop} loop ({self.gains.method}, {self.target.target}): "
+            + ", ".join(f"{k} = {v:.4g}" for k, v in g.items()),
+            fontsize=10,
+        )
+        fig.tight_layout()
+        return fig
+
+
+def _duration(gains: Gains, ff: Feedforward, extra: float) -> float:
+    poles = closed_loop_poles(gains, ff)
+    sigma = min((abs(p.real) for p in poles if p.real < 0), default=0.0)
+    settle = 8.0 / sigma if sigma > 0 else MAX_DURATION
+    return min(max(settle + extra, 40 * gains.period, 0.5), MAX_DURATION)
+
+
+def tune(
+    plant: Plant,
+    loop: str = "velocity",
+    *,
+    method: str = "lqr",
+    target: str = "volts",
+    units: MechanismUnits | None = None,
+    qp: float = 1.0,
+    qv: float = 1.5,
+    r: float = 7.0,
+    period: float = 0.02,
+    delay: float = 0.0,
+    rise_time: float | None = None,
+    overshoot: float = 5.0,
+    voltage: float = 12.0,
+    step: float | None = None,
+) -> TuneResult:
+    """Design gains, convert them to a target and check them in closed-loop simulation.
+
+    Parameters
+    ----------
+    plant
+        The plant (:class:`Plant`; SI).
+    loop
+        ``"velocity"`` or ``"position"``.
+    method
+        ``"lqr"`` (SysId's) or ``"poles"`` (rise time / overshoot).
+    target
+        One of :data:`motorlab.control.targets.TARGETS`.
+    units
+        The user's length unit; tolerances ``qp``, ``qv`` and ``step`` are in it. Default rad.
+    qp, qv
+        LQR tolerances on position [unit] and velocity [unit/s].
+    r
+        LQR control effort tolerance [V].
+    period
+        Controller period [s].
+    delay
+        Measurement delay [s].
+    rise_time
+        Pole placement: requested 10–90 % rise time [s].
+    overshoot
+        Pole placement: largest acceptable overshoot [%].
+    voltage
+        Supply voltage [V] (saturation, power and duty conversions, profile limits).
+    step
+        Step size [unit/s for velocity, unit for position]; default half the free speed, or one
+        revolution of the shaft.
+
+    Returns
+    -------
+    TuneResult
+
+    Raises
+    ------
+    OptionError
+        For impossible settings.
+    """
+    units = units or MechanismUnits("rad", 1.0)
+    if loop not in LOOPS:
+        raise OptionError(f"unknown loop {loop!r} (expected velocity or position)")
+    if method not in METHODS:
+        raise OptionError(f"unknown method {method!r} (expected lqr or poles)")
+    if not (voltage > 0 and math.isfinite(voltage)):
+        raise OptionError(f"supply voltage must be positive, got {voltage}")
+    ff = plant.feedforward.check_plant()
+    n = units.per_radian
+    if method == "lqr":
+        if loop == "velocity":
+            gains = design_velocity_lqr(ff.kV, ff.kA, qv=qv / n, r=r, period=period, delay=delay)
+        else:
+            gains = design_position_lqr(ff.kV, ff.kA, qp=qp / n, qv=qv / n, r=r, period=period, delay=delay)
+        # Report the tolerances in the user's units, as they were given.
+        user = {"qp": qp, "qv": qv} if loop == "position" else {"qv": qv}
+        gains = replace(gains, settings={**gains.settings, **user})
+    else:
+        gains = design_pid_poles(loop, ff, rise_time=rise_time, overshoot=overshoot, period=period, delay=delay)
+    tg = to_target(gains, ff, target, units=units, voltage=voltage)
+    limits = max_profile(ff, voltage)
+    free = ff.free_speed(voltage)
+    if free <= 0:
+        raise OptionError(f"at {voltage:g} V the motor cannot overcome kS = {ff.kS:.3g} V")
+    if step is None:
+        size = 0.5 * free if loop == "velocity" else 2 * math.pi
+    else:
+        size = step / n
+        if not (size != 0 and math.isfinite(size)):
+            raise OptionError(f"step size must be non-zero, got {step}")
+    if loop == "velocity" and abs(size) >= free:
+        raise OptionError(
+            f"velocity step {abs(size) * n:.4g} {units.short}/s is beyond the free speed "
+            f"{free * n:.4g} {units.short}/s at {voltage:g} V"
+        )
+    ctrl_ff = tg.equivalent_feedforward
+    sim_plant = plant.simulated
+    cpr = units.cpr
+    travel = abs(size) / free if loop == "position" else 0.0
+    step_resp = simulate_closed_loop(
+        gains,
+        ctrl_ff,
+        sim_plant,
+        step_reference(loop, size),
+        duration=_duration(gains, ff, 2 * travel + 5 * ff.time_constant),
+        voltage=voltage,
+        cpr=cpr,
+        kind="step",
+    )
+    if loop == "velocity":
+        ref, t_prof = velocity_ramp(size, limits.max_acceleration)
+    else:
+        ref, t_prof = trapezoid(size, limits.max_velocity, limits.max_acceleration)
+    prof_resp = simulate_closed_loop(
+        gains,
+        ctrl_ff,
+        sim_plant,
+        ref,
+        duration=_duration(gains, ff, t_prof + 2 * ff.time_constant),
+        voltage=voltage,
+        cpr=cpr,
+        kind="profile",
+        target=size,
+    )
+    warnings = _check(gains, step_resp, prof_resp, overshoot if method == "poles" else None, rise_time)
+    return TuneResult(gains, tg, step_resp, prof_resp, limits, plant, units, warnings)
+
+
+def _check(
+    gains: Gains,
+    step: ClosedLoopResponse,
+    profile: ClosedLoopResponse,
+    overshoot: float | None,
+    rise_time: float | None,
+) -> list[str]:
+    out = []
+    m = step.metrics
+    if m["sustained_oscillation"] or profile.metrics["sustained_oscillation"]:
+        out.append("the simulated loop keeps oscillating (limit cycle or instability): lower the gains")
+    if not math.isfinite(m["settling_time"]):
+        stuck = (
+            step.loop == "position"
+            and not m["sustained_oscillation"]
+            # Stopped, or creeping too slowly to close the gap within another run's length.
+            and abs(float(step.speed[-1])) * float(step.time[-1]) < abs(m["steady_state_error"])
+        )
+        if stuck:
+            out.append(
+                f"the motor stops (or creeps) {abs(m['steady_state_error']):.3g} rad short of the target: Coulomb "
+                "friction holds it where kP·error < kS; add kS·sgn(error) feedforward, an integral term "
+                "or a tighter qp"
+            )
+        else:
+            out.append("the simulated step response does not settle within the run")
+    if overshoot is not None and m["overshoot"] > overshoot + 1.0:
+        out.append(
+            f"simulated overshoot {m['overshoot']:.1f} % exceeds the requested {overshoot:g} % "
+            "(friction, saturation or quantisation the linear design ignores)"
+        )
+    wanted = gains.settings.get("rise_time") if rise_time is None else rise_time
+    if gains.method == "poles" and wanted and math.isfinite(m["rise_time"]) and m["rise_time"] > 1.5 * wanted:
+        out.append(
+            f"simulated rise time {m['rise_time']:.3g} s is slower than the requested {wanted:.3g} s "
+            "(the voltage saturates)"
+        )
+    if m["saturated_fraction"] > 0.2:
+        out.append(
+            f"the output saturates {100 * m['saturated_fraction']:.0f} % of the step: "
+            "use a motion profile or a smaller step"
+        )
+    return out
+
+
+def tune_summary(
+    params: MotorParams | Plant,
+    *,
+    voltage: float = 12.0,
+    cpr: float | None = None,
+    target: str = "volts",
+    units: str = "rad",
+    period: float = 0.02,
+    plot: bool = True,
+) -> dict[str, Any]:
+    """Velocity and position gains (SysId LQR defaults) for a motor, with a step-response figure.
+
+    Parameters
+    ----------
+    params
+        The motor (:class:`MotorParams`, at the encoder's shaft) or a :class:`Plant`.
+    voltage
+        Supply voltage [V].
+    cpr
+        Encoder counts per revolution (quantisation in the simulation; required by FTC targets).
+    target
+        Target for the gains (see :data:`motorlab.control.targets.TARGETS`); ``ftc-pidf`` applies to
+        the velocity loop only, the position loop then uses ``ftc-power``.
+    units
+        Length unit of the reported gains (``rad``, ``rotations``, ``degrees``, ``ticks``).
+    period
+        Controller period [s].
+    plot
+        Also draw the figure.
+
+    Returns
+    -------
+    dict
+        ``{"velocity": TuneResult.to_dict(), "position": ..., "text": str (a few lines for a terminal
+        or a report), "figure": matplotlib Figure or None, "results": {"velocity": TuneResult,
+        "position": TuneResult}}``.
+    """
+    plant = params if isinstance(params, Plant) else Plant.from_params(params)
+    mech = MechanismUnits.from_options(units, cpr=cpr)
+    results = {}
+    for loop in LOOPS:
+        tgt = "ftc-power" if (loop == "position" and target == "ftc-pidf") else target
+        results[loop] = tune(plant, loop, target=tgt, units=mech, period=period, voltage=voltage)
+    lines = []
+    for loop, res in results.items():
+        g = res.target.gains
+        resp = res.step.metrics
+        lines.append(
+            f"{loop} loop ({res.target.target}, LQR qp=1 qv=1.5 r=7, T={period:g} s): "
+            + ", ".join(f"{k} = {v:.4g} {res.target.units.get(k, '')}" for k, v in g.items())
+        )
+        lines.append(
+            f"    step: rise {resp['rise_time'] * 1e3:.0f} ms, overshoot {resp['overshoot']:.1f} %, "
+            f"settling {resp['settling_time'] * 1e3:.0f} ms"
+            if math.isfinite(resp["rise_time"]) and math.isfinite(resp["settling_time"])
+            else "    step: does not settle in the simulated run"
+        )
+        lines.extend(f"    warning: {w}" for w in res.warnings)
+    lim = results["velocity"].limits
+    per = mech.per_radian
+    lines.append(
+        f"fastest profile at {voltage:g} V: v_max = {lim.max_velocity * per:.4g} {mech.short}/s, "
+        f"a_max = {lim.max_acceleration * per:.4g} {mech.short}/s² (free speed {lim.free_speed * per:.4g})"
+    )
+    fig = None
+    if plot:
+        import matplotlib.pyplot as plt
+
+        fig = plt.figure(figsize=(9, 6.5))
+        axes = fig.subplots(2, 1)
+        for ax, (loop, res) in zip(axes, results.items(), strict=True):
+            disp = res._display_per_radian()
+            plot_response(res.step, ax=ax, per_radian=disp, unit=res.target.units["position"])
+            ax.set_title(ax.get_title().replace(f"{loop} step", f"{loop} step with LQR gains", 1), fontsize=10)
+        fig.tight_layout()
+    return {
+        "velocity": results["velocity"].to_dict(),
+        "position": results["position"].to_dict(),
+        "text": "\n".join(lines),
+        "figure": fig,
+        "results": results,
+    }

@@ -1,0 +1,1174 @@
+"""The virtual dynamometer: the seeds' experiments on a simulated unit, writing real-rig files.
+
+:class:`VirtualRig` holds one unit of a catalogue motor (true parameters drawn by
+:func:`~motorlab.rig.units.draw_unit`), the flywheel and the instruments. Each experiment method
+simulates the procedure of the seed with :func:`motorlab.simulate.simulate` (or, where the seed
+waits for a steady state, the closed forms of :mod:`motorlab.model`), reads the result through the
+instruments, writes exactly the files a real rig gives, records the truth in ``truth.json`` beside
+them and returns a :class:`~motorlab.rig.base.RigRun`.
+
+Experiments (seed section -> method -> file):
+
+- seed 1 "Flywheel and INA219 Experiment" -> :meth:`VirtualRig.spindown` -> FTC log (optionally split)
+- seed 1 "First Experiment" (constant current, flywheel) -> :meth:`VirtualRig.spinup` -> FTC log
+- seed 1 "Free Motor Spin-Up Experiment" -> :meth:`VirtualRig.free_spinup` -> ``time_ms`` CSV
+- seed 1 "Terminal Velocity Experiment" -> :meth:`VirtualRig.terminal` -> ``current_A,frequency_Hz``
+- seed 1 "LCR Meter Experiment" -> :meth:`VirtualRig.lcr` -> ``L_uH,Q,DCR_ohm``
+- seed 2 "The Motor Torque Constant" -> :meth:`VirtualRig.torque` -> ``current_A,mass_kg``
+- seed 2 "Amplifier Gain Constant" -> :meth:`VirtualRig.amplifier` -> ``command_V,current_A``
+- seed 2 "The Tachometer Gain Constant" -> :meth:`VirtualRig.tachometer` -> ``speed_rpm,tach_voltage_V``
+- seed 2 "Motor Mechanical Properties" -> :meth:`VirtualRig.pulse` -> ``time_s,command_V,velocity_rad_per_s``
+- identification logs -> :meth:`VirtualRig.transient` (CSV) and :meth:`VirtualRig.sysid` (SysId JSON)
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import zlib
+from collections.abc import Callable, Sequence
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from motorlab.catalog import Motor
+from motorlab.errors import OptionError, RigError
+from motorlab.io.csv_table import write_csv
+from motorlab.io.ftc import write_ftc_log
+from motorlab.model import MotorParams, feedforward_from_params
+from motorlab.rig.base import PathArg, RigRun, _jsonable, write_truth
+from motorlab.rig.flywheel import Flywheel
+from motorlab.rig.instruments import Encoder, Instruments, quantize
+from motorlab.rig.units import Commutator, UnitSpread, draw_unit, unit_name
+from motorlab.simulate import (
+    BenchSupply,
+    CurrentDrive,
+    Drive,
+    OpenCircuit,
+    Simulation,
+    State,
+    VoltageDrive,
+    simulate,
+)
+
+#: Experiment names (CLI spelling) -> method names.
+EXPERIMENTS: dict[str, str] = {
+    "spindown": "spindown",
+    "spinup": "spinup",
+    "free-spinup": "free_spinup",
+    "terminal": "terminal",
+    "lcr": "lcr",
+    "torque": "torque",
+    "amplifier": "amplifier",
+    "tachometer": "tachometer",
+    "pulse": "pulse",
+    "transient": "transient",
+    "sysid": "sysid",
+}
+
+#: Internal step of the simulator for flywheel runs [s] (mechanical time constant ≈ 10 s).
+FLYWHEEL_DT = 1e-3
+
+
+def _positive(value: float, name: str, unit: str) -> float:
+    if not (math.isfinite(value) and value > 0):
+        raise OptionError(f"{name} must be positive, got {value:g} {unit}")
+    return float(value)
+
+
+def _currents(values: Sequence[float] | None, name: str = "current") -> np.ndarray | None:
+    if values is None:
+        return None
+    arr = np.asarray(list(values), dtype=float)
+    if arr.size == 0:
+        raise OptionError(f"no {name} values given")
+    if not np.all(np.isfinite(arr)):
+        raise OptionError(f"{name} values must be finite")
+    if np.any(arr < 0):
+        raise OptionError(f"{name} {arr[arr < 0][0]:g} A is negative; give magnitudes (the rig sets the polarity)")
+    return arr
+
+
+def steady_state(params: MotorParams, current: float, *, voltage_limit: float) -> tuple[float, float, str]:
+    """Steady speed [rad/s], current [A] and supply mode of a current source with a voltage limit.
+
+    Notes
+    -----
+    In constant current, K·I = b·ω + Tf gives ω = (K·I − Tf)/b (0 if K·I ≤ Tf: stiction holds the
+    shaft). If the terminal voltage R·I + K·ω would exceed the limit, the source runs in constant
+    voltage at the limit: ω = (K·V − R·Tf)/(K² + R·b), I = (b·ω + Tf)/K (seed 1, "Terminal
+    Velocity Experiment"; seed 2's amplifier compliance).
+    """
+    p = params
+    if p.K * current <= p.Tf:
+        return 0.0, current, "CC"
+    if p.b <= 0:
+        return p.free_speed(voltage_limit), p.free_current(voltage_limit), "CV"
+    speed = (p.K * current - p.Tf) / p.b
+    if p.R * current + p.K * speed > voltage_limit:
+        return p.free_speed(voltage_limit), p.free_current(voltage_limit), "CV"
+    return speed, current, "CC"
+
+
+class VirtualRig:
+    """A simulated dynamometer with one unit of a catalogue motor on it.
+
+    Parameters
+    ----------
+    motor
+        Catalogue :class:`~motorlab.catalog.Motor` or its key (``"neverest40"``).
+    unit_seed
+        Which unit (0 -> "A", 1 -> "B" …); its true parameters are drawn from this seed.
+    noise_seed
+        Seed of every random reading error and timing jitter.
+    params
+        True parameters to use instead of a drawn unit (at the encoder shaft).
+    spread
+        Unit-to-unit spreads for the draw.
+    flywheel
+        The flywheel and step-up gearbox (default: seed 1's steel disc, 25:1).
+    instruments
+        The instruments (default figures: :mod:`motorlab.rig.instruments`).
+    commutator
+        Position dependence of the LCR readings.
+
+    Raises
+    ------
+    OptionError
+        Unknown motor, negative seeds.
+    """
+
+    experiments: tuple[str, ...] = tuple(EXPERIMENTS)
+
+    def __init__(
+        self,
+        motor: Motor | str,
+        *,
+        unit_seed: int = 0,
+        noise_seed: int = 0,
+        params: MotorParams | None = None,
+        spread: UnitSpread | None = None,
+        flywheel: Flywheel | None = None,
+        instruments: Instruments | None = None,
+        commutator: Commutator | None = None,
+    ):
+        self.motor = Motor.from_catalog(motor) if isinstance(motor, str) else motor
+        if unit_seed < 0 or noise_seed < 0:
+            raise OptionError("unit and noise seeds must not be negative")
+        self.unit_seed = int(unit_seed)
+        self.noise_seed = int(noise_seed)
+        self.spread = spread or UnitSpread()
+        self.params = params if params is not None else draw_unit(self.motor, self.unit_seed, spread=self.spread)
+        self.flywheel = flywheel or Flywheel()
+        self.instruments = instruments or Instruments()
+        self.commutator = commutator or Commutator()
+        self.encoder = Encoder(self.motor.cpr)
+
+    # ---- plumbing ---------------------------------------------------------------------------
+    @property
+    def unit(self) -> str:
+        """The unit's letter name."""
+        return unit_name(self.unit_seed)
+
+    def __repr__(self) -> str:
+        return f"VirtualRig({self.motor.key!r}, unit {self.unit}, noise_seed={self.noise_seed})"
+
+    def run(self, experiment: str, path: PathArg, **settings: Any) -> RigRun:
+        """Run ``experiment`` (a key of :data:`EXPERIMENTS`) writing ``path``; settings go to its method."""
+        if experiment not in EXPERIMENTS:
+            raise OptionError(f"unknown experiment {experiment!r}; known: {', '.join(EXPERIMENTS)}")
+        method: Callable[..., RigRun] = getattr(self, EXPERIMENTS[experiment])
+        return method(path, **settings)
+
+    def _rng(self, experiment: str) -> np.random.Generator:
+        # One independent stream per (noise seed, unit, motor, experiment): running one experiment
+        # never changes the noise of another.
+        return np.random.default_rng(
+            [self.noise_seed, self.unit_seed, zlib.crc32(self.motor.key.encode()), zlib.crc32(experiment.encode())]
+        )
+
+    def _loaded(self, with_flywheel: bool) -> MotorParams:
+        return self.flywheel.attach(self.params) if with_flywheel else self.params
+
+    def _finish(
+        self,
+        experiment: str,
+        paths: Sequence[Path],
+        *,
+        settings: dict[str, Any],
+        expected: dict[str, Any],
+        instruments: dict[str, Any],
+        flywheel: bool,
+    ) -> RigRun:
+        loaded = self._loaded(flywheel)
+        entry: dict[str, Any] = {
+            "experiment": experiment,
+            "files": [p.name for p in paths],
+            "motor": self.motor.key,
+            "cpr": self.motor.cpr,
+            "unit": self.unit,
+            "unit_seed": self.unit_seed,
+            "noise_seed": self.noise_seed,
+            "params": self.params.to_dict(),
+            "params_units": self.params.units(),
+            "nominal_params": self.motor.nominal_params().to_dict(),
+            "unit_spread": self.spread.to_dict(),
+            "flywheel": self.flywheel.settings() if flywheel else None,
+            "totals": {"J": loaded.J, "b": loaded.b, "Tf": loaded.Tf},
+            "expected": expected,
+            "settings": settings,
+            "instruments": instruments,
+        }
+        truth_path = write_truth(paths[0], entry)
+        return RigRun(experiment, tuple(paths), truth_path, json.loads(json.dumps(_plain(entry))))
+
+    def _simulate(
+        self, params: MotorParams, schedule: Sequence[tuple[float, Drive]], *, duration: float, dt: float,
+        initial_speed: float = 0.0, initial_position: float = 0.0,
+    ) -> Simulation:
+        return simulate(
+            params, list(schedule), duration=duration, dt=dt,
+            initial=State(speed=initial_speed, position=initial_position),
+        )
+
+    # ---- seed 1: flywheel experiments -----------------------------------------------------------
+    def spindown(
+        self,
+        path: PathArg,
+        *,
+        voltage: float = 12.0,
+        current_limit: float = 4.0,
+        on_time: float = 30.0,
+        coast_time: float = 60.0,
+        relay_delay: float = 0.2,
+        split: bool = False,
+        placeholder_rows: int | None = None,
+        blank_lines: int | None = None,
+        header: bool = True,
+        crlf: bool = False,
+    ) -> RigRun:
+        """Seed 1's "Flywheel and INA219 Experiment": spin the flywheel up from the bench supply, then coast.
+
+        Parameters
+        ----------
+        path
+            The FTC log to write (with ``split``, the first file; the second is ``<stem>2<suffix>``,
+            as ``testFile.txt`` + ``testFile2.txt``).
+        voltage
+            Supply voltage setting [V] (refused above 16 V: the INA219 is in circuit).
+        current_limit
+            Supply current limit [A] (seed 1: 4 A for the AndyMark 20 and 40).
+        on_time
+            Time the OpMode keeps the relay closed [s] (seed 1: 30 s).
+        coast_time
+            Time logged after the relay opens [s].
+        relay_delay
+            Time after the OpMode starts at which it closes the relay [s].
+        split
+            Write the run as the real OpMode does: the powered part in ``path`` followed by
+            placeholder zero rows, the coast in the second file, both starting with blank lines.
+        placeholder_rows
+            Zero rows after the powered part (default: 10 when split, else 0).
+        blank_lines
+            Blank lines at the top of each file (default: 2 when split, else 0).
+        header
+            Write the column header line.
+        crlf
+            Windows line endings.
+
+        Returns
+        -------
+        RigRun
+            Paths written; ``truth["expected"]`` holds K, the totals J, b, Tf with the flywheel,
+            γ = b/J, Tf/J and the time the coast starts.
+
+        Raises
+        ------
+        RigError
+            Supply voltage above the INA219's 16 V.
+        OptionError
+            Settings out of range.
+
+        Notes
+        -----
+        With the relay open the INA219 reads the back-EMF, V = K·ω; the coast obeys
+        J·dω/dt = −b·ω − Tf (seed 1, "Data Analysis" steps 4-7).
+        """
+        ins = self.instruments
+        ins.ina219.check_supply(voltage)
+        ins.supply.check(voltage, current_limit)
+        for value, name in ((on_time, "on time"), (coast_time, "coast time")):
+            _positive(value, name, "s")
+        if relay_delay < 0:
+            raise OptionError("relay delay must not be negative")
+        rng = self._rng("spindown")
+        loaded = self._loaded(True)
+        t_close = relay_delay + ins.relay.operate_time
+        t_command_off = relay_delay + on_time
+        t_open = t_command_off + ins.relay.release_time
+        duration = relay_delay + on_time + coast_time
+        schedule: list[tuple[float, Drive]] = [
+            (0.0, OpenCircuit()), (t_close, BenchSupply(voltage, current_limit)), (t_open, OpenCircuit())]
+        sim = self._simulate(loaded, schedule, duration=duration + 0.01, dt=FLYWHEEL_DT)
+        times, counts, bus, current = self._log_ftc(sim, duration, rng)
+        path = Path(path)
+        paths = [path]
+        if split:
+            first = times < t_command_off
+            second_path = path.with_name(f"{path.stem}2{path.suffix}")
+            paths.append(second_path)
+            blanks = 2 if blank_lines is None else blank_lines
+            placeholders = 10 if placeholder_rows is None else placeholder_rows
+            write_ftc_log(path, times[first], counts[first], bus[first], current[first], header=header,
+                          placeholder_rows=placeholders, crlf=crlf, blank_lines=blanks)
+            write_ftc_log(second_path, times[~first], counts[~first], bus[~first], current[~first], header=header,
+                          crlf=crlf, blank_lines=blanks)
+        else:
+            write_ftc_log(path, times, counts, bus, current, header=header,
+                          placeholder_rows=placeholder_rows or 0, crlf=crlf, blank_lines=blank_lines or 0)
+        on = (sim.time >= t_close) & (sim.time < t_open)
+        speed_off = float(np.interp(t_open, sim.time, sim.speed))
+        expected = {
+            "K": self.params.K,
+            "J": loaded.J,
+            "b": loaded.b,
+            "Tf": loaded.Tf,
+            "gamma": loaded.b / loaded.J,
+            "Tf_over_J": loaded.Tf / loaded.J,
+            "coast_start": t_open,
+            "speed_at_coast_start": speed_off,
+            "supply_current_limited": bool(np.any(sim.mode[on] == 1)),
+            "current_clipped": bool(np.max(np.abs(sim.current)) > ins.ina219.current_range),
+            "stop_time": _stop_time(sim, t_open),
+        }
+        settings = {
+            "voltage": voltage, "current_limit": current_limit, "on_time": on_time, "coast_time": coast_time,
+            "relay_delay": relay_delay, "relay_closed": t_close, "relay_opened": t_open, "split": split,
+            "dt": FLYWHEEL_DT,
+        }
+        instruments = {
+            "ina219": ins.ina219.settings(), "logger": ins.logger.settings(), "supply": ins.supply.settings(),
+            "relay": ins.relay.settings(), "encoder": self.encoder.settings(),
+        }
+        return self._finish("spindown", paths, settings=settings, expected=expected, instruments=instruments,
+                            flywheel=True)
+
+    def _log_ftc(
+        self, sim: Simulation, duration: float, rng: np.random.Generator
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Rows of the OpMode's log: time stamps, counts, INA219 bus voltage and current."""
+        ins = self.instruments
+        times = ins.logger.times(duration, rng)
+        d_enc, d_bus, d_cur = ins.logger.read_delays
+        counts = self.encoder.counts(sim.sample(times + d_enc)["position"])
+        bus = ins.ina219.read_bus_voltage(sim.sample(times + d_bus)["voltage"], rng)
+        current = ins.ina219.read_current(sim.sample(times + d_cur)["current"], rng)
+        return times, counts, bus, current
+
+    def spinup(
+        self,
+        path: PathArg,
+        *,
+        current: float = 2.0,
+        voltage: float = 12.0,
+        duration: float = 30.0,
+        coast_time: float = 0.0,
+        relay_delay: float = 0.2,
+        header: bool = True,
+        crlf: bool = False,
+    ) -> RigRun:
+        """Seed 1's "First Experiment": a constant current into the flywheel, τ = J·α, K = τ/I.
+
+        Parameters
+        ----------
+        path
+            The FTC log to write.
+        current
+            Supply current limit [A]: the supply runs in constant current while R·I + K·ω < V.
+        voltage
+            Supply voltage setting [V] (≤ 16 V with the INA219).
+        duration
+            Time the relay stays closed [s].
+        coast_time
+            Time logged after the relay opens [s] (0: none).
+        relay_delay
+            Time after the OpMode starts at which the relay closes [s].
+        header, crlf
+            Log layout.
+
+        Returns
+        -------
+        RigRun
+            ``truth["expected"]``: K, totals J, b, Tf, the initial acceleration (K·I − Tf)/J and
+            whether the supply stayed in constant current.
+
+        Raises
+        ------
+        RigError
+            Supply voltage above 16 V with the INA219.
+        OptionError
+            Settings out of range (negative current …).
+        """
+        ins = self.instruments
+        _currents([current])
+        ins.ina219.check_supply(voltage)
+        ins.supply.check(voltage, current)
+        _positive(duration, "duration", "s")
+        if coast_time < 0 or relay_delay < 0:
+            raise OptionError("coast time and relay delay must not be negative")
+        rng = self._rng("spinup")
+        loaded = self._loaded(True)
+        t_close = relay_delay + ins.relay.operate_time
+        t_open = relay_delay + duration + ins.relay.release_time
+        total = relay_delay + duration + coast_time
+        schedule: list[tuple[float, Drive]] = [
+            (0.0, OpenCircuit()), (t_close, BenchSupply(voltage, current)), (t_open, OpenCircuit())]
+        sim = self._simulate(loaded, schedule, duration=total + 0.01, dt=FLYWHEEL_DT)
+        times, counts, bus, amps = self._log_ftc(sim, total, rng)
+        path = Path(path)
+        write_ftc_log(path, times, counts, bus, amps, header=header, crlf=crlf)
+        on = (sim.time >= t_close + 0.05) & (sim.time < t_open)
+        expected = {
+            "K": self.params.K,
+            "J": loaded.J,
+            "b": loaded.b,
+            "Tf": loaded.Tf,
+            "current": current,
+            "acceleration_initial": max(self.params.K * current - loaded.Tf, 0.0) / loaded.J,
+            "constant_current_throughout": bool(np.all(sim.mode[on] == 1)),
+            "relay_closed": t_close,
+            "relay_opened": t_open,
+        }
+        settings = {"current": current, "voltage": voltage, "duration": duration, "coast_time": coast_time,
+                    "relay_delay": relay_delay, "dt": FLYWHEEL_DT}
+        instruments = {"ina219": ins.ina219.settings(), "logger": ins.logger.settings(),
+                       "supply": ins.supply.settings(), "relay": ins.relay.settings(),
+                       "encoder": self.encoder.settings()}
+        return self._finish("spinup", [path], settings=settings, expected=expected, instruments=instruments,
+                            flywheel=True)
+
+    # ---- seed 1: bare motor on the scope --------------------------------------------------------
+    def free_spinup(
+        self,
+        path: PathArg,
+        *,
+        current: float = 0.5,
+        voltage: float = 18.0,
+        hand_speed: float | None = None,
+        edges: int = 20,
+        timebase: float | None = None,
+        waveform: PathArg | None = None,
+        dt: float = 1e-4,
+    ) -> RigRun:
+        """Seed 1's "Free Motor Spin-Up Experiment": cursor times of 20 rising edges of channel B.
+
+        Parameters
+        ----------
+        path
+            CSV to write, one ``time_ms`` column (times after the trigger edge).
+        current
+            Supply current limit [A] (seed 1: 0.5 A at 18 V; the INA219 is not in this circuit).
+        voltage
+            Supply voltage setting [V].
+        hand_speed
+            Speed the hand start gives the shaft [rad/s] (default 5 % of the catalogue free speed).
+        edges
+            Rising edges recorded after the trigger edge (seed 1: 20).
+        timebase
+            Scope horizontal scale [s/div]; default: the 1-2-5 setting that puts at least four
+            cursor steps between adjacent edges.
+        waveform
+            Also write the scope's waveform export of channel B (Rigol CSV) to this path.
+        dt
+            Simulator step [s] (0.1 ms resolves edges of a ~30 ms mechanical time constant).
+
+        Returns
+        -------
+        RigRun
+            ``truth["expected"]``: J, K, Tf, b, the current, the true edge times and the
+            acceleration at the trigger (K·I − Tf − b·ω)/J.
+
+        Raises
+        ------
+        RigError
+            If the motor stops before the edges are recorded (current too low for the friction).
+        OptionError
+            Settings out of range.
+
+        Notes
+        -----
+        Channel B rises every 4 counts; the scope triggers on one rising edge and, as the seed says
+        ("if the first transition goes up, start counting cycles at the second up transition"), the
+        recorded edges are the next ``edges`` ones.
+        """
+        ins = self.instruments
+        _currents([current])
+        ins.supply.check(voltage, current)
+        if edges < 2:
+            raise OptionError(f"need at least 2 edges, got {edges}")
+        _positive(dt, "dt", "s")
+        rng = self._rng("free-spinup")
+        p = self.params
+        w0 = 0.05 * self.motor.free_speed if hand_speed is None else float(hand_speed)
+        if w0 < 0:
+            raise OptionError("hand-start speed must not be negative")
+        step = 2 * math.pi / self.motor.cpr
+        theta0 = float(rng.uniform(0.0, 4 * step))
+        needed = theta0 + (edges + 2) * 4 * step
+        drive = [(0.0, BenchSupply(voltage, current))]
+        guess = max(self.motor.free_speed * 0.5, 1e-3)
+        duration = max(4 * needed / guess, 0.05)
+        for _ in range(12):
+            sim = self._simulate(p, drive, duration=duration, dt=dt, initial_speed=w0, initial_position=theta0)
+            if sim.position[-1] >= needed or sim.speed[-1] <= 0:
+                break
+            duration *= 2
+        angles = self.encoder.channel_b_rising_angles(theta0, float(sim.position[-1]))
+        if angles.size < edges + 1:
+            raise RigError(
+                f"the motor stopped after {angles.size} rising edges at {current:g} A; "
+                "raise the current or the hand-start speed"
+            )
+        angles = angles[: edges + 1]
+        true_times = np.interp(angles, sim.position, sim.time)
+        t_trigger = true_times[0]
+        relative = true_times[1:] - t_trigger
+        scope = ins.scope
+        if timebase is None:
+            timebase = _timebase_for(float(np.min(np.diff(true_times))) / 4 * scope.columns / scope.divisions)
+        _positive(timebase, "timebase", "s/div")
+        scope = replace(scope, timebase=timebase)
+        readings = _strictly_increasing(scope.cursor_times(relative, rng), scope.cursor_step)
+        path = Path(path)
+        metadata = {"experiment": "free-spinup", "motor": self.motor.key, "cpr": self.motor.cpr,
+                    "channel": "B", "counts_per_edge": 4, "current_A": current}
+        write_csv(path, {"time_ms": quantize(readings * 1e3, 1e-6)}, metadata=metadata)
+        paths = [path]
+        if waveform is not None:
+            wpath = Path(waveform)
+            self._write_waveform(wpath, sim, t_trigger, scope, rng)
+            paths.append(wpath)
+        state = sim.sample(np.array([t_trigger]))
+        w_trig = float(state["speed"][0])
+        expected = {
+            "J": p.J, "K": p.K, "Tf": p.Tf, "b": p.b, "current": current,
+            "edge_times": relative,
+            "speed_at_trigger": w_trig,
+            "acceleration_at_trigger": (p.K * current - p.Tf - p.b * w_trig) / p.J,
+            "hand_speed": w0,
+            # After the winding current has risen (5·L/R), the supply must hold constant current.
+            "constant_current_throughout": bool(np.all(
+                sim.mode[(sim.time >= 5 * p.L / p.R) & (sim.time <= true_times[-1])] == 1)),
+        }
+        settings = {"current": current, "voltage": voltage, "hand_speed": w0, "edges": edges,
+                    "timebase": timebase, "dt": dt, "initial_position": theta0}
+        instruments = {"scope": scope.settings(), "supply": ins.supply.settings(),
+                       "encoder": self.encoder.settings()}
+        return self._finish("free-spinup", paths, settings=settings, expected=expected, instruments=instruments,
+                            flywheel=False)
+
+    def _write_waveform(self, path: Path, sim: Simulation, t_trigger: float, scope: Any,
+                        rng: np.random.Generator) -> None:
+        """Rigol DS1000Z CSV export of channel B: one division before the trigger, the rest after."""
+        span = scope.timebase * scope.divisions
+        increment = span / scope.points
+        start = -scope.timebase
+        t = t_trigger + start + increment * np.arange(scope.points)
+        t = t[t <= sim.time[-1]]
+        volts = self.encoder.channel_b_level(sim.sample(t)["position"])
+        volts = volts + rng.normal(0.0, scope.vertical_noise, volts.shape)
+        lines = ["X,CH1,Start,Increment,", f"Sequence,Volt,{start:.6e},{increment:.6e},"]
+        lines += [f"{k},{v:.4e}," for k, v in enumerate(volts)]
+        path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+
+    def terminal(
+        self,
+        path: PathArg,
+        *,
+        currents: Sequence[float] | None = None,
+        voltage: float = 18.0,
+    ) -> RigRun:
+        """Seed 1's "Terminal Velocity Experiment": steady current and channel frequency, no flywheel.
+
+        Parameters
+        ----------
+        path
+            CSV to write: ``current_A,frequency_Hz`` (supply display, scope frequency counter).
+        currents
+            Supply current settings [A] (default: five settings between the break-away current and
+            the one where the supply would reach ``voltage``, from the catalogue figures, as the seed
+            picks 0.25-0.4 A for the NeveRest 20).
+        voltage
+            Supply voltage setting [V] (seed 1: 18 V).
+
+        Returns
+        -------
+        RigRun
+            ``truth["expected"]``: b, Tf, K, the true steady speeds, currents and the supply mode.
+
+        Notes
+        -----
+        At steady state K·I = b·ω + Tf and f = ω·cpr/(4·2π) (seed 1: "Multiply the recorded frequency
+        ... by 4 ... dividing this number by counts per revolution ... multiply by 2π").
+        """
+        ins = self.instruments
+        amps = _currents(currents)
+        if amps is None:
+            amps = self._default_terminal_currents(voltage)
+        ins.supply.check(voltage, float(np.max(amps)) if amps.size else 1.0)
+        if np.any(amps == 0):
+            raise OptionError("a current setting of 0 A cannot spin the motor")
+        rng = self._rng("terminal")
+        p = self.params
+        states = [steady_state(p, float(i), voltage_limit=voltage) for i in amps]
+        speeds = np.array([s[0] for s in states])
+        true_i = np.array([s[1] for s in states])
+        freq = ins.scope.measure_frequency(np.array([self.encoder.channel_frequency(w) for w in speeds]), rng)
+        shown = ins.supply.display_current(true_i, rng)
+        path = Path(path)
+        write_csv(path, {"current_A": shown, "frequency_Hz": freq},
+                  metadata={"experiment": "terminal", "motor": self.motor.key, "cpr": self.motor.cpr,
+                            "voltage_V": voltage})
+        expected = {"K": p.K, "b": p.b, "Tf": p.Tf, "speeds": speeds, "currents": true_i,
+                    "frequencies": speeds * self.motor.cpr / (8 * math.pi), "modes": [s[2] for s in states]}
+        settings = {"currents": amps, "voltage": voltage}
+        instruments = {"scope": ins.scope.settings(), "supply": ins.supply.settings(),
+                       "encoder": self.encoder.settings()}
+        return self._finish("terminal", [path], settings=settings, expected=expected, instruments=instruments,
+                            flywheel=False)
+
+    def _default_terminal_currents(self, voltage: float) -> np.ndarray:
+        nominal = self.motor.nominal_params()
+        i_min = nominal.Tf / nominal.K
+        if nominal.b > 0:
+            # R·i + K·(K·i − Tf)/b = V  ->  i where the supply would leave constant current.
+            i_cv = (voltage + nominal.K * nominal.Tf / nominal.b) / (nominal.R + nominal.K**2 / nominal.b)
+        else:
+            i_cv = 2 * i_min
+        grid = i_min + np.linspace(0.3, 0.9, 5) * (i_cv - i_min)
+        return np.unique(np.round(grid, 3))
+
+    def lcr(self, path: PathArg, *, positions: int = 10) -> RigRun:
+        """Seed 1's "LCR Meter Experiment": L, Q and DCR at ``positions`` random shaft positions, 1 kHz.
+
+        Parameters
+        ----------
+        path
+            CSV to write: ``L_uH,Q,DCR_ohm`` with ``# frequency_Hz: 1000``.
+        positions
+            Number of shaft positions (seed 1: 10).
+
+        Returns
+        -------
+        RigRun
+            ``truth["expected"]``: L, R (winding, without brush contact), the mean true L and
+            DCR over the positions and the contact resistance at each.
+
+        Notes
+        -----
+        Q = 2π·f·L/R_ac; the DCR includes the brush contact resistance, sometimes much higher than
+        usual (seed 1's table: DCR 1.38-3.65 Ω for a 1.9 Ω winding).
+        """
+        if positions < 1:
+            raise OptionError(f"need at least one position, got {positions}")
+        rng = self._rng("lcr")
+        p = self.params
+        true = self.commutator.positions(p, positions, rng)
+        meter = self.instruments.lcr
+        readings = meter.read(true["inductance"], true["ac_resistance"], true["dc_resistance"], rng)
+        path = Path(path)
+        write_csv(path, {"L_uH": quantize(readings["inductance"] * 1e6, 0.1),
+                         "Q": readings["quality_factor"], "DCR_ohm": readings["dc_resistance"]},
+                  metadata={"experiment": "lcr", "motor": self.motor.key, "frequency_Hz": meter.frequency})
+        expected = {
+            "L": p.L, "R": p.R,
+            "L_mean_positions": float(np.mean(true["inductance"])),
+            "DCR_mean_positions": float(np.mean(true["dc_resistance"])),
+            "R_ac_mean_positions": float(np.mean(true["ac_resistance"])),
+            "contact_resistance": true["contact_resistance"],
+        }
+        return self._finish("lcr", [path], settings={"positions": positions}, expected=expected,
+                            instruments={"lcr": meter.settings(), "commutator": self.commutator.settings()},
+                            flywheel=False)
+
+    # ---- seed 2 ---------------------------------------------------------------------------------
+    def torque(
+        self,
+        path: PathArg,
+        *,
+        currents: Sequence[float] | None = None,
+        arm: float = 0.15,
+        dither: bool = True,
+    ) -> RigRun:
+        """Seed 2's "The Motor Torque Constant": a lever arm on the shaft pressing on a scale.
+
+        Parameters
+        ----------
+        path
+            CSV to write: ``current_A,mass_kg`` with ``# arm_m: ...``.
+        currents
+            Winding currents [A] (≥ 0; default six up to the least of 4 A, half the stall current
+            and 80 % of the scale's capacity).
+        arm
+            Lever arm length [m].
+        dither
+            Seed 2's 0.25 V, 30 Hz dither that frees stiction: without it the friction held by the
+            stalled gearbox biases each reading by up to ±Tf.
+
+        Returns
+        -------
+        RigRun
+            ``truth["expected"]``: K (slope τ/I), the true torques and the friction residuals.
+
+        Notes
+        -----
+        τ = K·I (seed 2, T(t) = Km·I(t)); the scale shows m = τ/(g₀·arm).
+        """
+        ins = self.instruments
+        _positive(arm, "lever arm", "m")
+        amps = _currents(currents)
+        p = self.params
+        if amps is None:
+            nominal = self.motor.nominal_params()
+            i_max = min(4.0, 0.5 * self.motor.stall_current,
+                        0.8 * ins.scale.capacity * 9.80665 * arm / nominal.K)
+            amps = np.round(np.linspace(i_max / 6, i_max, 6), 2)
+        if float(np.max(amps)) > ins.supply.max_current:
+            raise OptionError(f"currents above the supply's {ins.supply.max_current:g} A")
+        rng = self._rng("torque")
+        residual = p.Tf * (0.1 if dither else 1.0) * rng.uniform(-1.0, 1.0, amps.shape)
+        torque = np.where(amps > 0, p.K * amps + residual, 0.0)
+        mass = ins.scale.read(np.clip(torque, 0.0, None), arm, rng)
+        shown = ins.multimeter.read_current(amps, rng)
+        path = Path(path)
+        write_csv(path, {"current_A": shown, "mass_kg": mass},
+                  metadata={"experiment": "torque", "motor": self.motor.key, "arm_m": arm})
+        expected = {"K": p.K, "torques": torque, "currents": amps, "friction_residual": residual}
+        instruments = {"scale": ins.scale.settings(), "multimeter": ins.multimeter.settings()}
+        return self._finish("torque", [path], settings={"currents": amps, "arm": arm, "dither": dither},
+                            expected=expected, instruments=instruments, flywheel=False)
+
+    def amplifier(self, path: PathArg, *, commands: Sequence[float] | None = None) -> RigRun:
+        """Seed 2's "Amplifier Gain Constant": DC commands into the amplifier, output current on a DMM.
+
+        Parameters
+        ----------
+        path
+            CSV to write: ``command_V,current_A``.
+        commands
+            Command voltages [V] (default 0.25 V steps up to 90 % of the amplifier's 5 A).
+
+        Returns
+        -------
+        RigRun
+            ``truth["expected"]``: Ka [A/V] and the offset [A].
+
+        Notes
+        -----
+        I_out = Ka·V_in (seed 2) plus a small offset; the output clips at the sustained maximum.
+        """
+        amp = self.instruments.amplifier
+        if commands is None:
+            top = 0.9 * amp.max_current / amp.gain
+            cmd = np.arange(1, int(top / 0.25) + 1) * 0.25
+        else:
+            cmd = np.asarray(list(commands), dtype=float)
+            if cmd.size == 0 or not np.all(np.isfinite(cmd)):
+                raise OptionError("amplifier commands must be finite numbers")
+        rng = self._rng("amplifier")
+        true_i = amp.current(cmd)
+        shown = self.instruments.multimeter.read_current(true_i, rng)
+        path = Path(path)
+        write_csv(path, {"command_V": cmd, "current_A": shown},
+                  metadata={"experiment": "amplifier"})
+        expected = {"Ka": amp.gain, "offset": amp.offset, "currents": true_i,
+                    "saturated": bool(np.any(np.abs(amp.gain * cmd + amp.offset) > amp.max_current))}
+        return self._finish("amplifier", [path], settings={"commands": cmd}, expected=expected,
+                            instruments={"amplifier": amp.settings(),
+                                         "multimeter": self.instruments.multimeter.settings()},
+                            flywheel=False)
+
+    def tachometer(self, path: PathArg, *, commands: Sequence[float] | None = None) -> RigRun:
+        """Seed 2's "The Tachometer Gain Constant": steady speeds read by an optical tachometer and a DMM.
+
+        Parameters
+        ----------
+        path
+            CSV to write: ``speed_rpm,tach_voltage_V``.
+        commands
+            Amplifier commands [V] (default: five giving 30-90 % of the catalogue free speed).
+
+        Returns
+        -------
+        RigRun
+            ``truth["expected"]``: Kt_tach [V·s/rad] and the true speeds.
+
+        Notes
+        -----
+        v_t = Kt·Ω (seed 2). Driven by the amplifier (a current source): K·I = b·ω + Tf, limited by
+        the amplifier's compliance.
+        """
+        ins = self.instruments
+        amp = ins.amplifier
+        p = self.params
+        if commands is None:
+            nominal = self.motor.nominal_params()
+            targets = np.linspace(0.3, 0.9, 5) * self.motor.free_speed
+            amps = (nominal.b * targets + nominal.Tf) / nominal.K
+            cmd = np.round((amps - amp.offset) / 2.0, 3)  # the experimenter uses the nominal 2 A/V
+        else:
+            cmd = np.asarray(list(commands), dtype=float)
+            if cmd.size == 0 or not np.all(np.isfinite(cmd)) or np.any(cmd < 0):
+                raise OptionError("tachometer commands must be non-negative numbers")
+        rng = self._rng("tachometer")
+        true_i = amp.current(cmd)
+        speeds = np.array([steady_state(p, float(i), voltage_limit=amp.compliance)[0] for i in true_i])
+        rpm = ins.optical_tachometer.read_rpm(speeds, rng)
+        volts = ins.multimeter.read_voltage(ins.tachometer.gain * speeds, rng)
+        path = Path(path)
+        write_csv(path, {"speed_rpm": rpm, "tach_voltage_V": volts}, metadata={"experiment": "tachometer"})
+        expected = {"Kt_tach": ins.tachometer.gain, "speeds": speeds}
+        instruments = {"tachometer": ins.tachometer.settings(), "optical_tachometer":
+                       ins.optical_tachometer.settings(), "multimeter": ins.multimeter.settings(),
+                       "amplifier": amp.settings()}
+        return self._finish("tachometer", [path], settings={"commands": cmd}, expected=expected,
+                            instruments=instruments, flywheel=False)
+
+    def pulse(
+        self,
+        path: PathArg,
+        *,
+        amplitude: float = 1.0,
+        period: float = 2.0,
+        duty: float = 0.12,
+        periods: int = 1,
+        sample_interval: float = 1e-3,
+        flywheel: bool = False,
+        raw_tach: bool = False,
+        dt: float = 2e-4,
+    ) -> RigRun:
+        """Seed 2's "Motor Mechanical Properties": a unipolar square wave through the amplifier.
+
+        Parameters
+        ----------
+        path
+            CSV to write: ``time_s,command_V,velocity_rad_per_s`` (``tach_voltage_V`` with
+            ``raw_tach``), sampled like a scope trace; t = 0 at the first rising command edge.
+        amplitude
+            Square-wave high level [V] (seed 2: 0.5 V offset + 0.5 V amplitude = 1 V).
+        period
+            Period [s] (seed 2: 2 s).
+        duty
+            Duty cycle [-] (seed 2: 10-15 %).
+        periods
+            Number of periods on screen.
+        sample_interval
+            Scope sample interval [s].
+        flywheel
+            Attach the flywheel (default: bare motor, as seed 2 drives its own wheel).
+        raw_tach
+            Write the tachometer voltage instead of the speed converted with Kt_tach.
+        dt
+            Simulator step [s].
+
+        Returns
+        -------
+        RigRun
+            ``truth["expected"]``: J, Tf, b, K, Ka, Kt_tach, the accelerations
+            α₁ = (Ka·K·V − Tf)/J and α₂ = −Tf/J at zero speed, whether the amplifier saturated.
+
+        Notes
+        -----
+        J = Ka·Km·V/(Ω̇₁ − Ω̇₂) (seed 2, eq. (5)) holds when friction is Coulomb only.
+        """
+        ins = self.instruments
+        amp = ins.amplifier
+        for value, name, unit in ((amplitude, "amplitude", "V"), (period, "period", "s"),
+                                  (sample_interval, "sample interval", "s"), (dt, "dt", "s")):
+            _positive(value, name, unit)
+        if not 0 < duty < 1:
+            raise OptionError(f"duty cycle must lie in (0, 1), got {duty:g}")
+        if periods < 1:
+            raise OptionError("need at least one period")
+        rng = self._rng("pulse")
+        loaded = self._loaded(flywheel)
+        i_on = float(amp.current(amplitude))
+        i_off = float(amp.current(0.0))
+        on_drive: Drive = BenchSupply(amp.compliance, i_on) if i_on > 0 else CurrentDrive(i_on)
+        pre = 0.05 * period * periods
+        schedule: list[tuple[float, Drive]] = [(0.0, CurrentDrive(i_off))]
+        for k in range(periods):
+            schedule += [(pre + k * period, on_drive), (pre + (k + duty) * period, CurrentDrive(i_off))]
+        span = period * periods
+        sim = self._simulate(loaded, schedule, duration=span + dt, dt=dt)
+        t = np.arange(-pre, span - pre, sample_interval)
+        state = sim.sample(t + pre)
+        phase = np.mod(t, period)
+        command = np.where((t >= 0) & (phase < duty * period), amplitude, 0.0)
+        command = quantize(command + rng.normal(0.0, ins.scope.vertical_noise, t.shape), 1e-4)
+        tach = ins.tachometer.voltage(state["speed"], state["position"], rng)
+        path = Path(path)
+        columns: dict[str, Any] = {"time_s": quantize(t, 1e-7), "command_V": command}
+        if raw_tach:
+            columns["tach_voltage_V"] = quantize(tach, 1e-4)
+        else:
+            columns["velocity_rad_per_s"] = quantize(tach / ins.tachometer.gain, 1e-4)
+        write_csv(path, columns, metadata={"experiment": "pulse", "motor": self.motor.key,
+                                           "Ka_A_per_V": amp.gain, "Kt_tach_V_s_per_rad": ins.tachometer.gain})
+        saturated = bool(np.any((sim.mode == 0) & (sim.time > pre)))
+        end_on = pre + duty * period
+        expected = {
+            "J": loaded.J, "Tf": loaded.Tf, "b": loaded.b, "K": self.params.K,
+            "Ka": amp.gain, "Kt_tach": ins.tachometer.gain, "current_on": i_on,
+            "acceleration_on": (self.params.K * i_on - loaded.Tf) / loaded.J,
+            "acceleration_off": -(loaded.Tf - self.params.K * i_off) / loaded.J,
+            "peak_speed": float(np.interp(end_on, sim.time, sim.speed)),
+            "amplifier_saturated": saturated,
+            "rests_between_pulses": bool(sim.speed[np.searchsorted(sim.time, pre + period) - 1] == 0.0),
+        }
+        settings = {"amplitude": amplitude, "period": period, "duty": duty, "periods": periods,
+                    "sample_interval": sample_interval, "raw_tach": raw_tach, "dt": dt}
+        instruments = {"amplifier": amp.settings(), "tachometer": ins.tachometer.settings(),
+                       "scope": ins.scope.settings()}
+        return self._finish("pulse", [path], settings=settings, expected=expected, instruments=instruments,
+                            flywheel=flywheel)
+
+    # ---- identification logs --------------------------------------------------------------------
+    def transient(
+        self,
+        path: PathArg,
+        *,
+        profile: str = "steps",
+        rate: float = 1000.0,
+        duration: float = 4.0,
+        max_voltage: float = 12.0,
+        include_current: bool = True,
+        flywheel: bool = False,
+        voltage_noise: float = 0.02,
+        current_noise: float = 5e-3,
+    ) -> RigRun:
+        """A voltage-driven identification log (steps, ramps or random steps) sampled at ``rate``.
+
+        Parameters
+        ----------
+        path
+            CSV to write: ``time_s,voltage_V,current_A,position_counts`` (no current column
+            without ``include_current``).
+        profile
+            ``"steps"`` (0, ½, 1, ¼, −½, −1, 0 of ``max_voltage``), ``"ramps"`` (triangle ±max) or
+            ``"random"`` (random levels held 0.1-0.5 s).
+        rate
+            Sample rate [Hz] (e.g. 1 kHz or 10 kHz).
+        duration
+            Length [s].
+        max_voltage
+            Largest |voltage| [V].
+        include_current
+            Log the current.
+        flywheel
+            Attach the flywheel.
+        voltage_noise
+            Rms noise of the voltage measurement [V] (1 mV resolution).
+        current_noise
+            Rms noise of the current measurement [A] (1 mA resolution).
+
+        Returns
+        -------
+        RigRun
+            ``truth["expected"]``: K, R, L, J, b, Tf of what is driven (totals with a flywheel).
+        """
+        for value, name, unit in ((rate, "rate", "Hz"), (duration, "duration", "s"),
+                                  (max_voltage, "maximum voltage", "V")):
+            _positive(value, name, unit)
+        if voltage_noise < 0 or current_noise < 0:
+            raise OptionError("noise levels must not be negative")
+        rng = self._rng("transient")
+        voltage_of = _profile(profile, duration, max_voltage, rng)
+        loaded = self._loaded(flywheel)
+        period = 1.0 / rate
+        substeps = max(1, math.ceil(period / 1e-3))
+        dt = period / substeps
+        sim = self._simulate(loaded, [(0.0, VoltageDrive(voltage_of))], duration=duration + period, dt=dt)
+        t = np.arange(round(duration * rate) + 1) * period
+        state = sim.sample(t)
+        applied = voltage_of(t)
+        columns: dict[str, Any] = {
+            "time_s": quantize(t, 1e-7),
+            "voltage_V": quantize(applied + rng.normal(0.0, voltage_noise, t.shape), 1e-3),
+        }
+        if include_current:
+            columns["current_A"] = quantize(state["current"] + rng.normal(0.0, current_noise, t.shape), 1e-3)
+        columns["position_counts"] = self.encoder.counts(state["position"])
+        path = Path(path)
+        write_csv(path, columns, metadata={"experiment": "transient", "motor": self.motor.key,
+                                           "cpr": self.motor.cpr, "profile": profile})
+        expected = loaded.to_dict()
+        settings = {"profile": profile, "rate": rate, "duration": duration, "max_voltage": max_voltage,
+                    "include_current": include_current, "voltage_noise": voltage_noise,
+                    "current_noise": current_noise, "dt": dt}
+        return self._finish("transient", [path], settings=settings, expected=expected,
+                            instruments={"encoder": self.encoder.settings()}, flywheel=flywheel)
+
+    def sysid(
+        self,
+        path: PathArg,
+        *,
+        ramp_rate: float = 0.25,
+        step_voltage: float = 7.0,
+        quasistatic_duration: float = 30.0,
+        dynamic_duration: float = 10.0,
+        flywheel: bool = True,
+        start_time: float = 10.0,
+        gap: float = 5.0,
+    ) -> RigRun:
+        """WPILib SysId tests (quasistatic ramps, dynamic steps, both directions) as SysId's JSON.
+
+        Parameters
+        ----------
+        path
+            JSON to write: keys ``slow-forward``, ``slow-backward``, ``fast-forward``,
+            ``fast-backward``, rows ``[timestamp s, voltage V, position rot, velocity rot/s]``,
+            ``"sysid": true``, ``"test": "Simple"``, ``"units": "Rotations"``, ``"unitsPerRotation": 1.0``.
+        ramp_rate
+            Quasistatic ramp rate [V/s] (SysId default 0.25 V/s).
+        step_voltage
+            Dynamic step [V] (SysId default 7 V).
+        quasistatic_duration
+            Length of each quasistatic test [s].
+        dynamic_duration
+            Length of each dynamic test [s].
+        flywheel
+            Attach the flywheel (default: the dynamometer with its flywheel, so kA is observable).
+        start_time
+            Timestamp of the first row [s] (robot clock).
+        gap
+            Time between tests [s]; the mechanism is at rest at the start of each test.
+
+        Returns
+        -------
+        RigRun
+            ``truth["expected"]``: kS [V], kV [V·s/rad], kA [V·s²/rad] (and per rotation) of
+            what is driven, and the totals K, R, J, b, Tf.
+
+        Notes
+        -----
+        Velocity is what a motor controller reports: the count difference over
+        ``velocity_window``, refreshed with position every ``status_period`` (values repeat between
+        refreshes, as in real SysId logs).
+        """
+        ins = self.instruments
+        ctrl = ins.controller
+        for value, name, unit in ((ramp_rate, "ramp rate", "V/s"), (step_voltage, "step voltage", "V"),
+                                  (quasistatic_duration, "quasistatic duration", "s"),
+                                  (dynamic_duration, "dynamic duration", "s")):
+            _positive(value, name, unit)
+        if gap < 0:
+            raise OptionError("gap must not be negative")
+        rng = self._rng("sysid")
+        loaded = self._loaded(flywheel)
+        dt = FLYWHEEL_DT if flywheel else 2e-4
+        cpr = self.motor.cpr
+        tests: list[tuple[str, Callable[[np.ndarray], np.ndarray], float]] = [
+            ("slow-forward", lambda t: ramp_rate * t, quasistatic_duration),
+            ("slow-backward", lambda t: -ramp_rate * t, quasistatic_duration),
+            ("fast-forward", lambda t: np.where(t > 0, step_voltage, 0.0), dynamic_duration),
+            ("fast-backward", lambda t: np.where(t > 0, -step_voltage, 0.0), dynamic_duration),
+        ]
+        doc: dict[str, Any] = {}
+        position0 = 0.0
+        clock = start_time
+        for name, command, length in tests:
+            # The command starts one log period after the test's first row (that row logs 0 V).
+            lead = ctrl.log_period
+
+            def applied(t: np.ndarray, command: Callable[[np.ndarray], np.ndarray] = command,
+                        lead: float = lead) -> np.ndarray:
+                return np.where(t >= lead, command(np.asarray(t) - lead), 0.0)
+
+            sim = self._simulate(loaded, [(0.0, VoltageDrive(applied))], duration=length + lead + dt, dt=dt,
+                                 initial_position=position0)
+            n = int(length / ctrl.log_period) + 1
+            t_rows = np.arange(n) * ctrl.log_period + rng.normal(0.0, ctrl.log_jitter, n)
+            t_rows[0] = 0.0
+            t_rows = np.clip(np.maximum.accumulate(t_rows), 0.0, sim.time[-1])
+            # Status frames: the value logged at t is the one refreshed at the last frame ≤ t.
+            frame = np.floor(t_rows / ctrl.status_period) * ctrl.status_period
+            counts_now = self.encoder.counts(sim.sample(frame)["position"])
+            counts_then = self.encoder.counts(sim.sample(np.maximum(frame - ctrl.velocity_window, 0.0))["position"])
+            window = np.maximum(np.minimum(frame, ctrl.velocity_window), ctrl.velocity_window)
+            velocity = (counts_now - counts_then) / window / cpr
+            volts = applied(t_rows) + rng.normal(0.0, ctrl.voltage_noise, n)
+            rows = np.column_stack([clock + t_rows, np.round(volts, 6), counts_now / cpr, velocity])
+            doc[name] = [[round(float(x), 6) for x in row] for row in rows]
+            position0 = float(sim.position[-1])
+            clock += t_rows[-1] + gap
+        doc.update({"sysid": True, "test": "Simple", "units": "Rotations", "unitsPerRotation": 1.0})
+        path = Path(path)
+        path.write_text(json.dumps(doc) + "\n", encoding="utf-8")
+        ff = feedforward_from_params(loaded)
+        two_pi = 2 * math.pi
+        expected = {
+            **ff,
+            "kS_per_rotation": ff["kS"], "kV_per_rotation": ff["kV"] * two_pi, "kA_per_rotation": ff["kA"] * two_pi,
+            **dict(loaded.to_dict().items()),
+        }
+        settings = {"ramp_rate": ramp_rate, "step_voltage": step_voltage,
+                    "quasistatic_duration": quasistatic_duration, "dynamic_duration": dynamic_duration,
+                    "start_time": start_time, "gap": gap, "dt": dt}
+        return self._finish("sysid", [path], settings=settings, expected=expected,
+                            instruments={"controller": ctrl.settings(), "encoder": self.encoder.settings()},
+                            flywheel=flywheel)
+
+
+# ---- helpers --------------------------------------------------------------------------------------
+def _plain(value: Any) -> Any:
+    return _jsonable(value)
+
+
+def _stop_time(sim: Simulation, after: float) -> float | None:
+    """First time ≥ ``after`` at which the shaft is at rest (None if it still turns at the end)."""
+    idx = np.flatnonzero((sim.time >= after) & (sim.speed == 0.0))
+    return float(sim.time[idx[0]]) if idx.size else None
+
+
+def _timebase_for(limit: float) -> float:
+    """The largest 1-2-5 timebase [s/div] not above ``limit``."""
+    exponent = math.floor(math.log10(limit))
+    for mantissa in (5.0, 2.0, 1.0):
+        value = mantissa * 10.0**exponent
+        if value <= limit:
+            return value
+    return 5.0 * 10.0 ** (exponent - 1)
+
+
+def _strictly_increasing(times: np.ndarray, step: float) -> np.ndarray:
+    """Cursor readings never repeat: a person would move the cursor one step on."""
+    out = np.array(times, dtype=float)
+    for k in range(1, out.size):
+        if out[k] <= out[k - 1]:
+            out[k] = out[k - 1] + step
+    return out
+
+
+def _profile(profile: str, duration: float, max_voltage: float,
+             rng: np.random.Generator) -> Callable[[np.ndarray], np.ndarray]:
+    """Voltage profile ``f(t) -> V`` of a transient test."""
+    if profile == "steps":
+        levels = np.array([0.0, 0.5, 1.0, 0.25, -0.5, -1.0, 0.0]) * max_voltage
+        edges = np.linspace(0.0, duration, levels.size + 1)[1:-1]
+        return lambda t: levels[np.searchsorted(edges, np.asarray(t), side="right")]
+    if profile == "ramps":
+        knots_t = np.linspace(0.0, duration, 5)
+        knots_v = np.array([0.0, 1.0, 0.0, -1.0, 0.0]) * max_voltage
+        return lambda t: np.interp(np.asarray(t), knots_t, knots_v)
+    if profile == "random":
+        holds = [0.0]
+        while holds[-1] < duration:
+            holds.append(holds[-1] + float(rng.uniform(0.1, 0.5)))
+        starts = np.array(holds[1:-1])
+        levels = rng.uniform(-max_voltage, max_voltage, starts.size + 1)
+        levels[0] = 0.0
+        return lambda t: levels[np.searchsorted(starts, np.asarray(t), side="right")]
+    raise OptionError(f"unknown profile {profile!r}; choose steps, ramps or random")
