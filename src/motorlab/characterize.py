@@ -1,0 +1,652 @@
+"""Run a whole session: every analysis the session has files for, per unit, and combine the sources.
+
+:func:`characterize` takes a validated :class:`~motorlab.session.Session` and returns a
+:class:`Characterization`: per unit the fit of each experiment (or why it failed), the combined
+motor parameters (J, b, Tf, K, R, L) with the source each one comes from, the disagreements
+between sources, and the fleet statistics. :func:`write_outputs` writes ``results.json``,
+``results.csv`` (seed 1's "Final Calculated Parameters" table, one row per unit) and
+``report.html``.
+
+Combination
+-----------
+- Order: experiments that measure K run first (spin-down, torque, identification); the analyses
+  that need K (terminal velocity, then free spin-up, which also takes b and Tf) receive the
+  combined K *with its standard error*, which they propagate.
+- "The more precise source wins": of the determined estimates of one parameter, the one with the
+  smallest standard error is kept (not a weighted mean: sources may differ systematically, as
+  the seed's Kt through a lossy gearbox and its Ke do, and a mean would hide that).
+- Two sources a and b disagree when |a − b| > 3·sqrt(σa² + σb²); every disagreement is reported.
+- Experiments run with the flywheel attached (:data:`~motorlab.session.LOADED_EXPERIMENTS`)
+  contribute only K: their J, b and Tf describe motor + gearbox + flywheel and are reported with
+  the experiment, not as the motor's.
+- The LCR meter's R = 2πfL/Q is an AC resistance; the model's R is its ``R_dc``.
+- One failing experiment or unit does not stop the others: every
+  :class:`~motorlab.errors.MotorlabError` is caught per unit and experiment and its message kept.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from motorlab.errors import MotorlabError, OptionError
+from motorlab.fleet import DEFAULT_THRESHOLD, FleetSummary, fleet_summary
+from motorlab.results import Estimate, FitResult
+from motorlab.session import LOADED_EXPERIMENTS, ExperimentSpec, Session, UnitSpec, read_truth
+from motorlab.units import SI_UNITS
+
+#: The motor parameters of the final table, in seed 1's column order (plus Tf).
+PARAMETERS = ("J", "b", "Tf", "K", "R", "L")
+
+#: Experiments in the order they run: sources of K first, then the analyses that take K.
+ORDER = (
+    "lcr",
+    "spindown",
+    "torque",
+    "amplifier",
+    "tachometer",
+    "pulse",
+    "identify",
+    "feedforward",
+    "spinup",
+    "terminal",
+    "free-spinup",
+)
+
+#: Result parameter -> motor parameter, per experiment (what each may contribute to the table).
+CONTRIBUTIONS: dict[str, dict[str, str]] = {
+    "spindown": {"K": "K"},
+    "spinup": {"K": "K"},
+    "torque": {"K": "K"},
+    "lcr": {"R_dc": "R", "L": "L"},
+    "free-spinup": {"J": "J"},
+    "terminal": {"b": "b", "Tf": "Tf"},
+    "pulse": {"J": "J", "b": "b", "Tf": "Tf"},
+    "identify": {name: name for name in PARAMETERS},
+    # A SysId log is usually taken on a mechanism: its J, b, Tf are reported, not the motor's.
+    "feedforward": {},
+    "amplifier": {},
+    "tachometer": {},
+}
+
+#: Two estimates disagree when they differ by more than this many combined standard errors.
+DISAGREEMENT_SIGMAS = 3.0
+
+Progress = Callable[[str, str], None]
+
+
+@dataclass(frozen=True)
+class Combined:
+    """One motor parameter of one unit: the chosen estimate and every candidate."""
+
+    estimate: Estimate
+    source: str
+    candidates: dict[str, Estimate] = field(default_factory=dict)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON: the estimate (value, stderr, unit), its source and the other candidates."""
+        out = self.estimate.to_dict()
+        out["source"] = self.source
+        if len(self.candidates) > 1:
+            out["candidates"] = {k: v.to_dict() for k, v in self.candidates.items()}
+        return out
+
+
+@dataclass(frozen=True)
+class Disagreement:
+    """Two sources of one parameter that differ by more than :data:`DISAGREEMENT_SIGMAS`."""
+
+    parameter: str
+    first: str
+    second: str
+    first_estimate: Estimate
+    second_estimate: Estimate
+
+    @property
+    def sigmas(self) -> float:
+        """|a − b| / sqrt(σa² + σb²)."""
+        a, b = self.first_estimate, self.second_estimate
+        denom = math.hypot(_finite_or_zero(a.stderr), _finite_or_zero(b.stderr))
+        return abs(a.value - b.value) / denom if denom > 0 else math.inf
+
+    def message(self) -> str:
+        """One line for people."""
+        a, b = self.first_estimate, self.second_estimate
+        return (
+            f"{self.parameter}: {self.first} gives {a.value:.4g} ± {a.stderr:.2g}, {self.second} gives "
+            f"{b.value:.4g} ± {b.stderr:.2g} ({self.sigmas:.1f} σ apart)"
+        )
+
+
+@dataclass
+class UnitResult:
+    """Everything measured on one unit."""
+
+    spec: UnitSpec
+    fits: dict[str, FitResult] = field(default_factory=dict)
+    failures: dict[str, str] = field(default_factory=dict)
+    parameters: dict[str, Combined] = field(default_factory=dict)
+    disagreements: list[Disagreement] = field(default_factory=list)
+    truth: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def name(self) -> str:
+        """The unit's key in the session."""
+        return self.spec.name
+
+    @property
+    def status(self) -> str:
+        """``"ok"``, or what failed (the row of the final table says why)."""
+        if not self.failures:
+            return "ok"
+        return "; ".join(f"{exp} failed: {why}" for exp, why in self.failures.items())
+
+    def estimates(self) -> dict[str, Estimate]:
+        """The chosen estimate of each motor parameter."""
+        return {name: c.estimate for name, c in self.parameters.items()}
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON of one unit: parameters, experiments, disagreements, failures, truth."""
+        out: dict[str, Any] = {
+            "label": self.spec.display_name,
+            "status": self.status,
+            "parameters": {name: c.to_dict() for name, c in self.parameters.items()},
+            "experiments": {name: fit.to_dict() for name, fit in self.fits.items()},
+            "failures": dict(self.failures),
+            "disagreements": [
+                {
+                    "parameter": d.parameter,
+                    "sources": [d.first, d.second],
+                    "sigmas": _json_float(d.sigmas),
+                    "message": d.message(),
+                }
+                for d in self.disagreements
+            ],
+        }
+        if self.truth:
+            out["truth"] = dict(self.truth)
+        return out
+
+
+@dataclass
+class Characterization:
+    """The outcome of :func:`characterize`."""
+
+    session: Session
+    units: dict[str, UnitResult]
+    fleet: FleetSummary
+    gains: dict[str, Any] | None = None
+    notes: list[str] = field(default_factory=list)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON document written as ``results.json`` (SI units)."""
+        from motorlab import __version__
+
+        s = self.session
+        out: dict[str, Any] = {
+            "motorlab_version": __version__,
+            "session": {
+                "path": str(s.path),
+                "title": s.title,
+                "date": s.date,
+                "motor": {
+                    "name": s.motor.name,
+                    "catalog": s.motor.catalog,
+                    "counts_per_revolution": s.motor.counts_per_revolution,
+                    "gear_ratio": s.motor.gear_ratio,
+                },
+            },
+            "units": {name: unit.to_dict() for name, unit in self.units.items()},
+            "fleet": self.fleet.to_dict(),
+            "notes": list(self.notes),
+        }
+        if self.gains is not None:
+            out["gains"] = _jsonable({k: v for k, v in self.gains.items() if k != "figure"})
+        return out
+
+
+# ---------------------------------------------------------------------------------------------
+# Combination
+# ---------------------------------------------------------------------------------------------
+def combine(name: str, candidates: Mapping[str, Estimate]) -> tuple[Combined | None, list[Disagreement]]:
+    """Choose among several sources of one parameter and list their disagreements.
+
+    Parameters
+    ----------
+    name
+        Parameter symbol (``"K"``).
+    candidates
+        Source (experiment name) -> estimate, in SI.
+
+    Returns
+    -------
+    combined, disagreements
+        The estimate with the smallest standard error among the determined ones (None when there
+        is no candidate at all; an undetermined estimate when no candidate is determined), and
+        every pair of determined sources with |a − b| > 3·sqrt(σa² + σb²).
+    """
+    if not candidates:
+        return None, []
+    determined = {k: e for k, e in candidates.items() if e.determined and math.isfinite(e.value)}
+    if not determined:
+        source, est = next(iter(candidates.items()))
+        return Combined(est, source, dict(candidates)), []
+
+    def precision_key(item: tuple[str, Estimate]) -> float:
+        se = item[1].stderr
+        return se if math.isfinite(se) and se >= 0 else math.inf
+
+    source, best = min(determined.items(), key=precision_key)
+    chosen = Estimate(name, best.value, best.stderr, best.unit, True, f"from {source}")
+    disagreements = []
+    items = list(determined.items())
+    for i in range(len(items)):
+        for j in range(i + 1, len(items)):
+            (sa, a), (sb, b) = items[i], items[j]
+            denom = math.hypot(_finite_or_zero(a.stderr), _finite_or_zero(b.stderr))
+            if abs(a.value - b.value) > DISAGREEMENT_SIGMAS * denom:
+                disagreements.append(Disagreement(name, sa, sb, a, b))
+    return Combined(chosen, source, dict(candidates)), disagreements
+
+
+def _finite_or_zero(x: float) -> float:
+    return x if math.isfinite(x) else 0.0
+
+
+# ---------------------------------------------------------------------------------------------
+# Running the analyses
+# ---------------------------------------------------------------------------------------------
+@dataclass
+class _UnitContext:
+    """What an adapter may use: the session, the unit's experiment, and what is known so far."""
+
+    session: Session
+    experiment: ExperimentSpec
+    known: dict[str, Combined]
+    fits: dict[str, FitResult]
+
+    @property
+    def cpr(self) -> float:
+        return self.session.motor.counts_per_revolution
+
+    @property
+    def files(self) -> list[str]:
+        return [str(p) for p in self.experiment.files]
+
+    def setting(self, name: str) -> Any:
+        return self.experiment.settings.get(name)
+
+    def estimate(self, name: str) -> Estimate | None:
+        combined = self.known.get(name)
+        if combined is None or not combined.estimate.determined:
+            return None
+        return combined.estimate
+
+    def require(self, name: str, why: str) -> Estimate:
+        est = self.estimate(name)
+        if est is None:
+            raise OptionError(f"needs {name} ({why}); add an experiment that measures it")
+        return est
+
+
+def _run_spindown(ctx: _UnitContext) -> FitResult:
+    from motorlab.analyses import _common as common
+    from motorlab.analyses.spindown import spindown
+
+    recording = common.read_position_log(ctx.files, cpr=ctx.cpr)
+    flywheel = ctx.session.rig.flywheel
+    inertia = flywheel.reflected_inertia if flywheel is not None else None
+    return spindown(recording, cpr=ctx.cpr, inertia=inertia, cutoff=ctx.setting("cutoff"))
+
+
+def _run_lcr(ctx: _UnitContext) -> FitResult:
+    from motorlab.analyses.gains import read_tables
+    from motorlab.analyses.lcr import lcr
+
+    return lcr(read_tables(ctx.files), frequency=ctx.setting("frequency"))
+
+
+def _run_torque(ctx: _UnitContext) -> FitResult:
+    from motorlab.analyses.gains import read_tables
+    from motorlab.analyses.torque import torque
+
+    return torque(read_tables(ctx.files), arm=ctx.session.rig.lever_arm)
+
+
+def _run_spinup(ctx: _UnitContext) -> FitResult:
+    from motorlab.analyses import _common as common
+    from motorlab.analyses.spinup import spinup
+
+    flywheel = ctx.session.rig.flywheel
+    if flywheel is None:  # the session validation refuses this; kept for library callers
+        raise OptionError("the spin-up needs the flywheel's inertia: add [rig.flywheel]")
+    recording = common.read_position_log(ctx.files, cpr=ctx.cpr)
+    return spinup(
+        recording,
+        inertia=flywheel.reflected_inertia,
+        cpr=ctx.cpr,
+        spindown_result=ctx.fits.get("spindown"),
+        start=ctx.setting("start"),
+        end=ctx.setting("end"),
+    )
+
+
+def _run_terminal(ctx: _UnitContext) -> FitResult:
+    from motorlab.analyses.terminal import _concatenate, terminal
+    from motorlab.io.csv_table import read_csv
+
+    k = ctx.require("K", "b = (K·I − Tf)/ω")
+    recordings = [read_csv(p, cpr=ctx.cpr) for p in ctx.files]
+    recording = recordings[0] if len(recordings) == 1 else _concatenate(recordings)
+    return terminal(
+        recording,
+        torque_constant=k.value,
+        torque_constant_stderr=_stderr(k),
+        cpr=ctx.cpr,
+        current_stderr=ctx.setting("current_stderr"),
+    )
+
+
+def _run_free_spinup(ctx: _UnitContext) -> FitResult:
+    from motorlab.analyses.free_spinup import free_spinup, read_edges
+
+    if len(ctx.files) != 1:
+        raise OptionError(f"free-spinup analyses one file of edge times, got {len(ctx.files)}")
+    k = ctx.require("K", "the torque is K·I")
+    current = ctx.setting("current")
+    if current is None:  # the session validation requires it; kept for library callers
+        raise OptionError("free-spinup needs its current setting")
+    b, tf = ctx.estimate("b"), ctx.estimate("Tf")
+    return free_spinup(
+        read_edges(ctx.files[0]),
+        torque_constant=k.value,
+        torque_constant_stderr=_stderr(k),
+        current=current,
+        current_stderr=ctx.setting("current_stderr"),
+        cpr=ctx.cpr,
+        edges_per_revolution=ctx.setting("edges_per_revolution"),
+        viscous_friction=None if b is None else max(b.value, 0.0),
+        viscous_friction_stderr=None if b is None else _stderr(b),
+        coulomb_friction=None if tf is None else max(tf.value, 0.0),
+        coulomb_friction_stderr=None if tf is None else _stderr(tf),
+    )
+
+
+def _run_amplifier(ctx: _UnitContext) -> FitResult:
+    from motorlab.analyses.gains import amplifier, read_tables
+
+    return amplifier(read_tables(ctx.files), nominal=ctx.setting("nominal"))
+
+
+def _run_tachometer(ctx: _UnitContext) -> FitResult:
+    from motorlab.analyses.gains import read_tables, tachometer
+
+    return tachometer(read_tables(ctx.files), nominal=ctx.setting("nominal"))
+
+
+def _run_pulse(ctx: _UnitContext) -> FitResult:
+    from motorlab.analyses.gains import read_tables
+    from motorlab.analyses.pulse import pulse
+
+    k = ctx.require("K", "the torque is Ka·K·V")
+    gain = ctx.setting("amplifier_gain")
+    if gain is None:
+        fit = ctx.fits.get("amplifier")
+        if fit is None or "Ka" not in fit:
+            raise OptionError("needs the amplifier gain: run the amplifier experiment or set amplifier_gain")
+        gain = fit["Ka"].value
+    tach = ctx.setting("tach_gain")
+    if tach is None and "tachometer" in ctx.fits and "Kt_tach" in ctx.fits["tachometer"]:
+        tach = ctx.fits["tachometer"]["Kt_tach"].value
+    return pulse(read_tables(ctx.files), amplifier_gain=gain, torque_constant=k.value, tach_gain=tach)
+
+
+def _run_identify(ctx: _UnitContext) -> FitResult:
+    from motorlab.identify import identify, read_runs
+
+    cpr = ctx.cpr
+    runs = read_runs(ctx.files, cpr=int(cpr) if float(cpr).is_integer() else None)
+    if all(run.has("current") for run in runs):
+        return identify(runs, cpr=cpr)
+    # Without current the feedforward gains need R (and K to separate K from b) from elsewhere.
+    r, k = ctx.estimate("R"), ctx.estimate("K")
+    return identify(
+        runs, cpr=cpr, resistance=None if r is None else r.value, torque_constant=None if k is None else k.value
+    )
+
+
+def _run_feedforward(ctx: _UnitContext) -> FitResult:
+    from motorlab.feedforward import feedforward, motor_estimates
+    from motorlab.identify import read_runs
+
+    cpr = ctx.cpr
+    # A SysId JSON file holds angles already (no counts): the reader refuses a cpr for it.
+    json_only = all(p.lower().endswith(".json") for p in ctx.files)
+    runs = read_runs(ctx.files, cpr=None if json_only or not float(cpr).is_integer() else int(cpr))
+    result = feedforward(runs, cpr=None if json_only else cpr)
+    r, k = ctx.estimate("R"), ctx.estimate("K")
+    if r is not None:
+        result.parameters.update(
+            motor_estimates(result, resistance=r.value, torque_constant=None if k is None else k.value)
+        )
+    return result
+
+
+def _stderr(est: Estimate) -> float | None:
+    return est.stderr if math.isfinite(est.stderr) and est.stderr >= 0 else None
+
+
+#: Experiment name -> adapter calling the analysis' library function with the session's settings.
+ADAPTERS: dict[str, Callable[[_UnitContext], FitResult]] = {
+    "spindown": _run_spindown,
+    "spinup": _run_spinup,
+    "lcr": _run_lcr,
+    "torque": _run_torque,
+    "terminal": _run_terminal,
+    "free-spinup": _run_free_spinup,
+    "amplifier": _run_amplifier,
+    "tachometer": _run_tachometer,
+    "pulse": _run_pulse,
+    "identify": _run_identify,
+    "feedforward": _run_feedforward,
+}
+
+
+def characterize(
+    session: Session, *, progress: Progress | None = None, control: bool = True, figures: bool = True
+) -> Characterization:
+    """Run every analysis a session has files for and combine the results.
+
+    Parameters
+    ----------
+    session
+        A validated session (:func:`motorlab.session.load_session`).
+    progress
+        Called as ``progress(unit, experiment)`` before each analysis and
+        ``progress(unit, "")`` when a unit is done (drives the CLI's progress bar).
+    control
+        Also compute controller gains for the fleet's median parameters when
+        :mod:`motorlab.control` is available.
+    figures
+        Draw the step-response figure of the gains (for the report).
+
+    Returns
+    -------
+    Characterization
+        Per-unit fits, combined parameters, disagreements, failures, truth (simulated sessions)
+        and the fleet summary.
+    """
+    units: dict[str, UnitResult] = {}
+    for name, spec in session.units.items():
+        units[name] = _characterize_unit(session, spec, progress)
+    threshold = DEFAULT_THRESHOLD if session.fleet_threshold is None else session.fleet_threshold
+    fleet = fleet_summary(
+        {n: u.estimates() for n, u in units.items()},
+        model=session.motor.name,
+        healthy_spread=session.healthy_spread,
+        threshold=threshold,
+    )
+    result = Characterization(session=session, units=units, fleet=fleet)
+    if control:
+        result.gains = _controller_gains(result, plot=figures)
+    return result
+
+
+def _characterize_unit(session: Session, spec: UnitSpec, progress: Progress | None) -> UnitResult:
+    unit = UnitResult(spec=spec)
+    if spec.truth is not None:
+        try:
+            unit.truth = read_truth(spec.truth)
+        except MotorlabError as exc:
+            unit.failures["truth"] = str(exc)
+    candidates: dict[str, dict[str, Estimate]] = {name: {} for name in PARAMETERS}
+    ordered = sorted(spec.experiments, key=lambda e: ORDER.index(e) if e in ORDER else len(ORDER))
+    for exp_name in ordered:
+        if progress is not None:
+            progress(spec.name, exp_name)
+        adapter = ADAPTERS.get(exp_name)
+        if adapter is None:
+            unit.failures[exp_name] = "this analysis is not available in this version of motorlab"
+            continue
+        ctx = _UnitContext(session, spec.experiments[exp_name], unit.parameters, unit.fits)
+        try:
+            fit = adapter(ctx)
+        except MotorlabError as exc:
+            unit.failures[exp_name] = str(exc)
+            continue
+        unit.fits[exp_name] = fit
+        for result_name, motor_name in CONTRIBUTIONS.get(exp_name, {}).items():
+            if exp_name in LOADED_EXPERIMENTS and motor_name != "K":
+                continue
+            est = fit.parameters.get(result_name)
+            if est is not None:
+                candidates[motor_name][exp_name] = est
+        # Re-combine after each experiment so that later analyses see the best K so far.
+        for name in PARAMETERS:
+            combined, _ = combine(name, candidates[name])
+            if combined is not None:
+                unit.parameters[name] = combined
+    unit.parameters = {}
+    for name in PARAMETERS:
+        combined, disagreements = combine(name, candidates[name])
+        if combined is not None:
+            unit.parameters[name] = combined
+        unit.disagreements.extend(disagreements)
+    if progress is not None:
+        progress(spec.name, "")
+    return unit
+
+
+def _controller_gains(result: Characterization, *, plot: bool = True) -> dict[str, Any] | None:
+    """Gains for the fleet's median motor (SysId LQR defaults, :func:`motorlab.control.tune_summary`).
+
+    Returns None when K, R or J were not measured; a failure of the design is kept in ``notes``.
+    """
+    from motorlab.model import MotorParams
+
+    values: dict[str, float] = {}
+    for name in PARAMETERS:
+        stats = result.fleet.parameters.get(name)
+        if stats is not None and math.isfinite(stats.median):
+            values[name] = max(stats.median, 0.0)
+    if not all(name in values for name in ("K", "R", "J")):
+        return None
+    try:
+        from motorlab.control import tune_summary
+
+        params = MotorParams(**values)
+        voltage = result.session.motor.nominal_voltage or 12.0
+        summary = tune_summary(params, voltage=voltage, cpr=result.session.motor.counts_per_revolution, plot=plot)
+    except (ImportError, MotorlabError) as exc:
+        result.notes.append(f"controller gains not computed: {exc}")
+        return None
+    return {
+        "motor": "median of the units",
+        "voltage": voltage,
+        "params": params.to_dict(),
+        "velocity": summary.get("velocity"),
+        "position": summary.get("position"),
+        "text": summary.get("text", ""),
+        "figure": summary.get("figure"),
+    }
+
+
+# ---------------------------------------------------------------------------------------------
+# Outputs
+# ---------------------------------------------------------------------------------------------
+def results_table(result: Characterization) -> list[dict[str, Any]]:
+    """Seed 1's final table: one row per unit with value and standard error of each parameter (SI)."""
+    rows = []
+    for name, unit in result.units.items():
+        row: dict[str, Any] = {"unit": name, "label": unit.spec.display_name}
+        for p in PARAMETERS:
+            combined = unit.parameters.get(p)
+            est = combined.estimate if combined is not None else None
+            ok = est is not None and est.determined
+            row[p] = est.value if ok and est is not None else math.nan
+            row[f"{p}_stderr"] = est.stderr if ok and est is not None else math.nan
+            row[f"{p}_source"] = combined.source if combined is not None and ok else ""
+        outliers = result.fleet.outliers_of(name)
+        row["fleet"] = "; ".join(o.message() for o in outliers)
+        row["status"] = unit.status
+        rows.append(row)
+    return rows
+
+
+def write_csv(result: Characterization, path: str | Path) -> Path:
+    """Write ``results.csv``: one row per unit, SI units named in the header."""
+    path = Path(path)
+    header = ["unit", "label"]
+    for p in PARAMETERS:
+        unit = SI_UNITS[p]
+        header += [f"{p} ({unit})", f"{p} stderr ({unit})", f"{p} source"]
+    header += ["fleet outliers", "status"]
+    with path.open("w", newline="", encoding="utf-8") as handle:
+        writer = csv.writer(handle)
+        writer.writerow(header)
+        for row in results_table(result):
+            cells: list[Any] = [row["unit"], row["label"]]
+            for p in PARAMETERS:
+                cells += [_csv_float(row[p]), _csv_float(row[f"{p}_stderr"]), row[f"{p}_source"]]
+            cells += [row["fleet"], row["status"]]
+            writer.writerow(cells)
+    return path
+
+
+def write_outputs(result: Characterization, out_dir: str | Path, *, report: bool = True) -> dict[str, Path]:
+    """Write ``results.json``, ``results.csv`` and (by default) ``report.html`` into ``out_dir``.
+
+    Returns
+    -------
+    dict
+        ``{"json": path, "csv": path, "html": path}``.
+    """
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    paths = {"json": out / "results.json", "csv": out / "results.csv"}
+    paths["json"].write_text(json.dumps(result.to_dict(), indent=2, allow_nan=False) + "\n", encoding="utf-8")
+    write_csv(result, paths["csv"])
+    if report:
+        from motorlab.report import write_report
+
+        paths["html"] = write_report(result, out / "report.html")
+    return paths
+
+
+def _csv_float(x: float) -> str:
+    return f"{x:.6g}" if math.isfinite(x) else ""
+
+
+def _json_float(x: float) -> float | None:
+    return float(x) if math.isfinite(x) else None
+
+
+def _jsonable(obj: Any) -> Any:
+    from motorlab.results import _jsonable as convert
+
+    return convert(obj)

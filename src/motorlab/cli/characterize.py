@@ -1,0 +1,130 @@
+"""``motorlab characterize SESSION.toml [-o DIR]``: run a whole session and write the results and the report."""
+
+from __future__ import annotations
+
+import argparse
+import math
+from pathlib import Path
+from typing import Any
+
+
+def register(subparsers: Any) -> None:
+    """Add the ``characterize`` sub-command."""
+    parser = subparsers.add_parser(
+        "characterize",
+        help="run every analysis of a session (TOML) and write results.json, results.csv, report.html",
+        description="Validate the session description, run every analysis it has files for on every unit, "
+        "combine the sources (the most precise wins; disagreements are reported), test the fleet for "
+        "outliers, and write results.json, results.csv (one row per unit) and a self-contained report.html.",
+    )
+    parser.add_argument("session", metavar="SESSION.toml", help="the session description (see docs/session.md)")
+    parser.add_argument(
+        "-o", "--output", metavar="DIR", help="folder for the results (default: 'results' beside the session file)"
+    )
+    parser.add_argument("--no-report", action="store_true", help="write results.json and results.csv only")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar and no table")
+    parser.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Load, characterise, write, print the table."""
+    from motorlab.characterize import write_outputs
+    from motorlab.session import load_session
+
+    session = load_session(args.session)  # every validation error happens here, before any analysis
+    out_dir = Path(args.output) if args.output else session.folder / "results"
+    result = run_with_progress(session, quiet=args.quiet, figures=not args.no_report)
+    paths = write_outputs(result, out_dir, report=not args.no_report)
+    if not args.quiet:
+        print_table(result)
+    for kind in ("json", "csv", "html"):
+        if kind in paths:
+            print(f"wrote {paths[kind]}")
+    return 0
+
+
+def run_with_progress(session: Any, *, quiet: bool = False, figures: bool = True) -> Any:
+    """:func:`motorlab.characterize.characterize` with a rich progress bar on stderr (unless quiet)."""
+    from motorlab.characterize import characterize
+
+    if quiet:
+        return characterize(session, figures=figures)
+    from rich.console import Console
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+    total = sum(len(u.experiments) for u in session.units.values())
+    console = Console(stderr=True)
+    with Progress(
+        TextColumn("[bold]{task.description}"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TimeElapsedColumn(),
+        console=console,
+        transient=True,
+    ) as progress:
+        task = progress.add_task("characterising", total=total)
+        started = {"count": 0}
+
+        def step(unit: str, experiment: str) -> None:
+            if experiment:
+                if started["count"]:
+                    progress.advance(task)
+                started["count"] += 1
+                progress.update(task, description=f"unit {unit}: {experiment}")
+
+        result = characterize(session, progress=step, figures=figures)
+        progress.update(task, completed=total)
+    return result
+
+
+def print_table(result: Any, *, truth: bool = True) -> None:
+    """The estimates ± standard errors (against the truth for simulated sessions), printed with rich.
+
+    One row per parameter and one column per unit, which fits a terminal; ``results.csv`` and the
+    report keep seed 1's layout (one row per unit).
+    """
+    from rich.console import Console
+    from rich.table import Table
+
+    from motorlab.characterize import PARAMETERS
+    from motorlab.report import DISPLAY_UNITS, format_value
+
+    console = Console()
+    table = Table(title=result.session.title)
+    table.add_column("")
+    table.add_column("unit", style="dim")
+    units = list(result.units.values())
+    for unit in units:
+        table.add_column(unit.spec.display_name, justify="right")
+    flagged = {(o.unit, o.parameter) for o in result.fleet.outliers}
+    for p in PARAMETERS:
+        label, scale = DISPLAY_UNITS[p]
+        cells = []
+        for unit in units:
+            combined = unit.parameters.get(p)
+            if combined is None or not combined.estimate.determined:
+                cells.append("—")
+                continue
+            est = combined.estimate
+            text = format_value(est.value, est.stderr, scale=scale)
+            t = unit.truth.get(p) if truth else None
+            if t is not None:
+                dev = (est.value - t) / est.stderr if math.isfinite(est.stderr) and est.stderr > 0 else math.nan
+                text += f"\n[dim]truth {t * scale:.4g} ({dev:+.1f}σ)[/]"
+            if (unit.name, p) in flagged:
+                text = f"[bold red]{text}[/]"
+            cells.append(text)
+        table.add_row(p, label, *cells)
+    table.add_row("status", "", *[u.status if u.status == "ok" else "[red]see below[/]" for u in units])
+    console.print(table)
+    console.print("[dim]estimate ± standard error; the source of each is in results.json and the report[/]")
+    for unit in units:
+        for experiment, why in unit.failures.items():
+            console.print(f"[red]{unit.spec.display_name}: {experiment} failed: {why}[/]")
+        for d in unit.disagreements:
+            console.print(f"[yellow]{unit.spec.display_name}: sources disagree: {d.message()}[/]")
+    if result.fleet.outliers:
+        for o in result.fleet.outliers:
+            console.print(f"[bold red]fleet: unit {o.unit} stands out: {o.message()}[/]")
+    else:
+        console.print(f"fleet: no unit stands out (|z| ≤ {result.fleet.threshold:g})")

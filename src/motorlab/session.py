@@ -1,0 +1,881 @@
+"""Session descriptions: one TOML file naming the motor, the rig and, per unit, the files of each experiment.
+
+A person writes a session in minutes (see ``examples/session.toml`` and ``docs/session.md``)::
+
+    [session]
+    title = "NeveRest 40 fleet, March 2018"
+
+    [motor]
+    catalog = "neverest40"            # or name + counts_per_revolution + gear_ratio
+
+    [rig]
+    lever_arm = "0.20 m"
+    [rig.flywheel]
+    inertia = "0.0124 kg*m^2"         # or disc = { radius = ..., thickness = ..., material = ... }
+    ratio = 25                        # flywheel turns per motor-shaft turn
+    [rig.supply]
+    voltage_limit = "18 V"
+    current_limit = "4 A"
+
+    [units.A.spindown]
+    files = ["A/spindown.txt"]
+    [units.A.free-spinup]
+    files = ["A/free_spinup.csv"]
+    current = "0.5 A"
+
+:func:`load_session` parses and validates the whole description before any analysis runs: every
+file must exist, every key must be known, every quantity must have the right dimension, and
+contradictory settings (a flywheel given both as an inertia and as a disc, a current above the
+supply's limit) are refused. Errors are :class:`~motorlab.errors.SessionError` naming the file,
+the line and the key.
+
+Line numbers
+------------
+``tomllib`` reports line numbers for syntax errors only. For semantic errors the key's line is
+found by a small scan of the text (:func:`key_lines`): it follows ``[table]`` / ``[[array]]``
+headers, records every ``key = value`` (dotted and quoted keys included, and the keys of inline
+tables on the same line), and skips multi-line strings. A key that cannot be found falls back to
+the line of its nearest enclosing table.
+"""
+
+from __future__ import annotations
+
+import difflib
+import json
+import math
+import re
+import tomllib
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from motorlab.errors import MotorlabError, OptionError, SessionError
+from motorlab.units import format_unit, parse_quantity
+
+#: Densities of common flywheel materials [kg/m³] (engineering handbook values).
+MATERIAL_DENSITY: dict[str, float] = {
+    "steel": 7850.0,
+    "stainless steel": 8000.0,
+    "cast iron": 7200.0,
+    "aluminium": 2700.0,
+    "aluminum": 2700.0,
+    "brass": 8500.0,
+    "copper": 8960.0,
+    "acrylic": 1180.0,
+    "pla": 1240.0,
+    "abs": 1050.0,
+    "plywood": 600.0,
+    "hdpe": 960.0,
+}
+
+#: Settings each experiment accepts besides ``files``: name -> (SI unit or type name, description).
+#: A unit string means a quantity parsed with pint; "int" / "str" / "bool" are plain TOML values.
+EXPERIMENT_SETTINGS: dict[str, dict[str, tuple[str, str]]] = {
+    "spindown": {
+        "cutoff": ("s", "instant the relay opened (default: found from the current dropping to zero)"),
+    },
+    "spinup": {
+        "start": ("s", "start of the constant-current phase (default: found from the current)"),
+        "end": ("s", "end of the constant-current phase (default: found from the current)"),
+        "current": ("A", "supply current limit during the spin-up (checked against the supply)"),
+    },
+    "free-spinup": {
+        "current": ("A", "constant current driving the free motor (required)"),
+        "current_stderr": ("A", "standard error of that current"),
+        "edges_per_revolution": ("float", "rising edges per revolution (default cpr/4: one channel)"),
+    },
+    "terminal": {
+        "current_stderr": ("A", "standard error of one current reading"),
+    },
+    "lcr": {
+        "frequency": ("Hz", "test frequency of the L/Q readings (default: file, else 1 kHz)"),
+    },
+    "torque": {},
+    "amplifier": {
+        "nominal": ("A/V", "nominal amplifier gain to compare with"),
+    },
+    "tachometer": {
+        "nominal": ("V*s/rad", "nominal tachometer gain to compare with"),
+    },
+    "pulse": {
+        "amplifier_gain": ("A/V", "amplifier gain Ka (default: from the amplifier experiment)"),
+        "tach_gain": ("V*s/rad", "tachometer gain (default: from the tachometer experiment)"),
+    },
+    "identify": {},
+    "feedforward": {},
+}
+
+#: Settings an experiment cannot do without.
+REQUIRED_SETTINGS: dict[str, tuple[str, ...]] = {"free-spinup": ("current",)}
+
+#: Experiments run with the flywheel attached (their J, b, Tf include the flywheel and gearbox).
+LOADED_EXPERIMENTS = frozenset({"spindown", "spinup", "torque"})
+
+
+# ---------------------------------------------------------------------------------------------
+# Data classes
+# ---------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class MotorSpec:
+    """The motor model under test.
+
+    Attributes
+    ----------
+    name
+        Human-readable model name.
+    counts_per_revolution
+        Encoder counts per revolution of the shaft the encoder is counted at (the output shaft of a
+        gearmotor, as the FTC SDK reports) [count/rev].
+    gear_ratio
+        Gearbox reduction (motor turns per output turn) [-].
+    catalog
+        Catalogue key (``"neverest40"``) when the motor is in motorlab's catalogue, else None.
+    nominal_voltage
+        Voltage of the published figures [V] (None if unknown).
+    """
+
+    name: str
+    counts_per_revolution: float
+    gear_ratio: float = 1.0
+    catalog: str | None = None
+    nominal_voltage: float | None = None
+
+
+@dataclass(frozen=True)
+class FlywheelSpec:
+    """The flywheel of the rig.
+
+    Attributes
+    ----------
+    inertia
+        Moment of inertia about its own axis [kg·m²].
+    ratio
+        Flywheel turns per turn of the motor's counted shaft (25 for the seed's 25:1 step-up) [-].
+    description
+        How it was given (``"0.0124 kg·m²"`` or ``"steel disc r = 75 mm, h = 50 mm"``).
+    """
+
+    inertia: float
+    ratio: float = 1.0
+    description: str = ""
+
+    @property
+    def reflected_inertia(self) -> float:
+        """Inertia seen at the motor's counted shaft, J_f·N² [kg·m²]."""
+        return self.inertia * self.ratio**2
+
+
+@dataclass(frozen=True)
+class RigSpec:
+    """The dynamometer: flywheel, lever arm of the torque scale, supply limits (all optional)."""
+
+    flywheel: FlywheelSpec | None = None
+    lever_arm: float | None = None
+    voltage_limit: float | None = None
+    current_limit: float | None = None
+
+
+@dataclass(frozen=True)
+class ExperimentSpec:
+    """One experiment of one unit: its files (absolute paths) and settings (SI)."""
+
+    name: str
+    files: tuple[Path, ...]
+    settings: dict[str, Any] = field(default_factory=dict)
+    line: int | None = None
+
+
+@dataclass(frozen=True)
+class UnitSpec:
+    """One unit of the motor model (``A``, ``B`` ...) and its experiments, in the order written."""
+
+    name: str
+    experiments: dict[str, ExperimentSpec]
+    label: str = ""
+    truth: Path | None = None
+    notes: str = ""
+    line: int | None = None
+
+    @property
+    def display_name(self) -> str:
+        """The label if given, else the unit's key."""
+        return self.label or self.name
+
+
+@dataclass(frozen=True)
+class Session:
+    """A validated session description."""
+
+    path: Path
+    title: str
+    motor: MotorSpec
+    rig: RigSpec
+    units: dict[str, UnitSpec]
+    date: str = ""
+    notes: str = ""
+    fleet_threshold: float | None = None
+    healthy_spread: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def folder(self) -> Path:
+        """The folder relative paths are resolved against."""
+        return self.path.parent
+
+    def line_of(self, *keys: str) -> int | None:
+        """Line of a key in the TOML text (see :func:`key_lines`)."""
+        return _line_lookup(key_lines(self.path.read_text(encoding="utf-8")), keys)
+
+
+# ---------------------------------------------------------------------------------------------
+# Line numbers of keys
+# ---------------------------------------------------------------------------------------------
+_KEY_PART = r"""[A-Za-z0-9_-]+|"(?:[^"\\]|\\.)*"|'[^']*'"""
+_DOTTED_KEY = rf"(?:{_KEY_PART})(?:\s*\.\s*(?:{_KEY_PART}))*"
+_HEADER_RE = re.compile(rf"^\s*(\[\[|\[)\s*({_DOTTED_KEY})\s*\]\]?")
+_ASSIGN_RE = re.compile(rf"^\s*({_DOTTED_KEY})\s*=(.*)$")
+_INLINE_KEY_RE = re.compile(rf"(?:^|[{{,])\s*({_DOTTED_KEY})\s*=")
+
+
+def _split_key(text: str) -> tuple[str, ...]:
+    parts = re.findall(_KEY_PART, text)
+    return tuple(p[1:-1] if p[:1] in "\"'" else p for p in parts)
+
+
+def key_lines(text: str) -> dict[tuple[str, ...], int]:
+    """Map every key path of a TOML text to its 1-based line number.
+
+    Parameters
+    ----------
+    text
+        The TOML document.
+
+    Returns
+    -------
+    dict
+        ``("units", "A", "spindown", "files") -> 17``; tables map to their header line. Arrays of
+        tables get an index component (``("runs", "0", "file")``).
+
+    Notes
+    -----
+    A deliberately small scanner, not a TOML parser: the text has already been parsed by
+    ``tomllib``, so only the positions are wanted. Lines inside multi-line strings are skipped.
+    """
+    lines: dict[tuple[str, ...], int] = {}
+    prefix: tuple[str, ...] = ()
+    array_counts: dict[tuple[str, ...], int] = {}
+    in_string: str | None = None
+    for number, raw in enumerate(text.splitlines(), start=1):
+        line = raw
+        if in_string is not None:
+            if line.count(in_string) % 2 == 1:
+                in_string = None
+            continue
+        header = _HEADER_RE.match(line)
+        if header:
+            path = _split_key(header.group(2))
+            if header.group(1) == "[[":
+                index = array_counts.get(path, 0)
+                array_counts[path] = index + 1
+                path = (*path, str(index))
+            prefix = path
+            for k in range(1, len(path) + 1):
+                lines.setdefault(path[:k], number)
+            lines[path] = number
+            continue
+        assign = _ASSIGN_RE.match(line)
+        if not assign:
+            continue
+        path = (*prefix, *_split_key(assign.group(1)))
+        for k in range(len(prefix) + 1, len(path) + 1):
+            lines.setdefault(path[:k], number)
+        rest = assign.group(2)
+        for quote in ('"""', "'''"):
+            if rest.count(quote) % 2 == 1:
+                in_string = quote
+        stripped = rest.strip()
+        if stripped.startswith("{"):
+            for match in _INLINE_KEY_RE.finditer(stripped):
+                lines.setdefault((*path, *_split_key(match.group(1))), number)
+    return lines
+
+
+def _line_lookup(lines: Mapping[tuple[str, ...], int], keys: Iterable[str]) -> int | None:
+    path = tuple(keys)
+    while path:
+        if path in lines:
+            return lines[path]
+        path = path[:-1]
+    return None
+
+
+# ---------------------------------------------------------------------------------------------
+# Validation helpers
+# ---------------------------------------------------------------------------------------------
+class _Context:
+    """The file being validated: path, text, key lines."""
+
+    def __init__(self, path: Path, text: str):
+        self.path = path
+        self.lines = key_lines(text)
+
+    def error(self, keys: tuple[str, ...], message: str) -> SessionError:
+        name = ".".join(keys)
+        text = f"{name}: {message}" if name else message
+        return SessionError(text, path=self.path, line=_line_lookup(self.lines, keys))
+
+
+class _Table:
+    """A TOML table being read: takes known keys, refuses the rest with a 'did you mean'."""
+
+    def __init__(self, ctx: _Context, keys: tuple[str, ...], data: Any):
+        self.ctx = ctx
+        self.keys = keys
+        if not isinstance(data, dict):
+            raise ctx.error(keys, f"expected a table, got {_kind(data)}")
+        self.data: dict[str, Any] = data
+        self.known: list[str] = []
+
+    def error(self, key: str | None, message: str) -> SessionError:
+        return self.ctx.error(self.keys if key is None else (*self.keys, key), message)
+
+    def has(self, key: str) -> bool:
+        return key in self.data
+
+    def raw(self, key: str, default: Any = None) -> Any:
+        self.known.append(key)
+        return self.data.get(key, default)
+
+    def string(self, key: str, default: str | None = None, *, required: bool = False) -> str | None:
+        value = self.raw(key)
+        if value is None:
+            if required:
+                raise self.error(None, f"missing key {key!r}")
+            return default
+        if not isinstance(value, str):
+            raise self.error(key, f"expected a string, got {_kind(value)}")
+        return value
+
+    def quantity(self, key: str, unit: str, *, positive: bool = True, required: bool = False) -> float | None:
+        value = self.raw(key)
+        if value is None:
+            if required:
+                raise self.error(None, f"missing key {key!r} (a quantity in {format_unit(unit)})")
+            return None
+        if isinstance(value, bool) or not isinstance(value, int | float | str):
+            raise self.error(key, f"expected a quantity in {format_unit(unit)}, got {_kind(value)}")
+        try:
+            number = parse_quantity(value, unit, name=key)
+        except OptionError as exc:
+            raise self.error(key, exc.message.removeprefix(f"{key}: ")) from None
+        if positive and number <= 0:
+            raise self.error(key, f"must be positive, got {value!r}")
+        return number
+
+    def number(self, key: str, *, required: bool = False, integer: bool = False) -> float | None:
+        value = self.raw(key)
+        if value is None:
+            if required:
+                raise self.error(None, f"missing key {key!r}")
+            return None
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            raise self.error(key, f"expected a number, got {_kind(value)}")
+        if integer and (not float(value).is_integer()):
+            raise self.error(key, f"expected a whole number, got {value!r}")
+        if not math.isfinite(value) or value <= 0:
+            raise self.error(key, f"must be a positive number, got {value!r}")
+        return float(value)
+
+    def table(self, key: str) -> _Table | None:
+        value = self.raw(key)
+        if value is None:
+            return None
+        return _Table(self.ctx, (*self.keys, key), value)
+
+    def finish(self) -> None:
+        for key in self.data:
+            if key not in self.known:
+                hint = difflib.get_close_matches(key, self.known, n=1, cutoff=0.6)
+                allowed = ", ".join(sorted(set(self.known)))
+                suggestion = f"; did you mean {hint[0]!r}?" if hint else f" (known keys: {allowed})"
+                raise self.error(key, f"unknown key {key!r}{suggestion}")
+
+
+def _kind(value: Any) -> str:
+    return {dict: "a table", list: "an array", str: "a string", bool: "a boolean"}.get(
+        type(value), type(value).__name__
+    )
+
+
+# ---------------------------------------------------------------------------------------------
+# Loading
+# ---------------------------------------------------------------------------------------------
+def load_session(path: str | Path) -> Session:
+    """Read and validate a session description.
+
+    Parameters
+    ----------
+    path
+        The TOML file. Relative file names inside it are resolved against its folder.
+
+    Returns
+    -------
+    Session
+        The validated description (quantities in SI, files as absolute paths).
+
+    Raises
+    ------
+    SessionError
+        On a TOML syntax error, an unknown key (with a "did you mean"), a missing or unreadable
+        file, a quantity with the wrong dimension, or contradictory settings. The message names
+        the file, the line and the key.
+    """
+    path = Path(path)
+    try:
+        raw_bytes = path.read_bytes()
+    except OSError as exc:
+        raise SessionError(f"cannot read the session file ({exc.strerror})", path=path) from None
+    try:
+        text = raw_bytes.decode("utf-8")
+    except UnicodeDecodeError:
+        raise SessionError("the session file is not UTF-8 text", path=path) from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        match = re.search(r"\(at line (\d+), column \d+\)", str(exc))
+        message = re.sub(r"\s*\(at line \d+, column \d+\)", "", str(exc))
+        raise SessionError(f"invalid TOML: {message}", path=path, line=int(match.group(1)) if match else None) from None
+    ctx = _Context(path, text)
+    top = _Table(ctx, (), data)
+    info = top.table("session")
+    title = date = notes = ""
+    if info is not None:
+        title = info.string("title") or ""
+        date = info.string("date") or ""
+        notes = info.string("notes") or ""
+        info.finish()
+    motor_table = top.table("motor")
+    if motor_table is None:
+        raise ctx.error(("motor",), "missing table [motor] (a catalog name, or counts_per_revolution)")
+    motor = _read_motor(motor_table)
+    rig_table = top.table("rig")
+    rig = _read_rig(rig_table) if rig_table is not None else RigSpec()
+    units_table = top.table("units")
+    if units_table is None or not units_table.data:
+        raise ctx.error(("units",), "no units: add a [units.A.<experiment>] table with files = [...]")
+    units = {name: _read_unit(units_table, name, path.parent, rig) for name in units_table.data}
+    fleet_table = top.table("fleet")
+    threshold, spread = (None, {}) if fleet_table is None else _read_fleet(fleet_table)
+    top.finish()
+    return Session(
+        path=path.resolve(),
+        title=title or f"{motor.name} session",
+        motor=motor,
+        rig=rig,
+        units=units,
+        date=date,
+        notes=notes,
+        fleet_threshold=threshold,
+        healthy_spread=spread,
+    )
+
+
+def _read_fleet(table: _Table) -> tuple[float | None, dict[str, float]]:
+    threshold = table.number("threshold")
+    spread_table = table.table("spread")
+    table.finish()
+    spread: dict[str, float] = {}
+    if spread_table is not None:
+        for name in ("K", "R", "L", "J", "b", "Tf"):
+            value = spread_table.raw(name)
+            if value is None:
+                continue
+            if isinstance(value, str) and value.strip().endswith("%"):
+                try:
+                    number = float(value.strip()[:-1]) / 100
+                except ValueError:
+                    raise spread_table.error(name, f"cannot read {value!r} as a percentage") from None
+            elif isinstance(value, int | float) and not isinstance(value, bool):
+                number = float(value)
+            else:
+                raise spread_table.error(name, f'expected a fraction (0.1) or a percentage ("10 %"), got {value!r}')
+            if not (math.isfinite(number) and 0 < number < 5):
+                raise spread_table.error(name, f"a relative spread must lie in (0, 5), got {value!r}")
+            spread[name] = number
+        spread_table.finish()
+    return threshold, spread
+
+
+def _read_motor(table: _Table) -> MotorSpec:
+    catalog_key = table.string("catalog")
+    name = table.string("name")
+    cpr = table.number("counts_per_revolution")
+    ratio = table.number("gear_ratio")
+    nominal = table.quantity("nominal_voltage", "V")
+    table.finish()
+    if catalog_key is not None:
+        motor = _catalog_motor(table, catalog_key)
+        cat_cpr = float(motor.cpr)
+        cat_ratio = float(motor.gear_ratio)
+        if cpr is not None and not math.isclose(cpr, cat_cpr, rel_tol=1e-9):
+            raise table.error(
+                "counts_per_revolution",
+                f"{cpr:g} contradicts the catalogue's {cat_cpr:g} for {catalog_key!r} (remove one of them)",
+            )
+        if ratio is not None and not math.isclose(ratio, cat_ratio, rel_tol=1e-9):
+            raise table.error("gear_ratio", f"{ratio:g} contradicts the catalogue's {cat_ratio:g} for {catalog_key!r}")
+        return MotorSpec(
+            name=name or motor.name,
+            counts_per_revolution=cat_cpr,
+            gear_ratio=cat_ratio,
+            catalog=motor.key,
+            nominal_voltage=nominal if nominal is not None else float(motor.nominal_voltage),
+        )
+    if cpr is None:
+        raise table.error(None, 'give either catalog = "<name>" or counts_per_revolution (and gear_ratio)')
+    return MotorSpec(
+        name=name or "unnamed motor",
+        counts_per_revolution=cpr,
+        gear_ratio=ratio if ratio is not None else 1.0,
+        catalog=None,
+        nominal_voltage=nominal,
+    )
+
+
+def _catalog_motor(table: _Table, key: str) -> Any:
+    from motorlab import catalog
+
+    try:
+        return catalog.Motor.from_catalog(key)
+    except MotorlabError as exc:
+        known = [m if isinstance(m, str) else getattr(m, "key", str(m)) for m in catalog.list_motors()]
+        hint = difflib.get_close_matches(key.lower(), known, n=1, cutoff=0.5)
+        suffix = f"; did you mean {hint[0]!r}?" if hint else f" (known: {', '.join(known)})"
+        raise table.error("catalog", f"unknown motor {key!r}{suffix}") from exc
+
+
+def _read_rig(table: _Table) -> RigSpec:
+    lever = table.quantity("lever_arm", "m")
+    fly_table = table.table("flywheel")
+    flywheel = _read_flywheel(fly_table) if fly_table is not None else None
+    supply = table.table("supply")
+    voltage_limit = current_limit = None
+    if supply is not None:
+        voltage_limit = supply.quantity("voltage_limit", "V")
+        current_limit = supply.quantity("current_limit", "A")
+        supply.finish()
+    table.finish()
+    return RigSpec(flywheel=flywheel, lever_arm=lever, voltage_limit=voltage_limit, current_limit=current_limit)
+
+
+def _read_flywheel(table: _Table) -> FlywheelSpec:
+    has_inertia, has_disc = table.has("inertia"), table.has("disc")
+    if has_inertia and has_disc:
+        raise table.error("disc", "the flywheel is given both as an inertia and as a disc: keep one")
+    ratio = table.number("ratio") or 1.0
+    if has_inertia:
+        inertia = table.quantity("inertia", "kg*m^2", required=True)
+        assert inertia is not None
+        table.raw("disc")
+        table.finish()
+        return FlywheelSpec(inertia, ratio, f"{inertia:.4g} kg·m²")
+    disc = table.table("disc")
+    table.finish()
+    if disc is None:
+        raise table.error(
+            None, 'give the flywheel as inertia = "... kg*m^2" or as disc = { radius, thickness, material }'
+        )
+    if disc.has("radius") and disc.has("diameter"):
+        raise disc.error("diameter", "give the radius or the diameter, not both")
+    if disc.has("material") and disc.has("density"):
+        raise disc.error("density", "give the material or the density, not both")
+    radius = disc.quantity("radius", "m")
+    diameter = disc.quantity("diameter", "m")
+    if radius is None:
+        if diameter is None:
+            raise disc.error(None, "missing key 'radius' (or 'diameter')")
+        radius = diameter / 2
+    thickness = disc.quantity("thickness", "m", required=True)
+    assert thickness is not None
+    material = disc.string("material")
+    density = disc.quantity("density", "kg/m^3")
+    disc.finish()
+    if material is not None:
+        if material.lower() not in MATERIAL_DENSITY:
+            hint = difflib.get_close_matches(material.lower(), list(MATERIAL_DENSITY), n=1)
+            suffix = f"; did you mean {hint[0]!r}?" if hint else ""
+            raise disc.error("material", f"unknown material {material!r}{suffix} (or give density = ...)")
+        density = MATERIAL_DENSITY[material.lower()]
+    if density is None:
+        raise disc.error(None, "missing key 'material' (or 'density')")
+    # Uniform disc about its axis: J = ½·m·r² = ½·π·r⁴·ρ·h (seed 1, "First Experiment").
+    inertia = 0.5 * math.pi * radius**4 * density * thickness
+    what = material or f"ρ = {density:g} kg/m³"
+    return FlywheelSpec(inertia, ratio, f"{what} disc r = {1e3 * radius:g} mm, h = {1e3 * thickness:g} mm")
+
+
+def _read_unit(units: _Table, name: str, folder: Path, rig: RigSpec) -> UnitSpec:
+    table = units.table(name)
+    assert table is not None
+    label = table.string("label") or ""
+    notes = table.string("notes") or ""
+    truth_name = table.string("truth")
+    truth = None
+    if truth_name is not None:
+        truth = _existing_file(table, "truth", truth_name, folder)
+    experiments: dict[str, ExperimentSpec] = {}
+    for key in list(table.data):
+        if key in ("label", "notes", "truth"):
+            continue
+        if key not in EXPERIMENT_SETTINGS:
+            continue  # reported by finish() with a "did you mean"
+        experiments[key] = _read_experiment(table, key, folder, rig)
+    for key in EXPERIMENT_SETTINGS:
+        table.known.append(key)
+    table.finish()
+    if not experiments:
+        raise table.error(None, f"unit {name!r} has no experiment (add e.g. [units.{name}.spindown])")
+    return UnitSpec(
+        name=name,
+        experiments=experiments,
+        label=label,
+        truth=truth,
+        notes=notes,
+        line=_line_lookup(table.ctx.lines, table.keys),
+    )
+
+
+def _read_experiment(unit: _Table, name: str, folder: Path, rig: RigSpec) -> ExperimentSpec:
+    table = unit.table(name)
+    assert table is not None
+    files_value = table.raw("files")
+    if files_value is None:
+        raise table.error(None, "missing key 'files' (a file name or a list of file names)")
+    names = [files_value] if isinstance(files_value, str) else files_value
+    if not isinstance(names, list) or not names or not all(isinstance(n, str) for n in names):
+        raise table.error("files", "expected a file name or a non-empty list of file names")
+    files = tuple(_existing_file(table, "files", n, folder) for n in names)
+    settings: dict[str, Any] = {}
+    for key, (kind, _description) in EXPERIMENT_SETTINGS[name].items():
+        if not table.has(key):
+            table.known.append(key)
+            continue
+        if kind == "int":
+            value = table.number(key, integer=True)
+            settings[key] = int(value) if value is not None else None
+        elif kind == "float":
+            settings[key] = table.number(key)
+        elif kind == "str":
+            settings[key] = table.string(key)
+        else:
+            settings[key] = table.quantity(key, kind, positive=kind != "s")
+    table.finish()
+    for key in REQUIRED_SETTINGS.get(name, ()):
+        if settings.get(key) is None:
+            si_unit = format_unit(EXPERIMENT_SETTINGS[name][key][0])
+            raise table.error(None, f"missing key {key!r} ({EXPERIMENT_SETTINGS[name][key][1]}, in {si_unit})")
+    current = settings.get("current")
+    if current is not None and rig.current_limit is not None and current > rig.current_limit * (1 + 1e-9):
+        raise table.error("current", f"{current:g} A is above the supply's current limit of {rig.current_limit:g} A")
+    voltage = settings.get("voltage")
+    if voltage is not None and rig.voltage_limit is not None and voltage > rig.voltage_limit * (1 + 1e-9):
+        raise table.error("voltage", f"{voltage:g} V is above the supply's voltage limit of {rig.voltage_limit:g} V")
+    if name == "torque" and rig.lever_arm is None:
+        raise table.error(None, "the torque experiment needs the scale's lever arm: add rig.lever_arm")
+    if name in LOADED_EXPERIMENTS - {"torque"} and rig.flywheel is None:
+        raise table.error(None, f"the {name} experiment needs the flywheel: add a [rig.flywheel] table")
+    return ExperimentSpec(name=name, files=files, settings=settings, line=_line_lookup(table.ctx.lines, table.keys))
+
+
+def _existing_file(table: _Table, key: str, name: str, folder: Path) -> Path:
+    path = Path(name)
+    if not path.is_absolute():
+        path = folder / path
+    if not path.exists():
+        raise table.error(key, f"file not found: {name}")
+    if not path.is_file():
+        raise table.error(key, f"not a file: {name}")
+    return path.resolve()
+
+
+# ---------------------------------------------------------------------------------------------
+# Writing
+# ---------------------------------------------------------------------------------------------
+def toml_string(value: str) -> str:
+    """A TOML basic string (JSON string escapes are valid TOML)."""
+    return json.dumps(value, ensure_ascii=False)
+
+
+def read_truth(path: str | Path) -> dict[str, float]:
+    """True parameters of a simulated unit from a ``truth.json`` (``{"K": 0.37, ...}`` in SI).
+
+    Accepts the virtual rig's file (``{"format": "motorlab-truth", "runs": {file: {"params": ...}}}``;
+    every run of one unit has the same parameters, the first is taken), ``{"params": {...}}``, a
+    flat ``{"K": ...}`` mapping, or ``{"K": {"value": ...}}``.
+    """
+    path = Path(path)
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise SessionError(f"cannot read the truth file ({exc})", path=path) from None
+    if isinstance(data, dict) and isinstance(data.get("runs"), dict) and data["runs"]:
+        data = next(iter(data["runs"].values()))
+    if isinstance(data, dict) and isinstance(data.get("params"), dict):
+        data = data["params"]
+    out: dict[str, float] = {}
+    if isinstance(data, dict):
+        for name in ("K", "R", "L", "J", "b", "Tf"):
+            value = data.get(name)
+            if isinstance(value, dict):
+                value = value.get("value")
+            if isinstance(value, int | float) and not isinstance(value, bool):
+                out[name] = float(value)
+    if not out:
+        raise SessionError("no motor parameters (K, R, L, J, b, Tf) in the truth file", path=path)
+    return out
+
+
+#: Experiments of a simulated session: session key -> (rig experiment, file name, rig settings).
+SIMULATED_EXPERIMENTS: tuple[tuple[str, str, str, dict[str, Any]], ...] = (
+    ("lcr", "lcr", "lcr.csv", {}),
+    ("spindown", "spindown", "spindown.txt", {"voltage": 12.0, "current_limit": 4.0}),
+    ("torque", "torque", "torque.csv", {}),
+    ("terminal", "terminal", "terminal.csv", {}),
+    ("free-spinup", "free-spinup", "free_spinup.csv", {"current": 0.5}),
+    ("identify", "transient", "transient.csv", {}),
+)
+
+
+def write_simulated_session(
+    motor_key: str,
+    *,
+    out_dir: str | Path,
+    units: int = 3,
+    seed: int = 0,
+    degrade: Mapping[str, Mapping[str, float]] | None = None,
+    spread: Any = None,
+    experiments: Iterable[str] | None = None,
+) -> Path:
+    """Simulate a whole characterisation session on the virtual dynamometer and describe it in TOML.
+
+    Parameters
+    ----------
+    motor_key
+        Catalogue key or name of the motor (``"neverest40"``).
+    out_dir
+        Folder to write: ``session.toml`` and one folder per unit (``A/``, ``B/`` …) holding the
+        data files and the rig's ``truth.json``.
+    units
+        Number of units (1 to 26).
+    seed
+        Fleet seed: unit k's parameters are drawn with unit seed ``1000·seed + k`` and the
+        instrument noise uses ``seed``; the same seed gives the same session.
+    degrade
+        Factors applied to a unit's true parameters, e.g. ``{"B": {"b": 2.0}}`` for a unit with
+        doubled viscous friction (a worn gearbox) [-].
+    spread
+        A :class:`motorlab.rig.units.UnitSpread` for the draw (default: the rig's); when given,
+        the session's ``[fleet.spread]`` is set to it so the outlier test uses the same spreads.
+    experiments
+        Session keys of the experiments to run (default: every one of
+        :data:`SIMULATED_EXPERIMENTS`).
+
+    Returns
+    -------
+    Path
+        The ``session.toml`` written.
+
+    Raises
+    ------
+    OptionError
+        Unknown motor, a number of units out of range, an unknown unit or parameter in
+        ``degrade``, a non-positive factor, an unknown experiment.
+    """
+    from motorlab.catalog import Motor
+    from motorlab.rig.flywheel import Flywheel
+    from motorlab.rig.units import draw_unit, unit_name
+    from motorlab.rig.virtual import VirtualRig
+
+    motor = Motor.from_catalog(motor_key)
+    if not (isinstance(units, int) and 1 <= units <= 26):
+        raise OptionError(f"units must be a whole number from 1 to 26, got {units!r}")
+    if not (isinstance(seed, int) and seed >= 0):
+        raise OptionError(f"seed must be a whole number ≥ 0, got {seed!r}")
+    names = [unit_name(k) for k in range(units)]
+    degrade = {k: dict(v) for k, v in (degrade or {}).items()}
+    for unit, factors in degrade.items():
+        if unit not in names:
+            raise OptionError(f"degrade: no unit {unit!r} in a session of {units} unit(s)")
+        for name, factor in factors.items():
+            if name not in ("K", "R", "L", "J", "b", "Tf"):
+                raise OptionError(f"degrade: unknown parameter {name!r} (K, R, L, J, b, Tf)")
+            if not (isinstance(factor, int | float) and math.isfinite(factor) and factor > 0):
+                raise OptionError(f"degrade: factor of {unit}.{name} must be positive, got {factor!r}")
+    chosen = [e[0] for e in SIMULATED_EXPERIMENTS] if experiments is None else list(experiments)
+    known = [e[0] for e in SIMULATED_EXPERIMENTS]
+    for name in chosen:
+        if name not in known:
+            raise OptionError(f"unknown simulated experiment {name!r}; known: {', '.join(known)}")
+    plan = [e for e in SIMULATED_EXPERIMENTS if e[0] in chosen]
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    flywheel = Flywheel()
+    arm = 0.15
+    lines = [
+        "# motorlab session: simulated on the virtual dynamometer (motorlab simulate session).",
+        "# Relative file names are resolved against this file's folder; see docs/session.md.",
+        "",
+        "[session]",
+        f"title = {toml_string(f'{motor.name}: {units} simulated unit(s), seed {seed}')}",
+        f"notes = {toml_string(_degrade_note(degrade) or 'healthy units drawn around the catalogue figures')}",
+        "",
+        "[motor]",
+        f"catalog = {toml_string(motor.key)}",
+        "",
+        "[rig]",
+        f'lever_arm = "{arm:g} m"',
+        "",
+        "[rig.flywheel]",
+        f"# steel disc r = {1e3 * flywheel.disc.radius:g} mm, h = {1e3 * flywheel.disc.thickness:g} mm "
+        f"plus the gears at the flywheel shaft",
+        f'inertia = "{flywheel.inertia:.8g} kg*m^2"',
+        f"ratio = {flywheel.ratio:g}",
+        "",
+        "[rig.supply]",
+        'voltage_limit = "18 V"',
+        'current_limit = "4 A"',
+    ]
+    if spread is not None:
+        lines += ["", "[fleet.spread]"] + [f"{k} = {v:g}" for k, v in spread.to_dict().items()]
+    for k, name in enumerate(names):
+        params = draw_unit(motor, 1000 * seed + k, spread=spread)  # type: ignore[arg-type]  # rig protocol wants a settable key
+        if name in degrade:
+            params = params.scaled(**{p: getattr(params, p) * f for p, f in degrade[name].items()})
+        rig = VirtualRig(motor, unit_seed=k, noise_seed=seed, params=params, flywheel=flywheel)
+        folder = out / name
+        folder.mkdir(exist_ok=True)
+        truth = folder / "truth.json"
+        if truth.exists():
+            truth.unlink()  # a fresh session: the rig adds runs to an existing truth file
+        lines += ["", f"[units.{name}]", f'truth = "{name}/truth.json"']
+        if name in degrade:
+            lines.append(f"notes = {toml_string(_degrade_note({name: degrade[name]}))}")
+        for key, experiment, filename, settings in plan:
+            run = rig.run(experiment, folder / filename, **settings)
+            files = ", ".join(toml_string(f"{name}/{p.name}") for p in run.paths)
+            lines += ["", f"[units.{name}.{key}]", f"files = [{files}]"]
+            if key == "free-spinup":
+                lines.append(f'current = "{settings["current"]:g} A"')
+    path = out / "session.toml"
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return path
+
+
+def _degrade_note(degrade: Mapping[str, Mapping[str, float]]) -> str:
+    parts = [
+        f"unit {unit}: " + ", ".join(f"{p} × {f:g}" for p, f in factors.items())
+        for unit, factors in degrade.items()
+        if factors
+    ]
+    return ("deliberately degraded: " + "; ".join(parts)) if parts else ""

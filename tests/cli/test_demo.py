@@ -1,0 +1,48 @@
+"""``motorlab demo`` end to end, and ``motorlab characterize`` on good and bad sessions."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from motorlab.cli import main
+
+
+def test_demo_writes_report_and_prints_table(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "demo"
+    assert main(["demo", "-o", str(out), "--units", "2", "--seed", "1"]) == 0
+    printed = capsys.readouterr().out
+    assert "truth" in printed
+    assert "σ" in printed
+    assert "velocity loop" in printed  # the gains of the demo motor
+    for name in ("report.html", "results.json", "results.csv", "step_response.png", "session/session.toml"):
+        assert (out / name).is_file(), name
+    doc = json.loads((out / "results.json").read_text())
+    assert list(doc["units"]) == ["A", "B"]
+    for unit in doc["units"].values():
+        k = unit["parameters"]["K"]
+        assert abs(k["value"] - unit["truth"]["K"]) < 4 * k["stderr"]
+    html = (out / "report.html").read_text()
+    assert html.count("data:image/png;base64,") >= 10
+
+
+def test_characterize_cli(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from motorlab.session import write_simulated_session
+
+    toml = write_simulated_session("neverest40", out_dir=tmp_path / "s", units=1, experiments=("lcr",))
+    assert main(["characterize", str(toml), "-o", str(tmp_path / "r"), "--no-report"]) == 0
+    assert (tmp_path / "r" / "results.csv").is_file()
+    assert not (tmp_path / "r" / "report.html").exists()
+    capsys.readouterr()
+    # Bad input: one line naming the file, the line and the key; exit 2; nothing analysed.
+    text = toml.read_text().replace('files = ["A/lcr.csv"]', 'files = ["A/lcr.csv"]\nfrequency = "1 kV"')
+    bad = tmp_path / "s" / "bad.toml"
+    bad.write_text(text)
+    line = text.splitlines().index('frequency = "1 kV"') + 1
+    assert main(["characterize", str(bad), "-o", str(tmp_path / "bad")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(f"motorlab: error: {bad}:{line}: units.A.lcr.frequency:")
+    assert len(err.splitlines()) == 1
+    assert not (tmp_path / "bad").exists()
