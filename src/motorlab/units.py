@@ -21,7 +21,7 @@ STANDARD_GRAVITY = 9.80665
 @lru_cache(maxsize=1)
 def registry() -> pint.UnitRegistry:
     """The one pint registry motorlab uses (created on first use)."""
-    ureg = pint.UnitRegistry()
+    ureg: pint.UnitRegistry = pint.UnitRegistry()
     ureg.define("count = [] = counts = ct")
     return ureg
 
@@ -93,7 +93,7 @@ def parse_quantity(value: Any, unit: str, *, name: str = "value") -> float:
 def _parse_with_pint(text: str, unit: str, name: str) -> float:
     ureg = registry()
     try:
-        quantity = ureg.Quantity(text)
+        quantity: Any = ureg.Quantity(text)
     except Exception as exc:  # pint raises several unrelated types for bad text
         raise OptionError(f"{name}: cannot read {text!r} as a quantity in {unit} ({exc})") from None
     target = ureg.Quantity(1.0, unit)
