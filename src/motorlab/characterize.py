@@ -400,10 +400,17 @@ def _run_pulse(ctx: _UnitContext) -> FitResult:
         if fit is None or "Ka" not in fit:
             raise OptionError("needs the amplifier gain: run the amplifier experiment or set amplifier_gain")
         gain = fit["Ka"].value
+    # The amplifier's zero offset I0 (its fit's intercept) drives the motor too: Tf is biased without it.
+    offset = 0.0
+    amp = ctx.fits.get("amplifier")
+    if ctx.setting("amplifier_gain") is None and amp is not None and "I0" in amp:
+        offset = amp["I0"].value
     tach = ctx.setting("tach_gain")
     if tach is None and "tachometer" in ctx.fits and "Kt_tach" in ctx.fits["tachometer"]:
         tach = ctx.fits["tachometer"]["Kt_tach"].value
-    return pulse(read_tables(ctx.files), amplifier_gain=gain, torque_constant=k.value, tach_gain=tach)
+    return pulse(
+        read_tables(ctx.files), amplifier_gain=gain, amplifier_offset=offset, torque_constant=k.value, tach_gain=tach
+    )
 
 
 def _run_identify(ctx: _UnitContext) -> FitResult:

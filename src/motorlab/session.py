@@ -410,6 +410,10 @@ def _kind(value: Any) -> str:
 # ---------------------------------------------------------------------------------------------
 # Loading
 # ---------------------------------------------------------------------------------------------
+def _shorten(text: str, width: int = 60) -> str:
+    return text if len(text) <= width else text[: width - 1] + "…"
+
+
 def load_session(path: str | Path) -> Session:
     """Read and validate a session description.
 
@@ -444,7 +448,12 @@ def load_session(path: str | Path) -> Session:
     except tomllib.TOMLDecodeError as exc:
         match = re.search(r"\(at line (\d+), column \d+\)", str(exc))
         message = re.sub(r"\s*\(at line \d+, column \d+\)", "", str(exc))
-        raise SessionError(f"invalid TOML: {message}", path=path, line=int(match.group(1)) if match else None) from None
+        line = int(match.group(1)) if match else None
+        # tomllib names the line but not the key: quote the line, which shows the key to the user.
+        lines = text.splitlines()
+        if line is not None and 1 <= line <= len(lines) and lines[line - 1].strip():
+            message += f" in {_shorten(lines[line - 1].strip())!r}"
+        raise SessionError(f"invalid TOML: {message}", path=path, line=line) from None
     ctx = _Context(path, text)
     top = _Table(ctx, (), data)
     info = top.table("session")
@@ -742,6 +751,10 @@ SIMULATED_EXPERIMENTS: tuple[tuple[str, str, str, dict[str, Any]], ...] = (
     ("torque", "torque", "torque.csv", {}),
     ("terminal", "terminal", "terminal.csv", {}),
     ("free-spinup", "free-spinup", "free_spinup.csv", {"current": 0.5}),
+    ("spinup", "spinup", "spinup.txt", {}),
+    ("amplifier", "amplifier", "amplifier.csv", {}),
+    ("tachometer", "tachometer", "tachometer.csv", {}),
+    ("pulse", "pulse", "pulse.csv", {}),
     ("identify", "transient", "transient.csv", {}),
 )
 
