@@ -1,0 +1,395 @@
+"""SysId-style feedforward gains by simulation: ``V = kS·sgn(ω) + kV·ω + kA·α`` (+ gravity).
+
+WPILib SysId's tests — quasistatic voltage ramps and dynamic voltage steps, forward and backward — are
+fitted here by output error: the angle is simulated from the logged voltage with
+
+    kA·dω/dt = V − kS·sgn(ω) − kV·ω − g,     dθ/dt = ω,
+    g = 0 (simple), kG (elevator), kG·cos(θ + φ) (arm),
+
+including stiction (at rest while |V − g| ≤ kS), and compared with the encoder angle as counted. No
+speed or acceleration is differentiated out of a coarse encoder, which is where SysId's ordinary least
+squares loses accuracy (finite differences of a 560-count encoder logged every 10 ms are mostly
+quantisation noise, and the noise sits in a regressor, which biases kA and kV towards zero).
+For the arm the gravity term uses the measured angle (kG·cos(θ+φ) = a·cos θ − c·sin θ, linear in
+a = kG·cos φ and c = kG·sin φ), which keeps the simulated plant linear between friction events.
+
+The model is the DC motor with L neglected: kS = R·Tf/K [V], kV = K + R·b/K [V·s/rad], kA = R·J/K
+[V·s²/rad] (:func:`motorlab.model.feedforward_from_params`). The angle alone therefore determines only
+(kS, kV, kA); K, J, b, Tf need R and K from elsewhere (:func:`motor_estimates`).
+
+References
+----------
+WPILib SysId documentation, "Introduction to System Identification" and "Analyzing Data"
+(docs.wpilib.org); seed 1, "Equations".
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from motorlab import _oe
+from motorlab.errors import FitError, OptionError
+from motorlab.fitting import MAX_RELATIVE_STDERR
+from motorlab.identify import (
+    _prepare,
+    _result,
+    excitation_warnings,
+    noise_levels,
+    read_runs,
+    window_integrals,
+)
+from motorlab.model import MotorParams, feedforward_from_params, params_from_feedforward
+from motorlab.recording import Recording
+from motorlab.results import Estimate, FitResult
+from motorlab.units import SI_UNITS
+
+MECHANISMS = ("simple", "elevator", "arm")
+
+
+def gains_from_params(params: MotorParams) -> dict[str, float]:
+    """(kS [V], kV [V·s/rad], kA [V·s²/rad]) of a motor: kS = R·Tf/K, kV = K + R·b/K, kA = R·J/K."""
+    return feedforward_from_params(params)
+
+
+def params_from_gains(
+    kS: float,
+    kV: float,
+    kA: float,
+    *,
+    resistance: float,
+    torque_constant: float | None = None,
+    inductance: float = 0.0,
+) -> MotorParams:
+    """Motor parameters from feedforward gains and the winding resistance.
+
+    Parameters
+    ----------
+    kS, kV, kA
+        Feedforward gains [V], [V·s/rad], [V·s²/rad].
+    resistance
+        R [Ω].
+    torque_constant
+        K [V·s/rad]; without it b is taken as 0 and K = kV (an upper bound on K).
+    inductance
+        L [H], carried through.
+
+    Notes
+    -----
+    Tf = kS·K/R, b = (kV − K)·K/R, J = kA·K/R (inverse of :func:`gains_from_params`).
+    """
+    if not resistance > 0:
+        raise OptionError(f"resistance must be positive, got {resistance}")
+    return params_from_feedforward(kS, kV, kA, R=resistance, K=torque_constant, L=inductance)
+
+
+class FeedforwardModel(_oe.OEModel):
+    """kA·ω' = V − kS·sgn(ω) − kV·ω − g; parameters (kS, kV, kA[, kG | a, c])."""
+
+    uses_current = False
+
+    def __init__(self, mechanism: str):
+        self.mechanism = mechanism
+        extra = {"simple": (), "elevator": ("kG",), "arm": ("kG_cos", "kG_sin")}[mechanism]
+        self.names = ("kS", "kV", "kA", *extra)
+
+    def plant(self, p: np.ndarray) -> _oe.Plant:
+        return _oe.feedforward_plant(float(p[0]), float(p[1]), float(p[2]))
+
+    def drive(self, p: np.ndarray, log: _oe.Log) -> np.ndarray:
+        if self.mechanism == "elevator":
+            return log.grid_voltage - p[3]
+        if self.mechanism == "arm":
+            return log.grid_voltage - p[3] * np.cos(log.grid_angle) + p[4] * np.sin(log.grid_angle)
+        return log.grid_voltage
+
+    def initial(self, p: np.ndarray, log: _oe.Log, speed: float) -> np.ndarray:
+        return np.array([speed])
+
+
+def regression_start(logs: list[_oe.Log], mechanism: str) -> np.ndarray:
+    """(kS, kV, kA[, ...]) from ∫V dt = kS·∫sgn(ω̂) dt + kV·Δθ + kA·Δω̂ (+ gravity) over short windows.
+
+    Raises
+    ------
+    FitError
+        When the regression gives no positive kV and kA (no motion, or motion against the voltage).
+    """
+    parts = [window_integrals(log, max(4, round(0.02 / log.dt))) for log in logs]
+
+    def stack(key: str) -> np.ndarray:
+        return np.concatenate([p[key] for p in parts])
+
+    cols = [stack("int_sign"), stack("d_theta"), stack("d_omega")]
+    if mechanism == "elevator":
+        cols.append(stack("int_one"))
+    elif mechanism == "arm":
+        cols += [stack("int_cos"), -stack("int_sin")]
+    design = np.column_stack(cols)
+    y = stack("int_v")
+    beta, *_ = np.linalg.lstsq(design, y, rcond=None)
+    # Poor excitation makes columns collinear: drop kS (steps at one voltage), then kA (ramps only)
+    # and start from kS = 0 or a 50 ms mechanical time constant; the output-error fit takes over.
+    for dropped in ((0,), (2,), (0, 2)):
+        if beta[1] > 0 and beta[2] > 0:
+            break
+        keep = [k for k in range(design.shape[1]) if k not in dropped]
+        sub, *_ = np.linalg.lstsq(design[:, keep], y, rcond=None)
+        beta = np.zeros(design.shape[1])
+        beta[keep] = sub
+        if 2 in dropped:
+            beta[2] = 0.05 * beta[1]
+    if not (beta[1] > 0 and beta[2] > 0):
+        raise FitError("cannot find a starting point: the motion does not follow the voltage (kV or kA ≤ 0)")
+    beta[0] = max(beta[0], 0.0)
+    return beta
+
+
+def sysid_ols(recordings: Sequence[Recording], *, mechanism: str = "simple") -> dict[str, float]:
+    """WPILib SysId's ordinary least squares (the published method), as a baseline.
+
+    Acceleration from finite differences of the speed is regressed on [ω, V, sgn ω] (and 1 for an
+    elevator, cos θ for an arm): α = c₁·ω + c₂·V + c₃·sgn ω (+ c₄), giving kA = 1/c₂, kV = −c₁/c₂,
+    kS = −c₃/c₂, kG = −c₄/c₂. The speed is the logged one when the file has it, otherwise the
+    difference of successive angles; samples at rest (ω = 0) are dropped, as SysId does.
+
+    Returns
+    -------
+    dict
+        ``kS`` [V], ``kV`` [V·s/rad], ``kA`` [V·s²/rad] (and ``kG`` [V]).
+    """
+    rows = []
+    for rec in recordings:
+        t = rec.time
+        if "velocity" in rec:
+            w = rec.signals["velocity"]
+        else:
+            w = np.concatenate([[0.0], np.diff(rec.signals["position"]) / np.diff(t)])
+        acc = np.diff(w) / np.diff(t)
+        v = rec.signals["voltage"][:-1]
+        ws = w[:-1]
+        keep = ws != 0
+        cols = [ws, v, np.sign(ws)]
+        if mechanism == "elevator":
+            cols.append(np.ones_like(ws))
+        elif mechanism == "arm":
+            cols.append(np.cos(rec.signals["position"][:-1]))
+        rows.append((np.column_stack(cols)[keep], acc[keep]))
+    a = np.concatenate([r[0] for r in rows])
+    y = np.concatenate([r[1] for r in rows])
+    if y.size < a.shape[1]:
+        raise FitError("too few moving samples for the SysId regression")
+    c, *_ = np.linalg.lstsq(a, y, rcond=None)
+    out = {"kS": -c[2] / c[1], "kV": -c[0] / c[1], "kA": 1.0 / c[1]}
+    if mechanism != "simple":
+        out["kG"] = -c[3] / c[1]
+    return {k: float(v) for k, v in out.items()}
+
+
+def feedforward(
+    recordings: Recording | Sequence[Recording],
+    *,
+    mechanism: str = "simple",
+    cpr: float | None = None,
+) -> FitResult:
+    """Fit kS, kV, kA (and kG) to SysId-style tests by output error.
+
+    Parameters
+    ----------
+    recordings
+        The tests (one recording per test: ``Recording.split()`` of a SysId file), each with
+        ``voltage`` [V] and ``position`` [rad] (or [m] for a drivetrain; the gains then come per metre).
+    mechanism
+        ``"simple"`` (flywheel, shooter), ``"elevator"`` (constant gravity kG [V]) or ``"arm"``
+        (kG·cos(θ + φ), θ the measured angle, φ fitted).
+    cpr
+        Encoder counts per revolution [count/rev] (angle quantum 2π/cpr).
+
+    Returns
+    -------
+    FitResult
+        ``kS`` [V], ``kV`` [V·s/rad], ``kA`` [V·s²/rad] (``kG`` [V], ``offset`` [rad]); panels of
+        measured against simulated angle and speed; the SysId OLS estimates in ``details["sysid_ols"]``.
+
+    Raises
+    ------
+    LogFormatError
+        A test lacks voltage or angle, is too short, or holds non-finite values.
+    OptionError
+        An unknown mechanism or a non-positive cpr.
+    FitError
+        The motion does not follow the voltage.
+
+    Notes
+    -----
+    Standard errors: Jacobian at the optimum with the Newey–West long-run covariance of the
+    residuals (see :mod:`motorlab.identify`).
+    """
+    if mechanism not in MECHANISMS:
+        raise OptionError(f"mechanism must be one of {', '.join(MECHANISMS)}, got {mechanism!r}")
+    if cpr is not None and not (math.isfinite(cpr) and cpr > 0):
+        raise OptionError(f"cpr must be a positive number, got {cpr}")
+    recs = [recordings] if isinstance(recordings, Recording) else list(recordings)
+    if not recs:
+        raise OptionError("no recordings to fit")
+    logs, warnings = _prepare(recs, cpr=cpr, with_current=False)
+    model = FeedforwardModel(mechanism)
+    p0 = regression_start(logs, mechanism)
+    v_max = max(float(np.max(np.abs(log.grid_voltage))) for log in logs)
+    ks0, kv0, ka0 = p0[:3]
+    scale = np.concatenate([[max(ks0, 0.01 * v_max), kv0, ka0], np.full(p0.size - 3, max(0.05 * v_max, 0.1))])
+    lower = np.concatenate([[0.0, 1e-3 * kv0, 1e-3 * ka0], np.full(p0.size - 3, -10.0 * v_max)])
+    upper = np.concatenate([[v_max, 1e3 * kv0, 1e3 * ka0], np.full(p0.size - 3, 10.0 * v_max)])
+    sigma = noise_levels(logs, with_current=False)
+    fit = _oe.fit_output_error(model, logs, np.clip(p0, lower, upper), lower=lower, upper=upper, scale=scale,
+                               sigma=sigma)
+    m = len(model.names)
+    values = fit.values[:m].copy()
+    cov = fit.covariance[:m, :m].copy()
+    names = list(model.names)
+    if mechanism == "arm":  # report kG = hypot(a, c) and φ = atan2(c, a) (delta method)
+        a, c = values[3], values[4]
+        k_g = math.hypot(a, c)
+        grad = np.zeros((m, m))
+        grad[:3, :3] = np.eye(3)
+        if k_g > 0:
+            grad[3, 3:5] = [a / k_g, c / k_g]
+            grad[4, 3:5] = [-c / k_g**2, a / k_g**2]
+        values[3], values[4] = k_g, math.atan2(c, a)
+        cov = grad @ cov @ grad.T
+        names[3:5] = ["kG", "offset"]
+    stderr = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    params: dict[str, Estimate] = {}
+    units = {**SI_UNITS, "offset": "rad"}
+    for k, name in enumerate(names):
+        determined = not fit.null[min(k, fit.null.size - 1)] and stderr[k] <= MAX_RELATIVE_STDERR * abs(values[k])
+        if name in ("kG", "offset") and not fit.null[k]:
+            determined = bool(np.isfinite(stderr[k]))
+        params[name] = Estimate(name, float(values[k]), float(stderr[k]), units[name], determined,
+                                "" if determined else "the data carry (almost) no information on it")
+    with np.errstate(invalid="ignore", divide="ignore"):
+        corr = cov / np.outer(stderr, stderr)
+    np.fill_diagonal(corr, 1.0)
+    if not fit.success:
+        warnings.append(f"the optimiser stopped early: {fit.message}")
+    if fit.noise_model.startswith("Newey"):
+        warnings.append(
+            "the angle departs from the model by more than the measured noise explains "
+            f"(residual RMS {fit.residual_rms['position']:.3g} rad): uncertainties come from the residuals"
+        )
+    warnings.extend(_gain_warnings(logs, fit, values, corr))
+    details: dict[str, Any] = {
+        "method": "output error (angle simulated from the voltage)",
+        "uncertainty": fit.noise_model,
+        "mechanism": mechanism,
+        "residual_rms": {**fit.residual_rms},
+        "residual_rms_units": {"position": "rad"},
+        "noise_weights": sigma,
+        "start": dict(zip(model.names, p0.tolist(), strict=True)),
+        "hac_bandwidth_samples": fit.bandwidth,
+        "function_evaluations": fit.nfev,
+    }
+    try:
+        details["sysid_ols"] = sysid_ols(recs, mechanism=mechanism)
+    except (FitError, np.linalg.LinAlgError, ZeroDivisionError):
+        details["sysid_ols"] = None
+    return _result("feedforward", params, corr, names, logs, fit, warnings, details)
+
+
+def _gain_warnings(logs: list[_oe.Log], fit: _oe.Fit, values: np.ndarray, corr: np.ndarray) -> list[str]:
+    warnings = []
+    ks_rel = math.sqrt(max(float(fit.covariance[0, 0]), 0.0)) / max(abs(values[0]), 1e-300)
+    if abs(corr[0, 1]) > 0.99 or ks_rel > 0.25:
+        warnings.append(
+            f"kS and kV are {abs(corr[0, 1]):.3f} correlated: too little excitation to separate static "
+            "friction from viscous; run a slow quasistatic ramp from rest"
+        )
+    else:
+        warnings.extend(excitation_warnings(logs, [s["speed"] for s in fit.simulations]))
+    # an acceleration event: somewhere kA·α is a sizeable part of the applied voltage
+    k_a = values[2]
+    peak = 0.0
+    for log, sim in zip(logs, fit.simulations, strict=True):
+        if log.time.size > 2:
+            peak = max(peak, float(np.max(np.abs(k_a * np.gradient(sim["speed"], log.time)))))
+    v_max = max(float(np.max(np.abs(log.grid_voltage))) for log in logs)
+    if peak < 0.1 * v_max:
+        warnings.append(
+            f"no acceleration event: kA·α never exceeds {100 * peak / max(v_max, 1e-12):.1f} % of the voltage, so "
+            "kA is poorly determined; add a dynamic (step) test"
+        )
+    return warnings
+
+
+def motor_estimates(
+    result: FitResult, *, resistance: float | None, torque_constant: float | None
+) -> dict[str, Estimate]:
+    """R, K, J, b, Tf from fitted gains, as far as the given R (and K) determine them.
+
+    Without R nothing follows. With R only, kV = K + R·b/K cannot be split: K and b are not
+    determined, and J = kA·K/R, Tf = kS·K/R are only bounded (K ≤ kV since b ≥ 0). With R and K:
+    J = kA·K/R, b = (kV − K)·K/R, Tf = kS·K/R, standard errors from those of the gains (R and K taken
+    as exact).
+    """
+    ks, kv, ka = (result.parameters[n] for n in ("kS", "kV", "kA"))
+    out: dict[str, Estimate] = {}
+
+    def undetermined(name: str, note: str) -> Estimate:
+        return Estimate(name, math.nan, math.nan, SI_UNITS[name], False, note)
+
+    if resistance is None:
+        for name in ("K", "R", "J", "b", "Tf"):
+            out[name] = undetermined(name, "needs the winding resistance R (--R) or a current log")
+        return out
+    r = resistance
+    out["R"] = Estimate("R", r, 0.0, SI_UNITS["R"], True, "given")
+    if torque_constant is None:
+        out["K"] = undetermined("K", f"only kV = K + R·b/K is seen; K ≤ {kv.value:.4g} V·s/rad (supply --K or current)")
+        out["b"] = undetermined("b", "only kV = K + R·b/K is seen (supply --K or a current log)")
+        out["J"] = undetermined("J", f"J = kA·K/R needs K; J ≤ kA·kV/R = {ka.value * kv.value / r:.4g} kg·m²")
+        out["Tf"] = undetermined("Tf", f"Tf = kS·K/R needs K; Tf ≤ kS·kV/R = {ks.value * kv.value / r:.4g} N·m")
+        return out
+    k = torque_constant
+    out["K"] = Estimate("K", k, 0.0, SI_UNITS["K"], True, "given")
+    out["J"] = Estimate("J", ka.value * k / r, ka.stderr * k / r, SI_UNITS["J"], ka.determined)
+    b_value = (kv.value - k) * k / r
+    b_ok = kv.determined and kv.stderr * k / r <= MAX_RELATIVE_STDERR * abs(b_value)
+    out["b"] = Estimate("b", b_value, kv.stderr * k / r, SI_UNITS["b"], bool(b_ok),
+                        "" if b_ok else "kV − K is within the noise of kV")
+    out["Tf"] = Estimate("Tf", ks.value * k / r, ks.stderr * k / r, SI_UNITS["Tf"], ks.determined)
+    return out
+
+
+# --------------------------------------------------------------------------------------------------
+# motorlab analyze feedforward
+# --------------------------------------------------------------------------------------------------
+
+
+def add_arguments(parser: argparse.ArgumentParser, experiment: str) -> None:
+    """Options of ``motorlab analyze feedforward``."""
+    from motorlab.cli.common import positive_int, quantity
+
+    parser.add_argument("--cpr", type=positive_int, help="encoder counts per revolution at the shaft")
+    parser.add_argument("--mechanism", choices=MECHANISMS, default="simple",
+                        help="gravity term: none (simple), kG (elevator), kG·cos(θ+φ) (arm)")
+    parser.add_argument("--R", dest="resistance", type=quantity("ohm", positive=True),
+                        help="winding resistance, to convert the gains to K, J, b, Tf [Ω]")
+    parser.add_argument("--K", dest="torque_constant", type=quantity("V*s/rad", positive=True),
+                        help="torque constant, to separate K from b in kV [V·s/rad]")
+
+
+def from_cli(experiment: str, paths: list[str], args: argparse.Namespace) -> FitResult:
+    """Run ``motorlab analyze feedforward FILE...``."""
+    cpr = getattr(args, "cpr", None)
+    runs = read_runs(paths, cpr=cpr)
+    result = feedforward(runs, mechanism=getattr(args, "mechanism", "simple"), cpr=cpr)
+    resistance = getattr(args, "resistance", None)
+    if resistance is not None:
+        result.parameters.update(
+            motor_estimates(result, resistance=resistance, torque_constant=getattr(args, "torque_constant", None))
+        )
+    return result

@@ -1,0 +1,174 @@
+"""Round trips, coverage and bad input for motorlab.identify (output-error whole-model fit)."""
+
+from __future__ import annotations
+
+import argparse
+import math
+
+import numpy as np
+import pytest
+
+from motorlab import _oe
+from motorlab.errors import LogFormatError, OptionError
+from motorlab.identify import add_arguments, from_cli, identify
+from motorlab.model import MotorParams, feedforward_from_params
+from motorlab.recording import Recording
+from motorlab.simulate import VoltageDrive, simulate
+
+MOTOR = MotorParams(K=0.35, R=2.5, L=7e-4, J=8e-4, b=2e-3, Tf=0.03)
+CPR = 2240  # 560 counts/rev × 4 (quadrature) at the shaft
+
+
+def random_steps(seed: int, *, duration: float, dt: float, params: MotorParams = MOTOR, cpr: int = CPR,
+                 current_noise: float = 0.02, hold: float = 0.1) -> Recording:
+    """Random voltage steps in ±12 V, encoder counted (floor, random phase), current with noise."""
+    rng = np.random.default_rng(seed)
+    n_levels = math.ceil(duration / hold) + 1
+    levels = rng.uniform(-12.0, 12.0, n_levels)
+    sim = simulate(params, VoltageDrive(lambda t: levels[np.minimum((t / hold + 1e-9).astype(int), n_levels - 1)]),
+                   duration=duration, dt=dt)
+    q = 2 * math.pi / cpr
+    counts = np.floor((sim.position + rng.uniform(0.0, q)) / q)
+    return Recording(
+        sim.time,
+        {"voltage": sim.voltage, "position": counts * q, "counts": counts,
+         "current": sim.current + current_noise * rng.standard_normal(sim.time.size)},
+        metadata={"cpr": cpr},
+        source=f"sim-{seed}",
+    )
+
+
+def test_fast_simulator_matches_reference_simulation():
+    rec = random_steps(1, duration=1.0, dt=1e-3, current_noise=0.0)
+    sim = simulate(MOTOR, VoltageDrive(lambda t: np.interp(t, rec.time, rec["voltage"])), duration=1.0, dt=1e-3)
+    states, theta = _oe.simulate(_oe.motor_plant(*MOTOR.to_dict().values()), rec["voltage"][:-1], 1e-3)
+    assert np.max(np.abs(theta - sim.position)) < 1e-8
+    assert np.max(np.abs(states[:, 1] - sim.speed)) < 1e-7
+    assert np.max(np.abs(states[:, 0] - sim.current)) < 1e-7
+
+
+@pytest.mark.parametrize("seed", [3, 4])
+def test_round_trip_with_current(seed):
+    result = identify(random_steps(seed, duration=1.5, dt=1e-3))
+    for name, truth in MOTOR.to_dict().items():
+        est = result[name]
+        assert est.determined, name
+        assert abs(est.value - truth) < 4 * est.stderr, (name, est, truth)
+        assert abs(est.value / truth - 1) < (0.1 if name in ("L", "b") else 0.02), (name, est)
+    assert set(result.details["residual_rms"]) >= {"position", "current", "speed (differenced)"}
+    assert result.correlation is not None
+    assert result.correlation.shape == (6, 6)
+    assert [p.y_label for p in result.panels] == ["θ [rad]", "ω [rad/s]", "i [A]"]
+    assert result.details["feedforward"]["kV"] == pytest.approx(feedforward_from_params(MOTOR)["kV"], rel=0.01)
+
+
+def test_coverage_of_95_percent_intervals():
+    """Over 50 seeds the 95 % interval holds the truth 90–98 % of the time for every parameter."""
+    inside: dict[str, list[bool]] = {}
+    for seed in range(50):
+        result = identify(random_steps(1000 + seed, duration=2.0, dt=1e-3))
+        for name, truth in MOTOR.to_dict().items():
+            est = result[name]
+            if est.determined:
+                lo, hi = est.interval(1.96)
+                inside.setdefault(name, []).append(lo <= truth <= hi)
+    for name, hits in inside.items():
+        assert len(hits) >= 45, name
+        assert 0.90 <= np.mean(hits) <= 0.98, (name, np.mean(hits))
+
+
+def test_inductance_not_determined_when_the_current_rise_is_invisible():
+    # τe = L/R = 0.4 µs against samples every 2 ms: neither the current nor the angle sees L
+    fast = MOTOR.scaled(L=1e-6)
+    result = identify(random_steps(7, duration=2.0, dt=2e-3, params=fast))
+    assert not result["L"].determined
+    assert "τe" in result["L"].note
+    assert "L" not in result.to_dict()["parameters"] or result.to_dict()["parameters"]["L"]["value"] is None
+    for name in ("K", "R", "J"):
+        assert abs(result.value(name) / getattr(fast, name) - 1) < 0.03, name
+
+
+def test_without_current_gives_gains_and_says_what_is_not_determined():
+    rec = random_steps(5, duration=2.0, dt=1e-3)
+    del rec.signals["current"]
+    result = identify(rec, resistance=MOTOR.R)
+    truth = feedforward_from_params(MOTOR)
+    for name in ("kS", "kV", "kA"):
+        assert result[name].determined
+        assert abs(result.value(name) / truth[name] - 1) < 0.05, name
+    for name in ("K", "b", "J", "Tf"):
+        assert not result[name].determined, name
+    assert result["R"].value == MOTOR.R
+    with_k = identify(rec, resistance=MOTOR.R, torque_constant=MOTOR.K)
+    assert abs(with_k.value("J") / MOTOR.J - 1) < 0.05
+    assert abs(with_k.value("Tf") / MOTOR.Tf - 1) < 0.1
+
+
+def test_reversed_encoder_is_flagged_and_fitted():
+    rec = random_steps(8, duration=1.0, dt=1e-3)
+    rec.signals["position"] = -rec.signals["position"]
+    result = identify(rec)
+    assert any("counts against" in w for w in result.warnings)
+    assert abs(result.value("K") / MOTOR.K - 1) < 0.02
+
+
+def test_saturated_current_is_flagged():
+    rec = random_steps(9, duration=1.0, dt=1e-3)
+    rec.signals["current"] = np.clip(rec.signals["current"], -3.0, 3.0)
+    result = identify(rec)
+    assert any("saturated" in w for w in result.warnings)
+
+
+def test_encoder_overflow_is_flagged():
+    rec = random_steps(10, duration=1.0, dt=1e-3)
+    q = 2 * math.pi / CPR
+    rec.signals["position"][600:] -= 65536 * q
+    result = identify(rec, use_current=True)
+    assert any("overflow" in w for w in result.warnings)
+
+
+@pytest.mark.parametrize(
+    ("change", "error"),
+    [
+        ("nan", LogFormatError),
+        ("short", LogFormatError),
+        ("no_voltage", LogFormatError),
+        ("time", LogFormatError),
+    ],
+)
+def test_bad_logs_raise(change, error):
+    rec = random_steps(11, duration=0.2, dt=1e-3)
+    if change == "nan":
+        rec.signals["position"][50] = np.nan
+    elif change == "short":
+        rec = rec.select(slice(0, 10))
+    elif change == "no_voltage":
+        del rec.signals["voltage"]
+    elif change == "time":
+        rec.time[30] = rec.time[29]
+    with pytest.raises(error):
+        identify(rec)
+
+
+def test_impossible_options_raise():
+    rec = random_steps(12, duration=0.3, dt=1e-3)
+    with pytest.raises(OptionError):
+        identify(rec, resistance=-1.0)
+    with pytest.raises(OptionError):
+        identify([])
+
+
+def test_cli_on_csv(tmp_path):
+    from motorlab.io import write_csv
+
+    rec = random_steps(13, duration=1.0, dt=1e-3)
+    path = tmp_path / "steps.csv"
+    write_csv(path, {"time_s": rec.time, "voltage_V": rec["voltage"], "position_counts": rec["counts"],
+                     "current_A": rec["current"]})
+    parser = argparse.ArgumentParser()
+    add_arguments(parser, "identify")
+    args = parser.parse_args(["--cpr", str(CPR)])
+    result = from_cli("identify", [str(path)], args)
+    assert abs(result.value("R") / MOTOR.R - 1) < 0.02
+    assert result.sources == [str(path)]
+    assert result.to_dict()["parameters"]["K"]["unit"] == "V*s/rad"
