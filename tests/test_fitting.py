@@ -83,3 +83,54 @@ def test_r_squared():
     y = np.array([1.0, 2.0, 3.0])
     assert r_squared(y, y) == 1.0
     assert math.isnan(r_squared(np.ones(3), np.ones(3)))
+
+
+def _ar1(rng: np.random.Generator, n: int, phi: float, sigma: float) -> np.ndarray:
+    """Stationary AR(1) noise e_t = φ·e_{t−1} + u_t with marginal standard deviation ``sigma``."""
+    u = rng.normal(0.0, sigma * math.sqrt(1 - phi**2), n)
+    e = np.empty(n)
+    e[0] = rng.normal(0.0, sigma)
+    for t in range(1, n):
+        e[t] = phi * e[t - 1] + u[t]
+    return e
+
+
+def test_hac_covers_under_ar1_noise_where_the_plain_stderr_does_not():
+    # A straight line with AR(1) errors (φ = 0.8): the plain stderr assumes n independent samples
+    # and is about √((1+φ)/(1−φ)) = 3 times too small; the Newey–West sandwich is not.
+    seeds = range(200)
+    plain = robust = 0
+    for seed in seeds:
+        rng = np.random.default_rng(seed)
+        x = np.linspace(0.0, 1.0, 400)
+        y = 2.0 * x + 1.0 + _ar1(rng, x.size, 0.8, 0.1)
+        design = np.column_stack([x, np.ones_like(x)])
+        ols = fit_linear(design, y, ["slope", "c"])
+        hac = fit_linear(design, y, ["slope", "c"], covariance="hac")
+        assert ols.bandwidth is None
+        assert hac.bandwidth is not None
+        assert hac.values == pytest.approx(ols.values)
+        plain += abs(ols.values[0] - 2.0) <= 1.96 * ols.stderr[0]
+        robust += abs(hac.values[0] - 2.0) <= 1.96 * hac.stderr[0]
+    assert plain <= 0.65 * len(seeds)
+    assert 0.88 * len(seeds) <= robust <= 0.99 * len(seeds)
+
+
+def test_hac_nonlinear_fit_with_groups_and_white_noise():
+    # Two traces fitted together, white noise: the HAC result stays close to the plain one, and
+    # lags never cross from one trace into the other.
+    rng = np.random.default_rng(3)
+    t = np.linspace(0, 5, 200)
+    y = np.concatenate([3.0 * np.exp(-0.7 * t), 2.0 * np.exp(-0.7 * t)]) + rng.normal(0, 0.02, 2 * t.size)
+    groups = np.repeat([0, 1], t.size)
+
+    def residual(p: np.ndarray) -> np.ndarray:
+        return np.concatenate([p[0] * np.exp(-p[2] * t), p[1] * np.exp(-p[2] * t)]) - y
+
+    plain = fit_least_squares(residual, [1.0, 1.0, 1.0], ["A", "B", "gamma"])
+    hac = fit_least_squares(residual, [1.0, 1.0, 1.0], ["A", "B", "gamma"], covariance="hac", groups=groups)
+    assert hac.stderr == pytest.approx(plain.stderr, rel=0.25)
+    with pytest.raises(ValueError, match="covariance"):
+        fit_linear(np.ones((3, 1)), np.ones(3), ["a"], covariance="sandwich")
+    with pytest.raises(FitError, match="groups"):
+        fit_least_squares(residual, [1.0, 1.0, 1.0], ["A", "B", "gamma"], covariance="hac", groups=groups[:5])

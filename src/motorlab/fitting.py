@@ -5,6 +5,12 @@ Standard errors come from the Jacobian at the optimum, scaled by the residual va
 the information matrix is examined through the singular values of the column-scaled Jacobian: a
 direction with (almost) no information makes the parameters involved "not determined", reported
 as such rather than as noise dressed up as numbers.
+
+Those standard errors assume independent residuals. When the residuals are serially correlated
+(a tachometer's commutator ripple, a slowly wandering offset), ``covariance="hac"`` replaces
+s²·(JᵀJ)⁻¹ by the heteroskedasticity-and-autocorrelation-consistent sandwich of Newey and West
+(1987) with Bartlett weights and the data-driven bandwidth of Andrews (1991); see
+:func:`hac_covariance`.
 """
 
 from __future__ import annotations
@@ -40,6 +46,8 @@ class LeastSquares:
     dof: int
     success: bool
     message: str
+    #: Bartlett bandwidth (lags) of the HAC covariance, None for the standard one.
+    bandwidth: float | None = None
 
     @property
     def rmse(self) -> float:
@@ -59,8 +67,143 @@ class LeastSquares:
         return out
 
 
+#: Covariance estimators offered by :func:`fit_least_squares` and :func:`fit_linear`.
+COVARIANCES = ("standard", "hac")
+#: Largest AR(1) coefficient used in the bandwidth rule (Andrews 1991 truncates near-unit roots).
+_MAX_AR1 = 0.99
+
+
+def _segments(n: int, groups: np.ndarray | None) -> list[np.ndarray]:
+    """Index arrays of the contiguous runs of equal ``groups`` labels (one run without groups)."""
+    if groups is None:
+        return [np.arange(n)]
+    labels = np.asarray(groups)
+    if labels.shape != (n,):
+        raise FitError(f"groups must label each of the {n} residuals, got shape {labels.shape}")
+    cuts = np.flatnonzero(labels[1:] != labels[:-1]) + 1
+    return [seg for seg in np.split(np.arange(n), cuts) if seg.size]
+
+
+def _andrews_bandwidth(scores: np.ndarray, segments: list[np.ndarray]) -> float:
+    """Andrews' (1991) AR(1) plug-in bandwidth for the Bartlett kernel, 1.1447·(α(1)·n)^(1/3).
+
+    Each column of ``scores`` is approximated by an AR(1) process with coefficient ρ_a (fitted
+    within segments) and, so that the rule does not depend on the units of the parameters, every
+    column is given the same long-run variance: α(1) = mean over columns of 4ρ²/((1 − ρ)²(1 + ρ)²).
+    """
+    alphas = []
+    for a in range(scores.shape[1]):
+        pairs = [(scores[seg[1:], a], scores[seg[:-1], a]) for seg in segments if seg.size > 1]
+        if not pairs:
+            continue
+        lag0 = np.concatenate([x for x, _ in pairs])
+        lag1 = np.concatenate([y for _, y in pairs])
+        ss = float(lag1 @ lag1)
+        if lag0.size < 3 or ss <= 0:
+            continue
+        rho = float(np.clip((lag0 @ lag1) / ss, -_MAX_AR1, _MAX_AR1))
+        alphas.append(4 * rho**2 / ((1 - rho) ** 2 * (1 + rho) ** 2))
+    if not alphas:
+        return 0.0
+    return 1.1447 * (float(np.mean(alphas)) * scores.shape[0]) ** (1.0 / 3.0)
+
+
+def hac_covariance(
+    jac: np.ndarray,
+    residuals: np.ndarray,
+    bread: np.ndarray,
+    *,
+    groups: np.ndarray | None = None,
+    bandwidth: float | None = None,
+) -> tuple[np.ndarray, float]:
+    """Newey–West covariance of least-squares estimates with serially correlated residuals.
+
+    Parameters
+    ----------
+    jac
+        d(residual)/d(parameter) at the optimum, shape (n, p).
+    residuals
+        Residuals at the optimum, shape (n,), in sample order.
+    bread
+        (JᵀJ)⁻¹ (a pseudo-inverse where J is rank deficient), shape (p, p).
+    groups
+        Optional label per residual: residuals of different contiguous runs (separate traces,
+        separate regions of one trace, position and voltage blocks of a joint fit) are taken as
+        uncorrelated, so no lag crosses a run boundary.
+    bandwidth
+        Bartlett bandwidth L [samples]; default: Andrews' (1991) AR(1) plug-in rule.
+
+    Returns
+    -------
+    covariance, bandwidth
+        The sandwich covariance (p, p) and the bandwidth used.
+
+    Notes
+    -----
+    With scores g_t = J_tᵀ·r_t, the sandwich is B·S·B, B = (JᵀJ)⁻¹ and
+    S = Γ₀ + Σ_{l=1}^{⌊L⌋} (1 − l/(L+1))·(Γ_l + Γ_lᵀ), Γ_l = Σ_t g_t·g_{t−l}ᵀ (sums within runs),
+    times n/(n − p) for the degrees of freedom. Bartlett weights keep S positive semi-definite
+    (Newey and West 1987). The scores are first prewhitened with a VAR(1), g_t = A·g_{t−1} + e_t,
+    S is estimated from e_t and recoloured, S = (I − A)⁻¹·S_e·(I − A)⁻ᵀ (Andrews and Monahan 1992).
+    The bandwidth is chosen on the prewhitened scores; with independent residuals A ≈ 0 and the
+    result is close to the usual s²·(JᵀJ)⁻¹. Under AR(1) errors with φ = 0.8 and n = 400 the 95 %
+    intervals cover about 93 % (the plain ones about 45 %): tests/test_fitting.py.
+
+    References
+    ----------
+    W. K. Newey and K. D. West, "A simple, positive semi-definite, heteroskedasticity and
+    autocorrelation consistent covariance matrix", Econometrica 55 (1987) 703–708.
+    D. W. K. Andrews, "Heteroskedasticity and autocorrelation consistent covariance matrix
+    estimation", Econometrica 59 (1991) 817–858, eq. (6.2) and Table I (Bartlett kernel).
+    D. W. K. Andrews and J. C. Monahan, "An improved heteroskedasticity and autocorrelation
+    consistent covariance matrix estimator", Econometrica 60 (1992) 953–966.
+    """
+    jac = np.asarray(jac, dtype=float)
+    r = np.asarray(residuals, dtype=float)
+    n, p = jac.shape
+    scores = jac * r[:, None]
+    segments = _segments(n, groups)
+    # Prewhitening (Andrews and Monahan 1992): fit a VAR(1) g_t = A·g_{t−1} + e_t within runs, take
+    # the kernel estimate of the (nearly white) e_t and recolour it with (I − A)⁻¹. The kernel then
+    # has little left to do, which repairs most of its small-sample under-coverage.
+    lead = np.concatenate([seg[1:] for seg in segments if seg.size > 1] or [np.zeros(0, dtype=int)])
+    lag = np.concatenate([seg[:-1] for seg in segments if seg.size > 1] or [np.zeros(0, dtype=int)])
+    a_mat = np.zeros((p, p))
+    if lead.size > 2 * p:
+        a_mat = np.linalg.lstsq(scores[lag], scores[lead], rcond=None)[0].T
+        # Keep the VAR stable: shrink it if its largest singular value is near 1 (their rule).
+        top = float(np.linalg.svd(a_mat, compute_uv=False)[0]) if p else 0.0
+        if top > 0.97:
+            a_mat *= 0.97 / top
+    white = scores.copy()
+    for seg in segments:
+        white[seg[1:]] = scores[seg[1:]] - scores[seg[:-1]] @ a_mat.T
+    if bandwidth is None:
+        bandwidth = _andrews_bandwidth(white, segments)
+    longest = max(seg.size for seg in segments)
+    bandwidth = float(min(max(bandwidth, 0.0), longest - 1))
+    meat = white.T @ white
+    for lag_k in range(1, math.floor(bandwidth) + 1):
+        weight = 1.0 - lag_k / (bandwidth + 1.0)
+        gamma = np.zeros((p, p))
+        for seg in segments:
+            if seg.size > lag_k:
+                gamma += white[seg[lag_k:]].T @ white[seg[:-lag_k]]
+        meat += weight * (gamma + gamma.T)
+    recolour = np.linalg.pinv(np.eye(p) - a_mat)
+    meat = recolour @ meat @ recolour.T
+    cov = bread @ meat @ bread * (n / max(n - p, 1))
+    return cov, bandwidth
+
+
 def covariance_from_jacobian(
-    jac: np.ndarray, residuals: np.ndarray, values: np.ndarray, *, sigma_known: bool = False
+    jac: np.ndarray,
+    residuals: np.ndarray,
+    values: np.ndarray,
+    *,
+    sigma_known: bool = False,
+    covariance: str = "standard",
+    groups: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Covariance, standard errors, correlation and a determined-mask from a Jacobian.
 
@@ -75,7 +218,28 @@ def covariance_from_jacobian(
     sigma_known
         If True the residuals are already divided by their known standard deviations and the
         covariance is (JᵀJ)⁻¹ unscaled; otherwise it is scaled by s² = SSR/(n − p).
+    covariance
+        ``"standard"`` (the above) or ``"hac"``: the Newey–West sandwich of :func:`hac_covariance`
+        for serially correlated residuals (``sigma_known`` does not matter then).
+    groups
+        Run labels for ``"hac"`` (see :func:`hac_covariance`).
     """
+    cov, stderr, corr, determined, _ = _covariance(
+        jac, residuals, values, sigma_known=sigma_known, covariance=covariance, groups=groups
+    )
+    return cov, stderr, corr, determined
+
+
+def _covariance(
+    jac: np.ndarray,
+    residuals: np.ndarray,
+    values: np.ndarray,
+    *,
+    sigma_known: bool,
+    covariance: str,
+    groups: np.ndarray | None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float | None]:
+    """:func:`covariance_from_jacobian` plus the HAC bandwidth (None for the standard covariance)."""
     n, p = jac.shape
     dof = max(n - p, 1)
     scale = np.where(np.abs(values) > 0, np.abs(values), 1.0)
@@ -88,8 +252,14 @@ def covariance_from_jacobian(
     inv_s2 = np.where(keep, 1.0 / np.where(keep, s, 1.0) ** 2, 0.0)
     cov_scaled = (vt.T * inv_s2) @ vt
     cov = cov_scaled / np.outer(col_norm, col_norm)
-    s2 = 1.0 if sigma_known else float(residuals @ residuals) / dof
-    cov = cov * s2
+    bandwidth = None
+    if covariance == "hac":
+        cov, bandwidth = hac_covariance(jac, residuals, cov, groups=groups)
+    elif covariance == "standard":
+        s2 = 1.0 if sigma_known else float(residuals @ residuals) / dof
+        cov = cov * s2
+    else:
+        raise ValueError(f"unknown covariance {covariance!r}; choose one of {COVARIANCES}")
     # Parameters that load on a null direction are not determined.
     null_dirs = vt[~keep]
     in_null = (np.abs(null_dirs) > 1e-3).any(axis=0) if null_dirs.size else np.zeros(p, dtype=bool)
@@ -102,7 +272,7 @@ def covariance_from_jacobian(
     corr[:, in_null] = np.nan
     np.fill_diagonal(corr, 1.0)
     determined = ~in_null & (stderr <= MAX_RELATIVE_STDERR * scale)
-    return cov, stderr, corr, determined
+    return cov, stderr, corr, determined, bandwidth
 
 
 def fit_least_squares(
@@ -115,25 +285,53 @@ def fit_least_squares(
     x_scale: str | Sequence[float] = "jac",
     max_nfev: int | None = None,
     loss: str = "linear",
+    covariance: str = "standard",
+    groups: np.ndarray | None = None,
 ) -> LeastSquares:
     """Minimise ``sum(residual(x)**2)`` with scipy's trust-region least squares.
+
+    Parameters
+    ----------
+    residual
+        ``residual(x) -> r`` (already divided by the σ's when ``sigma_known``).
+    x0
+        Starting values.
+    names
+        One name per parameter.
+    bounds
+        Lower and upper bounds (scipy's convention).
+    sigma_known
+        Residuals are normalised by known σ's: covariance (JᵀJ)⁻¹ without the s² scale.
+    x_scale, max_nfev, loss
+        Passed to :func:`scipy.optimize.least_squares`.
+    covariance
+        ``"standard"`` (independent residuals) or ``"hac"`` (Newey–West with Andrews' bandwidth,
+        for serially correlated residuals; see :func:`hac_covariance`).
+    groups
+        For ``"hac"``: a label per residual; lags never cross a change of label.
 
     Raises
     ------
     FitError
         If the residual function returns non-finite values at the start point.
+    ValueError
+        For an unknown ``covariance``.
     """
-    x0 = np.asarray(x0, dtype=float)
-    r0 = residual(x0)
+    if covariance not in COVARIANCES:
+        raise ValueError(f"unknown covariance {covariance!r}; choose one of {COVARIANCES}")
+    start = np.asarray(x0, dtype=float)
+    r0 = residual(start)
     if not np.all(np.isfinite(r0)):
         raise FitError("the model gives non-finite residuals at the starting guess")
-    if r0.size < x0.size:
-        raise FitError(f"{r0.size} data points cannot determine {x0.size} parameters")
+    if r0.size < start.size:
+        raise FitError(f"{r0.size} data points cannot determine {start.size} parameters")
     lo, hi = bounds if bounds is not None else (-np.inf, np.inf)
     sol = optimize.least_squares(
-        residual, x0, bounds=(lo, hi), x_scale=x_scale, max_nfev=max_nfev, method="trf", loss=loss
+        residual, start, bounds=(lo, hi), x_scale=x_scale, max_nfev=max_nfev, method="trf", loss=loss
     )
-    cov, stderr, corr, determined = covariance_from_jacobian(sol.jac, sol.fun, sol.x, sigma_known=sigma_known)
+    cov, stderr, corr, determined, bandwidth = _covariance(
+        sol.jac, sol.fun, sol.x, sigma_known=sigma_known, covariance=covariance, groups=groups
+    )
     return LeastSquares(
         names=list(names),
         values=sol.x,
@@ -143,14 +341,21 @@ def fit_least_squares(
         determined=determined,
         residuals=sol.fun,
         jacobian=sol.jac,
-        dof=max(sol.fun.size - x0.size, 1),
+        dof=max(sol.fun.size - start.size, 1),
         success=bool(sol.success),
         message=str(sol.message),
+        bandwidth=bandwidth,
     )
 
 
 def fit_linear(
-    design: np.ndarray, y: np.ndarray, names: Sequence[str], *, weights: np.ndarray | None = None
+    design: np.ndarray,
+    y: np.ndarray,
+    names: Sequence[str],
+    *,
+    weights: np.ndarray | None = None,
+    covariance: str = "standard",
+    groups: np.ndarray | None = None,
 ) -> LeastSquares:
     """Ordinary (or weighted) linear least squares ``y ≈ design @ beta`` with standard errors.
 
@@ -164,7 +369,20 @@ def fit_linear(
         One name per column.
     weights
         Optional 1/σ per observation; the covariance is then still scaled by the residual variance.
+    covariance
+        ``"standard"`` or ``"hac"`` (serially correlated residuals; see :func:`hac_covariance`).
+    groups
+        For ``"hac"``: a label per observation; lags never cross a change of label.
+
+    Raises
+    ------
+    FitError
+        Fewer observations than parameters.
+    ValueError
+        For an unknown ``covariance``.
     """
+    if covariance not in COVARIANCES:
+        raise ValueError(f"unknown covariance {covariance!r}; choose one of {COVARIANCES}")
     design = np.asarray(design, dtype=float)
     y = np.asarray(y, dtype=float)
     if design.ndim == 1:
@@ -176,7 +394,9 @@ def fit_linear(
     a = design * w[:, None]
     beta, *_ = np.linalg.lstsq(a, y * w, rcond=None)
     res = (a @ beta) - y * w
-    cov, stderr, corr, determined = covariance_from_jacobian(a, res, beta)
+    cov, stderr, corr, determined, bandwidth = _covariance(
+        a, res, beta, sigma_known=False, covariance=covariance, groups=groups
+    )
     if n == p:  # exact fit: no residual degrees of freedom, uncertainty unknown
         stderr = np.full(p, np.nan)
     return LeastSquares(
@@ -191,6 +411,7 @@ def fit_linear(
         dof=max(n - p, 1),
         success=True,
         message="linear least squares",
+        bandwidth=bandwidth,
     )
 
 

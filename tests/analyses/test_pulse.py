@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
@@ -121,20 +123,41 @@ def test_bad_input():
 def test_virtual_rig_chain(tmp_path):
     """Amplifier gain and offset from the rig's amplifier file, then the rig's pulse trace.
 
-    The rig's tachometer has commutator ripple, which the fit treats as white noise: J and b stay
-    within their standard errors, Tf (set by the slow end of each coast, where the ripple is slow
-    too) only within 2 %."""
+    The rig's tachometer has commutator ripple, which correlates neighbouring residuals: the
+    Newey–West standard errors account for it, and those of Ka, I0 and the held command levels are
+    propagated, so the truth lies within 3 standard errors in at least 90 % of the units."""
     from motorlab.analyses.gains import amplifier
     from motorlab.rig import VirtualRig
 
-    for motor, seed in (("neverest20", 0), ("corehex", 1)):
+    inside = {"J": 0, "Tf": 0}
+    runs = [(motor, seed) for motor in ("neverest20", "corehex", "neverest37", "gobilda5202_19", "hdhex40")
+            for seed in range(2)]
+    for motor, seed in runs:
         rig = VirtualRig(motor, unit_seed=seed, noise_seed=seed)
         amp = amplifier(read_csv(rig.amplifier(tmp_path / "amp.csv").paths[0]))
-        run = rig.pulse(tmp_path / "pulse.csv", periods=2)
+        run = rig.pulse(tmp_path / "pulse.csv")
         truth = run.truth["expected"]
         result = pulse(read_csv(run.paths[0]), amplifier_gain=amp.value("Ka"), amplifier_offset=amp.value("I0"),
-                       torque_constant=truth["K"])
+                       amplifier_gain_stderr=amp["Ka"].stderr, amplifier_offset_stderr=amp["I0"].stderr,
+                       gain_offset_correlation=float(amp.correlation[0, 1]), torque_constant=truth["K"])
         assert result.details["friction_model"] == "both"
-        for name, tolerance in (("J", 0.005), ("b", 0.01), ("Tf", 0.02)):
-            assert result.value(name) == pytest.approx(truth[name], rel=tolerance), name
-        assert abs(result.value("J") - truth["J"]) <= 3 * result["J"].stderr
+        for name, tolerance in (("J", 0.01), ("b", 0.03), ("Tf", 0.03)):
+            assert result.value(name) == pytest.approx(truth[name], rel=tolerance), (motor, seed, name)
+        for name in inside:
+            inside[name] += abs(result.value(name) - truth[name]) <= 3 * result[name].stderr
+    for name, count in inside.items():
+        assert count >= 0.9 * len(runs), (name, count)
+
+
+def test_input_uncertainties_are_propagated():
+    rec = pulse_trace(1, b=2e-4, tf=0.02)
+    exact = pulse(rec, amplifier_gain=KA, torque_constant=KM)
+    loose = pulse(rec, amplifier_gain=KA, torque_constant=KM, amplifier_gain_stderr=0.01 * KA,
+                  amplifier_offset_stderr=0.002, torque_constant_stderr=0.01 * KM)
+    assert loose.value("J") == exact.value("J")
+    # J ∝ Ka·Km: 1 % on each adds √2 % in quadrature.
+    assert loose["J"].relative_error == pytest.approx(math.hypot(exact["J"].relative_error, 0.01 * math.sqrt(2)),
+                                                      rel=0.02)
+    assert loose["Tf"].stderr > exact["Tf"].stderr + 0.5 * KM * 0.002
+    with pytest.raises(OptionError):
+        pulse(rec, amplifier_gain=KA, torque_constant=KM, gain_offset_correlation=1.5)

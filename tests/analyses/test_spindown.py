@@ -73,6 +73,9 @@ def test_report_panels_and_units() -> None:
     assert abs(result.details["cutoff_s"] - 60.0) < 0.1
     assert "Coast" in result.panels[0].title
     assert "K =" in result.report()
+    # The correlation matrix is the joint fit's: it names theta0 and omega0 besides the parameters.
+    assert result.correlation_names == ["theta0", "omega0", "gamma", "Tf_over_J", "K"]
+    assert result.correlation.shape == (5, 5)
 
 
 def test_inertia_uncertainty_is_propagated() -> None:
@@ -188,18 +191,27 @@ def test_cli_reads_a_split_run_and_a_disc(tmp_path) -> None:
         from_cli("spindown", paths, args)
 
 
-@pytest.mark.parametrize("seed", [1, 2])
-def test_virtual_rig_round_trip(tmp_path, seed: int) -> None:
+def test_virtual_rig_default_procedure_meets_the_issue_targets(tmp_path) -> None:
+    """The rig's default spin-down is the seed's procedure (12 V / 4 A for 30 s, logged every ~100 ms,
+    INA219 on the leads, relay opened, coast logged): K within 1.5 %, γ and b within 3 %, Tf within
+    6 %, and the truth within 3 standard errors in at least 90 % of the units."""
     from motorlab.rig import VirtualRig
 
-    rig = VirtualRig("neverest40", unit_seed=seed, noise_seed=seed)
-    run = rig.spindown(tmp_path / "testFile.txt", voltage=12.0, current_limit=3.0, split=True)
-    expected = run.truth["expected"]
-    parser = argparse.ArgumentParser()
-    add_arguments(parser, "spindown")
-    args = parser.parse_args(["--cpr", str(rig.motor.cpr), "--inertia", str(expected["J"])])
-    result = from_cli("spindown", [str(p) for p in run.paths], args)
-    for name, rel in (("K", 0.015), ("gamma", 0.03), ("b", 0.03), ("Tf", 0.06)):
-        est = result[name]
-        assert est.value == pytest.approx(expected[name], rel=rel), name
-        assert abs(est.value - expected[name]) <= 4 * est.stderr, name
+    tolerance = {"K": 0.015, "gamma": 0.03, "b": 0.03, "Tf": 0.06}
+    covered = dict.fromkeys(tolerance, 0)
+    runs = [("neverest20", seed) for seed in range(5)] + [("gobilda5202_19", seed) for seed in range(5)]
+    for k, (motor, seed) in enumerate(runs):
+        rig = VirtualRig(motor, unit_seed=seed, noise_seed=seed)
+        run = rig.spindown(tmp_path / f"testFile{k}.txt", split=k % 2 == 0)
+        expected = run.truth["expected"]
+        parser = argparse.ArgumentParser()
+        add_arguments(parser, "spindown")
+        args = parser.parse_args(["--cpr", str(rig.motor.cpr), "--inertia", str(expected["J"])])
+        result = from_cli("spindown", [str(p) for p in run.paths], args)
+        assert result.details["cutoff_s"] == pytest.approx(expected["coast_start"], abs=0.12)
+        for name, rel in tolerance.items():
+            est = result[name]
+            assert est.value == pytest.approx(expected[name], rel=rel), (motor, seed, name)
+            covered[name] += abs(est.value - expected[name]) <= 3 * est.stderr
+    for name, count in covered.items():
+        assert count >= 0.9 * len(runs), (name, count)

@@ -71,9 +71,15 @@ def test_bad_input() -> None:
         terminal(data, torque_constant=K)
     with pytest.raises(OptionError):
         terminal(data, torque_constant=-1.0, cpr=CPR)
+    # A row at zero speed (stiction held the shaft, K·I ≤ Tf) is left out with a warning ...
     data.signals["frequency"][2] = 0.0
-    with pytest.raises(FitError, match=r"rows\.csv: row 3"):
-        terminal(data, torque_constant=K, cpr=CPR)
+    stuck = terminal(data, torque_constant=K, cpr=CPR)
+    assert stuck.n_points == len(data) - 1
+    assert any("zero speed" in w and "rows 3 " in w for w in stuck.warnings)
+    # ... but with no row turning there is nothing to fit.
+    still = Recording(np.arange(2.0), {"current": np.array([0.1, 0.2]), "frequency": np.zeros(2)}, source="rows.csv")
+    with pytest.raises(FitError, match=r"rows\.csv: the motor did not turn"):
+        terminal(still, torque_constant=K, cpr=CPR)
     data.signals["frequency"][2] = math.nan
     with pytest.raises(LogFormatError, match=r"rows\.csv"):
         terminal(data, torque_constant=K, cpr=CPR)
@@ -92,13 +98,21 @@ def test_cli_reads_csv(tmp_path) -> None:
 
 
 def test_virtual_rig_round_trip(tmp_path) -> None:
+    """The rig's default currents (raised where they do not turn the unit, as the seed says): b within
+    6 %, Tf within 12 %, the truth within 3 standard errors in at least 90 % of the units."""
     from motorlab.rig import VirtualRig
 
-    rig = VirtualRig("neverest40", unit_seed=4, noise_seed=4)
-    run = rig.terminal(tmp_path / "terminal.csv")
-    expected = run.truth["expected"]
-    parser = argparse.ArgumentParser()
-    add_arguments(parser, "terminal")
-    result = from_cli("terminal", [str(run.paths[0])], parser.parse_args(["--K", str(expected["K"])]))
-    assert result["b"].value == pytest.approx(expected["b"], rel=0.06)
-    assert result["Tf"].value == pytest.approx(expected["Tf"], rel=0.12)
+    runs = [(motor, seed) for motor in ("neverest40", "gobilda5202_19", "hdhex40") for seed in range(4)]
+    inside = {"b": 0, "Tf": 0}
+    for k, (motor, seed) in enumerate(runs):
+        run = VirtualRig(motor, unit_seed=seed, noise_seed=seed).terminal(tmp_path / f"terminal{k}.csv")
+        expected = run.truth["expected"]
+        assert min(expected["speeds"]) > 0  # every default setting turns the unit
+        parser = argparse.ArgumentParser()
+        add_arguments(parser, "terminal")
+        result = from_cli("terminal", [str(run.paths[0])], parser.parse_args(["--K", str(expected["K"])]))
+        for name, rel in (("b", 0.06), ("Tf", 0.12)):
+            assert result[name].value == pytest.approx(expected[name], rel=rel), (motor, seed, name)
+            inside[name] += abs(result[name].value - expected[name]) <= 3 * result[name].stderr
+    for name, count in inside.items():
+        assert count >= 0.9 * len(runs), (name, count)

@@ -78,7 +78,11 @@ def test_commutator_positions() -> None:
     com = Commutator()
     true = com.positions(p, 2000, np.random.default_rng(0))
     assert np.all(np.abs(true["inductance"] / p.L - 1) <= com.inductance_variation + 1e-12)
-    assert np.all(true["dc_resistance"] >= p.R * (1 - com.resistance_variation))
+    winding = p.R - com.mean_good_contact
+    assert np.all(true["dc_resistance"] >= winding * (1 - com.resistance_variation))
     assert np.all(true["ac_resistance"] > true["dc_resistance"])
     poor = true["contact_resistance"] > 0.25 * p.R
     assert poor.mean() == pytest.approx(com.poor_contact_probability, abs=0.04)
+    # The model's R is the running resistance: a good contact reads R on average.
+    good = true["dc_resistance"][~poor]
+    assert good.mean() == pytest.approx(p.R, abs=4 * good.std() / np.sqrt(good.size))

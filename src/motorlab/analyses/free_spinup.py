@@ -231,18 +231,22 @@ def add_arguments(parser: argparse.ArgumentParser, experiment: str) -> None:
 
 
 def read_edges(path: str) -> Recording:
-    """Edge times from a scope cursor-times CSV or a waveform export (told apart by their columns)."""
+    """Edge times from a scope waveform export or a cursor-times CSV.
+
+    :func:`motorlab.io.detect_format` recognises the waveform export; anything else is read as
+    cursor times, whose reader names the file and line of whatever does not fit (a header in an
+    unknown unit, an FTC log given by mistake).
+
+    Raises
+    ------
+    LogFormatError
+        A file that is not edge times.
+    """
+    from motorlab.io import detect_format
     from motorlab.io.scope import read_scope_times, read_scope_waveform
 
-    with open(path, encoding="utf-8", errors="replace") as handle:
-        for raw in handle:
-            line = raw.strip()
-            if not line or line.startswith("#"):
-                continue
-            fields = [f for f in line.replace(";", ",").split(",") if f.strip()]
-            if len(fields) > 1:
-                return read_scope_waveform(path)
-            break
+    if detect_format(path) == "scope-waveform":
+        return read_scope_waveform(path)
     return read_scope_times(path)
 
 

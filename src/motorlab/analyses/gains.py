@@ -5,9 +5,9 @@ each gain at one operating point; here several rows are fitted with a straight l
 intercept*, so that an offset (amplifier input offset, tachometer ripple rectification, a meter
 zero error) does not bias the slope and is reported instead of hidden.
 
-This module also holds the small table helpers the other bench analyses (``lcr``, ``torque``,
-``pulse``) share: reading several files, refusing non-finite rows with the file and line, and the
-straight-line fit itself.
+The small table helpers the bench analyses share (reading several files, refusing non-finite
+rows, the straight-line fit) live in :mod:`motorlab.analyses._common`; they are re-exported here
+for callers that imported them from this module.
 """
 
 from __future__ import annotations
@@ -19,11 +19,24 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from motorlab.errors import FitError, LogFormatError, OptionError
-from motorlab.fitting import LeastSquares, fit_linear, r_squared
+from motorlab.analyses._common import (
+    StraightLine,
+    concatenate,
+    finite_rows,
+    fit_straight_line,
+    metadata_quantity,
+    read_tables,
+    sources_of,
+)
+from motorlab.errors import OptionError
 from motorlab.recording import Recording
 from motorlab.results import Estimate, FitResult, Panel, Series
 from motorlab.units import SI_UNITS, format_unit
+
+__all__ = [
+    "StraightLine", "amplifier", "concatenate", "finite_rows", "fit_straight_line", "metadata_quantity",
+    "read_tables", "sources_of", "tachometer",
+]
 
 #: A measured gain further than this fraction from the nominal one (and beyond 3 standard errors)
 #: is reported in a warning.
@@ -34,122 +47,6 @@ SUMMARIES = {
     "amplifier": 'Servo-amplifier gain Ka from command voltage and output current (seed 2, "Amplifier Gain")',
     "tachometer": 'Tachometer gain Kt_tach from speed and tachometer voltage (seed 2, "Tachometer Gain Constant")',
 }
-
-# ---- table helpers shared by the bench analyses ---------------------------------------------------
-
-
-def read_tables(paths: Sequence[str]) -> list[Recording]:
-    """Read headed CSV files (``motorlab.io.read_csv``), one :class:`Recording` per path.
-
-    Raises
-    ------
-    LogFormatError
-        If no path is given or a file cannot be read (the reader names the file and line).
-    """
-    from motorlab.io import read_csv  # imported here: the CLI registers parsers without reading
-
-    if not paths:
-        raise OptionError("no input file given")
-    return [read_csv(path) for path in paths]
-
-
-def finite_rows(recording: Recording, names: Sequence[str]) -> None:
-    """Raise :class:`LogFormatError` at the first row where a named signal is not finite."""
-    for name in names:
-        values = recording.require(name)
-        bad = np.flatnonzero(~np.isfinite(values))
-        if bad.size:
-            raise LogFormatError(
-                f"{name} is not a finite number in this row", path=recording.source or None,
-                line=recording.line_of(int(bad[0])),
-            )
-
-
-def concatenate(recordings: Sequence[Recording], names: Sequence[str]) -> Recording:
-    """Join the rows of several recordings, keeping the named signals (checked finite first).
-
-    Metadata come from the first recording; ``source`` lists every file.
-    """
-    if not recordings:
-        raise OptionError("no input file given")
-    for rec in recordings:
-        finite_rows(rec, names)
-    if len(recordings) == 1:
-        return recordings[0]
-    signals = {name: np.concatenate([rec.require(name) for rec in recordings]) for name in names}
-    index = np.arange(sum(len(rec) for rec in recordings), dtype=float)
-    return Recording(
-        time=index,
-        signals=signals,
-        metadata=dict(recordings[0].metadata),
-        source=" + ".join(rec.source for rec in recordings if rec.source),
-    )
-
-
-def metadata_quantity(recording: Recording, keys: Sequence[str], unit: str) -> float | None:
-    """A number from the file's ``# key: value`` metadata (first key present), in ``unit``."""
-    from motorlab.units import parse_quantity
-
-    for key in keys:
-        if key in recording.metadata:
-            try:
-                return parse_quantity(recording.metadata[key], unit, name=key)
-            except OptionError as exc:
-                raise LogFormatError(exc.message, path=recording.source or None) from None
-    return None
-
-
-def sources_of(recordings: Sequence[Recording]) -> list[str]:
-    """The file names of ``recordings``, in order, without duplicates."""
-    out: list[str] = []
-    for rec in recordings:
-        for part in rec.source.split(" + ") if rec.source else []:
-            if part not in out:
-                out.append(part)
-    return out
-
-
-@dataclass
-class StraightLine:
-    """A fitted ``y = slope·x + intercept`` with its least-squares details."""
-
-    fit: LeastSquares
-    x: np.ndarray
-    y: np.ndarray
-    model: np.ndarray
-    r2: float
-
-    @property
-    def slope(self) -> float:
-        """The slope [y-unit per x-unit]."""
-        return float(self.fit.values[0])
-
-    @property
-    def intercept(self) -> float:
-        """The intercept [y-unit]."""
-        return float(self.fit.values[1])
-
-
-def fit_straight_line(x: np.ndarray, y: np.ndarray, *, source: str = "", what: str = "x") -> StraightLine:
-    """Ordinary least squares ``y = slope·x + intercept`` with standard errors.
-
-    Raises
-    ------
-    FitError
-        With fewer than two rows or when every row has the same ``x`` (no slope to see).
-    """
-    x = np.asarray(x, dtype=float)
-    y = np.asarray(y, dtype=float)
-    where = f"{source}: " if source else ""
-    if x.size < 2:
-        raise FitError(f"{where}{x.size} row(s): a straight line needs at least two rows with different {what}")
-    if np.ptp(x) == 0:
-        raise FitError(f"{where}every row has the same {what}: a slope needs at least two different values")
-    design = np.column_stack([x, np.ones_like(x)])
-    fit = fit_linear(design, y, ["slope", "intercept"])
-    model = design @ fit.values
-    return StraightLine(fit=fit, x=x, y=y, model=model, r2=r_squared(y, model))
-
 
 # ---- the gains --------------------------------------------------------------------------------------
 

@@ -17,8 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from motorlab.analyses._common import ramp_speed
-from motorlab.analyses.gains import metadata_quantity, read_tables, sources_of
+from motorlab.analyses._common import metadata_quantity, ramp_speed, read_tables, sources_of
 from motorlab.errors import FitError, LogFormatError, OptionError
 from motorlab.fitting import LeastSquares, fit_least_squares, fit_linear, r_squared
 from motorlab.recording import Recording
@@ -45,6 +44,7 @@ class _Region:
     command: float  # held command level [V]
     edge_time: float  # time of the edge that starts the region [s]
     source: str
+    command_stderr: float = 0.0  # standard error of the held level read from the noisy trace [V]
 
     @property
     def s(self) -> np.ndarray:
@@ -123,6 +123,9 @@ def _regions(
         )
     speed = speed * speed_sign
     sigma = _noise_sigma(speed)
+    # The held levels are medians of a noisy scope trace: their standard error 1.2533·σ/√n
+    # (the median's efficiency for Gaussian noise) is propagated into J, b and Tf.
+    sigma_command = _noise_sigma(command)
     stop_level = max(5.0 * sigma, 0.02 * float(np.max(speed)))
     regions: list[_Region] = []
     not_at_rest = 0
@@ -133,6 +136,8 @@ def _regions(
         nxt = next((k for k in rises if k > f), t.size)
         level_hi = float(np.median(command[r:f]))
         level_lo = float(np.median(command[f:nxt]))
+        se_hi = 1.2533 * sigma_command / math.sqrt(max(f - r, 1))
+        se_lo = 1.2533 * sigma_command / math.sqrt(max(nxt - f, 1))
         if speed[r] > stop_level:
             not_at_rest += 1
         a = np.flatnonzero((t >= t[r] + skip) & (np.arange(t.size) < f))
@@ -142,9 +147,9 @@ def _regions(
         if below.size:
             c = c[: below[0]]
         if a.size >= MIN_REGION_SAMPLES and float(np.max(speed[a])) > stop_level:
-            regions.append(_Region("accelerate", n + 1, t[a], speed[a], level_hi, float(t[r]), rec.source))
+            regions.append(_Region("accelerate", n + 1, t[a], speed[a], level_hi, float(t[r]), rec.source, se_hi))
         if c.size >= MIN_REGION_SAMPLES:
-            regions.append(_Region("coast", n + 1, t[c], speed[c], level_lo, float(t[f]), rec.source))
+            regions.append(_Region("coast", n + 1, t[c], speed[c], level_lo, float(t[f]), rec.source, se_lo))
     if not_at_rest:
         warnings.append(
             f"{rec.source or 'recording'}: in {not_at_rest} pulse(s) the shaft was still turning at the rising "
@@ -248,6 +253,10 @@ def pulse(
     skip: float = DEFAULT_SKIP,
     tach_gain: float | None = None,
     friction: str = "auto",
+    amplifier_gain_stderr: float = 0.0,
+    amplifier_offset_stderr: float = 0.0,
+    gain_offset_correlation: float = 0.0,
+    torque_constant_stderr: float = 0.0,
 ) -> FitResult:
     """J and friction from the response to a square-wave current command.
 
@@ -271,6 +280,14 @@ def pulse(
     friction
         ``"auto"`` (choose by BIC on the coast-downs), ``"coulomb"`` (the seed's eq. (2)),
         ``"viscous"`` or ``"both"``: the friction model of the final fit.
+    amplifier_gain_stderr, amplifier_offset_stderr
+        Standard errors of Ka [A/V] and I0 [A] (``analyze amplifier``), propagated into J, b and Tf
+        (default: exact). J and b scale with Ka, and Tf moves one for one with Km·I0, so on a fast
+        trace these are often the largest part of the uncertainty.
+    gain_offset_correlation
+        Correlation of Ka and I0 from the same straight-line fit (``C(Ka, I0)`` of its report) [-].
+    torque_constant_stderr
+        Standard error of Km [N·m/A], propagated likewise (default: exact).
 
     Returns
     -------
@@ -305,6 +322,9 @@ def pulse(
     ω = ω0 − (Tf/J)·t, and both ω = (ω0 + c)·e^(−γt) − c with c = Tf/b; AIC = n·ln(SSR/n) + 2k and
     BIC = n·ln(SSR/n) + k·ln(n) (k counts the start speeds too). Both assume independent residuals;
     tachometer ripple correlates them and makes the criteria over-eager for the richer model.
+    The standard errors of the final fit do not make that assumption: they come from the
+    Newey–West (HAC) sandwich of :func:`motorlab.fitting.hac_covariance`, with lags kept within
+    each region, because the tachometer's commutator ripple correlates neighbouring residuals.
 
     References
     ----------
@@ -325,6 +345,12 @@ def pulse(
         raise OptionError("no recording given")
     if not math.isfinite(amplifier_offset):
         raise OptionError(f"the amplifier offset must be a finite current, got {amplifier_offset} A")
+    for value, what in ((amplifier_gain_stderr, "Ka"), (amplifier_offset_stderr, "I0"),
+                        (torque_constant_stderr, "Km")):
+        if not (math.isfinite(value) and value >= 0):
+            raise OptionError(f"the standard error of {what} must be a finite number ≥ 0, got {value}")
+    if not (math.isfinite(gain_offset_correlation) and abs(gain_offset_correlation) <= 1):
+        raise OptionError(f"the Ka-I0 correlation must lie in [-1, 1], got {gain_offset_correlation}")
     gain = amplifier_gain * torque_constant  # torque per command volt [N·m/V]
     # An amplifier offset I0 acts as a command offset I0/Ka: τ = Ka·Km·(V + I0/Ka).
     command_offset = amplifier_offset / amplifier_gain
@@ -398,6 +424,22 @@ def pulse(
         grad = np.array([-bv / jv**2, 1.0 / jv])
         g_err = float(np.sqrt(max(grad @ cov @ grad, 0.0)))
         parameters["gamma"] = Estimate("gamma", bv / jv, g_err, SI_UNITS["gamma"], bool(est["b"].determined), "b/J")
+    fitted_names = ["J"] + (["b"] if with_b else []) + (["Tf"] if with_tf else [])
+    idx = [fit.names.index(n) for n in fitted_names]
+    cov_out = _propagate_inputs(
+        fit.covariance[np.ix_(idx, idx)], fitted_names, fit.values[idx],
+        gain=(amplifier_gain, amplifier_gain_stderr), offset=(amplifier_offset, amplifier_offset_stderr),
+        correlation=gain_offset_correlation, torque_constant=(torque_constant, torque_constant_stderr),
+        levels=_level_errors(accel, coasts),
+    )
+    for k, name in enumerate(fitted_names):
+        old_est = parameters[name]
+        parameters[name] = Estimate(name, old_est.value, float(math.sqrt(max(cov_out[k, k], 0.0))), old_est.unit,
+                                    old_est.determined, old_est.note)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        sd = np.sqrt(np.clip(np.diag(cov_out), 0.0, None))
+        correlation = cov_out / np.outer(sd, sd)
+    np.fill_diagonal(correlation, 1.0)
     all_t = np.concatenate([r.time for r in regions])
     all_w = np.concatenate([r.speed for r in regions])
     model_w = all_w + fit.residuals
@@ -432,12 +474,10 @@ def pulse(
         "coasts": len(coasts),
     }
     panels = _panels(traces, regions, model_w, table, best, coasts, chosen)
-    fitted_names = ["J"] + (["b"] if with_b else []) + (["Tf"] if with_tf else [])
-    idx = [fit.names.index(n) for n in fitted_names]
     return FitResult(
         experiment="pulse",
         parameters=parameters,
-        correlation=fit.correlation[np.ix_(idx, idx)],
+        correlation=correlation,
         correlation_names=fitted_names,
         rmse=fit.rmse,
         rmse_unit="rad/s",
@@ -448,6 +488,56 @@ def pulse(
         details=details,
         sources=sources_of(recs),
     )
+
+
+def _propagate_inputs(
+    cov: np.ndarray,
+    names: list[str],
+    values: np.ndarray,
+    *,
+    gain: tuple[float, float],
+    offset: tuple[float, float],
+    correlation: float,
+    torque_constant: tuple[float, float],
+    levels: tuple[float, float, float, float],
+) -> np.ndarray:
+    """Add the uncertainty of Ka, I0, Km and the held levels to the covariance of (J[, b][, Tf]).
+
+    First order. The data fix the accelerations A1,2 = (u·V1,2 + c − Tf)/J and γ = b/J, with
+    u = Ka·Km, c = Km·I0 and V1, V2 the held command levels. Hence J = u·(V1 − V2)/(A1 − A2) and
+    b = γ·J are proportional to u and to V1 − V2, and Tf = u·V2 + c − J·A2:
+    ∂J/∂Ka = J/Ka, ∂J/∂Km = J/Km, ∂J/∂V1 = −∂J/∂V2 = J/(V1 − V2) (b alike);
+    ∂Tf/∂Ka = (Tf − Km·I0)/Ka, ∂Tf/∂I0 = Km, ∂Tf/∂Km = Tf/Km, ∂Tf/∂V1 = −A2·J/(V1 − V2),
+    ∂Tf/∂V2 = u + A2·J/(V1 − V2).
+    """
+    (ka, ka_se), (i0, i0_se), (km, km_se) = gain, offset, torque_constant
+    v1, v1_se, v2, v2_se = levels
+    u = ka * km
+    inputs = np.diag([ka_se**2, i0_se**2, km_se**2, v1_se**2, v2_se**2])
+    inputs[0, 1] = inputs[1, 0] = correlation * ka_se * i0_se
+    if not inputs.any():
+        return cov
+    j = float(values[names.index("J")])
+    tf = float(values[names.index("Tf")]) if "Tf" in names else 0.0
+    a2 = (u * v2 - tf) / j  # the coast's acceleration at zero speed
+    dv = v1 - v2
+    grad = np.zeros((len(names), 5))
+    for k, name in enumerate(names):
+        v = float(values[k])
+        if name in ("J", "b"):
+            grad[k] = [v / ka, 0.0, v / km, v / dv, -v / dv]
+        elif name == "Tf":
+            grad[k] = [(v - km * i0) / ka, km, v / km, -a2 * j / dv, u + a2 * j / dv]
+    return cov + grad @ inputs @ grad.T
+
+
+def _level_errors(accel: list[_Region], coasts: list[_Region]) -> tuple[float, float, float, float]:
+    """Mean held levels V1 (pulses) and V2 (coasts) [V] and the standard errors of those means."""
+    v1 = float(np.mean([r.command for r in accel]))
+    v2 = float(np.mean([r.command for r in coasts]))
+    se1 = math.sqrt(sum(r.command_stderr**2 for r in accel)) / len(accel)
+    se2 = math.sqrt(sum(r.command_stderr**2 for r in coasts)) / len(coasts)
+    return v1, se1, v2, se2
 
 
 def _speed_signal(rec: Recording, tach_gain: float | None) -> str:
@@ -529,8 +619,13 @@ def _joint_fit(
     x0 += [float(r.speed[0]) for r in regions]
     lo = [1e-9] + ([0.0] if with_b else []) + ([-np.inf] if with_tf else []) + [-np.inf] * len(regions)
     hi = [np.inf] * len(x0)
+    # The tachometer's commutator ripple (seed 2's trace shows it) makes neighbouring residuals
+    # alike: independent-residual standard errors would be several times too small, so the
+    # covariance is the Newey–West sandwich, with lags kept within each region.
+    groups = np.concatenate([np.full(r.time.size, i) for i, r in enumerate(regions)])
     fit = fit_least_squares(
-        lambda x: model(x) - data, x0, names + [f"w0_{i}" for i in range(len(regions))], bounds=(lo, hi)
+        lambda x: model(x) - data, x0, names + [f"w0_{i}" for i in range(len(regions))], bounds=(lo, hi),
+        covariance="hac", groups=groups,
     )
     # Back to physical units: values, standard errors and covariance of the scaled parameters.
     full_scale = np.concatenate([scale, np.ones(len(regions))])
@@ -621,6 +716,18 @@ def add_arguments(parser: argparse.ArgumentParser, experiment: str) -> None:
         metavar="K", help="motor torque constant Km = K [N·m/A] ('analyze torque')",
     )
     parser.add_argument(
+        "--Ka-stderr", dest="amplifier_gain_stderr", type=quantity("A/V", nonnegative=True), default=0.0,
+        metavar="GAIN", help="standard error of Ka [A/V], propagated into J, b, Tf (default: exact)",
+    )
+    parser.add_argument(
+        "--I0-stderr", dest="amplifier_offset_stderr", type=quantity("A", nonnegative=True), default=0.0,
+        metavar="CURRENT", help="standard error of I0 [A], propagated into Tf (default: exact)",
+    )
+    parser.add_argument(
+        "--Km-stderr", "--K-stderr", dest="torque_constant_stderr", type=quantity("N*m/A", nonnegative=True),
+        default=0.0, metavar="K", help="standard error of Km [N·m/A], propagated (default: exact)",
+    )
+    parser.add_argument(
         "--skip", type=quantity("s", nonnegative=True), default=DEFAULT_SKIP, metavar="TIME",
         help=f"time left out after each command edge [s] (default {DEFAULT_SKIP * 1000:g} ms)",
     )
@@ -650,4 +757,7 @@ def from_cli(experiment: str, paths: list[str], args: argparse.Namespace) -> Fit
         skip=args.skip,
         tach_gain=args.tach_gain,
         friction=args.friction,
+        amplifier_gain_stderr=getattr(args, "amplifier_gain_stderr", 0.0),
+        amplifier_offset_stderr=getattr(args, "amplifier_offset_stderr", 0.0),
+        torque_constant_stderr=getattr(args, "torque_constant_stderr", 0.0),
     )

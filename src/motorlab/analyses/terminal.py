@@ -92,7 +92,8 @@ def terminal(
     LogFormatError
         NaN in the rows, no current or no speed.
     FitError
-        No row, a zero or negative speed.
+        No row, or no row where the motor turned. Rows at zero speed (stiction held the shaft)
+        are left out with a warning.
 
     Notes
     -----
@@ -119,11 +120,16 @@ def terminal(
     omega = np.abs(speeds_of(recording, cpr=cpr))
     if current.size == 0:
         raise FitError(f"{source}: no rows")
-    if np.any(omega <= 0):
-        k = int(np.flatnonzero(omega <= 0)[0])
-        raise FitError(f"{source}: row {k + 1} has zero speed: the motor did not turn at {current[k]:.3g} A")
     K = torque_constant
     warnings: list[str] = []
+    at_rest = omega <= 0
+    if np.all(at_rest):
+        raise FitError(f"{source}: the motor did not turn in any row (zero speed): raise the current")
+    if np.any(at_rest):
+        # A shaft held by stiction only says K·I ≤ Tf: no speed to balance, so the row is left out.
+        rows = ", ".join(f"{k + 1} ({current[k]:.3g} A)" for k in np.flatnonzero(at_rest))
+        warnings.append(f"rows {rows} have zero speed (stiction held the shaft, K·I ≤ Tf): left out")
+        current, omega = current[~at_rest], omega[~at_rest]
     spread = float(np.ptp(omega) / np.mean(omega))
     several = current.size >= 2 and spread >= _MIN_SPREAD
     details: dict[str, Any] = {

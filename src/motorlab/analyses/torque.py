@@ -14,8 +14,9 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from motorlab.analyses.gains import concatenate, fit_straight_line, metadata_quantity, read_tables, sources_of
+from motorlab.analyses._common import concatenate, fit_straight_line, metadata_quantity, read_tables, sources_of
 from motorlab.errors import LogFormatError, OptionError
+from motorlab.fitting import fit_linear, r_squared
 from motorlab.recording import Recording
 from motorlab.results import Estimate, FitResult, Panel, Series
 from motorlab.units import SI_UNITS, STANDARD_GRAVITY
@@ -47,8 +48,9 @@ def torque(
     Returns
     -------
     FitResult
-        ``K`` [V·s/rad] (the slope) and ``tau0`` [N·m] (the intercept, a torque offset), the
-        torque-vs-current panel and warnings.
+        ``K`` [V·s/rad] (the slope), ``tau0`` [N·m] (the intercept, a torque offset) and, when
+        the currents were approached from both sides, ``tau_h`` [N·m] (the friction held by the
+        stalled shaft: half-width of the hysteresis loop); the torque-vs-current panel and warnings.
 
     Raises
     ------
@@ -65,6 +67,12 @@ def torque(
     fit is τ = K·i + τ0 by ordinary least squares. The intercept τ0 is reported rather than forced
     to zero: a scale that was not tared with the arm resting on it, or stiction/friction holding
     part of the torque (seed 2 suggests a 0.25 V, 30 Hz dither against it), shows up there.
+    The stalled shaft creeps a little towards each new balance, so the friction it holds opposes
+    that creep: a current reached from below reads low, one reached from above reads high. The
+    rows are taken in the order they were measured (each file from rest); when some currents were
+    approached from below and some from above (a sweep up and back down), the fit is
+    τ = K·i + τ0 − d·τ_h, with d = +1 for a current larger than the one before (or the first) and
+    −1 for a smaller one: the hysteresis is then fitted instead of being left in the residuals.
     A current of the wrong polarity gives a negative slope; K is then reported as its magnitude
     with a warning. The torque measured at the output of a gearbox includes gearbox losses, so
     this K can be lower than the back-EMF K (seed 1, "Experimental Notes").
@@ -102,7 +110,17 @@ def torque(
     current = rec["current"]
     sources = sources_of(recs)
     line = fit_straight_line(current, tau, source=" + ".join(sources), what="current")
-    est = line.fit.estimates({"slope": "N*m/A", "intercept": "N*m"})
+    approach = np.concatenate([approach_direction(r["current"]) for r in recs])
+    hysteresis = int(np.count_nonzero(approach > 0)) >= 2 and int(np.count_nonzero(approach < 0)) >= 2
+    if hysteresis and current.size >= 4:
+        design = np.column_stack([current, np.ones_like(current), -approach])
+        fit = fit_linear(design, tau, ["slope", "intercept", "tau_h"])
+        model_tau = design @ fit.values
+        r2 = r_squared(tau, model_tau)
+    else:
+        hysteresis = False
+        fit, model_tau, r2 = line.fit, line.model, line.r2
+    est = fit.estimates({"slope": "N*m/A", "intercept": "N*m", "tau_h": "N*m"})
     slope, intercept = est["slope"], est["intercept"]
     if slope.value < 0:
         warnings.append(
@@ -120,6 +138,12 @@ def torque(
             "torque at zero current (intercept)",
         ),
     }
+    if hysteresis:
+        h = est["tau_h"]
+        parameters["tau_h"] = Estimate(
+            "tau_h", h.value, h.stderr, "N*m", h.determined,
+            "friction held by the stalled shaft (half-width of the up/down hysteresis)",
+        )
     if current.size == 2:
         warnings.append("only two rows: the line passes through both, so no uncertainty can be estimated")
     tau_span = float(np.max(np.abs(tau)))
@@ -133,7 +157,8 @@ def torque(
             "of the largest torque) is significant: friction/stiction holding part of the torque, or a scale "
             "not tared with the arm resting on it"
         )
-    details: dict[str, object] = {"g": STANDARD_GRAVITY}
+    details: dict[str, object] = {"g": STANDARD_GRAVITY, "approach": [int(d) for d in approach],
+                                  "hysteresis_fitted": hysteresis}
     if arm_used is not None:
         details["arm_m"] = arm_used
     panel = Panel(
@@ -141,22 +166,37 @@ def torque(
         x_label="current [A]",
         y_label="torque τ = m·g·r [N·m]" if arm_used is not None else "torque [N·m]",
         data=Series(current, tau, "scale readings", "data"),
-        model=Series(current, line.model, f"fit: K = {k_value:.4g} N·m/A", "model"),
+        model=Series(current, model_tau, f"fit: K = {k_value:.4g} N·m/A", "model"),
     )
     return FitResult(
         experiment="torque",
         parameters=parameters,
-        correlation=line.fit.correlation,
-        correlation_names=["K", "tau0"],
-        rmse=float(np.sqrt(np.mean((tau - line.model) ** 2))),
+        correlation=fit.correlation,
+        correlation_names=["K", "tau0", "tau_h"] if hysteresis else ["K", "tau0"],
+        rmse=float(np.sqrt(np.mean((tau - model_tau) ** 2))),
         rmse_unit="N*m",
-        r2=line.r2,
+        r2=r2,
         n_points=int(current.size),
         panels=[panel],
         warnings=warnings,
         details=details,
         sources=sources,
     )
+
+
+def approach_direction(current: np.ndarray) -> np.ndarray:
+    """+1 for a row whose |current| is larger than the row before (the first row: from rest), −1
+    for a smaller one; a repeated current keeps the direction of the row before."""
+    magnitude = np.abs(np.asarray(current, dtype=float))
+    out = np.ones(magnitude.size)
+    previous = 0.0
+    for k, value in enumerate(magnitude):
+        if value != previous:
+            out[k] = 1.0 if value > previous else -1.0
+        elif k:
+            out[k] = out[k - 1]
+        previous = float(value)
+    return out
 
 
 def add_arguments(parser: argparse.ArgumentParser, experiment: str) -> None:

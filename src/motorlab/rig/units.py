@@ -146,6 +146,11 @@ class Commutator:
     poor_contact_range: tuple[float, float] = (0.3, 0.9)
     ac_resistance_factor: float = 1.25
 
+    @property
+    def mean_good_contact(self) -> float:
+        """Mean brush contact resistance of a good contact [Ω] (log-normal mean median·exp(σ²/2))."""
+        return self.contact_median * math.exp(0.5 * self.contact_sigma**2)
+
     def positions(
         self, params: MotorParams, count: int, rng: np.random.Generator
     ) -> dict[str, np.ndarray]:
@@ -153,12 +158,16 @@ class Commutator:
 
         Notes
         -----
-        L(φ) = L·(1 + a_L·cos φ), R_w(φ) = R·(1 + a_R·cos(φ + π/3)), DCR = R_w + R_c,
+        L(φ) = L·(1 + a_L·cos φ), R_w(φ) = (R − R̄_c)·(1 + a_R·cos(φ + π/3)), DCR = R_w + R_c,
         R_ac = k_ac·R_w + R_c, with φ uniform (the seed turns the shaft to "random positions").
+        The model's R is the terminal resistance of the running motor, brushes included, so the
+        winding is R less the mean good brush contact R̄_c = median·exp(σ²/2): a DCR reading at a
+        good contact is R on average, and only the poor contacts read high.
         """
         phase = rng.uniform(0.0, 2 * math.pi, count)
         inductance = params.L * (1 + self.inductance_variation * np.cos(phase))
-        winding = params.R * (1 + self.resistance_variation * np.cos(phase + math.pi / 3))
+        winding_mean = params.R - min(self.mean_good_contact, 0.5 * params.R)
+        winding = winding_mean * (1 + self.resistance_variation * np.cos(phase + math.pi / 3))
         contact = self.contact_median * np.exp(self.contact_sigma * rng.standard_normal(count))
         poor = rng.random(count) < self.poor_contact_probability
         contact = contact + np.where(poor, params.R * rng.uniform(*self.poor_contact_range, count), 0.0)

@@ -70,6 +70,8 @@ EXPERIMENTS: dict[str, str] = {
 
 #: Internal step of the simulator for flywheel runs [s] (mechanical time constant ≈ 10 s).
 FLYWHEEL_DT = 1e-3
+#: Screen divisions before the trigger with the horizontal position "to the left" (seed 1).
+_PRE_TRIGGER_DIVISIONS = 0.2
 
 
 def _positive(value: float, name: str, unit: str) -> float:
@@ -477,8 +479,10 @@ class VirtualRig:
         edges
             Rising edges recorded after the trigger edge (seed 1: 20).
         timebase
-            Scope horizontal scale [s/div]; default: the 1-2-5 setting that puts at least four
-            cursor steps between adjacent edges.
+            Scope horizontal scale [s/div]; default: the finest 1-2-5 setting that still shows the
+            trigger and every recorded edge (the trigger near the left edge of the screen), as a person
+            zooms in until the edges fill the screen (seed 1: 200 ms/div, 20 ms/div for the fast
+            AM3.7).
         waveform
             Also write the scope's waveform export of channel B (Rigol CSV) to this path.
         dt
@@ -537,7 +541,9 @@ class VirtualRig:
         relative = true_times[1:] - t_trigger
         scope = ins.scope
         if timebase is None:
-            timebase = _timebase_for(float(np.min(np.diff(true_times))) / 4 * scope.columns / scope.divisions)
+            # The finest setting whose screen holds the last edge; the seed sets "the horizontal
+            # position to the left", leaving a fifth of a division before the trigger.
+            timebase = _timebase_at_least(1.01 * float(relative[-1]) / (scope.divisions - _PRE_TRIGGER_DIVISIONS))
         _positive(timebase, "timebase", "s/div")
         scope = replace(scope, timebase=timebase)
         readings = _strictly_increasing(scope.cursor_times(relative, rng), scope.cursor_step)
@@ -571,10 +577,10 @@ class VirtualRig:
 
     def _write_waveform(self, path: Path, sim: Simulation, t_trigger: float, scope: Any,
                         rng: np.random.Generator) -> None:
-        """Rigol DS1000Z CSV export of channel B: one division before the trigger, the rest after."""
+        """Rigol DS1000Z CSV export of channel B: a fifth of a division before the trigger, the rest after."""
         span = scope.timebase * scope.divisions
         increment = span / scope.points
-        start = -scope.timebase
+        start = -_PRE_TRIGGER_DIVISIONS * scope.timebase
         t = t_trigger + start + increment * np.arange(scope.points)
         t = t[t <= sim.time[-1]]
         volts = self.encoder.channel_b_level(sim.sample(t)["position"])
@@ -599,7 +605,9 @@ class VirtualRig:
         currents
             Supply current settings [A] (default: five settings between the break-away current and
             the one where the supply would reach ``voltage``, from the catalogue figures, as the seed
-            picks 0.25-0.4 A for the NeveRest 20).
+            picks 0.25-0.4 A for the NeveRest 20; a default setting that does not turn this unit is
+            raised in 0.01 A steps until it does, as the seed says: "If this current doesn't work,
+            change it to a higher value and record this new value").
         voltage
             Supply voltage setting [V] (seed 1: 18 V).
 
@@ -617,6 +625,10 @@ class VirtualRig:
         amps = _currents(currents)
         if amps is None:
             amps = self._default_terminal_currents(voltage)
+            # The experimenter raises a setting that leaves the shaft at rest (K·I ≤ Tf).
+            need = self.params.Tf / self.params.K
+            amps = np.array([a if a > need * 1.02 else math.ceil(need * 1.02 / 0.01 + 1) * 0.01 for a in amps])
+            amps = np.unique(np.round(amps, 3))
         ins.supply.check(voltage, float(np.max(amps)) if amps.size else 1.0)
         if np.any(amps == 0):
             raise OptionError("a current setting of 0 A cannot spin the motor")
@@ -663,8 +675,9 @@ class VirtualRig:
         Returns
         -------
         RigRun
-            ``truth["expected"]``: L, R (winding, without brush contact), the mean true L and
-            DCR over the positions and the contact resistance at each.
+            ``truth["expected"]``: L, R (the running motor's terminal resistance: winding plus a
+            good brush contact on average), the mean true L and DCR over the positions and the
+            contact resistance at each.
 
         Notes
         -----
@@ -707,24 +720,32 @@ class VirtualRig:
         Parameters
         ----------
         path
-            CSV to write: ``current_A,mass_kg`` with ``# arm_m: ...``.
+            CSV to write: ``current_A,mass_kg`` with ``# arm_m: ...``, one row per reading in the
+            order taken.
         currents
-            Winding currents [A] (≥ 0; default six up to the least of 4 A, half the stall current
-            and 80 % of the scale's capacity).
+            Winding currents [A] (≥ 0), in the order they are set. Default: seed 2's sweep of
+            equal steps up to the least of 4 A, half the stall current and 80 % of the scale's
+            capacity (six steps instead of the seed's four), then back down the same steps, so that
+            friction is seen from both sides (eleven readings).
         arm
             Lever arm length [m].
         dither
             Seed 2's 0.25 V, 30 Hz dither that frees stiction: without it the friction held by the
-            stalled gearbox biases each reading by up to ±Tf.
+            stalled gearbox biases each reading by up to Tf.
 
         Returns
         -------
         RigRun
-            ``truth["expected"]``: K (slope τ/I), the true torques and the friction residuals.
+            ``truth["expected"]``: K (slope τ/I), the true torques, the friction held at each
+            reading and the direction (+1 up, −1 down) from which each current was approached.
 
         Notes
         -----
-        τ = K·I (seed 2, T(t) = Km·I(t)); the scale shows m = τ/(g₀·arm).
+        τ = K·I (seed 2, T(t) = Km·I(t)); the scale shows m = τ_arm/(g₀·arm). The stalled shaft
+        creeps towards the new balance after each change of current, so the friction it holds
+        opposes that creep: τ_arm = K·I − d·f with d = ±1 the sign of the change (from rest for the
+        first reading) and f uniform in [0, r·Tf], r = 0.1 with the dither and 1 without. A sweep
+        up and back down therefore reads a hysteresis loop of half-width ≈ r·Tf/2 about K·I.
         """
         ins = self.instruments
         _positive(arm, "lever arm", "m")
@@ -734,18 +755,21 @@ class VirtualRig:
             nominal = self.motor.nominal_params()
             i_max = min(4.0, 0.5 * self.motor.stall_current,
                         0.8 * ins.scale.capacity * 9.80665 * arm / nominal.K)
-            amps = np.round(np.linspace(i_max / 6, i_max, 6), 2)
+            up = np.round(np.linspace(i_max / 6, i_max, 6), 2)
+            amps = np.concatenate([up, up[-2::-1]])
         if float(np.max(amps)) > ins.supply.max_current:
             raise OptionError(f"currents above the supply's {ins.supply.max_current:g} A")
         rng = self._rng("torque")
-        residual = p.Tf * (0.1 if dither else 1.0) * rng.uniform(-1.0, 1.0, amps.shape)
-        torque = np.where(amps > 0, p.K * amps + residual, 0.0)
+        approach = _approach(amps)
+        held = p.Tf * (0.1 if dither else 1.0) * rng.uniform(0.0, 1.0, amps.shape)
+        torque = np.where(amps > 0, p.K * amps - approach * held, 0.0)
         mass = ins.scale.read(np.clip(torque, 0.0, None), arm, rng)
         shown = ins.multimeter.read_current(amps, rng)
         path = Path(path)
         write_csv(path, {"current_A": shown, "mass_kg": mass},
                   metadata={"experiment": "torque", "motor": self.motor.key, "arm_m": arm})
-        expected = {"K": p.K, "torques": torque, "currents": amps, "friction_residual": residual}
+        expected = {"K": p.K, "torques": torque, "currents": amps, "friction_held": -approach * held,
+                    "approach": approach}
         instruments = {"scale": ins.scale.settings(), "multimeter": ins.multimeter.settings()}
         return self._finish("torque", [path], settings={"currents": amps, "arm": arm, "dither": dither},
                             expected=expected, instruments=instruments, flywheel=False)
@@ -1127,20 +1151,34 @@ def _plain(value: Any) -> Any:
     return _jsonable(value)
 
 
+def _approach(currents: np.ndarray) -> np.ndarray:
+    """+1 where a current was reached from below (or from rest), −1 from above; a repeated setting
+    keeps the direction of the one before."""
+    out = np.ones(currents.size)
+    previous = 0.0
+    for k, value in enumerate(np.abs(currents)):
+        if value != previous:
+            out[k] = 1.0 if value > previous else -1.0
+        elif k:
+            out[k] = out[k - 1]
+        previous = value
+    return out
+
+
 def _stop_time(sim: Simulation, after: float) -> float | None:
     """First time ≥ ``after`` at which the shaft is at rest (None if it still turns at the end)."""
     idx = np.flatnonzero((sim.time >= after) & (sim.speed == 0.0))
     return float(sim.time[idx[0]]) if idx.size else None
 
 
-def _timebase_for(limit: float) -> float:
-    """The largest 1-2-5 timebase [s/div] not above ``limit``."""
+def _timebase_at_least(limit: float) -> float:
+    """The smallest 1-2-5 timebase [s/div] not below ``limit``."""
     exponent = math.floor(math.log10(limit))
-    for mantissa in (5.0, 2.0, 1.0):
+    for mantissa in (1.0, 2.0, 5.0, 10.0):
         value = mantissa * 10.0**exponent
-        if value <= limit:
+        if value >= limit * (1 - 1e-12):
             return value
-    return 5.0 * 10.0 ** (exponent - 1)
+    return 10.0 ** (exponent + 1)
 
 
 def _strictly_increasing(times: np.ndarray, step: float) -> np.ndarray:
