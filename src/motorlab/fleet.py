@@ -11,7 +11,8 @@ estimates x_i (standard errors σ_i) on n ≥ 3 units::
 
     m    = median(y)                                    the fleet's centre (breakdown point ½)
     sMAD = 1.4826 · median(|y − m|)                     robust spread (σ for normal data)
-    s    = max(sMAD, f_p)                               never below the healthy spread f_p
+    s    = f_p                      if n < 5            the healthy spread f_p (a MAD of 3–4 points is noise)
+    s    = max(sMAD, f_p)           if n ≥ 5            never below the healthy spread
     z_i  = (y_i − m) / sqrt(s² + (σ_i/x_i)²)            a unit's distance in combined spreads
 
 and unit i is flagged when |z_i| > ``threshold`` (default 4). Iglewicz and Hoaglin cut modified
@@ -20,8 +21,10 @@ wider than one spread, and 3.5 flags about 1 healthy fleet of three in 55 over s
 (simulated with the floor equal to the true spread); 4 flags about 1 in 350, 4.5 about 1 in 1700.
 Why each piece:
 
-- With three units the MAD rests on one difference and may be tiny by chance (two units that
-  happen to agree make the third look far away); the floor f_p is the relative unit-to-unit
+- With three units the MAD rests on one difference: tiny by chance when two units happen to agree,
+  and inflated by the worn unit itself (which then hides behind the spread it creates — a doubled b
+  in three units was found only about half the time with max(sMAD, f_p)). Below five units the
+  spread is therefore the healthy spread alone; from five on the MAD may widen it. f_p is the relative unit-to-unit
   spread a healthy population shows (:data:`HEALTHY_SPREAD`, equal to the spreads the virtual
   rig draws units with, ``motorlab.rig.units.UnitSpread``), so that a healthy draw is not
   mistaken for wear. A session may give its own (``[fleet.spread]``).
@@ -33,9 +36,10 @@ Why each piece:
   s = max(1.4826·MAD(x), f_p·|median(x)|).
 
 What it can and cannot see: a change is detectable when ln(change) is well above the threshold
-times f_p. With the rig's default spread of b (25 %), doubling b (ln 2 = 2.8 f_p) cannot be told
-apart from a healthy unit in a fleet of three; tripling it usually can; with a tighter
-production spread (8 %) doubling stands out by about 8 spreads.
+times f_p. With the rig's default spread of b (10 %, from seed 1's sibling units), a doubled b
+(ln 2 = 6.9 f_p) in a fleet of three is flagged in about 95 % of simulated fleets and no healthy
+fleet of 200 raised a flag (``tests/test_fleet.py``); with a 25 % spread doubling would be only
+2.8 spreads and could not be told from a healthy draw.
 
 The message compares the unit with the median of its siblings (the others), which reads naturally:
 "b is 2.1× the median of its siblings".
@@ -63,7 +67,10 @@ from motorlab.units import format_unit
 #: and winding and vary least (seed 1, "Final Calculated Parameters"). Equal to the defaults of
 #: ``motorlab.rig.units.UnitSpread`` (a test checks it), so that a healthy simulated unit is not
 #: mistaken for wear.
-HEALTHY_SPREAD: dict[str, float] = {"K": 0.03, "R": 0.10, "L": 0.08, "J": 0.05, "b": 0.25, "Tf": 0.25}
+HEALTHY_SPREAD: dict[str, float] = {"K": 0.03, "R": 0.10, "L": 0.08, "J": 0.05, "b": 0.10, "Tf": 0.10}
+
+#: Below this many units the spread is the healthy spread alone (the MAD of fewer points is noise).
+MIN_UNITS_FOR_MAD = 5
 
 #: Default spread floor for parameters not listed in :data:`HEALTHY_SPREAD` [-].
 DEFAULT_HEALTHY_SPREAD = 0.10
@@ -216,7 +223,7 @@ def robust_z(values: np.ndarray, stderrs: np.ndarray, *, relative_floor: float) 
         floor = relative_floor * abs(float(np.median(x)))
     m = float(np.median(y))
     s_mad = MAD_SCALE * float(np.median(np.abs(y - m)))
-    s = max(s_mad, floor)
+    s = floor if x.size < MIN_UNITS_FOR_MAD else max(s_mad, floor)
     denom = np.sqrt(s**2 + sigma_y**2)
     with np.errstate(divide="ignore", invalid="ignore"):
         z = np.where(denom > 0, (y - m) / denom, 0.0)

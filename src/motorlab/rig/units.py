@@ -41,8 +41,10 @@ class UnitSpread:
     R: float = 0.10
     L: float = 0.08
     J: float = 0.05
-    b: float = 0.25
-    Tf: float = 0.25
+    # Seed 1's sibling units give σ(ln b) ≈ 0.12 (AM 20: 0.0022/0.0025/0.0028; AM 3.7 and Matrix alike),
+    # which includes their measurement scatter; the units' own spread is taken a little narrower.
+    b: float = 0.10
+    Tf: float = 0.10
 
     def __post_init__(self) -> None:
         for name in PARAMETER_NAMES:
