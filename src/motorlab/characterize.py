@@ -305,14 +305,14 @@ def _run_spindown(ctx: _UnitContext) -> FitResult:
 
 
 def _run_lcr(ctx: _UnitContext) -> FitResult:
-    from motorlab.analyses.gains import read_tables
+    from motorlab.analyses._common import read_tables
     from motorlab.analyses.lcr import lcr
 
     return lcr(read_tables(ctx.files), frequency=ctx.setting("frequency"))
 
 
 def _run_torque(ctx: _UnitContext) -> FitResult:
-    from motorlab.analyses.gains import read_tables
+    from motorlab.analyses._common import read_tables
     from motorlab.analyses.torque import torque
 
     return torque(read_tables(ctx.files), arm=ctx.session.rig.lever_arm)
@@ -378,38 +378,50 @@ def _run_free_spinup(ctx: _UnitContext) -> FitResult:
 
 
 def _run_amplifier(ctx: _UnitContext) -> FitResult:
-    from motorlab.analyses.gains import amplifier, read_tables
+    from motorlab.analyses._common import read_tables
+    from motorlab.analyses.gains import amplifier
 
     return amplifier(read_tables(ctx.files), nominal=ctx.setting("nominal"))
 
 
 def _run_tachometer(ctx: _UnitContext) -> FitResult:
-    from motorlab.analyses.gains import read_tables, tachometer
+    from motorlab.analyses._common import read_tables
+    from motorlab.analyses.gains import tachometer
 
     return tachometer(read_tables(ctx.files), nominal=ctx.setting("nominal"))
 
 
 def _run_pulse(ctx: _UnitContext) -> FitResult:
-    from motorlab.analyses.gains import read_tables
+    from motorlab.analyses._common import read_tables
     from motorlab.analyses.pulse import pulse
 
     k = ctx.require("K", "the torque is Ka·K·V")
-    gain = ctx.setting("amplifier_gain")
+    gain, gain_se, offset, offset_se, rho = ctx.setting("amplifier_gain"), 0.0, 0.0, 0.0, 0.0
     if gain is None:
         fit = ctx.fits.get("amplifier")
         if fit is None or "Ka" not in fit:
             raise OptionError("needs the amplifier gain: run the amplifier experiment or set amplifier_gain")
-        gain = fit["Ka"].value
-    # The amplifier's zero offset I0 (its fit's intercept) drives the motor too: Tf is biased without it.
-    offset = 0.0
-    amp = ctx.fits.get("amplifier")
-    if ctx.setting("amplifier_gain") is None and amp is not None and "I0" in amp:
-        offset = amp["I0"].value
+        gain, gain_se = fit["Ka"].value, _stderr(fit["Ka"]) or 0.0
+        # The amplifier's zero offset I0 (its fit's intercept) drives the motor too: Tf is biased without it.
+        if "I0" in fit:
+            offset, offset_se = fit["I0"].value, _stderr(fit["I0"]) or 0.0
+            names = fit.correlation_names
+            if fit.correlation is not None and "Ka" in names and "I0" in names:
+                rho = float(fit.correlation[names.index("Ka"), names.index("I0")])
+                rho = rho if math.isfinite(rho) else 0.0
     tach = ctx.setting("tach_gain")
     if tach is None and "tachometer" in ctx.fits and "Kt_tach" in ctx.fits["tachometer"]:
         tach = ctx.fits["tachometer"]["Kt_tach"].value
     return pulse(
-        read_tables(ctx.files), amplifier_gain=gain, amplifier_offset=offset, torque_constant=k.value, tach_gain=tach
+        read_tables(ctx.files),
+        amplifier_gain=gain,
+        amplifier_gain_stderr=gain_se,
+        amplifier_offset=offset,
+        amplifier_offset_stderr=offset_se,
+        gain_offset_correlation=rho,
+        torque_constant=k.value,
+        torque_constant_stderr=_stderr(k) or 0.0,
+        tach_gain=tach,
     )
 
 
