@@ -115,7 +115,10 @@ def reflected_inertia(inertia: float, ratio: float) -> float:
     _positive(ratio=ratio)
     if inertia < 0:
         raise OptionError(f"inertia must not be negative, got {inertia}")
-    return inertia * ratio**2
+    reflected = inertia * ratio * ratio  # not ratio**2: float ** raises OverflowError where * gives inf
+    if not math.isfinite(reflected):
+        raise OptionError(f"a ratio of {ratio:g} reflects an inertia too large to represent ({inertia:g} kg·m² × N²)")
+    return reflected
 
 
 def step_up_ratio(required: float, available: float) -> float:

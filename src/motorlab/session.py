@@ -163,7 +163,7 @@ class FlywheelSpec:
     @property
     def reflected_inertia(self) -> float:
         """Inertia seen at the motor's counted shaft, J_f·N² [kg·m²]."""
-        return self.inertia * self.ratio**2
+        return self.inertia * self.ratio * self.ratio
 
 
 @dataclass(frozen=True)
@@ -587,7 +587,7 @@ def _read_flywheel(table: _Table) -> FlywheelSpec:
         assert inertia is not None
         table.raw("disc")
         table.finish()
-        return FlywheelSpec(inertia, ratio, f"{inertia:.4g} kg·m²")
+        return _checked_flywheel(table, FlywheelSpec(inertia, ratio, f"{inertia:.4g} kg·m²"))
     disc = table.table("disc")
     table.finish()
     if disc is None:
@@ -617,10 +617,22 @@ def _read_flywheel(table: _Table) -> FlywheelSpec:
         density = MATERIAL_DENSITY[material.lower()]
     if density is None:
         raise disc.error(None, "missing key 'material' (or 'density')")
-    # Uniform disc about its axis: J = ½·m·r² = ½·π·r⁴·ρ·h (seed 1, "First Experiment").
-    inertia = 0.5 * math.pi * radius**4 * density * thickness
+    # Uniform disc about its axis: J = ½·m·r² = ½·π·r⁴·ρ·h (seed 1, "First Experiment"). Products, not
+    # powers: float ** raises OverflowError on absurd sizes where * gives inf, which is checked below.
+    r2 = radius * radius
+    inertia = 0.5 * math.pi * r2 * r2 * density * thickness
+    if not math.isfinite(inertia):
+        raise table.error("disc", f"a disc of radius {radius:g} m has an inertia too large to represent")
     what = material or f"ρ = {density:g} kg/m³"
-    return FlywheelSpec(inertia, ratio, f"{what} disc r = {1e3 * radius:g} mm, h = {1e3 * thickness:g} mm")
+    spec = FlywheelSpec(inertia, ratio, f"{what} disc r = {1e3 * radius:g} mm, h = {1e3 * thickness:g} mm")
+    return _checked_flywheel(table, spec)
+
+
+def _checked_flywheel(table: _Table, spec: FlywheelSpec) -> FlywheelSpec:
+    """``spec`` once its reflected inertia J·N² is a finite number (else the ratio is absurd)."""
+    if not math.isfinite(spec.reflected_inertia):
+        raise table.error("ratio", f"a ratio of {spec.ratio:g} reflects an inertia too large to represent")
+    return spec
 
 
 def _read_unit(units: _Table, name: str, folder: Path, rig: RigSpec) -> UnitSpec:

@@ -2,16 +2,20 @@
 
 Each sub-command lives in its own module of this package with ``register(subparsers)``, which adds
 its parser and sets ``func(args) -> int``. Every :class:`~motorlab.errors.MotorlabError` and every
-unreadable path becomes one line on stderr and exit code 2, never a traceback.
+unreadable path becomes one line on stderr and exit code 2, never a traceback; anything else is a bug
+and becomes one line asking for a report, exit code 1.
 """
 
 from __future__ import annotations
 
 import importlib
+import os
 import sys
+import warnings
 from collections.abc import Sequence
+from typing import TextIO
 
-from motorlab.cli.common import EXIT_INPUT, Parser
+from motorlab.cli.common import EXIT_INPUT, EXIT_INTERNAL, Parser
 from motorlab.errors import MotorlabError
 
 #: Sub-command modules, in the order ``motorlab --help`` lists them.
@@ -37,16 +41,41 @@ def build_parser() -> Parser:
     return parser
 
 
+def _one_line_warning(
+    message: Warning | str,
+    category: type[Warning],
+    filename: str,
+    lineno: int,
+    file: TextIO | None = None,
+    line: str | None = None,
+) -> None:
+    """Print a Python warning (numpy's overflow, matplotlib's …) as one line, not two with source code."""
+    text = " ".join(str(message).split())
+    print(f"motorlab: warning: {category.__name__}: {text} ({os.path.basename(filename)}:{lineno})", file=sys.stderr)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the console script; returns the exit code."""
+    """Entry point of the console script; returns the exit code.
+
+    Exit codes: 0 success; 2 input refused (a :class:`~motorlab.errors.MotorlabError`, an unreadable
+    or unwritable path, an argparse error); 3 ``characterize``/``demo`` wrote their results but some
+    analyses failed (each unit's status says why); 1 an internal error (a bug: one line asks for a
+    report; set ``MOTORLAB_TRACEBACK=1`` to see the traceback); 130 interrupted.
+    """
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
-        return int(args.func(args) or 0)
+        with warnings.catch_warnings():  # restores the warning machinery when the command returns
+            warnings.showwarning = _one_line_warning
+            return int(args.func(args) or 0)
     except MotorlabError as exc:
         print(f"motorlab: error: {exc}", file=sys.stderr)
         return EXIT_INPUT
-    except (FileNotFoundError, IsADirectoryError, PermissionError, NotADirectoryError) as exc:
+    except BrokenPipeError:
+        return 0
+    except OSError as exc:
+        # Paths the user gave that cannot be read or written (missing folder, a file where a folder
+        # should be, a full disk): the user's to fix, so one line and exit 2 like any bad input.
         where = getattr(exc, "filename", None) or ""
         reason = exc.strerror or type(exc).__name__
         print(f"motorlab: error: {where}: {reason}" if where else f"motorlab: error: {reason}", file=sys.stderr)
@@ -54,8 +83,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("motorlab: interrupted", file=sys.stderr)
         return 130
-    except BrokenPipeError:
-        return 0
+    except Exception as exc:  # last resort: a bug must not greet the user with a traceback
+        if os.environ.get("MOTORLAB_TRACEBACK"):
+            raise
+        detail = " ".join(str(exc).split()) or "no message"
+        print(
+            f"motorlab: internal error: {type(exc).__name__}: {detail} "
+            "(please report, with the command; MOTORLAB_TRACEBACK=1 shows where)",
+            file=sys.stderr,
+        )
+        return EXIT_INTERNAL
 
 
 if __name__ == "__main__":  # pragma: no cover

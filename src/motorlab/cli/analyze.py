@@ -15,8 +15,7 @@ import os
 from collections.abc import Sequence
 from typing import Any
 
-from motorlab.cli.common import Parser, print_json
-from motorlab.errors import OptionError
+from motorlab.cli.common import Parser, check_figure_path, print_json
 from motorlab.results import Estimate, FitResult
 from motorlab.units import format_unit
 
@@ -66,7 +65,7 @@ def run(args: argparse.Namespace) -> int:
     module = importlib.import_module(args.analysis_module)
     plot_path = args.plot
     if plot_path is not None:
-        _check_plot_path(plot_path)
+        check_figure_path(plot_path)
     groups = [[path] for path in args.files] if args.each else [list(args.files)]
     results = [module.from_cli(args.experiment, paths, args) for paths in groups]
     if plot_path is not None:
@@ -77,17 +76,6 @@ def run(args: argparse.Namespace) -> int:
     else:
         _print_tables(results)
     return 0
-
-
-def _check_plot_path(path: str) -> None:
-    from motorlab.plot import FIGURE_FORMATS
-
-    ext = os.path.splitext(path)[1].lower()
-    if ext not in FIGURE_FORMATS:
-        raise OptionError(f"--plot {path}: use a .png, .pdf or .svg file name")
-    folder = os.path.dirname(os.path.abspath(path))
-    if not os.path.isdir(folder):
-        raise OptionError(f"--plot {path}: the directory {folder} does not exist")
 
 
 def plot_paths(path: str, results: Sequence[FitResult], *, each: bool) -> list[str]:

@@ -1,11 +1,19 @@
-"""``motorlab characterize SESSION.toml [-o DIR]``: run a whole session and write the results and the report."""
+"""``motorlab characterize SESSION.toml [-o DIR]``: run a whole session and write the results and the report.
+
+Exit codes: 0 when every analysis ran; 3 when the results are written but some analyses failed (one
+line on stderr; a failure never stops the other units and each unit's status says why); 2 when the
+session is refused before any analysis runs.
+"""
 
 from __future__ import annotations
 
 import argparse
 import math
+import sys
 from pathlib import Path
 from typing import Any
+
+from motorlab.cli.common import EXIT_PARTIAL, check_output_dir
 
 
 def register(subparsers: Any) -> None:
@@ -16,6 +24,9 @@ def register(subparsers: Any) -> None:
         description="Validate the session description, run every analysis it has files for on every unit, "
         "combine the sources (the most precise wins; disagreements are reported), test the fleet for "
         "outliers, and write results.json, results.csv (one row per unit) and a self-contained report.html.",
+        epilog="Exit codes: 0 every analysis ran; 3 the results are written but some analyses failed (one line on "
+        "stderr; each unit's status says why); 2 the session was refused before any analysis (one line naming "
+        "the file, line and key); 1 an internal error.",
     )
     parser.add_argument("session", metavar="SESSION.toml", help="the session description (see docs/session.md)")
     parser.add_argument(
@@ -33,6 +44,7 @@ def run(args: argparse.Namespace) -> int:
 
     session = load_session(args.session)  # every validation error happens here, before any analysis
     out_dir = Path(args.output) if args.output else session.folder / "results"
+    check_output_dir(out_dir)
     result = run_with_progress(session, quiet=args.quiet, figures=not args.no_report)
     paths = write_outputs(result, out_dir, report=not args.no_report)
     if not args.quiet:
@@ -40,20 +52,43 @@ def run(args: argparse.Namespace) -> int:
     for kind in ("json", "csv", "html"):
         if kind in paths:
             print(f"wrote {paths[kind]}")
-    return 0
+    return report_failures(result, paths)
+
+
+def report_failures(result: Any, paths: dict[str, Any]) -> int:
+    """One line on stderr when some analyses failed; the exit code (0, or 3 = written with failures).
+
+    A failed analysis does not stop the other units (each unit's row in results.csv says why), but
+    a script running ``motorlab characterize`` must be able to tell that the table has holes.
+    """
+    failed = [(unit.name, experiment) for unit in result.units.values() for experiment in unit.failures]
+    if not failed:
+        return 0
+    where = paths.get("csv") or paths.get("json") or "the results"
+    shown = ", ".join(f"{unit}: {experiment}" for unit, experiment in failed[:4])
+    if len(failed) > 4:
+        shown += ", …"
+    print(
+        f"motorlab: {len(failed)} analys{'is' if len(failed) == 1 else 'es'} failed ({shown}); "
+        f"the other results are written and each unit's status in {where} says why",
+        file=sys.stderr,
+    )
+    return EXIT_PARTIAL
 
 
 def run_with_progress(session: Any, *, quiet: bool = False, figures: bool = True) -> Any:
     """:func:`motorlab.characterize.characterize` with a rich progress bar on stderr (unless quiet)."""
+    from rich.console import Console
+
     from motorlab.characterize import characterize
 
-    if quiet:
+    console = Console(stderr=True)
+    if quiet or not console.is_terminal:
+        # A progress bar is for people: redirected, it would only leave a blank line in the log.
         return characterize(session, figures=figures)
-    from rich.console import Console
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
     total = sum(len(u.experiments) for u in session.units.values())
-    console = Console(stderr=True)
     with Progress(
         TextColumn("[bold]{task.description}"),
         BarColumn(),

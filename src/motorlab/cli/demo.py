@@ -14,7 +14,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from motorlab.cli.common import check_option, positive_int, quantity
+from motorlab.cli.common import check_option, check_output_dir, positive_int, quantity
 
 
 def register(subparsers: Any) -> None:
@@ -56,10 +56,11 @@ def run(args: argparse.Namespace) -> int:
     from rich.console import Console
 
     from motorlab.characterize import write_outputs
-    from motorlab.cli.characterize import print_table, run_with_progress
+    from motorlab.cli.characterize import print_table, report_failures, run_with_progress
     from motorlab.session import load_session, write_simulated_session
 
     check_option(args.units <= 26, f"--units must be at most 26, got {args.units}")
+    check_output_dir(args.output)
     console = Console(stderr=True)
     out = Path(args.output)
     started = time.perf_counter()
@@ -88,4 +89,4 @@ def run(args: argparse.Namespace) -> int:
         if key in paths:
             print(f"wrote {paths[key]}")
     console.print(f"[dim]demo took {time.perf_counter() - started:.1f} s[/]")
-    return 0
+    return report_failures(result, paths)

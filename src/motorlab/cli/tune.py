@@ -6,7 +6,7 @@ import argparse
 import math
 from typing import Any
 
-from motorlab.cli.common import check_option, print_json, quantity
+from motorlab.cli.common import check_figure_path, check_option, print_json, quantity
 from motorlab.control.design import Feedforward
 from motorlab.control.emit import LANGUAGES, emit_snippet
 from motorlab.control.plant import UNIT_NAMES, MechanismUnits, Plant, load_plant
@@ -93,6 +93,8 @@ def plant_from_args(args: argparse.Namespace, units: MechanismUnits) -> Plant:
 
 def run(args: argparse.Namespace) -> int:
     """Run ``motorlab tune``."""
+    if args.plot:
+        check_figure_path(args.plot)  # before the design and simulations, not after
     units = MechanismUnits.from_options(args.units, cpr=args.cpr, wheel_radius=args.wheel_radius)
     if args.overshoot < 0 or args.overshoot >= 100:
         raise OptionError(f"--overshoot must be between 0 and 100 %, got {args.overshoot}")

@@ -68,6 +68,13 @@ class Feedforward:
             raise OptionError(f"kV must be positive, got {self.kV}")
         if not self.kA > 0:
             raise OptionError(f"kA must be positive, got {self.kA}")
+        # Finite, with a time constant kA/kV that is a number: kV = 1e308 with kA = 1e-308 passes the
+        # signs but gives τ = 0 and infinite matrix entries in the design.
+        tau = self.kA / self.kV
+        if not (math.isfinite(self.kV) and math.isfinite(self.kA) and math.isfinite(self.kS)):
+            raise OptionError(f"kS, kV, kA must be finite, got {self.kS}, {self.kV}, {self.kA}")
+        if not (tau > 0 and math.isfinite(1.0 / tau) and math.isfinite(1.0 / self.kA)):
+            raise OptionError(f"kA/kV = {tau:g} s is not a motor's time constant (kV = {self.kV:g}, kA = {self.kA:g})")
         return self
 
     def voltage(self, velocity: Any, acceleration: Any = 0.0) -> Any:
@@ -230,8 +237,9 @@ def lqr_gain(
     K = (B_dᵀ·S·B_d + R)⁻¹·B_dᵀ·S·A_d with S the solution of the discrete algebraic Riccati
     equation (scipy's ``solve_discrete_are``, the same equation WPILib solves with Drake's solver).
     """
-    q = np.array([0.0 if math.isinf(t) else 1.0 / t**2 for t in tolerances])
-    r = np.array([[1.0 / effort**2]])
+    # t·t, not t**2: float ** raises OverflowError for a huge tolerance, where t·t gives inf and weight 0.
+    q = np.array([0.0 if math.isinf(t) else 1.0 / (t * t) for t in tolerances])
+    r = np.array([[1.0 / (effort * effort)]])
     ad, bd = discretize(a, b, period)
     s = scipy.linalg.solve_discrete_are(ad, bd, np.diag(q), r)
     k = np.linalg.solve(bd.T @ s @ bd + r, bd.T @ s @ ad)
@@ -251,6 +259,8 @@ def _check_design(period: float, delay: float, **tolerances: float) -> None:
     for name, value in tolerances.items():
         if not (value > 0):  # also rejects NaN
             raise OptionError(f"{name} must be positive (or inf), got {value}")
+        if value * value == 0.0 or not math.isfinite(1.0 / (value * value)):  # the weight 1/tolerance² is inf
+            raise OptionError(f"{name} = {value:g} is too small: its LQR weight 1/{name}² is not a finite number")
 
 
 def design_velocity_lqr(

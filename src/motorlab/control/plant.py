@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from motorlab.control.design import Feedforward
-from motorlab.errors import LogFormatError, OptionError
+from motorlab.errors import InputError, LogFormatError, OptionError
 from motorlab.model import PARAMETER_NAMES, MotorParams, feedforward_from_params
 
 UNIT_NAMES = ("rad", "rotations", "degrees", "ticks", "m")
@@ -164,7 +164,13 @@ def load_plant(paths: list[str | PathLike[str]]) -> Plant:
     names = (*PARAMETER_NAMES, "kS", "kV", "kA")
     for path in paths:
         try:
-            doc = json.loads(Path(path).read_text(encoding="utf-8"))
+            raw = Path(path).read_bytes()
+        except OSError as exc:  # missing, a directory, unreadable: the user's file, named in one line
+            raise LogFormatError(f"cannot read the file ({exc.strerror})", path=path) from None
+        if not raw.strip():
+            raise LogFormatError("the file is empty (expected motorlab analyze --json output)", path=path)
+        try:
+            doc = json.loads(raw.decode("utf-8-sig"))
         except json.JSONDecodeError as exc:
             raise LogFormatError(f"not valid JSON ({exc.msg})", path=path, line=exc.lineno) from None
         except UnicodeDecodeError:
@@ -190,11 +196,16 @@ def load_plant(paths: list[str | PathLike[str]]) -> Plant:
             )
     source = ", ".join(str(p) for p in paths)
     params: MotorParams | None = None
-    if all(n in merged for n in ("K", "R", "J")):
-        params = MotorParams.from_dict(merged)
-    if "kV" in merged and "kA" in merged:
-        ff = Feedforward(max(merged.get("kS", 0.0), 0.0), merged["kV"], merged["kA"])
-        return Plant(ff, params, source)
+    # The values come from the files: an impossible one (R < 0, kA = 0) is a problem of the files,
+    # so the error names them (the last one, whose values won the merge, when there are several).
+    try:
+        if all(n in merged for n in ("K", "R", "J")):
+            params = MotorParams.from_dict(merged)
+        if "kV" in merged and "kA" in merged:
+            ff = Feedforward(max(merged.get("kS", 0.0), 0.0), merged["kV"], merged["kA"]).check_plant()
+            return Plant(ff, params, source)
+    except InputError as exc:
+        raise LogFormatError(exc.message, path=paths[-1] if len(paths) == 1 else source) from None
     if params is not None:
         return Plant.from_params(params, source=source)
     missing = "kV, kA" if ("kV" in merged or "kA" in merged) else "K, R, J (or kV, kA)"

@@ -30,6 +30,9 @@ from motorlab.model import MotorParams, feedforward_from_params
 #: Settling band: fraction of the step size (plus one encoder count when the encoder is quantised).
 SETTLING_BAND = 0.02
 
+#: Most controller periods one closed-loop run simulates (20 s at 10 µs; a few seconds of computing).
+MAX_PERIODS = 2_000_000
+
 Reference = Callable[[float], tuple[float, float, float]]
 
 
@@ -391,8 +394,15 @@ def simulate_closed_loop(
         raise OptionError("need period > 0, delay ≥ 0, duration > 0 and substeps ≥ 1")
     if cpr is not None and not cpr > 0:
         raise OptionError(f"encoder counts per revolution must be positive, got {cpr}")
-    sim = _plant_for(plant)
     n_periods = max(math.ceil(duration / period - 1e-9), 1)
+    if n_periods > MAX_PERIODS:
+        # Each period is a step of the loop below: a nanosecond period over seconds would take hours
+        # and gigabytes before failing, so refuse it up front.
+        raise OptionError(
+            f"too long to simulate: a {duration:.3g} s run at a controller period of {period:.3g} s is "
+            f"{n_periods:.3g} periods (at most {MAX_PERIODS:.0e})"
+        )
+    sim = _plant_for(plant)
     n = n_periods * substeps
     h = period / substeps
     time = np.arange(n + 1) * h

@@ -53,6 +53,8 @@ def read_bytes(path: PathArg) -> tuple[str, bytes]:
     name = os.fspath(path)
     if not isinstance(name, str):  # bytes paths: decode for messages
         name = os.fsdecode(name)
+    if not name.strip():
+        raise LogFormatError("the file name is empty")
     try:
         with open(name, "rb") as handle:
             return name, handle.read()
