@@ -14,12 +14,6 @@ from motorlab.units import STANDARD_GRAVITY
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 
 
-@pytest.fixture(autouse=True)
-def only_analyze(monkeypatch):
-    """Register only ``analyze``: these tests must not depend on the other sub-commands' modules."""
-    monkeypatch.setattr(cli, "COMMANDS", ("analyze",))
-
-
 def run(capsys, *argv: str) -> tuple[int, str, str]:
     code = cli.main(["analyze", *argv])
     out, err = capsys.readouterr()
@@ -157,20 +151,3 @@ def test_bad_options_are_one_line_and_exit_2(tmp_path, capsys):
     code, _, err = run(capsys, "torque", str(path), "--plot", str(tmp_path / "fig.bmp"))
     assert code == 2
     assert len(err.strip().splitlines()) == 1
-
-
-def test_missing_analysis_module_is_skipped_but_broken_one_is_not(monkeypatch, capsys, tmp_path):
-    from motorlab import analyses
-
-    monkeypatch.setitem(analyses.EXPERIMENTS, "ghost", "motorlab.analyses.ghost_not_written_yet")
-    parser = cli.build_parser()
-    assert parser.parse_args(["analyze", "lcr", "x.csv"]).experiment == "lcr"
-    with pytest.raises(SystemExit):
-        parser.parse_args(["analyze", "ghost", "x.csv"])
-    capsys.readouterr()
-    # A module that exists but imports something missing is a real error, not "still being written".
-    (tmp_path / "broken_analysis_for_test.py").write_text("import no_such_dependency_for_motorlab_test\n")
-    monkeypatch.syspath_prepend(str(tmp_path))
-    monkeypatch.setitem(analyses.EXPERIMENTS, "ghost", "broken_analysis_for_test")
-    with pytest.raises(ModuleNotFoundError, match="no_such_dependency"):
-        cli.build_parser()

@@ -57,8 +57,6 @@ def test_load_plant_errors(tmp_path):
 
 
 def _run(monkeypatch, capsys, *argv):
-    # Only this command is registered, so the test does not depend on other sub-commands.
-    monkeypatch.setattr(motorlab.cli, "COMMANDS", ("tune",))
     code = motorlab.cli.main(["tune", *argv])
     out, err = capsys.readouterr()
     return code, out, err

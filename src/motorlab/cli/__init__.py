@@ -31,13 +31,7 @@ def build_parser() -> Parser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=Parser)
     sub.required = True
     for name in COMMANDS:
-        try:
-            module = importlib.import_module(f"motorlab.cli.{name}")
-        except ModuleNotFoundError as exc:  # TODO(lead): remove once every command module exists
-            if exc.name == f"motorlab.cli.{name}":
-                continue
-            raise
-        module.register(sub)
+        importlib.import_module(f"motorlab.cli.{name}").register(sub)
     return parser
 
 

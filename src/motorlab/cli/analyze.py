@@ -35,13 +35,7 @@ def register(subparsers: Any) -> None:
     sub = parser.add_subparsers(dest="experiment", metavar="EXPERIMENT", parser_class=Parser)
     sub.required = True
     for name, module_name in EXPERIMENTS.items():
-        try:
-            module = importlib.import_module(module_name)
-        except ModuleNotFoundError as exc:
-            # Tolerated only while the module itself is still being written (not a broken import inside it).
-            if exc.name == module_name:
-                continue
-            raise
+        module = importlib.import_module(module_name)
         summary = getattr(module, "SUMMARIES", {}).get(name) or _summary(module)
         sp = sub.add_parser(name, help=summary, description=summary)
         sp.add_argument("files", nargs="+", metavar="FILE", help="measurement file(s)")
