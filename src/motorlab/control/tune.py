@@ -329,6 +329,7 @@ def tune_summary(
     target: str = "volts",
     units: str = "rad",
     period: float = 0.02,
+    velocity_delay: float | None = None,
     plot: bool = True,
 ) -> dict[str, Any]:
     """Velocity and position gains (SysId LQR defaults) for a motor, with a step-response figure.
@@ -348,6 +349,9 @@ def tune_summary(
         Length unit of the reported gains (``rad``, ``rotations``, ``degrees``, ``ticks``).
     period
         Controller period [s].
+    velocity_delay
+        Measurement delay compensated in the velocity loop [s]; default ``period/2``, the lag of a
+        velocity measured as the count difference over one period (as the simulation measures it).
     plot
         Also draw the figure.
 
@@ -361,15 +365,16 @@ def tune_summary(
     plant = params if isinstance(params, Plant) else Plant.from_params(params)
     mech = MechanismUnits.from_options(units, cpr=cpr)
     results = {}
+    delays = {"velocity": period / 2 if velocity_delay is None else velocity_delay, "position": 0.0}
     for loop in LOOPS:
         tgt = "ftc-power" if (loop == "position" and target == "ftc-pidf") else target
-        results[loop] = tune(plant, loop, target=tgt, units=mech, period=period, voltage=voltage)
+        results[loop] = tune(plant, loop, target=tgt, units=mech, period=period, voltage=voltage, delay=delays[loop])
     lines = []
     for loop, res in results.items():
         g = res.target.gains
         resp = res.step.metrics
         lines.append(
-            f"{loop} loop ({res.target.target}, LQR qp=1 qv=1.5 r=7, T={period:g} s): "
+            f"{loop} loop ({res.target.target}, LQR qp=1 qv=1.5 r=7, T={period:g} s, delay {delays[loop] * 1e3:g} ms): "
             + ", ".join(f"{k} = {v:.4g} {res.target.units.get(k, '')}" for k, v in g.items())
         )
         lines.append(
