@@ -155,3 +155,56 @@ def test_cli_on_sysid_json(real_dir):
     assert result["R"].value == pytest.approx(0.1)
     assert not result["K"].determined
     assert result.to_dict()["parameters"]["kV"]["unit"] == "V*s/rad"
+
+
+# --------------------------------------------------------------------------------------------------
+# the virtual dynamometer's own SysId files
+# --------------------------------------------------------------------------------------------------
+
+TARGETS = {"kS": 0.02, "kV": 0.005, "kA": 0.02}
+
+
+def _rig_sysid(tmp_path, motor: str, seed: int, **settings):
+    from motorlab.identify import read_runs
+    from motorlab.rig import VirtualRig
+    from motorlab.rig.flywheel import Flywheel
+
+    ratio = settings.pop("ratio", None)
+    rig = VirtualRig(motor, unit_seed=seed % 5, noise_seed=seed,
+                     flywheel=None if ratio is None else Flywheel(ratio=ratio))
+    run = rig.sysid(tmp_path / "sysid.json", **settings)
+    return feedforward(read_runs([str(run.paths[0])], cpr=None)), run.truth["expected"]
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_rig_sysid_ftc_like_meets_accuracy_targets(tmp_path, seed):
+    """FTC-like rig files: 560 counts/rev at the output, rows every 10 ms, 0.02 V on the logged voltage.
+
+    The NeveRest 20 with the steel disc straight on its output shaft (τm = kA/kV ≈ 0.18 s: kA is
+    observable at 10 ms), 0.5 V/s ramps for 14 s and 7 V steps for 2 s. The rig's controller also
+    repeats 20 ms status frames (the angle lags by up to a frame) and jitters the rows by 0.3 ms.
+    With 1 V/s ramps the frames' unknown phase (±5 ms of lag) leaves kS within ≈ 3 %.
+    """
+    result, truth = _rig_sysid(tmp_path, "neverest20", seed, ratio=1.0, ramp_rate=0.5,
+                               quasistatic_duration=14.0, dynamic_duration=2.0)
+    assert result.details["status_frames"]["period_s"] == pytest.approx(0.02, rel=0.15)
+    for name, tolerance in TARGETS.items():
+        est = result[name]
+        assert est.determined, name
+        assert abs(est.value / truth[name] - 1) < tolerance, (name, est, truth[name])
+        assert abs(est.value - truth[name]) < 3.5 * est.stderr, (name, est, truth[name])
+    assert not result.warnings
+
+
+def test_rig_sysid_default_flywheel_file(tmp_path):
+    """``motorlab simulate sysid`` as it comes: flywheel through the 25:1 gearbox, τm ≈ 20 s.
+
+    kV = K + R·b/K is far above K here (b·N² of the flywheel bearings), as it should be.
+    """
+    result, truth = _rig_sysid(tmp_path, "neverest40", 1)
+    assert truth["kV"] > 1.2 * truth["K"]
+    for name, tolerance in TARGETS.items():
+        est = result[name]
+        assert abs(est.value / truth[name] - 1) < tolerance, (name, est, truth[name])
+        assert abs(est.value - truth[name]) < 3.5 * est.stderr, (name, est, truth[name])
+    assert result.details["residual_rms"]["position"] < 0.05

@@ -62,19 +62,36 @@ def test_round_trip_with_current(seed):
     assert result.details["feedforward"]["kV"] == pytest.approx(feedforward_from_params(MOTOR)["kV"], rel=0.01)
 
 
-def test_coverage_of_95_percent_intervals():
-    """Over 50 seeds the 95 % interval holds the truth 90–98 % of the time for every parameter."""
-    inside: dict[str, list[bool]] = {}
-    for seed in range(50):
-        result = identify(random_steps(1000 + seed, duration=2.0, dt=1e-3))
-        for name, truth in MOTOR.to_dict().items():
+RIG_TOLERANCE = {"K": 0.002, "R": 0.005, "L": 0.03, "J": 0.005, "b": 0.05, "Tf": 0.05}
+
+
+def test_rig_transient_files_round_trip_with_honest_intervals(tmp_path):
+    """Identify reads the virtual dynamometer's own transient files (1 kHz, V ± 20 mV, I ± 5 mA, 1120 counts).
+
+    Five units, twenty noise seeds each, 1.2 s step logs: every parameter within a fraction of a
+    percent (a few percent for L, b, Tf) and its 95 % interval holding the truth 90–98 % of the time
+    (100 seeds: with 50 the binomial scatter alone leaves that window one time in ten). The
+    logged voltage's noise enters the simulated current (errors in the input variable) and the
+    quantised angle's errors repeat at rest or at a whole number of counts per sample: both are
+    modelled (docs/identify.md), which the previous white-residual intervals were not.
+    """
+    from motorlab.io import read_any
+    from motorlab.rig import VirtualRig
+
+    inside: dict[str, list[bool]] = {name: [] for name in RIG_TOLERANCE}
+    for seed in range(100):
+        rig = VirtualRig("neverest40", unit_seed=seed % 5, noise_seed=seed)
+        run = rig.transient(tmp_path / "transient.csv", duration=1.2)
+        result = identify(read_any(run.paths[0], cpr=rig.motor.cpr), cpr=rig.motor.cpr)
+        truth = run.truth["expected"]
+        for name, tolerance in RIG_TOLERANCE.items():
             est = result[name]
-            if est.determined:
-                lo, hi = est.interval(1.96)
-                inside.setdefault(name, []).append(lo <= truth <= hi)
-    for name, hits in inside.items():
-        assert len(hits) >= 45, name
-        assert 0.90 <= np.mean(hits) <= 0.98, (name, np.mean(hits))
+            assert est.determined, (seed, name)
+            assert abs(est.value / truth[name] - 1) < tolerance, (seed, name, est, truth[name])
+            lo, hi = est.interval(1.96)
+            inside[name].append(lo <= truth[name] <= hi)
+    rates = {name: float(np.mean(hits)) for name, hits in inside.items()}
+    assert all(0.90 <= rate <= 0.98 for rate in rates.values()), rates
 
 
 def test_inductance_not_determined_when_the_current_rise_is_invisible():

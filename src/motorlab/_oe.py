@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy import linalg, signal
@@ -368,6 +368,13 @@ class Log:
     The simulation runs on a uniform grid of step ``dt`` starting at the first sample; the voltage
     of each grid step is the last logged voltage at or before it (zero-order hold). When the samples
     are themselves uniform the grid is the samples.
+
+    ``reading`` numbers the runs of identical consecutive angle readings (a shaft at rest, or turning
+    less than one count between samples) and ``position_weight`` is 1/√m for each of the m samples
+    of a run: the m readings of one count carry the information of one reading (they share one
+    quantisation error), not of m independent ones. Without it a stretch at rest, with its single
+    quantisation error repeated hundreds of times, outweighs the motion and biases friction
+    (docs/identify.md, "Quantised angle").
     """
 
     time: np.ndarray  # sample times from 0 [s]
@@ -380,6 +387,15 @@ class Log:
     resolution: float  # position quantum [rad] (0 if unknown)
     moving_at_start: bool
     source: str = ""
+    reading: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))  # run index per sample
+    position_weight: np.ndarray = field(default_factory=lambda: np.ones(0))  # 1/√(run length) per sample
+    stale_variance: np.ndarray | None = None  # variance of stale status frames per sample [rad²]
+
+    def position_factor(self, sigma_position: float) -> np.ndarray:
+        """Weight of each angle residual: 1/√(run length) over the angle noise of the sample [1/rad]."""
+        if self.stale_variance is None:
+            return self.position_weight / sigma_position
+        return self.position_weight / np.sqrt(sigma_position**2 + self.stale_variance)
 
     @property
     def n_grid(self) -> int:
@@ -406,21 +422,66 @@ def prepare_log(
     steps = np.diff(t)
     dt = float(np.median(steps))
     uniform = bool(np.all(np.abs(steps - dt) <= 1e-3 * dt))
+    if not uniform and np.all(np.abs(steps - dt) <= 0.2 * dt):
+        # rows jittered about a fixed period: the mean step, or the grid would drift from the rows
+        # (the median of jittered steps is off by ~σ/√n, a whole step after a few thousand rows)
+        dt = float(t[-1]) / steps.size
     if uniform:
         grid_v = np.asarray(voltage[:-1], dtype=float)
         grid_theta = np.asarray(position[:-1], dtype=float)
     else:
         n_grid = int(np.ceil(t[-1] / dt - 1e-9))
         tg = dt * np.arange(n_grid)
-        idx = np.clip(np.searchsorted(t, tg + 1e-9 * dt, side="right") - 1, 0, t.size - 1)
+        # the row whose voltage holds over most of the step: the last one at or before its middle
+        # (rows jittered by ±ε around the grid would otherwise lag a whole step half of the time)
+        idx = np.clip(np.searchsorted(t, tg + 0.5 * dt, side="right") - 1, 0, t.size - 1)
         grid_v = np.asarray(voltage, dtype=float)[idx]
         grid_theta = np.asarray(position, dtype=float)[idx]
     # Moving at the first sample: the angle changes by more than two quanta within the first samples.
-    head = position[: max(3, min(10, position.size // 20))]
+    # Three samples: a step applied right after the first row must not count as motion at the start.
+    head = position[:3]
     moving = bool(np.ptp(head) > 2.0 * max(resolution, 1e-12)) if head.size > 1 else False
     cur = None if current is None else np.asarray(current, dtype=float)
     pos = np.asarray(position, dtype=float)
-    return Log(t, dt, grid_v, grid_theta, pos, cur, uniform, resolution, moving, source)
+    reading, weight = reading_runs(pos)
+    return Log(t, dt, grid_v, grid_theta, pos, cur, uniform, resolution, moving, source, reading, weight)
+
+
+def reading_runs(position: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Run index of each sample among runs of identical consecutive readings, and weights 1/√(run length)."""
+    position = np.asarray(position, dtype=float)
+    if position.size == 0:
+        return np.zeros(0, dtype=np.int64), np.ones(0)
+    reading = np.concatenate([[0], np.cumsum(position[1:] != position[:-1])]).astype(np.int64)
+    length = np.bincount(reading)
+    return reading, 1.0 / np.sqrt(length[reading])
+
+
+def stale_frame_period(log: Log) -> float:
+    """Refresh period of the angle when the log repeats stale status frames [s], or 0.
+
+    A motor controller sends its position every few milliseconds and the logging loop records the
+    latest value it has, so at speed some rows repeat the previous angle although the shaft turned
+    several counts. (Without stale frames a shaft turning at least one count per row never repeats a
+    reading.) The fraction z of repeated rows where the shaft turns ≥ 1.5 counts per row gives
+    the period P = dt/(1 − z) (every other row repeated: P = 2·dt). The logged angle is then
+    θ(t − d) with d spread over [0, P): a lag of mean P/2. The first row showing a new reading
+    places its frame within one row period (a scatter of (ω·dt)²/12 per reading), and the frames'
+    phase, one per run, shifts the whole run's lag by up to ±dt/2 (see
+    :func:`noise_propagation_covariance`).
+    """
+    q = log.resolution
+    if q <= 0 or log.position.size < 30:
+        return 0.0
+    counts = np.abs(np.diff(log.position)) / q
+    mean = np.convolve(counts, np.ones(7) / 7.0, mode="same")
+    fast = mean >= 1.5
+    if int(np.sum(fast)) < 20:
+        return 0.0
+    repeated = float(np.mean(counts[fast] < 0.5))
+    if repeated < 0.2:
+        return 0.0
+    return log.dt / max(1.0 - repeated, 0.05)
 
 
 def initial_speed_guess(log: Log) -> float:
@@ -437,11 +498,13 @@ class Fit:
     names: list[str]
     covariance: np.ndarray  # of the model parameters (HAC)
     covariance_white: np.ndarray  # plain s²·(JᵀJ)⁻¹, for comparison
+    covariance_residuals: np.ndarray  # Newey–West from the residuals, for comparison
     null: np.ndarray  # bool per model parameter: loads on a direction without information
     residual_rms: dict[str, float]
     simulations: list[dict[str, np.ndarray]]
     bandwidth: int
     noise_model: str
+    bias_correction: np.ndarray  # subtracted from the model parameters (errors in the input variable)
     nfev: int
     success: bool
     message: str
@@ -452,6 +515,9 @@ class OEModel:
 
     names: tuple[str, ...] = ()
     uses_current: bool = False
+    #: Lag τ [s] of the logged angle behind the simulated one (stale status frames, see
+    #: :func:`stale_frame_period`): the angle compared is θ(t) − τ·ω(t).
+    lag: float = 0.0
 
     def plant(self, p: np.ndarray) -> Plant:  # pragma: no cover - abstract
         raise NotImplementedError
@@ -471,6 +537,8 @@ def _simulate_log(model: OEModel, p: np.ndarray, log: Log, speed0: float, offset
         "position": log.at_samples(theta) + offset,
         "speed": log.at_samples(states[:, plant.w]),
     }
+    if model.lag:
+        out["position"] = out["position"] - model.lag * out["speed"]
     if model.uses_current:
         out["current"] = log.at_samples(states[:, 0])
     return out
@@ -485,6 +553,7 @@ def fit_output_error(
     upper: np.ndarray,
     scale: np.ndarray,
     sigma: dict[str, float],
+    current_noise: float = 0.0,
     max_nfev: int = 60,
 ) -> Fit:
     """Output-error least squares of measured angle (and current) against the simulated ones.
@@ -499,7 +568,11 @@ def fit_output_error(
     p0, lower, upper, scale
         Start, bounds and typical magnitude of the model parameters (SI).
     sigma
-        Noise level used to weight each signal: ``{"position": [rad], "current": [A]}``.
+        Noise level used to weight each signal: ``{"position": [rad], "current": [A]}`` (for the
+        current, the measurement noise and the voltage noise the simulation carries, see
+        :func:`input_noise_gain`).
+    current_noise
+        Measurement noise of the current alone [A], for the propagated covariance.
 
     Notes
     -----
@@ -525,13 +598,15 @@ def fit_output_error(
     def speed_of(k: int, speeds: np.ndarray) -> float:
         return float(speeds[speed_logs.index(k)]) if k in speed_logs else 0.0
 
+    factors = [log.position_factor(sigma["position"]) for log in logs]
+
     def residual_parts(p: np.ndarray, offsets: np.ndarray, speeds: np.ndarray) -> tuple[np.ndarray, list]:
         parts = []
         sims = []
         for k, log in enumerate(logs):
             sim = _simulate_log(model, p, log, speed_of(k, speeds), float(offsets[k]))
             sims.append(sim)
-            parts.append((sim["position"] - log.position) / sigma["position"])
+            parts.append((sim["position"] - log.position) * factors[k])
             if model.uses_current:
                 assert log.current is not None
                 parts.append((sim["current"] - log.current) / sigma["current"])
@@ -567,7 +642,7 @@ def fit_output_error(
         for k, log in enumerate(logs):
             col = np.zeros(r0.size)
             m = log.time.size
-            col[start : start + m] = x_scale[n_model + k] / sigma["position"]
+            col[start : start + m] = x_scale[n_model + k] * factors[k]
             cols[:, n_model + k] = col
             start += m * len(signals)
         return cols
@@ -591,23 +666,36 @@ def fit_output_error(
         m = log.time.size
         blocks.append((start, m))
         start += m * len(signals)
-    cov_hac, cov_white, null, bandwidth = hac_covariance(jx, res, blocks, len(signals), sol.x * x_scale)
+    values = sol.x * x_scale
+    bias = np.zeros(values.size)
+    if model.uses_current:
+        # The logged voltage's noise reaches the simulated current (errors in the input variable) and
+        # biases L and R: remove the first-order bias (see input_noise_bias).
+        bias = input_noise_bias(jx, model, p, logs, sigma["current"])
+        if np.all(np.isfinite(bias)) and np.all(values - bias >= lower_z * x_scale) and np.any(bias):
+            values = values - bias
+            p, offsets, speeds = unpack(values / x_scale)
+            res, sims = residual_parts(p, offsets, speeds)
+        else:
+            bias = np.zeros(values.size)
+    cov_hac, cov_white, null, bandwidth = hac_covariance(jx, res, blocks, len(signals), values)
     cov_full = cov_hac
     noise_model = "Newey–West"
-    if not model.uses_current:
-        # Angle only: the residual is dominated by the logged voltage's noise integrated by the plant
-        # (a random walk no stationary residual model captures) plus counting noise. Propagate both.
-        cov_prop, predicted = noise_propagation_covariance(jx, model, p, logs, sims, blocks, sigma["position"])
-        actual = float(np.mean(res**2))
-        if actual <= 2.0 * predicted:
-            cov_full = cov_prop
-            noise_model = "voltage noise propagated + counting noise"
-        else:
-            # the residuals are larger than the measured noise explains: the model misses something
-            # real (a load, a delay, stale samples), and only the residuals themselves say how much
-            noise_model = (
-                f"Newey–West (residuals {math.sqrt(actual / predicted):.3g}× larger than the measured noise explains)"
-            )
+    # The residual is made of the logged voltage's noise run through the plant (integrated twice into
+    # the angle: a random walk no stationary residual model captures), counting noise and current
+    # noise. Propagate them; fall back on the residuals when they are larger than this noise explains.
+    cov_prop, predicted = noise_propagation_covariance(jx, model, p, logs, sims, blocks, sigma,
+                                                       current_noise=current_noise)
+    actual = float(np.mean(res**2))
+    if actual <= 2.0 * predicted:
+        cov_full = cov_prop
+        noise_model = "measured noise propagated (voltage, counting" + (", current)" if model.uses_current else ")")
+    else:
+        # the residuals are larger than the measured noise explains: the model misses something
+        # real (a load, a delay, stale samples), and only the residuals themselves say how much
+        noise_model = (
+            f"Newey–West (residuals {math.sqrt(actual / predicted):.3g}× larger than the measured noise explains)"
+        )
     rms: dict[str, float] = {}
     for name in signals:
         err = np.concatenate(
@@ -615,15 +703,17 @@ def fit_output_error(
         )  # type: ignore[operator]
         rms[name] = float(np.sqrt(np.mean(err**2)))
     return Fit(
-        values=sol.x * x_scale,
+        values=values,
         names=names,
         covariance=cov_full,
         covariance_white=cov_white,
+        covariance_residuals=cov_hac,
         null=null,
         residual_rms=rms,
         simulations=sims,
         bandwidth=bandwidth,
         noise_model=noise_model,
+        bias_correction=bias[:n_model],
         nfev=int(sol.nfev),
         success=bool(sol.success),
         message=str(sol.message),
@@ -780,6 +870,74 @@ def voltage_noise(log: Log) -> float:
     return float(1.4826 * np.median(np.abs(d2 - np.median(d2))) / np.sqrt(6.0))
 
 
+def _filters(d: _Discrete) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Rational filters (in z⁻¹) from a held voltage perturbation δV_k to the states and angle increments.
+
+    Returns (numerators of each state (n × 3), numerator of the angle increment hx·x_k + hv·δV_k (3,),
+    common denominator (3,)); x_k depends on δV_j for j < k only (the leading coefficient is zero).
+    """
+    if d.ad.shape[0] == 1:
+        den = np.array([1.0, -d.ad[0, 0], 0.0])
+        states = np.array([[0.0, d.bv[0], 0.0]])
+    else:
+        (a11, a12), (a21, a22) = d.ad
+        b0, b1 = d.bv
+        den = np.array([1.0, -(a11 + a22), a11 * a22 - a12 * a21])
+        # X = (zI − Ad)⁻¹·bv·E: X0 = [z⁻¹b0 + z⁻²(a12·b1 − a22·b0)]/det, X1 = [z⁻¹b1 + z⁻²(a21·b0 − a11·b1)]/det
+        states = np.array([[0.0, b0, a12 * b1 - a22 * b0], [0.0, b1, a21 * b0 - a11 * b1]])
+    increment = d.hx @ states + d.hv * den
+    return states, increment, den
+
+
+def _adjoint(num: np.ndarray, den: np.ndarray, u: np.ndarray) -> np.ndarray:
+    """a_k = Σ_{m≥0} h(m)·u_{k+m} for the impulse response h of num/den (filtering backwards in time)."""
+    return signal.lfilter(num, den, u[::-1], axis=0)[::-1]
+
+
+def _sample_to_grid(log: Log, values: np.ndarray) -> np.ndarray:
+    """Spread per-sample rows onto the N_grid + 1 grid points (the transpose of nearest-point sampling)."""
+    if log.uniform:
+        return values
+    out = np.zeros((log.n_grid + 1, values.shape[1]))
+    idx = np.clip(np.round(log.time / log.dt).astype(int), 0, log.n_grid)
+    np.add.at(out, idx, values)
+    return out
+
+
+#: Terms of the Fourier series of the counting-error covariance (the rest is folded in by scaling).
+COUNTING_HARMONICS = 32
+
+
+def _counting_score(g: np.ndarray, log: Log, angle: np.ndarray, sigma_position: float) -> np.ndarray:
+    """Covariance of Σ_t g_t·e_t for the counting errors e_t of one run (g in 1/rad) [score units].
+
+    A quantised angle θ reads ⌊(θ + φ)/q⌋·q with an unknown phase φ, so two errors are not
+    independent: over φ, cov(e_s, e_t) = q²·B₂(frac((θ_t − θ_s)/q))/2 with B₂(u) = u² − u + 1/6 (a
+    shaft at rest repeats one error; a speed of a whole number of counts per sample repeats it too,
+    which white counting noise would miss). With B₂(frac u)/2 = Σ_k cos(2πku)/(2π²k²) the double sum
+    is Σ_k |Σ_t g_t·exp(2πikθ_t/q)|²·q²/(2π²k²), a few harmonics of the simulated angle θ_t.
+    Without a known quantum the errors of a run of identical readings are taken as one white error
+    of σ = ``sigma_position``.
+    """
+    q = log.resolution
+    if q <= 0:
+        runs = np.zeros((int(log.reading[-1]) + 1, g.shape[1]))
+        np.add.at(runs, log.reading, g)
+        return sigma_position**2 * (runs.T @ runs)
+    angle = np.asarray(angle, dtype=float)
+    if log.stale_variance is not None:
+        # stale frames: the rows of one reading repeat one sample of the angle, and its error
+        first = np.flatnonzero(np.diff(np.concatenate([[-1], log.reading])))
+        angle = angle[first][log.reading]
+    phase = (2.0 * np.pi / q) * (angle - float(angle[0]))
+    k = np.arange(1, COUNTING_HARMONICS + 1)
+    waves = np.exp(1j * np.outer(k, phase))  # K × m
+    sums = waves @ g  # K × P
+    weights = q**2 / (2.0 * np.pi**2 * k**2)
+    weights *= (np.pi**2 / 6.0) / float(np.sum(1.0 / k**2))  # keep the total variance q²/12
+    return (sums.real.T * weights) @ sums.real + (sums.imag.T * weights) @ sums.imag
+
+
 def noise_propagation_covariance(
     jac: np.ndarray,
     model: OEModel,
@@ -787,54 +945,128 @@ def noise_propagation_covariance(
     logs: list[Log],
     sims: list[dict[str, np.ndarray]],
     blocks: list[tuple[int, int]],
-    sigma_position: float,
+    sigma: dict[str, float],
     *,
-    draws: int = 200,
-    seed: int = 0,
+    current_noise: float = 0.0,
 ) -> tuple[np.ndarray, float]:
-    """Covariance of the estimates from the noise the data carry, by a linearised parametric bootstrap.
+    """Covariance of the estimates from the noise the data carry, propagated through the linearised fit.
 
-    Each draw adds white noise of the measured level to the logged voltage (the plant was driven by
-    the true voltage, the fit by the logged one), runs it through the plant linearised about the fit
-    (zero while the simulated shaft is at rest), adds white angle noise of σ = the angle weight
-    (counting noise q/√12 or the measured sample noise), and maps the resulting angle error through
-    the linearised estimator δ = (JᵀJ)⁻¹·Jᵀ·e/σ. The spread of δ over the draws is the covariance;
-    the mean of (e/σ)² is returned too, to check that this noise explains the residuals. Draws use
-    ``np.random.default_rng(seed)``, so results are reproducible.
+    Three independent noises make the residual: white noise of the measured level σ_V on the logged
+    voltage (the plant was driven by the true voltage, the fit by the logged one: errors in the input
+    variable), run through the plant linearised about the fit (the angle does not move while the
+    simulated shaft is at rest) into the simulated angle and current; counting noise of σ = the angle
+    weight, correlated as the phase of a quantised angle makes them (:func:`_counting_score`); stale
+    status frames (:func:`stale_frame_period`); with current, white current noise of ``current_noise``.
+    The estimate moves by δ = (JᵀJ)⁻¹·Jᵀ·δr, δr
+    the weighted residual perturbation, so cov(δ) = (JᵀJ)⁻¹·S·(JᵀJ)⁻¹ with S the covariance of the
+    score Jᵀ·δr, computed exactly: for the voltage noise S = σ_V²·AᵀA, A the Jacobian filtered
+    backwards in time through the plant's impulse responses (the adjoint system).
+
+    Returns
+    -------
+    cov, predicted
+        The covariance of all fitted parameters, and the mean square weighted residual this noise
+        predicts (to check that it explains the residuals).
     """
-    rng = np.random.default_rng(seed)
     n, n_par = jac.shape
-    draws = int(max(50, min(draws, 4_000_000 // max(n, 1))))
-    jte = np.zeros((n_par, draws))
-    square_sum = 0.0
+    score = np.zeros((n_par, n_par))
+    expected_square = 0.0
     plant = model.plant(p)
+    sigma_position = sigma["position"]
     for (start, m), log, sim in zip(blocks, logs, sims, strict=True):
+        j_pos = jac[start : start + m]
+        f = log.position_factor(sigma_position)
+        g = j_pos * f[:, None]
+        score += _counting_score(g, log, sim["position"], sigma_position)
+        expected_square += float(np.sum(f**2)) * sigma_position**2
+        if log.stale_variance is not None:
+            # stale status frames: one timing error per reading, of variance (ω·dt)²/12
+            runs = np.zeros((int(log.reading[-1]) + 1, n_par))
+            np.add.at(runs, log.reading, g)
+            first = np.flatnonzero(np.diff(np.concatenate([[-1], log.reading])))
+            score += (runs.T * log.stale_variance[first]) @ runs
+            expected_square += float(np.sum(f**2 * log.stale_variance))
+            # The frames keep one phase through a run, so its lag is P/2 only on average: the rows
+            # where a new reading appears place each frame within one row period, a lag error of
+            # variance dt²/12 shared by the whole run (a systematic shift of −δτ·ω).
+            shift = g.T @ sim["speed"]
+            score += (log.dt**2 / 12.0) * np.outer(shift, shift)
+        j_cur = jac[start + m : start + 2 * m] if model.uses_current else None
+        if j_cur is not None:
+            ratio = current_noise / sigma["current"]
+            score += ratio**2 * (j_cur.T @ j_cur)
+            expected_square += m * ratio**2
         sig_v = voltage_noise(log)
-        err = sigma_position * rng.standard_normal((m, draws))
-        if sig_v > 0:
-            d = _Modal(plant, 1).discrete(log.dt)
-            dv = sig_v * rng.standard_normal((log.n_grid, draws))
-            # state response x⁺ = Ad·x + bv·δV and angle increments hx·x + hv·δV, all draws at once
-            x = np.zeros((plant.n, draws))
-            xs = np.empty((log.n_grid, plant.n, draws))
-            if plant.n == 1:
-                xs[:, 0, :] = signal.lfilter([0.0, d.bv[0]], [1.0, -d.ad[0, 0]], dv, axis=0)
-            else:  # pragma: no cover - the angle-only models are first order
-                for k in range(log.n_grid):
-                    xs[k] = x
-                    x = d.ad @ x + d.bv[:, None] * dv[k]
-            inc = np.einsum("i,kid->kd", d.hx, xs) + d.hv * dv
-            moving = np.abs(sim["speed"]) > 0
-            theta = np.vstack([np.zeros((1, draws)), np.cumsum(inc * _grid_mask(log, moving)[:, None], axis=0)])
-            err += log.at_samples(theta) if log.uniform else np.column_stack(
-                [log.at_samples(theta[:, b]) for b in range(draws)]
-            )
-        jte += jac[start : start + m].T @ (err / sigma_position)
-        square_sum += float(np.sum((err / sigma_position) ** 2)) / draws
+        if sig_v <= 0:
+            continue
+        d = _Modal(plant, 1).discrete(log.dt)
+        states, increment, den = _filters(d)
+        mask = _grid_mask(log, np.abs(sim["speed"]) > 0)
+        # angle: Σ_t c_t·θ_t = Σ_j mask_j·inc_j·C_j with C_j = Σ_{t>j} c_t, c_t = J_t·w_t/σ
+        c_grid = _sample_to_grid(log, g)
+        tail = np.cumsum(c_grid[::-1], axis=0)[::-1]  # Σ_{t≥j}
+        u = mask[:, None] * tail[1 : log.n_grid + 1]
+        a = _adjoint(increment, den, u)
+        gain = float(np.sum(increment) / np.sum(den))  # angle per volt per step at low frequency
+        moving_steps = np.concatenate([[0.0], np.cumsum(mask)])
+        expected_square += sig_v**2 * gain**2 * float(np.sum(f**2 * log.at_samples(moving_steps)))
+        if j_cur is not None:
+            ci_grid = _sample_to_grid(log, j_cur / sigma["current"])
+            a = a + _adjoint(states[0], den, ci_grid)[: log.n_grid]
+            p00 = float(linalg.solve_discrete_lyapunov(d.ad, np.outer(d.bv, d.bv))[0, 0])
+            expected_square += m * sig_v**2 * p00 / sigma["current"] ** 2
+        score += sig_v**2 * (a.T @ a)
     h_inv = np.linalg.pinv(jac.T @ jac)
-    delta = h_inv @ jte
-    delta -= delta.mean(axis=1, keepdims=True)
-    return delta @ delta.T / (draws - 1), square_sum / max(n, 1)
+    return h_inv @ score @ h_inv, expected_square / max(n, 1)
+
+
+def input_noise_gain(plant: Plant, dt: float) -> np.ndarray:
+    """Stationary covariance of the state per unit variance of white noise on the held voltage [state²/V²].
+
+    P = Ad·P·Adᵀ + bv·bvᵀ (discrete Lyapunov equation of the moving regime): the current the model
+    simulates from a logged voltage with noise σ_V carries σ_V²·P[i, i] of it, sample by sample.
+    """
+    d = _Modal(plant, 1).discrete(dt)
+    return np.asarray(linalg.solve_discrete_lyapunov(d.ad, np.outer(d.bv, d.bv)))
+
+
+def input_noise_bias(
+    jac: np.ndarray, model: OEModel, p: np.ndarray, logs: list[Log], sigma_current: float
+) -> np.ndarray:
+    """First-order bias of the output-error estimate from white noise on the logged voltage (current channel).
+
+    The simulated current carries the voltage noise filtered by the plant, so the expected cost gains
+    N(p) = Σ_runs n·σ_V²·P_ii(p)/σ_i² (:func:`input_noise_gain`), which depends on the parameters
+    (mostly L and R: a slower or more resistive winding passes less of the noise) and pulls the
+    minimum away from the truth by −½·(JᵀJ)⁻¹·∇N. Returns that shift for every parameter (model
+    parameters first; ∇N is zero for the nuisance ones); subtract it from the estimate.
+
+    References
+    ----------
+    T. Söderström, *Errors-in-Variables Methods in System Identification*, Springer 2018, ch. 7
+    (bias-compensated least squares).
+    """
+    n_model = p.size
+
+    def noise_cost(q: np.ndarray) -> float:
+        total = 0.0
+        plant = model.plant(q)
+        for log in logs:
+            sig_v = voltage_noise(log)
+            if sig_v > 0:
+                total += log.time.size * sig_v**2 * float(input_noise_gain(plant, log.dt)[0, 0])
+        return total / sigma_current**2
+
+    base = noise_cost(p)
+    grad = np.zeros(jac.shape[1])
+    if base == 0.0:
+        return grad
+    for k in range(n_model):
+        h = 1e-5 * max(abs(float(p[k])), 1e-12)
+        q = p.copy()
+        q[k] += h
+        grad[k] = (noise_cost(q) - base) / h
+    return -0.5 * np.linalg.pinv(jac.T @ jac) @ grad
 
 
 def _grid_mask(log: Log, moving_at_samples: np.ndarray) -> np.ndarray:

@@ -39,6 +39,7 @@ from motorlab.identify import (
     _prepare,
     _result,
     excitation_warnings,
+    measured_speed,
     noise_levels,
     read_runs,
     window_integrals,
@@ -92,10 +93,11 @@ class FeedforwardModel(_oe.OEModel):
 
     uses_current = False
 
-    def __init__(self, mechanism: str):
+    def __init__(self, mechanism: str, *, lag: float = 0.0):
         self.mechanism = mechanism
         extra = {"simple": (), "elevator": ("kG",), "arm": ("kG_cos", "kG_sin")}[mechanism]
         self.names = ("kS", "kV", "kA", *extra)
+        self.lag = lag
 
     def plant(self, p: np.ndarray) -> _oe.Plant:
         return _oe.feedforward_plant(float(p[0]), float(p[1]), float(p[2]))
@@ -111,15 +113,50 @@ class FeedforwardModel(_oe.OEModel):
         return np.array([speed])
 
 
-def regression_start(logs: list[_oe.Log], mechanism: str) -> np.ndarray:
-    """(kS, kV, kA[, ...]) from ∫V dt = kS·∫sgn(ω̂) dt + kV·Δθ + kA·Δω̂ (+ gravity) over short windows.
+#: Window lengths tried for the starting regression [s]: a short window sees a fast mechanism's
+#: acceleration, a long one a flywheel's (τm = kA/kV of seconds, where the speed change over 20 ms
+#: drowns in counting noise and the short-window regression puts kA near zero).
+START_WINDOWS = (0.02, 0.1, 0.5, 2.0)
+
+
+def regression_start(logs: list[_oe.Log], mechanism: str, *, lag: float = 0.0) -> np.ndarray:
+    """(kS, kV, kA[, ...]) from ∫V dt = kS·∫sgn(ω̂) dt + kV·Δθ + kA·Δω̂ (+ gravity) over windows.
+
+    The regression is run with each window length of :data:`START_WINDOWS` and the start whose
+    simulated angle (offsets removed, residuals weighted as the fit weights them) is closest to the
+    measured one is kept. ``lag`` [s]: see :attr:`motorlab._oe.OEModel.lag`.
 
     Raises
     ------
     FitError
-        When the regression gives no positive kV and kA (no motion, or motion against the voltage).
+        When no regression gives positive kV and kA (no motion, or motion against the voltage).
     """
-    parts = [window_integrals(log, max(4, round(0.02 / log.dt))) for log in logs]
+    model = FeedforwardModel(mechanism, lag=lag)
+    best: tuple[float, np.ndarray] | None = None
+    error: FitError | None = None
+    for window in START_WINDOWS:
+        try:
+            beta = _window_regression(logs, mechanism, window)
+        except FitError as exc:
+            error = exc
+            continue
+        cost = 0.0
+        for log in logs:
+            speed = _oe.initial_speed_guess(log) if log.moving_at_start else 0.0
+            sim = _oe._simulate_log(model, beta, log, speed, 0.0)
+            weight = log.position_factor(max(log.resolution, 1e-9) / math.sqrt(12.0)) ** 2
+            miss = sim["position"] - log.position
+            cost += float(np.sum(weight * (miss - np.average(miss, weights=weight)) ** 2))
+        if math.isfinite(cost) and (best is None or cost < best[0]):
+            best = (cost, beta)
+    if best is None:
+        assert error is not None
+        raise error
+    return best[1]
+
+
+def _window_regression(logs: list[_oe.Log], mechanism: str, window: float) -> np.ndarray:
+    parts = [window_integrals(log, max(4, round(window / log.dt))) for log in logs]
 
     def stack(key: str) -> np.ndarray:
         return np.concatenate([p[key] for p in parts])
@@ -226,8 +263,9 @@ def feedforward(
 
     Notes
     -----
-    Standard errors: Jacobian at the optimum with the Newey–West long-run covariance of the
-    residuals (see :mod:`motorlab.identify`).
+    Standard errors: the measured noises (logged voltage, counting, stale status frames) propagated
+    through the linearised fit (:func:`motorlab._oe.noise_propagation_covariance`); the Newey–West
+    covariance of the residuals when these do not explain the residuals (docs/feedforward.md).
     """
     if mechanism not in MECHANISMS:
         raise OptionError(f"mechanism must be one of {', '.join(MECHANISMS)}, got {mechanism!r}")
@@ -237,20 +275,30 @@ def feedforward(
     if not recs:
         raise OptionError("no recordings to fit")
     logs, warnings = _prepare(recs, cpr=cpr, with_current=False)
-    model = FeedforwardModel(mechanism)
-    p0 = regression_start(logs, mechanism)
+    # Stale status frames (SysId logs of CAN motor controllers): the logged angle is θ(t − d) with d
+    # spread over one refresh period P, a lag of P/2 on average; the first row showing a new reading
+    # places its frame within one row period dt, a scatter of (ω·dt)²/12 per reading about the lag
+    # (the frames' phase, shared by a whole run, is in the propagated covariance).
+    # The lag is not fitted: it trades off against kA (a first-order lag and a delay look alike at
+    # 10 ms sampling) and would take kA's information with it.
+    period = max(_oe.stale_frame_period(log) for log in logs)
+    if period > 0:
+        for log in logs:
+            log.stale_variance = (measured_speed(log) * log.dt) ** 2 / 12.0
+    p0 = regression_start(logs, mechanism, lag=0.5 * period)
     v_max = max(float(np.max(np.abs(log.grid_voltage))) for log in logs)
     ks0, kv0, ka0 = p0[:3]
     scale = np.concatenate([[max(ks0, 0.01 * v_max), kv0, ka0], np.full(p0.size - 3, max(0.05 * v_max, 0.1))])
     lower = np.concatenate([[0.0, 1e-3 * kv0, 1e-3 * ka0], np.full(p0.size - 3, -10.0 * v_max)])
-    upper = np.concatenate([[v_max, 1e3 * kv0, 1e3 * ka0], np.full(p0.size - 3, 10.0 * v_max)])
+    upper = np.concatenate([[v_max, 1e3 * kv0, max(1e3 * ka0, 100.0 * kv0)], np.full(p0.size - 3, 10.0 * v_max)])
+    model = FeedforwardModel(mechanism, lag=0.5 * period)
     sigma = noise_levels(logs, with_current=False)
     fit = _oe.fit_output_error(model, logs, np.clip(p0, lower, upper), lower=lower, upper=upper, scale=scale,
                                sigma=sigma)
     m = len(model.names)
     values = fit.values[:m].copy()
     cov = fit.covariance[:m, :m].copy()
-    names = list(model.names)
+    names = list(model.names[:m])
     if mechanism == "arm":  # report kG = hypot(a, c) and φ = atan2(c, a) (delta method)
         a, c = values[3], values[4]
         k_g = math.hypot(a, c)
@@ -293,6 +341,8 @@ def feedforward(
         "hac_bandwidth_samples": fit.bandwidth,
         "function_evaluations": fit.nfev,
     }
+    if period > 0:
+        details["status_frames"] = {"period_s": period, "lag_s": 0.5 * period}
     try:
         details["sysid_ols"] = sysid_ols(recs, mechanism=mechanism)
     except (FitError, np.linalg.LinAlgError, ZeroDivisionError):

@@ -98,6 +98,12 @@ def position_resolution(rec: Recording, *, cpr: float | None = None) -> float:
     return 0.0
 
 
+def _steps_are_multiples(position: np.ndarray, quantum: float) -> bool:
+    """Whether (nearly) every step of the angle is a whole number of ``quantum``."""
+    ratio = np.abs(np.diff(position)) / quantum
+    return bool(ratio.size) and float(np.mean(np.abs(ratio - np.round(ratio)) < 0.02)) > 0.95
+
+
 def data_warnings(rec: Recording, resolution: float) -> tuple[list[str], bool]:
     """Warnings about a log before fitting, and whether its angle counts against the voltage.
 
@@ -282,7 +288,12 @@ def _prepare(
     warnings: list[str] = []
     for rec in recordings:
         check_recording(rec, need_current=with_current)
-        q = position_resolution(rec, cpr=cpr)
+    quanta = [position_resolution(rec, cpr=cpr) for rec in recordings]
+    common = min((q for q in quanta if q > 0), default=0.0)
+    for rec, q in zip(recordings, quanta, strict=True):
+        if q == 0.0 and common > 0 and _steps_are_multiples(rec.signals["position"], common):
+            # a fast run may never move by a single count: take the quantum of the other runs
+            q = common
         warns, reversed_ = data_warnings(rec, q)
         warnings.extend(warns)
         pos = -rec.signals["position"] if reversed_ else rec.signals["position"]
@@ -373,9 +384,13 @@ def identify(
 
     Notes
     -----
-    Standard errors come from the Jacobian at the optimum with the Newey–West long-run covariance of
-    the residuals (:func:`motorlab._oe.hac_covariance`): output-error residuals of a quantised angle
-    are far from white, and the plain s²·(JᵀJ)⁻¹ would claim several times too much precision.
+    The logged voltage's noise reaches the simulated current (errors in the input variable): the
+    current is weighted by its measured noise plus that, and the first-order bias it causes (mostly
+    in L and R) is removed (:func:`motorlab._oe.input_noise_bias`). Standard errors propagate the
+    measured noises — voltage through the plant, current, and counting errors correlated as a
+    quantiser of unknown phase makes them — through the linearised fit
+    (:func:`motorlab._oe.noise_propagation_covariance`); the Newey–West covariance of the residuals
+    is used when these noises do not explain the residuals.
     """
     recs = [recordings] if isinstance(recordings, Recording) else list(recordings)
     if not recs:
@@ -397,8 +412,14 @@ def identify(
     lower = np.array([1e-3 * k0, 1e-3 * r0, 1e-3 * r0 * dt, 1e-3 * j0, 0.0, 0.0])
     upper = np.array([1e3 * k0, 1e3 * r0, 1e3 * scale[2] + 1.0, 1e3 * j0, 1e3 * scale[4], 1e3 * scale[5]])
     sigma = noise_levels(logs, with_current=True)
+    current_noise = sigma["current"]
+    # The simulated current carries the logged voltage's noise filtered by the winding (errors in the
+    # input variable): weight the current by the noise its residual really has, measurement and input.
+    gain = float(_oe.input_noise_gain(MotorModel().plant(np.clip(p0, lower, upper)), dt)[0, 0])
+    voltage_noise = max(_oe.voltage_noise(log) for log in logs)
+    sigma["current"] = math.sqrt(current_noise**2 + voltage_noise**2 * gain)
     fit = _oe.fit_output_error(MotorModel(), logs, np.clip(p0, lower, upper), lower=lower, upper=upper,
-                               scale=scale, sigma=sigma)
+                               scale=scale, sigma=sigma, current_noise=current_noise)
     values = fit.values[:6]
     cov = fit.covariance[:6, :6]
     stderr = np.sqrt(np.clip(np.diag(cov), 0.0, None))
@@ -426,15 +447,20 @@ def identify(
     np.fill_diagonal(corr, 1.0)
     motor = MotorParams(*(float(v) for v in np.maximum(values, [1e-12, 1e-12, 0, 1e-12, 0, 0])))
     details: dict[str, Any] = {
-        "method": "output error (angle and current simulated from the voltage), Newey–West covariance",
+        "method": "output error (angle and current simulated from the voltage), errors-in-variables bias removed",
         "residual_rms": {**fit.residual_rms},
         "residual_rms_units": {"position": "rad", "current": "A"},
         "noise_weights": sigma,
+        "measured_noise": {"current": current_noise, "voltage": voltage_noise},
+        "uncertainty": fit.noise_model,
+        "input_noise_bias_removed": dict(zip(MOTOR_NAMES, fit.bias_correction.tolist(), strict=True)),
         "start": dict(zip(MOTOR_NAMES, p0.tolist(), strict=True)),
         "feedforward": feedforward_from_params(motor),
         "hac_bandwidth_samples": fit.bandwidth,
         "stderr_white_residuals": dict(zip(MOTOR_NAMES, np.sqrt(np.diag(fit.covariance_white)[:6]).tolist(),
                                            strict=True)),
+        "stderr_newey_west": dict(zip(MOTOR_NAMES, np.sqrt(np.diag(fit.covariance_residuals)[:6]).tolist(),
+                                      strict=True)),
         "function_evaluations": fit.nfev,
     }
     return _result("identify", params, corr, list(MOTOR_NAMES), logs, fit, warnings, details)
@@ -513,12 +539,19 @@ def add_arguments(parser: argparse.ArgumentParser, experiment: str) -> None:
 
 
 def read_runs(paths: list[str], *, cpr: int | None) -> list[Recording]:
-    """Read every file with :func:`motorlab.io.read_any`, one recording per test segment."""
+    """Read every file with :func:`motorlab.io.read_any`, one recording per test segment.
+
+    ``cpr`` goes to the readers that convert counts (FTC log, CSV); formats that log angles (SysId
+    JSON in rotations, .wpilog) do not take it, and the fit uses it for the angle quantum instead.
+    """
+    import inspect
+
     from motorlab import io as mio
 
     runs: list[Recording] = []
     for path in paths:
-        rec = mio.read_any(path, cpr=cpr)
+        takes_cpr = "cpr" in inspect.signature(mio.READERS[mio.detect_format(path)]).parameters
+        rec = mio.read_any(path, cpr=cpr if takes_cpr else None)
         runs.extend(rec.split())
     return runs
 
