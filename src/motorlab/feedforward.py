@@ -285,7 +285,10 @@ def feedforward(
     if period > 0:
         for log in logs:
             log.stale_variance = (measured_speed(log) * log.dt) ** 2 / 12.0
-    p0 = regression_start(logs, mechanism, lag=0.5 * period)
+    try:
+        p0 = regression_start(logs, mechanism, lag=0.5 * period)
+    except FitError as exc:  # name the file(s): the user must know which log cannot be explained
+        raise FitError(f"{', '.join(dict.fromkeys(log.source for log in logs if log.source))}: {exc}") from None
     v_max = max(float(np.max(np.abs(log.grid_voltage))) for log in logs)
     ks0, kv0, ka0 = p0[:3]
     scale = np.concatenate([[max(ks0, 0.01 * v_max), kv0, ka0], np.full(p0.size - 3, max(0.05 * v_max, 0.1))])

@@ -403,7 +403,10 @@ def identify(
         return _identify_without_current(recs, resistance=resistance, torque_constant=torque_constant, cpr=cpr,
                                          note_missing=use_current and any("current" in r for r in recs))
     logs, warnings = _prepare(recs, cpr=cpr, with_current=True)
-    p0 = regression_start(logs)
+    try:
+        p0 = regression_start(logs)
+    except FitError as exc:  # name the file(s): the user must know which log cannot be explained
+        raise FitError(f"{', '.join(dict.fromkeys(log.source for log in logs if log.source))}: {exc}") from None
     k0, r0, _, j0, _, _ = p0
     v_max = max(float(np.max(np.abs(log.grid_voltage))) for log in logs)
     dt = min(log.dt for log in logs)

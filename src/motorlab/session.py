@@ -768,6 +768,7 @@ SIMULATED_EXPERIMENTS: tuple[tuple[str, str, str, dict[str, Any]], ...] = (
     ("tachometer", "tachometer", "tachometer.csv", {}),
     ("pulse", "pulse", "pulse.csv", {}),
     ("identify", "transient", "transient.csv", {}),
+    ("feedforward", "sysid", "sysid.json", {}),
 )
 
 
