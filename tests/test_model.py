@@ -74,3 +74,14 @@ def test_from_dict_accepts_analysis_json():
     assert p.L == 0.0
     with pytest.raises(OptionError):
         MotorParams.from_dict({"K": 0.3})
+
+
+@pytest.mark.parametrize("voltage", [1e300, -2e3, math.inf, math.nan])
+def test_figures_refuse_voltages_no_gearmotor_runs_on(voltage):
+    """Power grows as V²: 1e300 V overflowed into warnings and infinite figures; now refused."""
+    with pytest.raises(OptionError, match="voltage"):
+        MOTOR.figures(voltage)
+    with pytest.raises(OptionError, match="voltage"):
+        MOTOR.curves(voltage)
+    figures = MOTOR.figures(1000.0)  # the limit itself is fine, every figure finite
+    assert all(math.isfinite(value) for value, _ in figures.values())

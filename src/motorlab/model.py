@@ -22,6 +22,20 @@ from motorlab.errors import OptionError
 from motorlab.units import SI_UNITS
 
 PARAMETER_NAMES = ("K", "R", "L", "J", "b", "Tf")
+#: Largest supply voltage [V] the derived figures accept. Brushed DC gearmotors of the seeds run on
+#: 12 V; even industrial ones stay below a few hundred volts. Far beyond it power (∝ V²) overflows a
+#: float (``--voltage 1e300`` printed overflow warnings and infinite figures).
+MAX_VOLTAGE = 1000.0
+
+
+def check_voltage(voltage: float) -> float:
+    """Return ``voltage`` [V] if it is finite and |V| ≤ :data:`MAX_VOLTAGE`, else raise :class:`OptionError`."""
+    if not (isinstance(voltage, int | float) and math.isfinite(voltage) and abs(voltage) <= MAX_VOLTAGE):
+        raise OptionError(
+            f"the supply voltage (--voltage) must be a finite number of at most {MAX_VOLTAGE:g} V in magnitude, "
+            f"got {voltage!r} V (no brushed DC gearmotor runs on more)"
+        )
+    return float(voltage)
 
 
 @dataclass(frozen=True)
@@ -150,8 +164,13 @@ class MotorParams:
         dict
             ``speed`` [rad/s] from 0 to free speed, ``torque`` shaft output [N·m], ``current`` [A],
             ``power`` mechanical output [W], ``efficiency`` output/input [-].
+
+        Raises
+        ------
+        OptionError
+            A voltage that is not finite or exceeds :data:`MAX_VOLTAGE` in magnitude.
         """
-        v = abs(voltage)
+        v = abs(check_voltage(voltage))
         w_free = self.free_speed(v)
         speed = np.linspace(0.0, w_free, points)
         current = (v - self.K * speed) / self.R
@@ -184,7 +203,14 @@ class MotorParams:
         return float(c["efficiency"][k]), float(c["speed"][k])
 
     def figures(self, voltage: float) -> dict[str, tuple[float, str]]:
-        """The derived figures at ``voltage``, each as (value, SI unit), for tables and reports."""
+        """The derived figures at ``voltage`` [V], each as (value, SI unit), for tables and reports.
+
+        Raises
+        ------
+        OptionError
+            A voltage that is not finite or exceeds :data:`MAX_VOLTAGE` in magnitude.
+        """
+        check_voltage(voltage)
         peak_p, w_p = self.peak_power(voltage)
         peak_e, w_e = self.peak_efficiency(voltage)
         return {

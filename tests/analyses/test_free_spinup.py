@@ -143,3 +143,19 @@ def test_read_edges_tells_the_formats_apart(tmp_path) -> None:
     log.write_text("12.5 0 0.96 -0.001\n112.7 3 0.97 -0.001\n")
     with pytest.raises(LogFormatError, match=r"testFile\.txt"):
         read_edges(str(log))
+
+
+@pytest.mark.parametrize(
+    ("options", "mention"),
+    [({"torque_constant": 1e300, "current": 1e300}, "--K"), ({"current": 1e300}, "--current"),
+     ({"edges_per_revolution": 1e-300}, "--edges-per-rev")],
+)
+def test_values_that_would_overflow_are_refused_up_front(options, mention) -> None:
+    """K·I = 1e600 overflowed into RuntimeWarnings and a fit error that named neither file nor option."""
+    import warnings
+
+    kwargs = {"torque_constant": BARE.K, "current": 0.5, "cpr": CPR, **options}
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(OptionError, match=mention):
+            free_spinup(edge_times(3), **kwargs)

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from motorlab.analyses.lcr import lcr, robust_outliers
-from motorlab.errors import FitError, LogFormatError, OptionError
+from motorlab.errors import LogFormatError, OptionError
 from motorlab.io import read_csv, write_csv
 from motorlab.recording import Recording
 
@@ -123,6 +123,30 @@ def test_frequency_from_option_metadata_and_column(tmp_path):
         lcr(rec, frequency=-5.0)
 
 
+@pytest.mark.parametrize("frequency", [1e300, 0.5, 2e8])
+def test_frequency_no_lcr_meter_uses_is_refused(frequency, tmp_path):
+    """1e300 Hz would overflow 2πfL/Q (and give R = 1e297 Ω): refused, option or file alike."""
+    path = tmp_path / "lcr.csv"
+    write_csv(path, {"L_uH": [700.0, 710.0, 690.0], "Q": [22.0, 22.3, 21.7]})
+    with pytest.raises(OptionError, match="--frequency"):
+        lcr(read_csv(path), frequency=frequency)
+    write_csv(path, {"L_uH": [700.0, 710.0], "Q": [2.2, 2.23], "frequency_Hz": [1000.0, frequency]})
+    with pytest.raises(LogFormatError, match="no LCR meter") as err:
+        lcr(read_csv(path))
+    assert err.value.path == str(path)
+    assert err.value.line is not None
+    write_csv(path, {"L_uH": [700.0, 710.0], "Q": [2.2, 2.23]}, metadata={"frequency_Hz": frequency})
+    with pytest.raises(LogFormatError, match="frequency_Hz"):
+        lcr(read_csv(path))
+
+
+def test_unusual_frequency_is_warned(tmp_path):
+    path = tmp_path / "lcr.csv"
+    write_csv(path, {"L_uH": [700.0, 710.0, 690.0], "Q": [22.0, 22.3, 21.7]})
+    assert any("check its unit" in w for w in lcr(read_csv(path), frequency=5e6).warnings)
+    assert not any("check its unit" in w for w in lcr(read_csv(path), frequency=1e5).warnings)
+
+
 def test_separate_files_for_lq_and_dcr(tmp_path):
     a, b = tmp_path / "lq.csv", tmp_path / "dcr.csv"
     write_csv(a, {"L_uH": [700.0, 705.0, 698.0], "Q": [1.9, 1.95, 1.92]})
@@ -138,8 +162,10 @@ def test_separate_files_for_lq_and_dcr(tmp_path):
 def test_bad_input():
     with pytest.raises(LogFormatError, match="no LCR readings"):
         lcr(Recording(np.arange(3.0), {"current": np.ones(3)}, source="x.csv"))
-    with pytest.raises(FitError):
-        lcr(Recording(np.arange(1.0), {"dc_resistance": np.ones(1)}))
+    with pytest.raises(LogFormatError, match="only one DC resistance reading") as err:
+        lcr(Recording(np.arange(1.0), {"dc_resistance": np.ones(1)}, source="one.csv", lines=np.array([4])))
+    assert err.value.path == "one.csv"
+    assert err.value.line == 4
     with pytest.raises(LogFormatError, match="positive"):
         lcr(Recording(np.arange(3.0), {"inductance": np.ones(3) * 1e-4, "quality_factor": np.array([1.0, -2, 3])}))
     with pytest.raises(LogFormatError, match="finite"):

@@ -100,9 +100,14 @@ def test_forced_coulomb_model_on_viscous_data_is_flagged():
 
 def test_bad_input():
     rec = pulse_trace(0, b=0.0, tf=0.02, cycles=1)
-    flat = Recording(rec.time, {"command": np.zeros(rec.time.size), "velocity": rec["velocity"]})
-    with pytest.raises(FitError, match="never changes"):
+    flat = Recording(rec.time, {"command": np.zeros(rec.time.size), "velocity": rec["velocity"]}, source="flat.csv")
+    with pytest.raises(FitError, match=r"^flat\.csv: the command never changes"):
         pulse(flat, amplifier_gain=KA, torque_constant=KM)
+    # Ka = 1e-300 A/V made J ~ 1e-300 kg·m² and J² underflow: a ZeroDivisionError, now refused.
+    with pytest.raises(OptionError, match="--Ka"):
+        pulse(rec, amplifier_gain=1e-300, torque_constant=KM)
+    with pytest.raises(OptionError, match="--K"):
+        pulse(rec, amplifier_gain=KA, torque_constant=1e300)
     with pytest.raises(OptionError):
         pulse(rec, amplifier_gain=0.0, torque_constant=KM)
     with pytest.raises(OptionError):

@@ -215,3 +215,30 @@ def test_virtual_rig_default_procedure_meets_the_issue_targets(tmp_path) -> None
             covered[name] += abs(est.value - expected[name]) <= 3 * est.stderr
     for name, count in covered.items():
         assert count >= 0.9 * len(runs), (name, count)
+
+
+@pytest.mark.parametrize("cutoff", [-1.0, 200.0])
+def test_cutoff_outside_the_log_is_refused_naming_the_file_and_span(cutoff: float) -> None:
+    """A cut-off before the log starts fitted the powered run as a coast (K = 1.30 against 0.70)."""
+    log = flywheel_log(10, duration=100.0)
+    with pytest.raises(OptionError, match=r"--cutoff.*time span") as err:
+        spindown(log, cpr=CPR, cutoff=cutoff)
+    assert err.value.path == "sim-testFile.txt"
+
+
+def test_cutoff_while_the_current_still_flows_is_refused() -> None:
+    log = flywheel_log(11, duration=100.0)
+    with pytest.raises(OptionError, match="current still flows") as err:
+        spindown(log, cpr=CPR, cutoff=30.0)  # the relay opens at 60 s
+    assert err.value.path == "sim-testFile.txt"
+    result = spindown(log, cpr=CPR, cutoff=60.05)  # right after the relay opened: fine
+    assert result["K"].value == pytest.approx(FLYWHEEL.K, rel=0.03)
+
+
+def test_cpr_that_would_overflow_is_refused_without_warnings() -> None:
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(OptionError, match="--cpr"):
+            spindown(flywheel_log(12, duration=100.0), cpr=1e-300)

@@ -90,3 +90,12 @@ def test_cli_with_spindown_file(tmp_path) -> None:
     assert result["K"].value == pytest.approx(FLYWHEEL.K, rel=0.015)
     with pytest.raises(OptionError, match="inertia"):
         from_cli("spinup", paths[:1], parser.parse_args(["--cpr", "560"]))
+
+
+def test_start_after_end_or_outside_the_log_is_refused() -> None:
+    log = flywheel_log(5, on_time=20.0, duration=30.0)
+    with pytest.raises(OptionError, match=r"--start 8 s.*--end 2 s"):
+        spinup(log, inertia=FLYWHEEL.J, cpr=CPR, start=8.0, end=2.0)
+    with pytest.raises(OptionError, match=r"--end.*time span") as err:
+        spinup(log, inertia=FLYWHEEL.J, cpr=CPR, end=500.0)
+    assert err.value.path == "spinup.txt"

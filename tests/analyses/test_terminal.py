@@ -116,3 +116,57 @@ def test_virtual_rig_round_trip(tmp_path) -> None:
             inside[name] += abs(result[name].value - expected[name]) <= 3 * result[name].stderr
     for name, count in inside.items():
         assert count >= 0.9 * len(runs), (name, count)
+
+
+def test_single_row_uncertainty_is_unknown_without_the_readings_errors() -> None:
+    """One row fits b = K·I/ω exactly: its stderr was reported as 0 ('± 0'); now NaN with a warning,
+    or the given reading uncertainties propagated to first order."""
+    one = Recording(np.arange(1.0), {"current": np.array([0.3]), "frequency": np.array([100.0])}, source="one.csv")
+    bare = terminal(one, torque_constant=K, cpr=CPR)
+    assert math.isnan(bare["b"].stderr)
+    assert any("--current-stderr" in w for w in bare.warnings)
+    assert any("folded into b" in w for w in bare.warnings)
+    i_se, f_se, k_se = 1e-3, 0.05, 2e-4
+    given = terminal(one, torque_constant=K, cpr=CPR, current_stderr=i_se, frequency_stderr=f_se,
+                     torque_constant_stderr=k_se)
+    b = given["b"].value
+    expected = b * math.sqrt((i_se / 0.3) ** 2 + (f_se / 100.0) ** 2 + (k_se / K) ** 2)
+    assert given["b"].stderr == pytest.approx(expected, rel=1e-9)
+    speeds = Recording(np.arange(1.0), {"current": np.array([0.3]), "speed": np.array([90.0])})
+    with pytest.raises(OptionError, match="frequency"):
+        terminal(speeds, torque_constant=K, frequency_stderr=0.1)
+
+
+def test_the_same_current_in_every_row_cannot_separate_b_and_tf() -> None:
+    """Equal currents at different speeds gave b = −7e-19 ± 0 (a regression on a constant): now the
+    rows are repeats of one operating point, said so, and b's scatter is its uncertainty."""
+    rng = np.random.default_rng(3)
+    f = 1000.0 * (1 + rng.normal(0, 0.01, 5))
+    data = Recording(np.arange(5.0), {"current": np.full(5, 0.3), "frequency": f}, source="same.csv")
+    result = terminal(data, torque_constant=K, cpr=CPR)
+    assert "Tf" not in result.parameters
+    b = result["b"]
+    per_row = K * 0.3 / (2 * math.pi * 4 * f / CPR)
+    assert b.value == pytest.approx(K * 0.3 / np.mean(2 * math.pi * 4 * f / CPR))
+    assert b.stderr == pytest.approx(np.std(per_row, ddof=1) / math.sqrt(5), rel=1e-9)
+    assert any("same current" in w and "cannot be separated" in w for w in result.warnings)
+    # Exact repeats leave no scatter: the uncertainty is unknown without --current-stderr.
+    twins = Recording(np.arange(3.0), {"current": np.full(3, 0.3), "frequency": np.full(3, 1000.0)})
+    assert math.isnan(terminal(twins, torque_constant=K, cpr=CPR)["b"].stderr)
+
+
+def test_rows_exactly_on_a_line_do_not_claim_zero_uncertainty() -> None:
+    omega = np.array([100.0, 200.0, 300.0, 400.0])
+    current = (B * omega + TF) / K
+    data = Recording(np.arange(4.0), {"current": current, "speed": omega}, source="exact.csv")
+    result = terminal(data, torque_constant=K)
+    assert result["b"].value == pytest.approx(B)
+    assert math.isnan(result["b"].stderr)
+    assert any("exactly on a straight line" in w for w in result.warnings)
+
+
+def test_absurd_torque_constant_or_cpr_is_refused() -> None:
+    with pytest.raises(OptionError, match="--K"):
+        terminal(rows(24), torque_constant=1e300, cpr=CPR)
+    with pytest.raises(OptionError, match="--cpr"):
+        terminal(rows(24), torque_constant=K, cpr=1e-300)

@@ -306,3 +306,21 @@ def test_refusals(tmp_path: Path) -> None:
         VirtualRig("not-a-motor")
     with pytest.raises(RigError, match="stopped"):
         rig.free_spinup(tmp_path / "f.csv", current=0.05, hand_speed=0.0)
+
+
+@pytest.mark.parametrize(
+    ("experiment", "settings", "mention"),
+    [
+        ("spindown", {"on_time": 1e9}, "simulator steps"),
+        ("pulse", {"sample_interval": 1e-12}, "--sample-interval"),
+        ("transient", {"rate": 1e12}, "simulator steps"),
+        ("free-spinup", {"edges": 10**8}, "--edges"),
+        ("lcr", {"positions": 10**8}, "--positions"),
+        ("terminal", {"currents": [0.3] * 200_000}, "current settings"),
+    ],
+)
+def test_absurdly_large_runs_are_refused_before_allocating(tmp_path: Path, experiment, settings, mention) -> None:
+    """Settings that asked for terabytes (or hung) fail at once with an OptionError; nothing is written."""
+    with pytest.raises(OptionError, match=mention):
+        VirtualRig(MOTOR).run(experiment, tmp_path / "out.csv", **settings)
+    assert list(tmp_path.iterdir()) == []

@@ -14,6 +14,11 @@ Small on purpose; every analysis module may use it.
 - :func:`read_tables`, :func:`finite_rows`, :func:`concatenate`, :func:`metadata_quantity`,
   :func:`sources_of`, :func:`fit_straight_line`: headed-CSV tables of the bench analyses (``lcr``,
   ``torque``, ``pulse``, ``gains``).
+- :func:`reader_warnings`: what the readers noted (e.g. a truncated last line dropped), for every
+  analysis to pass on in :attr:`FitResult.warnings <motorlab.results.FitResult.warnings>`.
+- :func:`check_range`, :func:`check_cpr`, :func:`check_flat`, :func:`in_file`: refuse values outside a
+  physically possible range (before they overflow), responses that carry no information, and
+  name the file in a :class:`~motorlab.errors.FitError`.
 """
 
 from __future__ import annotations
@@ -59,6 +64,115 @@ def check_stderr(value: float | None, name: str) -> float:
     return 0.0 if value is None else float(value)
 
 
+def check_range(value: float | None, name: str, low: float, high: float, unit: str, *, why: str = "") -> None:
+    """Raise :class:`OptionError` unless ``value`` is None or a finite number in [low, high].
+
+    Used for options whose absurd values (``--cpr 1e-300``, ``--K 1e300``) would overflow the
+    arithmetic of a fit long before they could give an answer: the limits are generous physical
+    bounds, not tolerances, and ``why`` says where they come from.
+    """
+    if value is None:
+        return
+    if not (isinstance(value, int | float) and math.isfinite(value) and low <= value <= high):
+        text = f" [{unit}]" if unit else ""
+        reason = f" ({why})" if why else ""
+        raise OptionError(f"{name} must lie between {low:g} and {high:g}{text}, got {value!r}{reason}")
+
+
+#: Encoder counts per revolution a real encoder can have [count/rev]: at least one count, at most
+#: 2³⁰ (the finest absolute encoders give 2²⁴–2²⁹ counts before a gearbox multiplies them).
+CPR_RANGE = (1.0, 2.0**30)
+
+
+#: Generous physical limits of the quantities the analyses are given, by symbol: (lowest, highest,
+#: unit). They are not tolerances: a value outside is a typo or a wrong unit (``--K 1e300``), and
+#: checking up front keeps it from overflowing a fit into warnings and a non-finite result. K: a
+#: coreless micro-motor has ~1e-3 V·s/rad before its gearbox, a large gearmotor a few hundred after
+#: it; I: any bench supply or servo amplifier; J: a micro-motor's rotor (~1e-9 kg·m²) to seed 1's
+#: flywheel reflected through 25:1 (~8 kg·m²), with margins; arm: a lever from 0.1 mm to 100 m.
+LIMITS: dict[str, tuple[float, float, str]] = {
+    "K": (1e-6, 1e4, "V·s/rad"),
+    "I": (1e-6, 1e4, "A"),
+    "J": (1e-12, 1e6, "kg·m²"),
+    "b": (0.0, 1e6, "N·m·s/rad"),
+    "Tf": (0.0, 1e6, "N·m"),
+    "Ka": (1e-6, 1e4, "A/V"),
+    "arm": (1e-4, 100.0, "m"),
+    "f": (0.0, 1e8, "Hz"),
+}
+TORQUE_CONSTANT_RANGE = LIMITS["K"][:2]
+CURRENT_RANGE = LIMITS["I"][:2]
+
+
+def check_limits(value: float | None, symbol: str, name: str) -> None:
+    """Raise :class:`OptionError` unless ``value`` is None or within ``LIMITS[symbol]``."""
+    low, high, unit = LIMITS[symbol]
+    check_range(value, name, low, high, unit, why="beyond any DC gearmotor rig")
+
+
+def check_stderr_limit(value: float | None, symbol: str, name: str) -> float:
+    """A standard-error option of quantity ``symbol``: None → 0 (exact); finite, ≥ 0 and within its limits."""
+    se = check_stderr(value, name)
+    check_range(se, name, 0.0, LIMITS[symbol][1], LIMITS[symbol][2], why="beyond any DC gearmotor rig")
+    return se
+
+
+def check_torque_constant(value: float | None, name: str = "the torque constant K (--K)") -> None:
+    """Raise :class:`OptionError` unless ``value`` is None or within ``LIMITS["K"]``."""
+    check_limits(value, "K", name)
+
+
+def check_current(value: float | None, name: str = "the current (--current)") -> None:
+    """Raise :class:`OptionError` unless ``value`` is None or within ``LIMITS["I"]``."""
+    check_limits(value, "I", name)
+
+
+def check_cpr(cpr: float | None) -> None:
+    """Raise :class:`OptionError` unless ``cpr`` is None or within :data:`CPR_RANGE`."""
+    check_range(cpr, "the encoder counts per revolution (--cpr)", *CPR_RANGE, "count/rev",
+                why="an encoder gives at least one count per turn")
+
+
+def check_flat(values: np.ndarray, what: str, *, source: str) -> None:
+    """Raise :class:`FitError` naming ``source`` when every value of a response is the same.
+
+    A response column that never changes (an unplugged sensor, a column of zeros) fits any straight
+    line through a constant exactly, with zero residuals: the slope would come out as 0 ± 0, a number
+    the data cannot determine.
+    """
+    values = np.asarray(values, dtype=float)
+    if values.size >= 2 and float(np.ptp(values)) == 0.0:
+        where = f"{source}: " if source else ""
+        raise FitError(
+            f"{where}the {what} reads {values[0]:g} in every row: a response that never changes is not a "
+            "measurement (sensor unplugged or not logged?)"
+        )
+
+
+def in_file(exc: FitError, source: str) -> FitError:
+    """``exc`` with ``source`` in front of its message (unless it already names it)."""
+    text = str(exc)
+    if not source or text.startswith(source):
+        return exc
+    return FitError(f"{source}: {text}")
+
+
+def reader_warnings(recordings: Recording | Iterable[Recording]) -> list[str]:
+    """The readers' warnings (``Recording.metadata["warnings"]``) of every recording, in order, once each.
+
+    Readers note what they repaired or dropped (a truncated last line, placeholder rows, a test of
+    a SysId file that is empty) with the file and line; every analysis passes these on first in
+    its :class:`~motorlab.results.FitResult` warnings, so that nothing dropped goes unsaid.
+    """
+    recs = [recordings] if isinstance(recordings, Recording) else list(recordings)
+    out: list[str] = []
+    for rec in recs:
+        for text in rec.metadata.get("warnings", []) or []:
+            if str(text) not in out:
+                out.append(str(text))
+    return out
+
+
 def check_finite_signals(recording: Recording, names: Iterable[str]) -> None:
     """Raise :class:`LogFormatError` (file and line) at the first NaN/inf of time or a named signal."""
     arrays = [("time", recording.time)] + [(n, recording.signals[n]) for n in names if n in recording.signals]
@@ -100,9 +214,14 @@ def position_of(recording: Recording, *, cpr: float | None = None) -> tuple[np.n
     """
     if cpr is not None:
         check_positive(cpr, "cpr (encoder counts per revolution)")
+        check_cpr(cpr)
     cpr = cpr if cpr is not None else recording.metadata.get("cpr")
     if "counts" in recording.signals and cpr is not None:
         check_positive(float(cpr), "cpr (encoder counts per revolution)")
+        try:
+            check_cpr(float(cpr))
+        except OptionError as exc:  # the file's own "# cpr:" line
+            raise LogFormatError(exc.message, path=recording.source or None) from None
         check_finite_signals(recording, ["counts"])
         quantum = 2.0 * math.pi / float(cpr)
         return recording.signals["counts"] * quantum, quantum
@@ -334,7 +453,8 @@ def finite_rows(recording: Recording, names: Sequence[str]) -> None:
 def concatenate(recordings: Sequence[Recording], names: Sequence[str]) -> Recording:
     """Join the rows of several recordings, keeping the named signals (checked finite first).
 
-    Metadata come from the first recording; ``source`` lists every file.
+    Metadata come from the first recording, except the readers' ``warnings``, which are every
+    file's; ``source`` lists every file.
     """
     if not recordings:
         raise OptionError("no input file given")
@@ -344,10 +464,12 @@ def concatenate(recordings: Sequence[Recording], names: Sequence[str]) -> Record
         return recordings[0]
     signals = {name: np.concatenate([rec.require(name) for rec in recordings]) for name in names}
     index = np.arange(sum(len(rec) for rec in recordings), dtype=float)
+    metadata = dict(recordings[0].metadata)
+    metadata["warnings"] = reader_warnings(recordings)  # every file's, not only the first's
     return Recording(
         time=index,
         signals=signals,
-        metadata=dict(recordings[0].metadata),
+        metadata=metadata,
         source=" + ".join(rec.source for rec in recordings if rec.source),
     )
 
@@ -384,6 +506,9 @@ class StraightLine:
     y: np.ndarray
     model: np.ndarray
     r2: float
+    #: True when the rows lie exactly on the line (more than two rows, zero residuals): the
+    #: standard errors are then NaN, not 0.
+    exact: bool = False
 
     @property
     def slope(self) -> float:
@@ -396,13 +521,16 @@ class StraightLine:
         return float(self.fit.values[1])
 
 
-def fit_straight_line(x: np.ndarray, y: np.ndarray, *, source: str = "", what: str = "x") -> StraightLine:
+def fit_straight_line(
+    x: np.ndarray, y: np.ndarray, *, source: str = "", what: str = "x", response: str = "response"
+) -> StraightLine:
     """Ordinary least squares ``y = slope·x + intercept`` with standard errors.
 
     Raises
     ------
     FitError
-        With fewer than two rows or when every row has the same ``x`` (no slope to see).
+        With fewer than two rows, when every row has the same ``x`` (no slope to see) or the same
+        ``y`` (a flat response, e.g. a column of zeros: nothing was measured).
     """
     x = np.asarray(x, dtype=float)
     y = np.asarray(y, dtype=float)
@@ -411,10 +539,31 @@ def fit_straight_line(x: np.ndarray, y: np.ndarray, *, source: str = "", what: s
         raise FitError(f"{where}{x.size} row(s): a straight line needs at least two rows with different {what}")
     if np.ptp(x) == 0:
         raise FitError(f"{where}every row has the same {what}: a slope needs at least two different values")
+    check_flat(y, response, source=source)
     design = np.column_stack([x, np.ones_like(x)])
     fit = fit_linear(design, y, ["slope", "intercept"])
     model = design @ fit.values
-    return StraightLine(fit=fit, x=x, y=y, model=model, r2=r_squared(y, model))
+    exact = x.size > 2 and no_scatter(y, model)
+    if exact:
+        # Zero residuals give s² = 0 and so "± 0": not a precise result but one whose scatter
+        # cannot be seen (readings rounded to a coarse display, or made up).
+        fit.stderr = np.full(2, math.nan)
+        fit.covariance = np.full((2, 2), math.nan)
+    return StraightLine(fit=fit, x=x, y=y, model=model, r2=r_squared(y, model), exact=exact)
+
+
+#: Warning of an analysis whose rows lie exactly on its straight line (see :func:`fit_straight_line`).
+EXACT_LINE_WARNING = (
+    "the rows lie exactly on a straight line: there is no scatter to estimate the uncertainty from "
+    "(readings rounded to a coarse display?)"
+)
+
+
+def no_scatter(y: np.ndarray, model: np.ndarray) -> bool:
+    """True when ``y − model`` is zero up to rounding of the arithmetic (an exact fit: s² = 0)."""
+    y = np.asarray(y, dtype=float)
+    scale = float(np.max(np.abs(y))) if y.size else 0.0
+    return bool(np.all(np.abs(y - model) <= 1e-12 * max(scale, 1e-300)))
 
 
 # ---- fits with known inputs that carry an uncertainty ---------------------------------------------

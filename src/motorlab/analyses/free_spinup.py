@@ -72,7 +72,8 @@ def free_spinup(
     Raises
     ------
     OptionError
-        Missing or impossible K, I, cpr, friction.
+        Missing or impossible K, I, cpr, friction; K, I, cpr or the edges per revolution outside
+        generous physical limits (:data:`~motorlab.analyses._common.TORQUE_CONSTANT_RANGE` ...).
     FitError
         Too few edges, or a motor that does not accelerate.
 
@@ -100,13 +101,21 @@ def free_spinup(
     common.check_positive(current, "current", allow_none=False)
     common.check_positive(cpr, "cpr (encoder counts per revolution)")
     common.check_positive(edges_per_revolution, "edges per revolution")
+    # Generous physical limits, checked before K·I or 2π/n_e can overflow into a non-finite fit.
+    common.check_torque_constant(torque_constant)
+    common.check_current(current)
+    common.check_cpr(cpr)
+    common.check_range(edges_per_revolution, "the edges per revolution (--edges-per-rev)", 0.25, 2.0**30, "",
+                       why="one channel of an encoder has at least a quarter of a rising edge per turn")
     common.check_nonnegative(viscous_friction, "viscous friction b")
     common.check_nonnegative(coulomb_friction, "Coulomb friction Tf")
+    common.check_limits(viscous_friction, "b", "the viscous friction b (--b)")
+    common.check_limits(coulomb_friction, "Tf", "the Coulomb friction Tf (--Tf)")
     se = {
-        "K": common.check_stderr(torque_constant_stderr, "standard error of K"),
-        "I": common.check_stderr(current_stderr, "standard error of the current"),
-        "b": common.check_stderr(viscous_friction_stderr, "standard error of b"),
-        "Tf": common.check_stderr(coulomb_friction_stderr, "standard error of Tf"),
+        "K": common.check_stderr_limit(torque_constant_stderr, "K", "the standard error of K (--K-stderr)"),
+        "I": common.check_stderr_limit(current_stderr, "I", "the standard error of the current (--current-stderr)"),
+        "b": common.check_stderr_limit(viscous_friction_stderr, "b", "the standard error of b (--b-stderr)"),
+        "Tf": common.check_stderr_limit(coulomb_friction_stderr, "Tf", "the standard error of Tf (--Tf-stderr)"),
     }
     if cpr is None and edges.metadata.get("cpr") is not None:  # a "# cpr: 1120" line of the CSV
         try:
@@ -114,6 +123,10 @@ def free_spinup(
         except (TypeError, ValueError):
             raise OptionError(f"{source}: the file's cpr {edges.metadata['cpr']!r} is not a number") from None
         common.check_positive(cpr, "cpr (encoder counts per revolution)")
+        try:
+            common.check_cpr(cpr)
+        except OptionError as exc:
+            raise OptionError(f"the file's '# cpr:' line: {exc.message}", path=edges.source or None) from None
     if edges_per_revolution is None:
         if cpr is None:
             raise OptionError("give the encoder's counts per revolution (--cpr) or --edges-per-rev")
@@ -129,7 +142,7 @@ def free_spinup(
     tau = t_edges - t_edges[0]
     b_given = viscous_friction or 0.0
     tf_given = coulomb_friction or 0.0
-    warnings: list[str] = []
+    warnings: list[str] = common.reader_warnings(edges)
 
     quad = np.polyfit(tau, theta, 2)
     alpha0 = 2.0 * quad[0]
@@ -159,10 +172,13 @@ def free_spinup(
         for name in ("K", "I", "Tf", "b")
     ]
     sigma = np.ones_like(theta)
-    fit, x_full = common.fit_with_priors(lambda x: (position(x) - theta) / sigma, x0, _NAMES, priors)
-    # Cursor errors are errors in time: a position error ω·δt (plus a constant part).
-    sigma = common.speed_noise_sigma(position(x_full) - theta, speed(x_full), dof=max(theta.size - 3, 1))
-    fit, x_full = common.fit_with_priors(lambda x: (position(x) - theta) / sigma, x_full, _NAMES, priors)
+    try:
+        fit, x_full = common.fit_with_priors(lambda x: (position(x) - theta) / sigma, x0, _NAMES, priors)
+        # Cursor errors are errors in time: a position error ω·δt (plus a constant part).
+        sigma = common.speed_noise_sigma(position(x_full) - theta, speed(x_full), dof=max(theta.size - 3, 1))
+        fit, x_full = common.fit_with_priors(lambda x: (position(x) - theta) / sigma, x_full, _NAMES, priors)
+    except FitError as exc:
+        raise common.in_file(exc, source) from None
 
     est = fit.estimates({n: _UNITS[n] for n in fit.names})
     alpha = rates(x_full)[1]
@@ -203,7 +219,7 @@ def free_spinup(
         r2=r_squared(theta, model_theta),
         n_points=int(theta.size),
         panels=panels,
-        warnings=list(edges.metadata.get("warnings", [])) + warnings,
+        warnings=warnings,
         details=details,
         sources=[edges.source] if edges.source else [],
     )

@@ -20,12 +20,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from motorlab.analyses._common import (
+    EXACT_LINE_WARNING,
     StraightLine,
     concatenate,
     finite_rows,
     fit_straight_line,
     metadata_quantity,
     read_tables,
+    reader_warnings,
     sources_of,
 )
 from motorlab.errors import OptionError
@@ -77,10 +79,12 @@ _SPECS = {
 
 
 def _gain_result(
-    experiment: str, x: np.ndarray, y: np.ndarray, *, nominal: float | None, sources: list[str]
+    experiment: str, x: np.ndarray, y: np.ndarray, *, nominal: float | None, sources: list[str],
+    read_warnings: list[str],
 ) -> FitResult:
     spec = _SPECS[experiment]
-    line = fit_straight_line(x, y, source=" + ".join(sources), what=spec.x_label.split(" [")[0])
+    line = fit_straight_line(x, y, source=" + ".join(sources), what=spec.x_label.split(" [")[0],
+                             response=spec.y_label.split(" [")[0])
     unit = SI_UNITS[spec.name]
     params = line.fit.estimates({"slope": unit, "intercept": spec.intercept_unit})
     slope, intercept = params["slope"], params["intercept"]
@@ -91,10 +95,12 @@ def _gain_result(
             "intercept of the straight line (offset)",
         ),
     }
-    warnings: list[str] = []
+    warnings: list[str] = list(read_warnings)
     details: dict[str, object] = {"seed": spec.seed}
     if x.size == 2:
         warnings.append("only two rows: the line passes through both, so no uncertainty can be estimated")
+    elif line.exact:
+        warnings.append(EXACT_LINE_WARNING)
     if math.isfinite(intercept.stderr) and abs(intercept.value) > 3 * intercept.stderr:
         x_span = float(np.max(np.abs(x)))
         share = abs(intercept.value) / max(abs(slope.value) * x_span, 1e-300)
@@ -174,7 +180,8 @@ def amplifier(
     """
     recs = _as_list(recordings)
     rec = concatenate(recs, ["command", "current"])
-    return _gain_result("amplifier", rec["command"], rec["current"], nominal=nominal, sources=sources_of(recs))
+    return _gain_result("amplifier", rec["command"], rec["current"], nominal=nominal, sources=sources_of(recs),
+                        read_warnings=reader_warnings(recs))
 
 
 def tachometer(
@@ -215,7 +222,8 @@ def tachometer(
     speed_name = "speed" if all("speed" in r for r in recs) else "velocity"
     rec = concatenate(recs, [speed_name, "tach_voltage"])
     return _gain_result(
-        "tachometer", rec[speed_name], rec["tach_voltage"], nominal=nominal, sources=sources_of(recs)
+        "tachometer", rec[speed_name], rec["tach_voltage"], nominal=nominal, sources=sources_of(recs),
+        read_warnings=reader_warnings(recs),
     )
 
 

@@ -15,8 +15,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from motorlab.analyses._common import finite_rows, metadata_quantity, read_tables, sources_of
-from motorlab.errors import FitError, LogFormatError, OptionError
+from motorlab.analyses._common import finite_rows, metadata_quantity, read_tables, reader_warnings, sources_of
+from motorlab.errors import LogFormatError, OptionError
 from motorlab.recording import Recording
 from motorlab.results import Estimate, FitResult, Panel, Series
 from motorlab.units import SI_UNITS
@@ -25,6 +25,15 @@ from motorlab.units import SI_UNITS
 DEFAULT_FREQUENCY = 1000.0
 #: Modified z-score above which a reading is an outlier (Iglewicz & Hoaglin's 3.5).
 OUTLIER_Z = 3.5
+#: Smallest outlier threshold accepted. At 1, a third of normal readings are already set aside; it
+#: also guarantees that at least half the readings (those within one MAD of the median) are kept.
+MIN_OUTLIER_Z = 1.0
+#: Test frequencies [Hz] refused outright: no LCR meter or impedance analyser measures L and Q
+#: outside this range, so such a value is a wrong unit or a typo (and 2πfL/Q would overflow).
+FREQUENCY_LIMITS = (1.0, 1e8)
+#: Test frequencies [Hz] of common LCR meters (the seed's DE-5000: 100 Hz–100 kHz; bench meters
+#: such as Keysight's E4980A: 20 Hz–2 MHz); outside it a warning asks to check the unit.
+FREQUENCY_USUAL = (20.0, 2e6)
 
 
 def robust_outliers(values: np.ndarray, *, threshold: float = OUTLIER_Z) -> np.ndarray:
@@ -81,13 +90,51 @@ def _frequency_of(recording: Recording, frequency: float | None) -> tuple[np.nda
     n = len(recording)
     if frequency is not None:
         return np.full(n, frequency), "option"
+    low, high = FREQUENCY_LIMITS
     if "frequency" in recording:
         finite_rows(recording, ["frequency"])
-        return recording["frequency"], "column"
+        values = recording["frequency"]
+        bad = np.flatnonzero((values < low) | (values > high))
+        if bad.size:
+            raise LogFormatError(
+                f"test frequency {values[bad[0]]:g} Hz is outside {low:g} Hz–{high:g} Hz, where no LCR meter "
+                "measures (a wrong unit?)", path=recording.source or None, line=recording.line_of(int(bad[0])),
+            )
+        return values, "column"
     meta = metadata_quantity(recording, ["frequency_Hz", "frequency"], "Hz")
     if meta is not None:
+        if not low <= meta <= high:
+            raise LogFormatError(
+                f"the '# frequency_Hz:' line gives {meta:g} Hz, outside {low:g} Hz–{high:g} Hz, where no LCR "
+                "meter measures (a wrong unit?)", path=recording.source or None,
+            )
         return np.full(n, meta), "metadata"
     return np.full(n, DEFAULT_FREQUENCY), "default"
+
+
+def check_frequency(frequency: float | None) -> None:
+    """Raise :class:`OptionError` for a test frequency no LCR meter uses (see :data:`FREQUENCY_LIMITS`)."""
+    if frequency is None:
+        return
+    low, high = FREQUENCY_LIMITS
+    if not (math.isfinite(frequency) and frequency > 0):
+        raise OptionError(f"the test frequency (--frequency) must be positive, got {frequency} Hz")
+    if not low <= frequency <= high:
+        raise OptionError(
+            f"the test frequency (--frequency) {frequency:g} Hz is outside {low:g} Hz–{high:g} Hz, where no LCR "
+            "meter measures (the seed's DE-5000 uses 100 Hz–100 kHz): a wrong unit?"
+        )
+
+
+def _only_one(what: str, recs: list[Recording], rows: list[np.ndarray]) -> LogFormatError:
+    """The error for a single reading, naming the file(s) it came from (and its line, for one file)."""
+    holders = [rec for rec, r in zip(recs, rows, strict=True) if r.size]
+    path = " + ".join(rec.source for rec in holders if rec.source) or None
+    line = holders[0].line_of(0) if len(holders) == 1 else None
+    return LogFormatError(
+        f"only one {what} reading: the seed takes ten, at different shaft positions (R and L vary with the "
+        "commutator position, so one reading has no uncertainty)", path=path, line=line,
+    )
 
 
 def lcr(
@@ -127,9 +174,11 @@ def lcr(
     LogFormatError
         If no file holds L and Q nor DCR, or a reading is not finite or not positive.
     OptionError
-        For an impossible frequency or circuit.
-    FitError
-        If fewer than two readings remain.
+        For an impossible circuit, or a frequency outside :data:`FREQUENCY_LIMITS` (1 Hz–100 MHz: no
+        LCR meter measures there; a frequency outside 20 Hz–2 MHz is warned about).
+    LogFormatError
+        If only one L/Q (or DC resistance) reading is given (naming its file), or a frequency
+        column or ``# frequency_Hz:`` line lies outside :data:`FREQUENCY_LIMITS`.
 
     Notes
     -----
@@ -151,15 +200,21 @@ def lcr(
     recs = [recordings] if isinstance(recordings, Recording) else list(recordings)
     if not recs:
         raise OptionError("no recording given")
-    if frequency is not None and not (math.isfinite(frequency) and frequency > 0):
-        raise OptionError(f"the test frequency must be positive, got {frequency} Hz")
-    warnings: list[str] = []
+    check_frequency(frequency)
+    if not (math.isfinite(threshold) and MIN_OUTLIER_Z <= threshold):
+        raise OptionError(
+            f"the outlier threshold (--outlier-z) must be a modified z-score of at least {MIN_OUTLIER_Z:g}, got "
+            f"{threshold!r} (below it ordinary readings are set aside; {OUTLIER_Z} is the usual choice)"
+        )
+    warnings: list[str] = reader_warnings(recs)
     l_rows: list[np.ndarray] = []
     q_rows: list[np.ndarray] = []
     f_rows: list[np.ndarray] = []
     dcr_rows: list[np.ndarray] = []
     freq_origin = set()
     circuits = set()
+    l_recs: list[Recording] = []
+    dcr_recs: list[Recording] = []
     for rec in recs:
         has_lq = rec.has("inductance", "quality_factor")
         has_dcr = "dc_resistance" in rec
@@ -178,11 +233,13 @@ def lcr(
             l_rows.append(rec["inductance"])
             q_rows.append(rec["quality_factor"])
             f_rows.append(f)
+            l_recs.append(rec)
             circuits.add(_circuit_of(rec, circuit))
         if has_dcr:
             finite_rows(rec, ["dc_resistance"])
             _positive(rec, "dc_resistance")
             dcr_rows.append(rec["dc_resistance"])
+            dcr_recs.append(rec)
     sources = sources_of(recs)
     if len(circuits) > 1:
         raise OptionError("the files disagree on the meter's equivalent circuit (series/parallel): give --circuit")
@@ -201,7 +258,13 @@ def lcr(
         q = np.concatenate(q_rows)
         f = np.concatenate(f_rows)
         if inductance.size < 2:
-            raise FitError("only one L/Q reading: the seed takes ten, at different shaft positions")
+            raise _only_one("L/Q", l_recs, l_rows)
+        low, high = FREQUENCY_USUAL
+        if np.any((f < low) | (f > high)):
+            warnings.append(
+                f"test frequency {_freq_text(f)} is outside the {low:g} Hz–{high / 1e6:g} MHz of common LCR "
+                "meters: check its unit"
+            )
         if circ == "parallel":
             # Parallel Lp with Q = Rp/(ωLp) is the same impedance as Ls = Lp·Q²/(1+Q²) in series with Rs.
             inductance = inductance * q**2 / (1 + q**2)
@@ -264,7 +327,7 @@ def lcr(
     if dcr_rows:
         dcr = np.concatenate(dcr_rows)
         if dcr.size < 2:
-            raise FitError("only one DC resistance reading: the seed takes ten, at different shaft positions")
+            raise _only_one("DC resistance", dcr_recs, dcr_rows)
         d_out = robust_outliers(dcr, threshold=threshold)
         d_kept = ~d_out
         parameters["R_dc"] = _mean_estimate(

@@ -17,7 +17,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from motorlab.analyses._common import metadata_quantity, ramp_speed, read_tables, sources_of
+from motorlab.analyses._common import (
+    LIMITS,
+    check_range,
+    check_stderr_limit,
+    check_torque_constant,
+    metadata_quantity,
+    ramp_speed,
+    read_tables,
+    reader_warnings,
+    sources_of,
+)
 from motorlab.errors import FitError, LogFormatError, OptionError
 from motorlab.fitting import LeastSquares, fit_least_squares, fit_linear, r_squared
 from motorlab.recording import Recording
@@ -60,11 +70,12 @@ def _noise_sigma(speed: np.ndarray) -> float:
     return float(1.4826 * np.median(np.abs(d2 - np.median(d2))) / math.sqrt(6.0))
 
 
-def _levels(command: np.ndarray) -> tuple[np.ndarray, float, float]:
+def _levels(command: np.ndarray, *, source: str = "") -> tuple[np.ndarray, float, float]:
     """High/low state of the command with hysteresis, and the low and high levels [V]."""
     lo, hi = float(np.percentile(command, 2)), float(np.percentile(command, 98))
     if not hi > lo:
-        raise FitError("the command never changes: no pulses to analyse (expected a square wave)")
+        where = f"{source}: " if source else ""
+        raise FitError(f"{where}the command never changes: no pulses to analyse (expected a square wave)")
     up, down = lo + 0.6 * (hi - lo), lo + 0.4 * (hi - lo)
     state = np.empty(command.size, dtype=bool)
     high = bool(command[0] > 0.5 * (lo + hi))
@@ -100,7 +111,7 @@ def _regions(
     if rec.metadata.get("time") == "row index":
         raise LogFormatError("the pulse analysis needs a time column (time_s or time_ms)", path=rec.source or None)
     warnings: list[str] = []
-    state, _, _ = _levels(command)
+    state, _, _ = _levels(command, source=rec.source)
     change = np.flatnonzero(np.diff(state.astype(np.int8))) + 1
     rises = [int(k) for k in change if state[k]]
     falls = [int(k) for k in change if not state[k]]
@@ -334,6 +345,10 @@ def pulse(
         raise OptionError(f"the amplifier gain Ka must be positive, got {amplifier_gain} A/V")
     if not (math.isfinite(torque_constant) and torque_constant > 0):
         raise OptionError(f"the torque constant Km must be positive, got {torque_constant} N·m/A")
+    # Generous physical limits: Ka = 1e-300 A/V made J ~ 1e-300 kg·m² and J² underflow to 0.
+    check_range(amplifier_gain, "the amplifier gain (--Ka)", *LIMITS["Ka"][:2], "A/V",
+                why="seed 2's amplifier gives 2 A/V; no servo amplifier is outside this by far")
+    check_torque_constant(torque_constant, "the torque constant Km (--K)")
     if not (math.isfinite(skip) and skip >= 0):
         raise OptionError(f"the time skipped after edges must be ≥ 0, got {skip} s")
     if friction not in ("auto", *FRICTION_MODELS):
@@ -349,13 +364,19 @@ def pulse(
                         (torque_constant_stderr, "Km")):
         if not (math.isfinite(value) and value >= 0):
             raise OptionError(f"the standard error of {what} must be a finite number ≥ 0, got {value}")
+    check_range(abs(amplifier_offset), "the amplifier offset (--I0) in magnitude", 0.0, LIMITS["I"][1], "A",
+                why="beyond any servo amplifier")
+    check_stderr_limit(amplifier_gain_stderr, "Ka", "the standard error of Ka (--Ka-stderr)")
+    check_stderr_limit(amplifier_offset_stderr, "I", "the standard error of I0 (--I0-stderr)")
+    check_stderr_limit(torque_constant_stderr, "K", "the standard error of Km (--Km-stderr)")
     if not (math.isfinite(gain_offset_correlation) and abs(gain_offset_correlation) <= 1):
         raise OptionError(f"the Ka-I0 correlation must lie in [-1, 1], got {gain_offset_correlation}")
     gain = amplifier_gain * torque_constant  # torque per command volt [N·m/V]
     # An amplifier offset I0 acts as a command offset I0/Ka: τ = Ka·Km·(V + I0/Ka).
     command_offset = amplifier_offset / amplifier_gain
     regions: list[_Region] = []
-    warnings: list[str] = []
+    warnings: list[str] = reader_warnings(recs)
+    n_read = len(warnings)  # the friction-model sentence goes right after what the readers noted
     traces = []
     sigmas = []
     for rec in recs:
@@ -421,7 +442,7 @@ def pulse(
         jb = [fit.names.index("J"), fit.names.index("b")]
         cov = fit.covariance[np.ix_(jb, jb)]
         jv, bv = float(fit.values[jb[0]]), float(fit.values[jb[1]])
-        grad = np.array([-bv / jv**2, 1.0 / jv])
+        grad = np.array([-(bv / jv) / jv, 1.0 / jv])  # d(b/J)/dJ written so that J² cannot underflow
         g_err = float(np.sqrt(max(grad @ cov @ grad, 0.0)))
         parameters["gamma"] = Estimate("gamma", bv / jv, g_err, SI_UNITS["gamma"], bool(est["b"].determined), "b/J")
     fitted_names = ["J"] + (["b"] if with_b else []) + (["Tf"] if with_tf else [])
@@ -443,7 +464,7 @@ def pulse(
     all_t = np.concatenate([r.time for r in regions])
     all_w = np.concatenate([r.speed for r in regions])
     model_w = all_w + fit.residuals
-    warnings.insert(0, sentence)
+    warnings.insert(n_read, sentence)
     if chosen == "coulomb" and best != "coulomb":
         warnings.append("viscous friction is left out of the final fit as asked: J and Tf are biased")
 
@@ -749,6 +770,10 @@ def from_cli(experiment: str, paths: list[str], args: argparse.Namespace) -> Fit
         ka = metadata_quantity(recs[0], ["Ka_A_per_V", "Ka"], "A/V")
         if ka is None:
             raise OptionError("give the amplifier gain --Ka [A/V] (measure it with 'motorlab analyze amplifier')")
+        try:
+            check_range(ka, "the amplifier gain", *LIMITS["Ka"][:2], "A/V", why="no servo amplifier is outside this")
+        except OptionError as exc:
+            raise LogFormatError(f"the '# Ka_A_per_V:' line: {exc.message}", path=recs[0].source or None) from None
     return pulse(
         recs,
         amplifier_gain=ka,

@@ -79,6 +79,33 @@ def find_cutoff(time: np.ndarray, current: np.ndarray, *, source: str = "") -> t
     return last_on + 1, 0.5 * float(time[last_on] + time[last_on + 1])
 
 
+def _check_no_current_after(
+    time: np.ndarray, current: np.ndarray, t_start: float, cutoff: float, *, path: str | None
+) -> None:
+    """Refuse a given cut-off after which the motor is still driven (three or more powered samples).
+
+    The powered level is the one :func:`find_cutoff` uses: above 2 % of the drive current and six
+    noise σ's above the zero read at the end of the log. A coast model fitted to a powered run gives
+    numbers that look like results (the QA run: K = 1.29 against 0.70, γ < 0) instead of an error.
+    """
+    i_abs = np.abs(current)
+    i_on = float(np.percentile(i_abs, 95))
+    if i_on < 0.02:
+        return  # no powered phase in the log at all
+    tail = i_abs[-max(5, i_abs.size // 20):]
+    tail_level = float(np.median(tail))
+    noise = 1.4826 * float(np.median(np.abs(tail - tail_level)))
+    threshold = max(tail_level + 6.0 * noise, 0.02 * i_on, 0.005)
+    powered = np.flatnonzero((time >= t_start) & (i_abs > threshold))
+    if powered.size >= 3:
+        raise OptionError(
+            f"the current still flows after the cut-off (--cutoff) {cutoff:g} s: {powered.size} samples up to "
+            f"{float(time[powered[-1]]):g} s carry up to {float(np.max(i_abs[powered])):.3g} A; the relay opened "
+            "later (leave --cutoff out to find it from the current)",
+            path=path,
+        )
+
+
 def _initial_guess(tau: np.ndarray, theta: np.ndarray) -> list[tuple[float, float, float]]:
     """Starting (ω0, γ, Tf/J) guesses from block-averaged finite-difference speeds."""
     n = tau.size
@@ -141,7 +168,8 @@ def spindown(
     Raises
     ------
     OptionError
-        Impossible ``cpr``, ``inertia``, ``inertia_stderr``, ``cutoff`` or ``guard``.
+        Impossible ``cpr``, ``inertia``, ``inertia_stderr``, ``cutoff`` or ``guard``; a ``cutoff``
+        outside the log's time span, or one after which the current still flows (naming the file).
     LogFormatError
         NaN in the log, or no encoder signal.
     FitError
@@ -166,7 +194,8 @@ def spindown(
     source = recording.source or "log"
     common.check_nonnegative(guard, "guard")
     common.check_positive(inertia, "inertia")
-    inertia_se = common.check_stderr(inertia_stderr, "inertia standard error")
+    common.check_limits(inertia, "J", "the inertia (--inertia)")
+    inertia_se = common.check_stderr_limit(inertia_stderr, "J", "the inertia's standard error (--inertia-stderr)")
     if cutoff is not None and not math.isfinite(cutoff):
         raise OptionError(f"cutoff must be a finite time in seconds, got {cutoff!r}")
     common.check_finite_signals(recording, ["counts", "position", "voltage", "current"])
@@ -175,15 +204,26 @@ def spindown(
     n_all = t_all.size
     if n_all < _MIN_SAMPLES:
         raise FitError(f"{source}: {n_all} samples are too few for a spin-down fit")
-    warnings: list[str] = []
+    warnings: list[str] = common.reader_warnings(recording)
     tick_log = common.is_tick_log(recording)
     has_current = "current" in recording.signals and not tick_log
     has_voltage = "voltage" in recording.signals and not tick_log
+    if cutoff is not None and not float(t_all[0]) <= cutoff <= float(t_all[-1]):
+        # Before the log starts the powered run would be fitted as a coast (K = 1.30 against 0.70
+        # and Tf/J < 0 in the QA run); after it ends there is nothing to fit.
+        raise OptionError(
+            f"the cut-off (--cutoff) {cutoff:g} s lies outside the log's time span "
+            f"{float(t_all[0]):g} s to {float(t_all[-1]):g} s",
+            path=recording.source or None,
+        )
 
     # ---- the coast: after the relay opened (plus a guard), until the shaft stopped -----------------
     if cutoff is not None:
         t_off = float(cutoff)
         first = int(np.searchsorted(t_all, t_off, side="left"))
+        if has_current:
+            _check_no_current_after(t_all, recording.signals["current"], t_off + guard, cutoff,
+                                    path=recording.source or None)
     elif has_current:
         first_or_none, t_off = find_cutoff(t_all, recording.signals["current"], source=source)
         if first_or_none is None:
@@ -232,10 +272,13 @@ def spindown(
 
     best: LeastSquares | None = None
     for omega0, gamma0, decel0 in _initial_guess(tau, theta):
-        fit = fit_least_squares(
-            lambda x: position_model(x) - theta, [0.0, omega0, gamma0, decel0],
-            ["theta0", "omega0", "gamma", "Tf_over_J"],
-        )
+        try:
+            fit = fit_least_squares(
+                lambda x: position_model(x) - theta, [0.0, omega0, gamma0, decel0],
+                ["theta0", "omega0", "gamma", "Tf_over_J"],
+            )
+        except FitError as exc:
+            raise common.in_file(exc, source) from None
         if best is None or float(fit.residuals @ fit.residuals) < float(best.residuals @ best.residuals):
             best = fit
     assert best is not None
@@ -278,7 +321,10 @@ def spindown(
 
     def run(fixed: dict[int, float], x0: np.ndarray) -> LeastSquares:
         residual, free = make_residual(fixed)
-        return fit_least_squares(residual, x0[free], [names[k] for k in free], sigma_known=True)
+        try:
+            return fit_least_squares(residual, x0[free], [names[k] for k in free], sigma_known=True)
+        except FitError as exc:
+            raise common.in_file(exc, source) from None
 
     joint = run({}, x_start)
     # Refine the σ's once from the joint fit's own residuals, then refit.
@@ -410,7 +456,7 @@ def spindown(
         r2=r_squared(theta, model_theta),
         n_points=int(tau.size),
         panels=panels,
-        warnings=list(recording.metadata.get("warnings", [])) + warnings,
+        warnings=warnings,
         details=details,
         sources=[recording.source] if recording.source else [],
     )

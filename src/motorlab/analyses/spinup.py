@@ -105,7 +105,8 @@ def spinup(
     Raises
     ------
     OptionError
-        Impossible inertia, friction or limits, or friction given twice.
+        Impossible inertia, friction or limits (``start`` not before ``end``, or outside the log's
+        time span), or friction given twice.
     LogFormatError
         NaN in the log, no encoder signal or no current.
     FitError
@@ -126,18 +127,32 @@ def spinup(
     """
     source = recording.source or "log"
     common.check_positive(inertia, "inertia", allow_none=False)
-    inertia_se = common.check_stderr(inertia_stderr, "inertia standard error")
+    common.check_limits(inertia, "J", "the inertia (--inertia)")
+    inertia_se = common.check_stderr_limit(inertia_stderr, "J", "the inertia's standard error (--inertia-stderr)")
     common.check_nonnegative(viscous_friction, "viscous friction b")
     common.check_nonnegative(coulomb_friction, "Coulomb friction Tf")
-    b_se = common.check_stderr(viscous_friction_stderr, "standard error of b")
-    tf_se = common.check_stderr(coulomb_friction_stderr, "standard error of Tf")
+    common.check_limits(viscous_friction, "b", "the viscous friction b (--b)")
+    common.check_limits(coulomb_friction, "Tf", "the Coulomb friction Tf (--Tf)")
+    b_se = common.check_stderr_limit(viscous_friction_stderr, "b", "the standard error of b (--b-stderr)")
+    tf_se = common.check_stderr_limit(coulomb_friction_stderr, "Tf", "the standard error of Tf (--Tf-stderr)")
     if spindown_result is not None and (viscous_friction is not None or coulomb_friction is not None):
         raise OptionError("give the friction either from a spin-down or as b/Tf, not both")
+    for value, name in ((start, "start (--start)"), (end, "end (--end)")):
+        if value is not None and not math.isfinite(value):
+            raise OptionError(f"the {name} must be a finite time in seconds, got {value!r}")
+    if start is not None and end is not None and not start < end:
+        raise OptionError(f"the start (--start {start:g} s) is not before the end (--end {end:g} s) of the "
+                          "constant-current phase")
     common.check_finite_signals(recording, ["counts", "position", "current"])
     theta_all, _quantum = common.position_of(recording, cpr=cpr)
     current_all = recording.require("current")
     t_all = recording.time
-    warnings: list[str] = []
+    warnings: list[str] = common.reader_warnings(recording)
+    span = f"{float(t_all[0]):g} s to {float(t_all[-1]):g} s" if t_all.size else "empty"
+    for value, name in ((start, "start (--start)"), (end, "end (--end)")):
+        if value is not None and t_all.size and not float(t_all[0]) <= value <= float(t_all[-1]):
+            raise OptionError(f"the {name} {value:g} s lies outside the log's time span {span}",
+                              path=recording.source or None)
 
     first, last = constant_current_phase(t_all, current_all, source=source)
     if start is not None:
@@ -211,11 +226,14 @@ def spinup(
     ]
     # Stage 1 with unit weights gives the residuals from which the position σ's are estimated.
     sigma = np.ones_like(theta)
-    fit, x_full = common.fit_with_priors(lambda x: (position(x) - theta) / sigma, x0, names, priors)
-    res = position(x_full) - theta
-    speed = common.ramp_speed(tau, x_full[1], *rates(x_full))
-    sigma = common.speed_noise_sigma(res, speed, dof=max(theta.size - 3, 1))
-    fit, x_full = common.fit_with_priors(lambda x: (position(x) - theta) / sigma, x_full, names, priors)
+    try:
+        fit, x_full = common.fit_with_priors(lambda x: (position(x) - theta) / sigma, x0, names, priors)
+        res = position(x_full) - theta
+        speed = common.ramp_speed(tau, x_full[1], *rates(x_full))
+        sigma = common.speed_noise_sigma(res, speed, dof=max(theta.size - 3, 1))
+        fit, x_full = common.fit_with_priors(lambda x: (position(x) - theta) / sigma, x_full, names, priors)
+    except FitError as exc:
+        raise common.in_file(exc, source) from None
 
     est = fit.estimates({n: _UNITS[n] for n in fit.names})
     alpha = rates(x_full)[1]
@@ -262,7 +280,7 @@ def spinup(
         r2=r_squared(theta, model_theta),
         n_points=int(theta.size),
         panels=panels,
-        warnings=list(recording.metadata.get("warnings", [])) + warnings,
+        warnings=warnings,
         details=details,
         sources=[recording.source] if recording.source else [],
     )

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from motorlab.analyses import _common as common
-from motorlab.errors import FitError, OptionError
+from motorlab.errors import FitError, LogFormatError, OptionError
 from motorlab.fitting import fit_linear, r_squared
 from motorlab.recording import Recording
 from motorlab.results import Estimate, FitResult, Panel, Series
@@ -37,11 +37,18 @@ def speeds_of(recording: Recording, *, cpr: float | None = None) -> np.ndarray:
         No frequency or speed column.
     """
     if "frequency" in recording.signals:
+        from_file = cpr is None
         if cpr is None:
             cpr = recording.metadata.get("cpr")
         if cpr is None:
             raise OptionError("the rows hold encoder channel frequencies: give the counts per revolution (--cpr)")
         common.check_positive(float(cpr), "cpr (encoder counts per revolution)")
+        try:
+            common.check_cpr(float(cpr))
+        except OptionError as exc:
+            if not from_file:
+                raise
+            raise LogFormatError(f"the '# cpr:' line: {exc.message}", path=recording.source or None) from None
         # One cycle of one channel spans four quadrature counts (seed 1, step 2).
         return 2.0 * math.pi * 4.0 * recording.signals["frequency"] / float(cpr)
     for name in ("speed", "velocity"):
@@ -60,6 +67,7 @@ def terminal(
     coulomb_friction: float | None = None,
     coulomb_friction_stderr: float | None = None,
     current_stderr: float | None = None,
+    frequency_stderr: float | None = None,
 ) -> FitResult:
     """Viscous (and Coulomb) friction from steady speeds at constant currents.
 
@@ -77,13 +85,17 @@ def terminal(
     coulomb_friction, coulomb_friction_stderr
         A known Tf [N·m] (and its standard error): then only b is fitted.
     current_stderr
-        Standard error of one current reading [A], used when a single row leaves no residuals
-        (default: 0, i.e. only K's uncertainty).
+        Standard error of one current reading [A] (the ammeter's resolution and accuracy), used
+        when the rows leave no scatter to estimate it from (a single row, or exact repeats).
+        Without it, b from such rows is reported with its uncertainty as unknown.
+    frequency_stderr
+        Standard error of one frequency reading [Hz] (the counter's resolution), propagated
+        alongside ``current_stderr`` in the same cases (default: exact).
 
     Returns
     -------
     FitResult
-        ``b`` [N·m·s/rad] and, with two or more distinct speeds, ``Tf`` [N·m].
+        ``b`` [N·m·s/rad] and, with two or more distinct currents and speeds, ``Tf`` [N·m].
 
     Raises
     ------
@@ -101,8 +113,13 @@ def terminal(
     state): it is ω = (K·I − Tf)/b. With several currents the current is regressed on the speed,
     I = (b/K)·ω + Tf/K, by ordinary least squares: the frequency counter reads to ~0.02 % while the
     supply's ammeter reads to ~1 mA and ±0.2 %, so the errors are in I and the small error in ω is
-    neglected. K's uncertainty is then propagated (it scales b and Tf alike). With a single current
-    b = (K·I − Tf)/ω, and without Tf the Coulomb friction is folded into b.
+    neglected. K's uncertainty is then propagated (it scales b and Tf alike). With a single
+    operating point (one row, rows whose speeds differ by less than 1 %, or rows that all read the
+    same current) b and Tf cannot be separated: b = (K·I − Tf)/ω, and without Tf the Coulomb
+    friction is folded into b. Its standard error is then the scatter of the per-row values
+    b_k = (K·I_k − Tf)/ω_k when the rows differ, else first-order propagation of the given reading
+    uncertainties, σ_b² = ((I·σ_K)² + (K·σ_I)² + σ_Tf² + (b·σ_ω)²)/ω²; with neither it is unknown
+    (NaN), never a bare 0.
 
     References
     ----------
@@ -111,17 +128,29 @@ def terminal(
     source = recording.source or "rows"
     common.check_positive(torque_constant, "K (torque constant)", allow_none=False)
     common.check_positive(cpr, "cpr (encoder counts per revolution)")
-    k_se = common.check_stderr(torque_constant_stderr, "standard error of K")
+    common.check_cpr(cpr)
+    common.check_torque_constant(torque_constant)
+    k_se = common.check_stderr_limit(torque_constant_stderr, "K", "the standard error of K (--K-stderr)")
     common.check_nonnegative(coulomb_friction, "Coulomb friction Tf")
-    tf_se = common.check_stderr(coulomb_friction_stderr, "standard error of Tf")
-    i_se_given = common.check_stderr(current_stderr, "standard error of the current")
+    common.check_limits(coulomb_friction, "Tf", "the Coulomb friction Tf (--Tf)")
+    tf_se = common.check_stderr_limit(coulomb_friction_stderr, "Tf", "the standard error of Tf (--Tf-stderr)")
+    common.check_nonnegative(current_stderr, "standard error of the current")
+    common.check_stderr_limit(current_stderr, "I", "the standard error of the current (--current-stderr)")
+    f_se = common.check_stderr_limit(frequency_stderr, "f", "the standard error of the frequency (--frequency-stderr)")
     common.check_finite_signals(recording, ["current", "frequency", "speed", "velocity"])
     current = np.abs(recording.require("current"))
     omega = np.abs(speeds_of(recording, cpr=cpr))
+    if frequency_stderr is not None and "frequency" not in recording.signals:
+        raise OptionError(f"{source}: the rows hold speeds, not frequencies: the frequency's standard error "
+                          "does not apply")
+    # One frequency reading's standard error as a speed [rad/s]: ω = 2π·4·f/cpr (speeds_of).
+    omega_se = 0.0
+    if f_se > 0:
+        omega_se = 2.0 * math.pi * 4.0 * f_se / float(cpr if cpr is not None else recording.metadata["cpr"])
     if current.size == 0:
         raise FitError(f"{source}: no rows")
     K = torque_constant
-    warnings: list[str] = []
+    warnings: list[str] = common.reader_warnings(recording)
     at_rest = omega <= 0
     if np.all(at_rest):
         raise FitError(f"{source}: the motor did not turn in any row (zero speed): raise the current")
@@ -131,7 +160,8 @@ def terminal(
         warnings.append(f"rows {rows} have zero speed (stiction held the shaft, K·I ≤ Tf): left out")
         current, omega = current[~at_rest], omega[~at_rest]
     spread = float(np.ptp(omega) / np.mean(omega))
-    several = current.size >= 2 and spread >= _MIN_SPREAD
+    one_current = current.size >= 2 and float(np.ptp(current)) == 0.0
+    several = current.size >= 2 and spread >= _MIN_SPREAD and not one_current
     details: dict[str, Any] = {
         "rows": [{"current_A": float(i), "speed_rad_per_s": float(w)} for i, w in zip(current, omega, strict=True)]
     }
@@ -140,11 +170,14 @@ def terminal(
     correlation_names: list[str] = []
     if several and coulomb_friction is None:
         # I = β1·ω + β0 with β1 = b/K, β0 = Tf/K.
-        fit = fit_linear(np.column_stack([omega, np.ones_like(omega)]), current, ["b_over_K", "Tf_over_K"])
+        line = common.fit_straight_line(omega, current, source=source, what="speed", response="current")
+        fit = line.fit
         (beta1, beta0), cov = fit.values, fit.covariance
         if current.size == 2:
             warnings.append("two rows determine b and Tf exactly: their uncertainty cannot be estimated")
             cov = np.full((2, 2), np.nan)
+        elif line.exact:
+            warnings.append(common.EXACT_LINE_WARNING)
         b = K * beta1
         tf = K * beta0
         b_se = math.sqrt(K**2 * cov[0, 0] + beta1**2 * k_se**2)
@@ -160,27 +193,35 @@ def terminal(
         model_current = beta1 * omega + beta0
     else:
         tf = coulomb_friction or 0.0
-        if current.size >= 2 and coulomb_friction is not None:
+        if several:
             # (K·I − Tf) = b·ω through the origin.
             fit = fit_linear(omega[:, None], K * current - tf, ["b"])
             b = float(fit.values[0])
-            var_fit = float(fit.covariance[0, 0]) if current.size > 1 else 0.0
+            var_fit = float(fit.covariance[0, 0])
+            if common.no_scatter(K * current - tf, b * omega):
+                var_fit = math.nan
+                warnings.append(common.EXACT_LINE_WARNING)
             # K and Tf errors move every row alike: propagate them through b = (K·Ī − Tf)·ω̄/ω̄².
             w2 = float(np.sum(omega**2))
             db_dk = float(np.sum(current * omega)) / w2
             db_dtf = -float(np.sum(omega)) / w2
             b_se = math.sqrt(var_fit + db_dk**2 * k_se**2 + db_dtf**2 * tf_se**2)
         else:
-            if current.size >= 2:
+            b, b_se = _one_operating_point(
+                current, omega, K=K, tf=tf, k_se=k_se, tf_se=tf_se, i_se=current_stderr, omega_se=omega_se,
+                warnings=warnings,
+            )
+            if one_current and spread >= _MIN_SPREAD:
+                warnings.append(
+                    f"every row reads the same current ({current[0]:.4g} A) while the speeds differ by "
+                    f"{100 * spread:.2g} %: b and Tf cannot be separated; rows treated as repeats of one "
+                    "operating point (measure at several currents)"
+                )
+            elif current.size >= 2:
                 warnings.append(
                     f"the rows span only {100 * spread:.2g} % in speed: b and Tf cannot be separated; "
                     "rows treated as repeats of one operating point"
                 )
-            i_mean = float(np.mean(current))
-            w_mean = float(np.mean(omega))
-            i_se = (float(np.std(current, ddof=1)) / math.sqrt(current.size) if current.size > 1 else i_se_given)
-            b = (K * i_mean - tf) / w_mean
-            b_se = math.sqrt((i_mean * k_se) ** 2 + (K * i_se) ** 2 + tf_se**2) / w_mean
             if coulomb_friction is None:
                 warnings.append(
                     "one operating point: Coulomb friction is folded into b (b = K·I/ω); "
@@ -206,10 +247,40 @@ def terminal(
         r2=r_squared(current, model_current) if current.size > 2 else math.nan,
         n_points=int(current.size),
         panels=panels,
-        warnings=list(recording.metadata.get("warnings", [])) + warnings,
+        warnings=warnings,
         details=details,
         sources=[recording.source] if recording.source else [],
     )
+
+
+def _one_operating_point(
+    current: np.ndarray, omega: np.ndarray, *, K: float, tf: float, k_se: float, tf_se: float,
+    i_se: float | None, omega_se: float, warnings: list[str],
+) -> tuple[float, float]:
+    """b = (K·Ī − Tf)/ω̄ of rows that repeat one operating point, and its standard error (NaN if unknown).
+
+    The scatter of the per-row b_k measures the reading errors when the rows differ; K's and Tf's
+    errors are common to every row and are added to it. Rows that leave no scatter (one row, exact
+    repeats) need the readings' standard errors: without ``i_se`` the uncertainty is unknown.
+    """
+    i_mean = float(np.mean(current))
+    w_mean = float(np.mean(omega))
+    b = (K * i_mean - tf) / w_mean
+    common_var = ((i_mean * k_se) ** 2 + tf_se**2) / w_mean**2
+    per_row = (K * current - tf) / omega
+    n = current.size
+    scatter = float(np.std(per_row, ddof=1)) / math.sqrt(n) if n > 1 else 0.0
+    if scatter > 0:
+        return b, math.sqrt(scatter**2 + common_var)
+    if i_se is None:
+        what = "one row" if n == 1 else f"{n} identical rows"
+        warnings.append(
+            f"{what}: the uncertainty of b cannot be estimated without the readings' standard errors "
+            "(give --current-stderr, and --frequency-stderr, --K-stderr)"
+        )
+        return b, math.nan
+    reading_var = ((K * i_se) ** 2 + (b * omega_se) ** 2) / w_mean**2 / n
+    return b, math.sqrt(reading_var + common_var)
 
 
 # ---- command line ---------------------------------------------------------------------------------
@@ -224,7 +295,11 @@ def add_arguments(parser: argparse.ArgumentParser, experiment: str) -> None:
     parser.add_argument("--Tf", type=quantity("N*m", nonnegative=True), help="known Coulomb friction Tf [N·m]")
     parser.add_argument("--Tf-stderr", type=quantity("N*m", nonnegative=True), help="standard error of Tf")
     parser.add_argument("--current-stderr", type=quantity("A", nonnegative=True),
-                        help="standard error of one current reading (used with a single row)")
+                        help="standard error of one current reading (used when the rows show no scatter, "
+                        "e.g. a single row)")
+    parser.add_argument("--frequency-stderr", type=quantity("Hz", nonnegative=True),
+                        help="standard error of one frequency reading (the counter's resolution), "
+                        "used with --current-stderr")
 
 
 def from_cli(experiment: str, paths: list[str], args: argparse.Namespace) -> FitResult:
@@ -238,6 +313,7 @@ def from_cli(experiment: str, paths: list[str], args: argparse.Namespace) -> Fit
     return terminal(
         recording, torque_constant=args.K, cpr=args.cpr, torque_constant_stderr=args.K_stderr,
         coulomb_friction=args.Tf, coulomb_friction_stderr=args.Tf_stderr, current_stderr=args.current_stderr,
+        frequency_stderr=args.frequency_stderr,
     )
 
 
@@ -247,9 +323,11 @@ def _concatenate(recordings: list[Recording]) -> Recording:
     for rec in recordings[1:]:
         if set(rec.signals) != names:
             raise OptionError(f"{rec.source}: its columns differ from those of {recordings[0].source}")
+    metadata = dict(recordings[0].metadata)
+    metadata["warnings"] = common.reader_warnings(recordings)
     return Recording(
         time=np.arange(sum(len(r) for r in recordings), dtype=float),
         signals={n: np.concatenate([r.signals[n] for r in recordings]) for n in names},
-        metadata=dict(recordings[0].metadata),
+        metadata=metadata,
         source=" + ".join(r.source for r in recordings),
     )

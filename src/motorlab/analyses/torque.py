@@ -14,7 +14,17 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from motorlab.analyses._common import concatenate, fit_straight_line, metadata_quantity, read_tables, sources_of
+from motorlab.analyses._common import (
+    EXACT_LINE_WARNING,
+    check_limits,
+    check_stderr_limit,
+    concatenate,
+    fit_straight_line,
+    metadata_quantity,
+    read_tables,
+    reader_warnings,
+    sources_of,
+)
 from motorlab.errors import LogFormatError, OptionError
 from motorlab.fitting import fit_linear, r_squared
 from motorlab.recording import Recording
@@ -107,9 +117,17 @@ def torque(
         tau = rec["mass"] * STANDARD_GRAVITY * arm_used
     if arm_stderr < 0:
         raise OptionError("the arm length uncertainty must not be negative")
+    try:
+        check_limits(arm_used, "arm", "the lever arm (--arm)")
+    except OptionError as exc:
+        if arm is not None:
+            raise
+        raise LogFormatError(f"the '# arm_m:' line: {exc.message}", path=recs[0].source or None) from None
+    check_stderr_limit(arm_stderr, "arm", "the lever arm's standard error (--arm-stderr)")
     current = rec["current"]
     sources = sources_of(recs)
-    line = fit_straight_line(current, tau, source=" + ".join(sources), what="current")
+    line = fit_straight_line(current, tau, source=" + ".join(sources), what="current",
+                             response="scale reading" if arm_used is not None else "torque")
     approach = np.concatenate([approach_direction(r["current"]) for r in recs])
     hysteresis = int(np.count_nonzero(approach > 0)) >= 2 and int(np.count_nonzero(approach < 0)) >= 2
     if hysteresis and current.size >= 4:
@@ -146,6 +164,8 @@ def torque(
         )
     if current.size == 2:
         warnings.append("only two rows: the line passes through both, so no uncertainty can be estimated")
+    elif line.exact:
+        warnings.append(EXACT_LINE_WARNING)
     tau_span = float(np.max(np.abs(tau)))
     if (
         math.isfinite(intercept.stderr)
@@ -178,7 +198,7 @@ def torque(
         r2=r2,
         n_points=int(current.size),
         panels=[panel],
-        warnings=warnings,
+        warnings=reader_warnings(recs) + warnings,
         details=details,
         sources=sources,
     )

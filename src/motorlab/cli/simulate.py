@@ -192,10 +192,71 @@ def _settings(args: argparse.Namespace) -> dict[str, Any]:
     raise OptionError(f"unknown experiment {e!r}")  # pragma: no cover - argparse restricts the choices
 
 
+def check_voltage(voltage: float, name: str) -> None:
+    """Refuse a drive voltage beyond :data:`motorlab.model.MAX_VOLTAGE` (the simulation would overflow)."""
+    from motorlab.model import MAX_VOLTAGE
+
+    if not abs(voltage) <= MAX_VOLTAGE:
+        raise OptionError(f"{name} must be at most {MAX_VOLTAGE:g} V, got {voltage:g} V "
+                          "(no brushed DC gearmotor runs on more)")
+
+
+def check_sizes(args: argparse.Namespace) -> None:
+    """Refuse settings whose run would be absurdly large (or its voltages absurd), naming the options.
+
+    The limits are :data:`motorlab.rig.base.MAX_SAMPLES` (simulator steps, logged samples) and
+    :data:`~motorlab.rig.base.MAX_READINGS` (readings taken by hand). ``--on-time 1e9`` asked the
+    simulator for 7 TiB and ``--positions 1e8`` hung; the rig checks its simulations too, but here
+    the message can name the options to change.
+
+    Raises
+    ------
+    OptionError
+        A setting that would exceed a limit.
+    """
+    from motorlab.rig.base import MAX_READINGS, check_size
+    from motorlab.rig.virtual import FLYWHEEL_DT
+
+    e = args.experiment
+    ms = f"{FLYWHEEL_DT * 1e3:g} ms"
+    if e == "spindown":
+        check_size((args.on_time + args.coast_time) / FLYWHEEL_DT,
+                   f"simulator steps of {ms} (--on-time + --coast-time)", hint="seed 1 runs 30 s + 60 s")
+    elif e == "spinup":
+        check_size((args.duration + args.coast_time) / FLYWHEEL_DT,
+                   f"simulator steps of {ms} (--duration + --coast-time)", hint="seed 1 runs 30 s")
+    elif e == "free-spinup":
+        check_size(args.edges, "rising edges (--edges)", limit=MAX_READINGS, hint="seed 1 records 20")
+    elif e == "lcr":
+        check_size(args.positions, "shaft positions (--positions)", limit=MAX_READINGS, hint="seed 1 takes ten")
+    elif e in ("terminal", "torque") and args.currents is not None:
+        check_size(len(args.currents), "currents (--currents)", limit=MAX_READINGS)
+    elif e in ("amplifier", "tachometer") and args.commands is not None:
+        check_size(len(args.commands), "commands (--commands)", limit=MAX_READINGS)
+    elif e == "pulse":
+        check_size(args.period * args.periods / args.sample_interval,
+                   "scope samples (--period × --periods / --sample-interval)", hint="a scope holds 12 Mpts at most")
+    elif e == "transient":
+        check_voltage(args.max_voltage, "the largest voltage (--max-voltage)")
+        check_size(args.rate * args.duration, "samples (--rate × --duration)",
+                   hint="1 kHz or 10 kHz for a few seconds is plenty")
+    elif e == "sysid":
+        check_voltage(args.step_voltage, "the dynamic step (--step-voltage)")
+        check_voltage(args.ramp_rate * args.quasistatic_duration,
+                      "the end of the quasistatic ramp (--ramp-rate × --quasistatic-duration)")
+        from motorlab.rig.instruments import Instruments
+
+        period = Instruments().controller.log_period
+        check_size(max(args.quasistatic_duration, args.dynamic_duration) / period,
+                   f"rows per test, one every {period * 1e3:g} ms (--quasistatic-duration, --dynamic-duration)",
+                   hint="SysId's defaults are tens of seconds")
+
+
 def run(args: argparse.Namespace) -> int:
     """Run the experiment; print the files written (errors: MotorlabError -> exit code 2)."""
     from motorlab.rig import VirtualRig
 
+    check_sizes(args)
     rig = VirtualRig(args.motor, unit_seed=args.unit_seed, noise_seed=args.noise_seed)
     result = rig.run(args.experiment, args.output, **_settings(args))
     files = " + ".join(str(p) for p in result.paths)

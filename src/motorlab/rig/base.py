@@ -18,7 +18,14 @@ from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
-from motorlab.errors import InputError, RigError
+from motorlab.errors import InputError, OptionError, RigError
+
+#: Most simulator steps or logged samples one run may produce. Ten million steps take ~80 MB per
+#: float array (the simulator keeps six) and minutes to compute; a real log is far shorter (seed 1's
+#: FTC logs hold ~1000 rows, a scope trace 12 Mpts at most).
+MAX_SAMPLES = 10_000_000
+#: Most readings a person takes by hand in one run (LCR positions, table rows, scope cursor edges).
+MAX_READINGS = 100_000
 
 #: Identifies a truth file and its layout.
 TRUTH_FORMAT = "motorlab-truth"
@@ -61,6 +68,34 @@ class Dynamometer(Protocol):
     experiments: tuple[str, ...]
 
     def run(self, experiment: str, path: PathArg, **settings: Any) -> RigRun: ...
+
+
+def check_size(count: float, what: str, *, limit: int = MAX_SAMPLES, hint: str = "") -> None:
+    """Refuse, before anything is allocated, a run that would produce more than ``limit`` items.
+
+    Parameters
+    ----------
+    count
+        How many samples, steps or rows the settings ask for (a float: it may be astronomically
+        large, or NaN from an impossible setting).
+    what
+        What is counted and which settings make it, e.g. ``"samples (--rate × --duration)"``.
+    limit
+        The largest count allowed (:data:`MAX_SAMPLES` or :data:`MAX_READINGS`).
+    hint
+        What to change, appended to the message.
+
+    Raises
+    ------
+    OptionError
+        When ``count`` exceeds ``limit`` or is not a number.
+    """
+    if not count <= limit:  # NaN fails as well
+        text = f"{count:.3g}" if math.isfinite(count) else str(count)
+        raise OptionError(
+            f"these settings ask for {text} {what}, more than the {limit:,} a run may have"
+            + (f": {hint}" if hint else "")
+        )
 
 
 def _jsonable(value: Any) -> Any:

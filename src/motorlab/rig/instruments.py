@@ -166,6 +166,9 @@ class Encoder:
     def counts(self, position: np.ndarray) -> np.ndarray:
         """Counts (integers) at shaft angles ``position`` [rad]."""
         x = np.asarray(position, dtype=float) * self.counts_per_revolution / (2 * math.pi)
+        if not np.all(np.abs(x) < 2.0**62):  # NaN, inf or beyond a 64-bit counter: no cast warning
+            raise RigError("the simulated shaft angle is not finite or overflows the encoder counter: "
+                           "a setting far outside the rig's range (voltage, ramp rate, duration)?")
         # A tiny tolerance keeps exact multiples (e.g. position 0) from flooring to −1.
         return np.floor(x + 1e-9).astype(np.int64)
 
@@ -442,6 +445,16 @@ class Oscilloscope:
     frequency_digits: int = 5
     points: int = 6000
     vertical_noise: float = 0.01
+
+    #: Horizontal scales the DS1054Z offers [s/div].
+    TIMEBASE_RANGE = (5e-9, 50.0)
+
+    def __post_init__(self) -> None:
+        low, high = self.TIMEBASE_RANGE
+        if not low <= self.timebase <= high:  # NaN fails too
+            raise OptionError(
+                f"the scope's timebase (--timebase) must lie between {low:g} and {high:g} s/div, got {self.timebase!r}"
+            )
 
     @property
     def cursor_step(self) -> float:

@@ -38,7 +38,7 @@ from motorlab.errors import OptionError, RigError
 from motorlab.io.csv_table import write_csv
 from motorlab.io.ftc import write_ftc_log
 from motorlab.model import MotorParams, feedforward_from_params
-from motorlab.rig.base import PathArg, RigRun, _jsonable, write_truth
+from motorlab.rig.base import MAX_READINGS, PathArg, RigRun, _jsonable, check_size, write_truth
 from motorlab.rig.flywheel import Flywheel
 from motorlab.rig.instruments import Encoder, Instruments, quantize
 from motorlab.rig.units import Commutator, UnitSpread, draw_unit, unit_name
@@ -86,6 +86,7 @@ def _currents(values: Sequence[float] | None, name: str = "current") -> np.ndarr
     arr = np.asarray(list(values), dtype=float)
     if arr.size == 0:
         raise OptionError(f"no {name} values given")
+    check_size(arr.size, f"{name} settings", limit=MAX_READINGS)
     if not np.all(np.isfinite(arr)):
         raise OptionError(f"{name} values must be finite")
     if np.any(arr < 0):
@@ -230,6 +231,9 @@ class VirtualRig:
         self, params: MotorParams, schedule: Sequence[tuple[float, Drive]], *, duration: float, dt: float,
         initial_speed: float = 0.0, initial_position: float = 0.0,
     ) -> Simulation:
+        # Refused before the simulator allocates its arrays (on_time = 1e9 s asked for 7 TiB).
+        check_size(duration / dt, f"simulator steps ({duration:.3g} s in steps of {dt:.3g} s)",
+                   hint="shorten the run or sample it less finely")
         return simulate(
             params, list(schedule), duration=duration, dt=dt,
             initial=State(speed=initial_speed, position=initial_position),
@@ -512,12 +516,14 @@ class VirtualRig:
         ins.supply.check(voltage, current)
         if edges < 2:
             raise OptionError(f"need at least 2 edges, got {edges}")
+        check_size(edges, "rising edges (--edges)", limit=MAX_READINGS, hint="the seed records 20")
         _positive(dt, "dt", "s")
         rng = self._rng("free-spinup")
         p = self.params
         w0 = 0.05 * self.motor.free_speed if hand_speed is None else float(hand_speed)
-        if w0 < 0:
-            raise OptionError("hand-start speed must not be negative")
+        if not 0 <= w0 <= 2 * self.motor.free_speed:  # a hand does not spin it past its own free speed
+            raise OptionError(f"the hand-start speed (--hand-speed) must lie between 0 and twice the free speed "
+                              f"({2 * self.motor.free_speed:.3g} rad/s), got {w0:g} rad/s")
         step = 2 * math.pi / self.motor.cpr
         theta0 = float(rng.uniform(0.0, 4 * step))
         needed = theta0 + (edges + 2) * 4 * step
@@ -686,6 +692,7 @@ class VirtualRig:
         """
         if positions < 1:
             raise OptionError(f"need at least one position, got {positions}")
+        check_size(positions, "shaft positions (--positions)", limit=MAX_READINGS, hint="the seed takes ten")
         rng = self._rng("lcr")
         p = self.params
         true = self.commutator.positions(p, positions, rng)
@@ -916,6 +923,8 @@ class VirtualRig:
             raise OptionError(f"duty cycle must lie in (0, 1), got {duty:g}")
         if periods < 1:
             raise OptionError("need at least one period")
+        check_size(period * periods / sample_interval,
+                   "scope samples (--period × --periods / --sample-interval)", hint="a scope holds 12 Mpts at most")
         rng = self._rng("pulse")
         loaded = self._loaded(flywheel)
         i_on = float(amp.current(amplitude))
@@ -1024,14 +1033,18 @@ class VirtualRig:
         }
         if include_current:
             columns["current_A"] = quantize(state["current"] + rng.normal(0.0, current_noise, t.shape), 1e-3)
-        columns["position_counts"] = self.encoder.counts(state["position"])
+        # A real encoder is zeroed with the shaft anywhere within a count: the counting errors of a
+        # run then differ from unit to unit (a shaft exactly on an edge would repeat one error pattern).
+        # Drawn last so that the other noise streams stay as they were.
+        phase = rng.uniform(0.0, 2.0 * math.pi / self.encoder.counts_per_revolution)
+        columns["position_counts"] = self.encoder.counts(state["position"] + phase)
         path = Path(path)
         write_csv(path, columns, metadata={"experiment": "transient", "motor": self.motor.key,
                                            "cpr": self.motor.cpr, "profile": profile})
         expected = loaded.to_dict()
         settings = {"profile": profile, "rate": rate, "duration": duration, "max_voltage": max_voltage,
                     "include_current": include_current, "voltage_noise": voltage_noise,
-                    "current_noise": current_noise, "dt": dt}
+                    "current_noise": current_noise, "dt": dt, "encoder_phase": phase}
         return self._finish("transient", [path], settings=settings, expected=expected,
                             instruments={"encoder": self.encoder.settings()}, flywheel=flywheel)
 
@@ -1111,19 +1124,33 @@ class VirtualRig:
                         lead: float = lead) -> np.ndarray:
                 return np.where(t >= lead, command(np.asarray(t) - lead), 0.0)
 
-            sim = self._simulate(loaded, [(0.0, VoltageDrive(applied))], duration=length + lead + dt, dt=dt,
-                                 initial_position=position0)
             n = int(length / ctrl.log_period) + 1
             t_rows = np.arange(n) * ctrl.log_period + rng.normal(0.0, ctrl.log_jitter, n)
             t_rows[0] = 0.0
-            t_rows = np.clip(np.maximum.accumulate(t_rows), 0.0, sim.time[-1])
-            # Status frames: the value logged at t is the one refreshed at the last frame ≤ t.
-            frame = np.floor(t_rows / ctrl.status_period) * ctrl.status_period
+            t_rows = np.clip(np.maximum.accumulate(t_rows), 0.0, length + lead)
+            # The robot loop computes the command, sends it and logs it in the same iteration: the
+            # controller holds each row's voltage until the next row (a ramp is a staircase, a step
+            # starts at a row), as in a real SysId run. The simulation holds its drive over grid steps,
+            # so each change goes to the grid point nearest its row (no systematic delay).
+            held = applied(t_rows)
+
+            def staircase(t: np.ndarray, held: np.ndarray = held, t_rows: np.ndarray = t_rows,
+                          half: float = 0.5 * dt) -> np.ndarray:
+                k = np.searchsorted(t_rows, np.asarray(t) + half, side="right") - 1
+                return held[np.clip(k, 0, held.size - 1)]
+
+            sim = self._simulate(loaded, [(0.0, VoltageDrive(staircase))], duration=length + lead + dt, dt=dt,
+                                 initial_position=position0)
+            volts = held + rng.normal(0.0, ctrl.voltage_noise, n)
+            # Status frames: the value logged at t is the one refreshed at the last frame ≤ t. The
+            # controller's clock runs apart from the robot loop's: the frames have a phase of their
+            # own (frames locked to the rows would make the staleness hinge on the sign of the jitter).
+            phase = rng.uniform(0.0, ctrl.status_period)
+            frame = np.maximum(np.floor((t_rows + phase) / ctrl.status_period) * ctrl.status_period - phase, 0.0)
             counts_now = self.encoder.counts(sim.sample(frame)["position"])
             counts_then = self.encoder.counts(sim.sample(np.maximum(frame - ctrl.velocity_window, 0.0))["position"])
             window = np.maximum(np.minimum(frame, ctrl.velocity_window), ctrl.velocity_window)
             velocity = (counts_now - counts_then) / window / cpr
-            volts = applied(t_rows) + rng.normal(0.0, ctrl.voltage_noise, n)
             rows = np.column_stack([clock + t_rows, np.round(volts, 6), counts_now / cpr, velocity])
             doc[name] = [[round(float(x), 6) for x in row] for row in rows]
             position0 = float(sim.position[-1])
