@@ -134,3 +134,10 @@ def test_hac_nonlinear_fit_with_groups_and_white_noise():
         fit_linear(np.ones((3, 1)), np.ones(3), ["a"], covariance="sandwich")
     with pytest.raises(FitError, match="groups"):
         fit_least_squares(residual, [1.0, 1.0, 1.0], ["A", "B", "gamma"], covariance="hac", groups=groups[:5])
+
+
+def test_an_exact_fit_has_unknown_not_zero_uncertainty():
+    x = np.array([1.0, 2.0, 3.0, 4.0])
+    fit = fit_linear(np.column_stack([x, np.ones_like(x)]), 2.0 * x + 1.0, ["a", "c"])
+    assert fit.values == pytest.approx([2.0, 1.0])
+    assert np.all(np.isnan(fit.stderr))

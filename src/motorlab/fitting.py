@@ -397,7 +397,10 @@ def fit_linear(
     cov, stderr, corr, determined, bandwidth = _covariance(
         a, res, beta, sigma_known=False, covariance=covariance, groups=groups
     )
-    if n == p:  # exact fit: no residual degrees of freedom, uncertainty unknown
+    # An exact fit (no residual degrees of freedom, or residuals at rounding level) says nothing about
+    # the scatter: the uncertainty is unknown, not zero.
+    exact = n == p or float(np.max(np.abs(res), initial=0.0)) <= 1e-12 * max(float(np.max(np.abs(y * w))), 1e-300)
+    if exact:
         stderr = np.full(p, np.nan)
     return LeastSquares(
         names=list(names),
@@ -405,7 +408,7 @@ def fit_linear(
         stderr=stderr,
         covariance=cov,
         correlation=corr,
-        determined=determined | (n == p),
+        determined=determined,
         residuals=res / w,
         jacobian=a,
         dof=max(n - p, 1),

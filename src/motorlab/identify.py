@@ -35,6 +35,7 @@ from typing import Any
 import numpy as np
 
 from motorlab import _oe
+from motorlab.analyses._common import reader_warnings
 from motorlab.errors import FitError, LogFormatError, OptionError
 from motorlab.fitting import MAX_RELATIVE_STDERR
 from motorlab.model import MotorParams, feedforward_from_params
@@ -285,7 +286,7 @@ def _prepare(
     recordings: Sequence[Recording], *, cpr: float | None, with_current: bool
 ) -> tuple[list[_oe.Log], list[str]]:
     logs = []
-    warnings: list[str] = []
+    warnings = reader_warnings(recordings)  # what the readers repaired or dropped comes first
     for rec in recordings:
         check_recording(rec, need_current=with_current)
     quanta = [position_resolution(rec, cpr=cpr) for rec in recordings]

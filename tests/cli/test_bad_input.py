@@ -267,15 +267,6 @@ JSON_VALUES = {"abc": '"abc"', "nan": "NaN", "inf": "Infinity"}
 
 FILE_CORRUPTIONS = ("empty", "binary", "directory", "missing", "single-row", "truncated")
 
-# Corruptions whose fix belongs in identify.py / feedforward.py (another helper's files): each is
-# listed with the exact input and output in the report to the lead.
-_NO_READER_WARNINGS = (
-    "the analysis drops Recording.metadata['warnings']: the reader's 'truncated last line dropped' "
-    "never reaches the user ({}: add analyses._common.reader_warnings(...) to FitResult.warnings)"
-)
-XFAIL: dict[tuple[str, str], str] = {
-    ("identify", "truncated"): _NO_READER_WARNINGS.format("identify.py"),
-}
 # Not refused but analysed: one operating point gives b with Coulomb friction folded in and its
 # uncertainty unknown (see test_terminal_single_row_reports_an_unknown_uncertainty).
 NOT_REFUSED = {("terminal", "single-row")}
@@ -287,9 +278,7 @@ def _params(experiments: list[str], kinds: tuple[str, ...]) -> list[Any]:
         for k in kinds:
             if (e, k) in NOT_REFUSED:
                 continue
-            reason = XFAIL.get((e, k))
-            marks = [pytest.mark.xfail(strict=True, reason=reason)] if reason else []
-            out.append(pytest.param(e, k, id=f"{e}-{k}", marks=marks))
+            out.append(pytest.param(e, k, id=f"{e}-{k}"))
     return out
 
 
@@ -499,18 +488,11 @@ BAD_OPTIONS: dict[str, list[tuple[tuple[str, ...], str]]] = {
     "identify": [(("--cpr", "0"), "--cpr"), (("--R", "1 V"), "--R"), (("--R", "-1"), "--R")],
     "feedforward": [(("--cpr", "0"), "--cpr"), (("--mechanism", "rocket"), "--mechanism"), (("--R", "1 A"), "--R")],
 }
-# Option cases whose fix belongs in another helper's files (none at present).
-OPTION_XFAIL: dict[tuple[str, str], str] = {}
-
-
 def _option_params() -> list[Any]:
     out = []
     for e, cases in BAD_OPTIONS.items():
         for opts, mention in cases:
-            case_id = f"{e}-{'='.join(opts)}"
-            reason = OPTION_XFAIL.get((e, " ".join(opts)))
-            marks = [pytest.mark.xfail(strict=True, reason=reason)] if reason else []
-            out.append(pytest.param(e, opts, mention, id=case_id, marks=marks))
+            out.append(pytest.param(e, opts, mention, id=f"{e}-{'='.join(opts)}"))
     return out
 
 
@@ -664,12 +646,11 @@ class Case:
     argv: Callable[[Path], list[str]]
     file: str | None = None
     mentions: str | None = None
-    xfail: str | None = None
 
 
 def _cases(cases: dict[str, Case]) -> list[Any]:
     return [
-        pytest.param(c, id=name, marks=[pytest.mark.xfail(strict=True, reason=c.xfail)] if c.xfail else [])
+        pytest.param(c, id=name)
         for name, c in cases.items()
     ]
 
