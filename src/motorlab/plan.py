@@ -29,8 +29,22 @@ from motorlab.errors import OptionError
 from motorlab.model import MotorParams
 from motorlab.units import STANDARD_GRAVITY
 
-#: Densities of flywheel materials [kg/m³] (seed 1 uses 7850 for steel).
-MATERIALS: dict[str, float] = {"steel": 7850.0, "aluminium": 2700.0, "aluminum": 2700.0, "brass": 8500.0}
+#: Densities of common flywheel materials [kg/m³] (engineering handbook values; seed 1 uses 7850 for
+#: steel, seed 2 2600 for its aluminium wheel). The one table every module uses.
+MATERIALS: dict[str, float] = {
+    "steel": 7850.0,
+    "stainless steel": 8000.0,
+    "cast iron": 7200.0,
+    "aluminium": 2700.0,
+    "aluminum": 2700.0,
+    "brass": 8500.0,
+    "copper": 8960.0,
+    "acrylic": 1180.0,
+    "pla": 1240.0,
+    "abs": 1050.0,
+    "plywood": 600.0,
+    "hdpe": 960.0,
+}
 
 #: INA219 limits: bus voltage it survives in the seed's experience [V] (seed 1: "do NOT set the
 #: voltage ... higher than 16 volts ... a high voltage will fry the sensor"), and full-scale shunt
@@ -66,7 +80,8 @@ def disc_inertia(radius: float, thickness: float, density: float) -> float:
 
     References
     ----------
-    Seed 1, "First Experiment" (r = 0.075 m, h = 0.05 m steel: 0.0124 kg·m²).
+    Seed 1, "First Experiment": r = 0.075 m, h = 0.05 m of steel gives 0.0195 kg·m² (the seed writes
+    0.0124, which is r⁴·ρ·h without the ½·π of its own formula).
     """
     _positive(radius=radius, thickness=thickness, density=density)
     return 0.5 * math.pi * radius**4 * density * thickness

@@ -51,23 +51,11 @@ from pathlib import Path
 from typing import Any
 
 from motorlab.errors import MotorlabError, OptionError, SessionError
+from motorlab.plan import MATERIALS
 from motorlab.units import format_unit, parse_quantity
 
-#: Densities of common flywheel materials [kg/m³] (engineering handbook values).
-MATERIAL_DENSITY: dict[str, float] = {
-    "steel": 7850.0,
-    "stainless steel": 8000.0,
-    "cast iron": 7200.0,
-    "aluminium": 2700.0,
-    "aluminum": 2700.0,
-    "brass": 8500.0,
-    "copper": 8960.0,
-    "acrylic": 1180.0,
-    "pla": 1240.0,
-    "abs": 1050.0,
-    "plywood": 600.0,
-    "hdpe": 960.0,
-}
+#: Densities of flywheel materials [kg/m³]: the one table of :mod:`motorlab.plan`.
+MATERIAL_DENSITY = MATERIALS
 
 #: Settings each experiment accepts besides ``files``: name -> (SI unit or type name, description).
 #: A unit string means a quantity parsed with pint; "int" / "str" / "bool" are plain TOML values.

@@ -33,10 +33,12 @@ from scipy import optimize
 
 from motorlab.errors import FitError, LogFormatError, OptionError
 from motorlab.fitting import LeastSquares, fit_least_squares, fit_linear, r_squared
+from motorlab.plan import MATERIALS
+from motorlab.plan import disc_inertia as plan_disc_inertia
 from motorlab.recording import Recording
 
-#: Mass densities of flywheel materials [kg/m³] (seed 1, "First Experiment": steel ≈ 7850).
-MATERIAL_DENSITY: dict[str, float] = {"steel": 7850.0, "aluminium": 2700.0, "aluminum": 2700.0}
+#: Mass densities of flywheel materials [kg/m³] (the one table, :data:`motorlab.plan.MATERIALS`).
+MATERIAL_DENSITY = MATERIALS
 
 
 # ---- option checks -------------------------------------------------------------------------------
@@ -353,14 +355,14 @@ def disc_inertia(radius: float, thickness: float, *, density: float, ratio: floa
 
     Notes
     -----
-    J = ½·m·r² = ½·π·r⁴·ρ·h at the disc, times N² at the encoder shaft (seed 1, "First Experiment":
-    r = 0.075 m, h = 0.05 m of steel gives 0.0124 kg·m²). The motor's own armature and the gearbox
-    are not included.
+    J = ½·m·r² = ½·π·r⁴·ρ·h at the disc (:func:`motorlab.plan.disc_inertia`), times N² at the encoder
+    shaft (seed 1, "First Experiment": r = 0.075 m, h = 0.05 m of steel gives 0.0195 kg·m²; the seed
+    writes 0.0124, dropping the ½·π). The motor's own armature and the gearbox are not included.
     """
     for value, name in ((radius, "disc radius"), (thickness, "disc thickness"), (density, "density"),
                         (ratio, "gear ratio")):
         check_positive(value, name, allow_none=False)
-    return 0.5 * math.pi * radius**4 * density * thickness * ratio**2
+    return plan_disc_inertia(radius, thickness, density) * ratio**2
 
 
 # ---- command line -------------------------------------------------------------------------------

@@ -46,6 +46,17 @@ def quantity(unit: str, *, positive: bool = False, nonnegative: bool = False) ->
     return convert
 
 
+def nonnegative_int(text: str) -> int:
+    """An argparse ``type`` for a whole number ≥ 0 (seeds)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"{text!r} must not be negative")
+    return value
+
+
 def positive_int(text: str) -> int:
     """An argparse ``type`` for a whole number > 0."""
     try:

@@ -14,7 +14,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from motorlab.cli.common import check_option, check_output_dir, positive_int, quantity
+from motorlab.cli.common import check_option, check_output_dir, nonnegative_int, positive_int, quantity
 
 
 def register(subparsers: Any) -> None:
@@ -28,7 +28,7 @@ def register(subparsers: Any) -> None:
     )
     parser.add_argument("--motor", default="neverest40", help="catalogue key or name (default neverest40)")
     parser.add_argument("--units", type=positive_int, default=3, help="number of units (default 3)")
-    parser.add_argument("--seed", type=_nonnegative_int, default=0, help="fleet and noise seed (default 0)")
+    parser.add_argument("--seed", type=nonnegative_int, default=0, help="fleet and noise seed (default 0)")
     parser.add_argument("-o", "--output", default="out/demo", metavar="DIR", help="output folder (out/demo)")
     parser.add_argument("--worn", metavar="UNIT", help="make one unit worn (its viscous friction multiplied)")
     parser.add_argument(
@@ -39,16 +39,6 @@ def register(subparsers: Any) -> None:
         help="factor applied to the worn unit's b (default 3)",
     )
     parser.set_defaults(func=run)
-
-
-def _nonnegative_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"{text!r} must not be negative")
-    return value
 
 
 def run(args: argparse.Namespace) -> int:

@@ -13,7 +13,7 @@ import importlib
 from collections.abc import Callable
 from typing import Any
 
-from motorlab.cli.common import positive_int, quantity
+from motorlab.cli.common import nonnegative_int, positive_int, quantity
 from motorlab.errors import OptionError
 
 #: Sub-command help per experiment (seed section it reproduces).
@@ -46,21 +46,11 @@ def _list_of(unit: str) -> Callable[[str], list[float]]:
     return convert
 
 
-def _nonnegative_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"{text!r} must not be negative")
-    return value
-
-
 def _common(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--motor", required=True, help="catalogue key or name, e.g. neverest40")
-    parser.add_argument("--unit-seed", type=_nonnegative_int, default=0,
+    parser.add_argument("--unit-seed", type=nonnegative_int, default=0,
                         help="which unit: 0 is unit A, 1 is B … (draws its true parameters; default 0)")
-    parser.add_argument("--noise-seed", type=_nonnegative_int, default=0,
+    parser.add_argument("--noise-seed", type=nonnegative_int, default=0,
                         help="seed of the reading noise and timing jitter (default 0)")
     parser.add_argument("-o", "--output", required=True, metavar="FILE", help="file to write")
 
@@ -154,7 +144,7 @@ def register(subparsers: Any) -> None:
                              "the session TOML) for several units of one motor.")
     session.add_argument("--motor", required=True, help="catalogue key or name")
     session.add_argument("--units", type=positive_int, default=3, help="number of units (3: A, B, C)")
-    session.add_argument("--seed", type=_nonnegative_int, default=0, help="noise seed (0)")
+    session.add_argument("--seed", type=nonnegative_int, default=0, help="noise seed (0)")
     session.add_argument("-o", "--output", required=True, metavar="DIR", help="folder to write")
     session.set_defaults(func=run_session)
 

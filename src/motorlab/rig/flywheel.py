@@ -17,9 +17,10 @@ from typing import Any
 
 from motorlab.errors import OptionError
 from motorlab.model import MotorParams
+from motorlab.plan import MATERIALS, disc_inertia
 
-#: Densities [kg/m³] of disc materials.
-DENSITIES: dict[str, float] = {"steel": 7850.0, "aluminum": 2700.0, "aluminium": 2700.0, "brass": 8500.0}
+#: Densities [kg/m³] of disc materials (the one table, :data:`motorlab.plan.MATERIALS`).
+DENSITIES = MATERIALS
 
 
 @dataclass(frozen=True)
@@ -63,7 +64,7 @@ class Disc:
     @property
     def inertia(self) -> float:
         """J = ½·m·r² = ½·π·r⁴·ρ·h [kg·m²] (seed 1, "First Experiment")."""
-        return 0.5 * math.pi * self.radius**4 * self.density * self.thickness
+        return disc_inertia(self.radius, self.thickness, self.density)
 
 
 @dataclass(frozen=True)
