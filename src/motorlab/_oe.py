@@ -428,7 +428,6 @@ def prepare_log(
         dt = float(t[-1]) / steps.size
     if uniform:
         grid_v = np.asarray(voltage[:-1], dtype=float)
-        grid_theta = np.asarray(position[:-1], dtype=float)
     else:
         n_grid = int(np.ceil(t[-1] / dt - 1e-9))
         tg = dt * np.arange(n_grid)
@@ -436,7 +435,7 @@ def prepare_log(
         # (rows jittered by ±ε around the grid would otherwise lag a whole step half of the time)
         idx = np.clip(np.searchsorted(t, tg + 0.5 * dt, side="right") - 1, 0, t.size - 1)
         grid_v = np.asarray(voltage, dtype=float)[idx]
-        grid_theta = np.asarray(position, dtype=float)[idx]
+    grid_theta = grid_angle(t, np.asarray(position, dtype=float), dt, grid_v.size)
     # Moving at the first sample: the angle changes by more than two quanta within the first samples.
     # Three samples: a step applied right after the first row must not count as motion at the start.
     head = position[:3]
@@ -445,6 +444,18 @@ def prepare_log(
     pos = np.asarray(position, dtype=float)
     reading, weight = reading_runs(pos)
     return Log(t, dt, grid_v, grid_theta, pos, cur, uniform, resolution, moving, source, reading, weight)
+
+
+def grid_angle(time: np.ndarray, position: np.ndarray, dt: float, n_grid: int, *, lag: float = 0.0) -> np.ndarray:
+    """Measured angle at the middle of each grid step, for gravity terms [rad].
+
+    The angle at the middle of the step (interpolated between the readings around it) is the step's
+    mean angle to first order; the angle at the start of the step would put the gravity term dt/2
+    behind the motion, a shift of ω·dt/2 that biases an arm's offset, kS and kV by several standard
+    errors. ``lag`` [s]: the readings lag the shaft by it (stale status frames), so the angle at
+    t is read at t + lag.
+    """
+    return np.interp(dt * np.arange(n_grid) + 0.5 * dt + lag, time - time[0], position)
 
 
 def reading_runs(position: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

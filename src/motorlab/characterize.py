@@ -299,9 +299,31 @@ def _run_spindown(ctx: _UnitContext) -> FitResult:
     from motorlab.analyses.spindown import spindown
 
     recording = common.read_position_log(ctx.files, cpr=ctx.cpr)
+    inertia, inertia_se = _loaded_inertia(ctx)
+    return spindown(
+        recording, cpr=ctx.cpr, inertia=inertia, inertia_stderr=inertia_se, cutoff=ctx.setting("cutoff")
+    )
+
+
+def _loaded_inertia(ctx: _UnitContext) -> tuple[float | None, float | None]:
+    """Total inertia at the encoder shaft with the flywheel on, and its standard error [kg·m²].
+
+    The flywheel reflected through its gear ratio (J·N², taken as exact: the session gives it) plus the
+    gearmotor's own J: the unit's estimate when one is known already, otherwise the catalogue's nominal
+    J with a 100 % standard error (a guess that only has to be small next to the flywheel's J·N²).
+    """
     flywheel = ctx.session.rig.flywheel
-    inertia = flywheel.reflected_inertia if flywheel is not None else None
-    return spindown(recording, cpr=ctx.cpr, inertia=inertia, cutoff=ctx.setting("cutoff"))
+    if flywheel is None:
+        return None, None
+    own = ctx.estimate("J")
+    if own is not None:
+        return flywheel.reflected_inertia + own.value, _stderr(own) or 0.0
+    j_guess = 0.0
+    if ctx.session.motor.catalog:
+        from motorlab.catalog import Motor
+
+        j_guess = Motor.from_catalog(ctx.session.motor.catalog).nominal_params().J
+    return flywheel.reflected_inertia + j_guess, j_guess
 
 
 def _run_lcr(ctx: _UnitContext) -> FitResult:
@@ -326,9 +348,12 @@ def _run_spinup(ctx: _UnitContext) -> FitResult:
     if flywheel is None:  # the session validation refuses this; kept for library callers
         raise OptionError("the spin-up needs the flywheel's inertia: add [rig.flywheel]")
     recording = common.read_position_log(ctx.files, cpr=ctx.cpr)
+    inertia, inertia_se = _loaded_inertia(ctx)
+    assert inertia is not None  # a flywheel was checked above
     return spinup(
         recording,
-        inertia=flywheel.reflected_inertia,
+        inertia=inertia,
+        inertia_stderr=inertia_se,
         cpr=ctx.cpr,
         spindown_result=ctx.fits.get("spindown"),
         start=ctx.setting("start"),

@@ -242,22 +242,24 @@ def feedforward(
         ``voltage`` [V] and ``position`` [rad] (or [m] for a drivetrain; the gains then come per metre).
     mechanism
         ``"simple"`` (flywheel, shooter), ``"elevator"`` (constant gravity kG [V]) or ``"arm"``
-        (kG·cos(θ + φ), θ the measured angle, φ fitted).
+        (kG·cos(θ + φ), θ the angle as counted, φ [rad] from the encoder's zero to horizontal, fitted;
+        the position must then be the arm's angle, not a distance).
     cpr
         Encoder counts per revolution [count/rev] (angle quantum 2π/cpr).
 
     Returns
     -------
     FitResult
-        ``kS`` [V], ``kV`` [V·s/rad], ``kA`` [V·s²/rad] (``kG`` [V], ``offset`` [rad]); panels of
-        measured against simulated angle and speed; the SysId OLS estimates in ``details["sysid_ols"]``.
+        ``kS`` [V], ``kV`` [V·s/rad], ``kA`` [V·s²/rad] (``kG`` [V], ``offset`` [rad]); per metre
+        ([V·s/m], [V·s²/m]) when every run logs a distance; panels of measured against simulated
+        angle and speed; the SysId OLS estimates in ``details["sysid_ols"]``.
 
     Raises
     ------
     LogFormatError
         A test lacks voltage or angle, is too short, or holds non-finite values.
     OptionError
-        An unknown mechanism or a non-positive cpr.
+        An unknown mechanism, a non-positive cpr, or an arm whose position is a distance.
     FitError
         The motion does not follow the voltage.
 
@@ -266,6 +268,9 @@ def feedforward(
     Standard errors: the measured noises (logged voltage, counting, stale status frames) propagated
     through the linearised fit (:func:`motorlab._oe.noise_propagation_covariance`); the Newey–West
     covariance of the residuals when these do not explain the residuals (docs/feedforward.md).
+    For the arm, gravity over each step acts at the measured angle at the step's middle
+    (:func:`motorlab._oe.grid_angle`), and φ's variance includes q²/12 for the encoder's quantiser
+    phase (q = 2π/cpr), which no fit can resolve.
     """
     if mechanism not in MECHANISMS:
         raise OptionError(f"mechanism must be one of {', '.join(MECHANISMS)}, got {mechanism!r}")
@@ -274,6 +279,13 @@ def feedforward(
     recs = [recordings] if isinstance(recordings, Recording) else list(recordings)
     if not recs:
         raise OptionError("no recordings to fit")
+    if mechanism == "arm":
+        for rec in recs:  # kG·cos(θ + φ) needs the arm's angle, not a distance
+            if rec.metadata.get("position_unit") == "m":
+                raise OptionError(
+                    f"{rec.source or 'recording'}: mechanism 'arm' needs the arm's angle, but the position is "
+                    "logged as a distance (m); log the arm angle (rotations, radians or degrees)"
+                )
     logs, warnings = _prepare(recs, cpr=cpr, with_current=False)
     # Stale status frames (SysId logs of CAN motor controllers): the logged angle is θ(t − d) with d
     # spread over one refresh period P, a lag of P/2 on average; the first row showing a new reading
@@ -285,6 +297,8 @@ def feedforward(
     if period > 0:
         for log in logs:
             log.stale_variance = (measured_speed(log) * log.dt) ** 2 / 12.0
+            if mechanism == "arm":  # gravity acts at the shaft's angle, which the readings show P/2 late
+                log.grid_angle = _oe.grid_angle(log.time, log.position, log.dt, log.n_grid, lag=0.5 * period)
     try:
         p0 = regression_start(logs, mechanism, lag=0.5 * period)
     except FitError as exc:  # name the file(s): the user must know which log cannot be explained
@@ -312,10 +326,16 @@ def feedforward(
             grad[4, 3:5] = [-c / k_g**2, a / k_g**2]
         values[3], values[4] = k_g, math.atan2(c, a)
         cov = grad @ cov @ grad.T
+        # The counted angle is the shaft's to within one count, with an unknown quantiser phase shared
+        # by all tests (one encoder): φ, relative to the shaft's angle, is uncertain by q/√12 more.
+        cov[4, 4] += max(log.resolution for log in logs) ** 2 / 12.0
         names[3:5] = ["kG", "offset"]
     stderr = np.sqrt(np.clip(np.diag(cov), 0.0, None))
     params: dict[str, Estimate] = {}
     units = {**SI_UNITS, "offset": "rad"}
+    linear = all(rec.metadata.get("position_unit") == "m" for rec in recs)
+    if linear:  # a drivetrain or an elevator logged in metres: the gains come per metre
+        units.update(kV="V*s/m", kA="V*s^2/m")
     for k, name in enumerate(names):
         determined = not fit.null[min(k, fit.null.size - 1)] and stderr[k] <= MAX_RELATIVE_STDERR * abs(values[k])
         if name in ("kG", "offset") and not fit.null[k]:
@@ -338,7 +358,7 @@ def feedforward(
         "uncertainty": fit.noise_model,
         "mechanism": mechanism,
         "residual_rms": {**fit.residual_rms},
-        "residual_rms_units": {"position": "rad"},
+        "residual_rms_units": {"position": "m" if linear else "rad"},
         "noise_weights": sigma,
         "start": dict(zip(model.names, p0.tolist(), strict=True)),
         "hac_bandwidth_samples": fit.bandwidth,
@@ -350,7 +370,13 @@ def feedforward(
         details["sysid_ols"] = sysid_ols(recs, mechanism=mechanism)
     except (FitError, np.linalg.LinAlgError, ZeroDivisionError):
         details["sysid_ols"] = None
-    return _result("feedforward", params, corr, names, logs, fit, warnings, details)
+    result = _result("feedforward", params, corr, names, logs, fit, warnings, details)
+    if linear:  # identify's result speaks of angles; these runs logged a distance
+        result.rmse_unit = "m"
+        result.details["residual_rms_units"]["speed (differenced)"] = "m/s"
+        for panel in result.panels:
+            panel.y_label = {"θ [rad]": "x [m]", "ω [rad/s]": "v [m/s]"}.get(panel.y_label, panel.y_label)
+    return result
 
 
 def _gain_warnings(logs: list[_oe.Log], fit: _oe.Fit, values: np.ndarray, corr: np.ndarray) -> list[str]:

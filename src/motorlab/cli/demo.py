@@ -41,6 +41,69 @@ def register(subparsers: Any) -> None:
     parser.set_defaults(func=run)
 
 
+def experiment_rows(result: Any) -> list[tuple[str, str, str, list[str]]]:
+    """Every analysis's own estimates against the rig's expectation for that run, unit by unit.
+
+    Returns rows ``(experiment, parameter, unit, cells)`` with one cell per unit:
+    ``"value ± stderr (+z σ)"`` where z = (estimate − truth)/stderr, or the estimate alone when the
+    rig recorded no expected value for it.
+    """
+    import json
+    import math
+
+    from motorlab.units import format_unit
+
+    expected: dict[str, dict[str, dict[str, float]]] = {}  # unit -> experiment -> parameter -> truth
+    for unit in result.units.values():
+        runs = {}
+        if unit.spec.truth is not None and Path(unit.spec.truth).exists():
+            runs = json.loads(Path(unit.spec.truth).read_text(encoding="utf-8")).get("runs", {})
+        expected[unit.name] = {
+            name: runs.get(spec.files[0].name, {}).get("expected", {}) for name, spec in unit.spec.experiments.items()
+        }
+    order: list[tuple[str, str, str]] = []
+    for unit in result.units.values():
+        for exp, fit in unit.fits.items():
+            for par, est in fit.parameters.items():
+                key = (exp, par, est.unit)
+                if key not in order and not est.note.startswith("given"):
+                    order.append(key)
+    rows = []
+    for exp, par, unit_str in order:
+        cells = []
+        for unit in result.units.values():
+            fit = unit.fits.get(exp)
+            est = fit.parameters.get(par) if fit is not None else None
+            if est is None or not est.determined:
+                cells.append("—" if est is None else "not determined")
+                continue
+            cell = f"{est.value:.5g} ± {est.stderr:.2g}" if math.isfinite(est.stderr) else f"{est.value:.5g} ± ?"
+            truth = expected.get(unit.name, {}).get(exp, {}).get(par)
+            if isinstance(truth, int | float) and math.isfinite(est.stderr) and est.stderr > 0:
+                cell += f" ({(est.value - truth) / est.stderr:+.1f}σ)"
+            cells.append(cell)
+        rows.append((exp, par, format_unit(unit_str), cells))
+    return rows
+
+
+def print_experiment_table(result: Any) -> None:
+    """Print :func:`experiment_rows` as a table (each experiment's own estimates against the truth)."""
+    from rich.console import Console
+    from rich.table import Table
+
+    table = Table(title="Every analysis against the simulated truth (estimate ± stderr, distance in σ)")
+    table.add_column("experiment")
+    table.add_column("parameter")
+    table.add_column("unit")
+    for unit in result.units.values():
+        table.add_column(unit.spec.display_name, justify="right")
+    previous = ""
+    for exp, par, unit_str, cells in experiment_rows(result):
+        table.add_row("" if exp == previous else exp, par, unit_str, *cells)
+        previous = exp
+    Console(width=160).print(table)
+
+
 def run(args: argparse.Namespace) -> int:
     """Simulate, characterise, write, print."""
     from rich.console import Console
@@ -72,6 +135,7 @@ def run(args: argparse.Namespace) -> int:
             save_figure(figure, out / "step_response.png")
             paths["step"] = out / "step_response.png"
     print_table(result)
+    print_experiment_table(result)
     if gains.get("text"):
         print(f"\nController gains for the median unit ({args.motor}, {gains.get('voltage', 12):g} V):")
         print(gains["text"])

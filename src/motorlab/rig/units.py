@@ -153,6 +153,11 @@ class Commutator:
         """Mean brush contact resistance of a good contact [Ω] (log-normal mean median·exp(σ²/2))."""
         return self.contact_median * math.exp(0.5 * self.contact_sigma**2)
 
+    def expected_ac_resistance(self, params: MotorParams) -> float:
+        """Mean R_ac = k_ac·R_w + R_c at good contacts [Ω]: what 2πfL/Q finds with poor contacts set aside."""
+        winding_mean = params.R - min(self.mean_good_contact, 0.5 * params.R)
+        return self.ac_resistance_factor * winding_mean + self.mean_good_contact
+
     def positions(
         self, params: MotorParams, count: int, rng: np.random.Generator
     ) -> dict[str, np.ndarray]:

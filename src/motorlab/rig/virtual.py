@@ -681,9 +681,9 @@ class VirtualRig:
         Returns
         -------
         RigRun
-            ``truth["expected"]``: L, R (the running motor's terminal resistance: winding plus a
-            good brush contact on average), the mean true L and DCR over the positions and the
-            contact resistance at each.
+            ``truth["expected"]``: L; R, the mean AC resistance 2πfL/Q measures at good contacts; R_dc, the model's
+            R (the running motor's terminal resistance: winding plus a good brush contact on
+            average); the mean true L and DCR over the positions and the contact resistance at each.
 
         Notes
         -----
@@ -702,8 +702,11 @@ class VirtualRig:
         write_csv(path, {"L_uH": quantize(readings["inductance"] * 1e6, 0.1),
                          "Q": readings["quality_factor"], "DCR_ohm": readings["dc_resistance"]},
                   metadata={"experiment": "lcr", "motor": self.motor.key, "frequency_Hz": meter.frequency})
+        # What each of the analysis's outputs should find: R = 2πfL/Q is the meter's AC resistance
+        # (winding plus eddy-current and brush losses at f); R_dc, with poor contacts set aside, is the
+        # model's R (winding plus a good brush contact).
         expected = {
-            "L": p.L, "R": p.R,
+            "L": p.L, "R": self.commutator.expected_ac_resistance(p), "R_dc": p.R,
             "L_mean_positions": float(np.mean(true["inductance"])),
             "DCR_mean_positions": float(np.mean(true["dc_resistance"])),
             "R_ac_mean_positions": float(np.mean(true["ac_resistance"])),
