@@ -242,3 +242,4 @@ def test_cpr_that_would_overflow_is_refused_without_warnings() -> None:
         warnings.simplefilter("error")
         with pytest.raises(OptionError, match="--cpr"):
             spindown(flywheel_log(12, duration=100.0), cpr=1e-300)
+

@@ -99,3 +99,24 @@ def test_start_after_end_or_outside_the_log_is_refused() -> None:
     with pytest.raises(OptionError, match=r"--end.*time span") as err:
         spinup(log, inertia=FLYWHEEL.J, cpr=CPR, end=500.0)
     assert err.value.path == "spinup.txt"
+
+
+def test_current_unit_option_for_logs_in_milliamps(tmp_path, capsys):
+    """``--current-unit mA`` (issue 2): a sensor logging mA gives the K of one logging A; K = J·α/i needs it."""
+    import json
+
+    from motorlab.cli import main
+    from motorlab.io import read_ftc_log, write_ftc_log
+    from motorlab.rig import VirtualRig
+
+    run = VirtualRig("neverest40", unit_seed=1, noise_seed=1).spinup(tmp_path / "a.txt", duration=10.0)
+    rec = read_ftc_log(run.paths)
+    write_ftc_log(tmp_path / "ma.txt", rec.time, rec.signals["counts"], rec.signals["voltage"],
+                  rec.signals["current"] * 1e3, header=False)
+    inertia = str(run.truth["expected"]["J"]) if "J" in run.truth["expected"] else str(run.truth["totals"]["J"])
+    k = {}
+    for name, extra in (("a.txt", []), ("ma.txt", ["--current-unit", "mA"])):
+        argv = ["analyze", "spinup", str(tmp_path / name), "--cpr", "1120", "--inertia", inertia, "--json", *extra]
+        assert main(argv) == 0
+        k[name] = json.loads(capsys.readouterr().out)["parameters"]["K"]["value"]
+    assert k["ma.txt"] == pytest.approx(k["a.txt"], rel=1e-3)

@@ -407,8 +407,19 @@ def inertia_from_args(args: argparse.Namespace) -> tuple[float | None, float | N
     return args.inertia, args.inertia_stderr
 
 
-def read_position_log(paths: list[str], *, cpr: float | None) -> Recording:
-    """Read one run: FTC OpMode log(s) (possibly split over several files) or one CSV file."""
+def add_current_unit_argument(parser: argparse.ArgumentParser) -> None:
+    """``--current-unit A|mA``: the unit of the shunt-current column of FTC logs without a header."""
+    parser.add_argument(
+        "--current-unit", choices=("A", "mA"), default=None,
+        help="unit of the current column of an FTC log (default: from its header, else A)",
+    )
+
+
+def read_position_log(paths: list[str], *, cpr: float | None, current_unit: str | None = None) -> Recording:
+    """Read one run: FTC OpMode log(s) (possibly split over several files) or one CSV file.
+
+    ``current_unit`` ("A" or "mA") applies to FTC logs, whose columns carry no units.
+    """
     if not paths:
         raise OptionError("give the log file(s) to analyse")
     if all(str(p).lower().endswith(".csv") for p in paths):
@@ -419,7 +430,7 @@ def read_position_log(paths: list[str], *, cpr: float | None) -> Recording:
         return read_csv(paths[0], cpr=cpr)
     from motorlab.io.ftc import read_ftc_log
 
-    return read_ftc_log(paths, cpr=cpr)
+    return read_ftc_log(paths, cpr=cpr, current_unit=current_unit)
 
 
 # ---- tables of the bench analyses (lcr, torque, pulse, gains) ---------------------------------------------------

@@ -486,6 +486,7 @@ def _friction_from_inertia(fit: LeastSquares, inertia: float, inertia_se: float)
 def add_arguments(parser: argparse.ArgumentParser, experiment: str) -> None:
     """Options of ``motorlab analyze spindown``."""
     common.add_cpr_argument(parser)
+    common.add_current_unit_argument(parser)
     common.add_inertia_arguments(parser)
     from motorlab.cli.common import quantity
 
@@ -498,7 +499,7 @@ def add_arguments(parser: argparse.ArgumentParser, experiment: str) -> None:
 
 def from_cli(experiment: str, paths: list[str], args: argparse.Namespace) -> FitResult:
     """Read the log(s) (one run, possibly split over several files) and fit the spin-down."""
-    recording = common.read_position_log(paths, cpr=args.cpr)
+    recording = common.read_position_log(paths, cpr=args.cpr, current_unit=args.current_unit)
     inertia, inertia_se = common.inertia_from_args(args)
     return spindown(
         recording, cpr=args.cpr, inertia=inertia, inertia_stderr=inertia_se, cutoff=args.cutoff, guard=args.guard

@@ -311,6 +311,7 @@ def add_arguments(parser: argparse.ArgumentParser, experiment: str) -> None:
     from motorlab.cli.common import quantity
 
     common.add_cpr_argument(parser)
+    common.add_current_unit_argument(parser)
     common.add_inertia_arguments(parser)
     parser.add_argument("--b", type=quantity("N*m*s/rad", nonnegative=True), help="viscous friction b [N·m·s/rad]")
     parser.add_argument("--b-stderr", type=quantity("N*m*s/rad", nonnegative=True), help="standard error of b")
@@ -327,14 +328,15 @@ def from_cli(experiment: str, paths: list[str], args: argparse.Namespace) -> Fit
     inertia, inertia_se = common.inertia_from_args(args)
     if inertia is None:
         raise OptionError("the spin-up needs the inertia: give --inertia or the flywheel disc")
-    recording = common.read_position_log(paths, cpr=args.cpr)
+    recording = common.read_position_log(paths, cpr=args.cpr, current_unit=args.current_unit)
     spindown_result = None
     if args.spindown:
         if args.b is not None or args.Tf is not None:
             raise OptionError("give the friction either with --spindown or with --b/--Tf, not both")
         from motorlab.analyses.spindown import spindown
 
-        spindown_result = spindown(common.read_position_log(args.spindown, cpr=args.cpr), cpr=args.cpr)
+        coast = common.read_position_log(args.spindown, cpr=args.cpr, current_unit=args.current_unit)
+        spindown_result = spindown(coast, cpr=args.cpr)
     return spinup(
         recording, inertia=inertia, inertia_stderr=inertia_se, cpr=args.cpr,
         viscous_friction=args.b, viscous_friction_stderr=args.b_stderr,
