@@ -336,8 +336,8 @@ def _fleet_section(result: Characterization) -> str:
         f"<th>n</th>{head}</tr></thead><tbody>{''.join(rows)}</tbody></table>"
         f"{f'<ul class=muted>{notes}</ul>' if notes else ''}"
         '<p class="muted">Robust z-score on ln x: z = (ln x − median ln x)/√(s² + (σ/x)²) with '
-        "s = max(1.4826·MAD, healthy spread); see Methods. “Which of our motors is worn?” — a unit whose "
-        "friction stands out is the first suspect.</p></section>"
+        "s = the healthy spread (or the MAD from five units on); see Methods. "
+        "“Which of our motors is worn?” — a unit whose friction stands out is the first suspect.</p></section>"
     )
 
 
@@ -532,12 +532,13 @@ def _methods_section() -> str:
         "LCR: R_ac = 2π·f·L/Q (seed); the model's R is the DC resistance",
         "combination: the determined estimate with the smallest standard error wins; two sources disagree "
         "when |a − b| > 3·√(σa² + σb²); K's standard error is propagated into the analyses that use it",
-        "fleet: z = (ln x − median ln x)/√(s² + (σ/x)²), s = max(1.4826·MAD(ln x), healthy spread); "
+        "fleet: z = (ln x − median ln x)/√(s² + (σ/x)²), s = the healthy spread below five units, "
+        "max(1.4826·MAD(ln x), healthy spread) from five on; "
         "|z| > threshold stands out (Iglewicz & Hoaglin's modified z-score)",
     ]
     mistakes = [
         "Free spin-up: the seed fits P = P0 + K·I·(t − t0)²/J, which omits the ½ of "
-        "P = P0 + ½·α·t²; its J comes out half the true value. motorlab fits θ0 + ω0·t + ½·α·t².",
+        "P = P0 + ½·α·t²; its J comes out twice the true value. motorlab fits θ0 + ω0·t + ½·α·t².",
         "Terminal velocity: the seed's ω = Ke·J/b is dimensionally wrong (and step 3 then divides by ω). "
         "The steady state of (3) is K·I = b·ω + Tf, so b = (K·I − Tf)/ω.",
         "Spin-down: the pure exponential P(∞) − B·e^(−γ(t−30)) ignores Coulomb friction, which then "
