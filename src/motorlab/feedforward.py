@@ -370,13 +370,7 @@ def feedforward(
         details["sysid_ols"] = sysid_ols(recs, mechanism=mechanism)
     except (FitError, np.linalg.LinAlgError, ZeroDivisionError):
         details["sysid_ols"] = None
-    result = _result("feedforward", params, corr, names, logs, fit, warnings, details)
-    if linear:  # identify's result speaks of angles; these runs logged a distance
-        result.rmse_unit = "m"
-        result.details["residual_rms_units"]["speed (differenced)"] = "m/s"
-        for panel in result.panels:
-            panel.y_label = {"θ [rad]": "x [m]", "ω [rad/s]": "v [m/s]"}.get(panel.y_label, panel.y_label)
-    return result
+    return _result("feedforward", params, corr, names, logs, fit, warnings, details, length="m" if linear else "rad")
 
 
 def _gain_warnings(logs: list[_oe.Log], fit: _oe.Fit, values: np.ndarray, corr: np.ndarray) -> list[str]:

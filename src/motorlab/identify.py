@@ -307,10 +307,13 @@ def _estimate(name: str, value: float, stderr: float, *, determined: bool = True
     return Estimate(name, float(value), float(stderr), SI_UNITS[name], determined, note)
 
 
-def fit_panels(logs: list[_oe.Log], fit: _oe.Fit, *, title: str) -> list[Panel]:
-    """Measured against simulated angle, speed and current, the runs laid end to end."""
+def fit_panels(logs: list[_oe.Log], fit: _oe.Fit, *, title: str, length: str = "rad") -> list[Panel]:
+    """Measured against simulated angle (or distance, ``length="m"``), speed and current, runs end to end."""
     panels = []
-    signals = [("position", "angle", "θ [rad]"), ("speed", "speed", "ω [rad/s]")]
+    if length == "m":
+        signals = [("position", "position", "x [m]"), ("speed", "speed", "v [m/s]")]
+    else:
+        signals = [("position", "angle", "θ [rad]"), ("speed", "speed", "ω [rad/s]")]
     if any(log.current is not None for log in logs) and "current" in fit.simulations[0]:
         signals.append(("current", "current", "i [A]"))
     for key, label, y_label in signals:
@@ -479,7 +482,10 @@ def _result(
     fit: _oe.Fit,
     warnings: list[str],
     details: dict[str, Any],
+    *,
+    length: str = "rad",
 ) -> FitResult:
+    """The FitResult of an output-error fit; ``length`` is the unit of the logged position ("rad" or "m")."""
     pos = np.concatenate([log.position for log in logs])
     sim = np.concatenate([s["position"] for s in fit.simulations])
     sst = float(np.sum((pos - pos.mean()) ** 2))
@@ -487,17 +493,17 @@ def _result(
     speed_rms = float(np.sqrt(np.mean(np.concatenate(
         [(measured_speed(log) - s["speed"]) ** 2 for log, s in zip(logs, fit.simulations, strict=True)]))))
     details["residual_rms"]["speed (differenced)"] = speed_rms
-    details["residual_rms_units"]["speed (differenced)"] = "rad/s"
+    details["residual_rms_units"]["speed (differenced)"] = f"{length}/s"
     return FitResult(
         experiment=experiment,
         parameters=params,
         correlation=corr,
         correlation_names=names,
         rmse=fit.residual_rms["position"],
-        rmse_unit="rad",
+        rmse_unit=length,
         r2=r2,
         n_points=int(sum(log.time.size for log in logs)),
-        panels=fit_panels(logs, fit, title=experiment),
+        panels=fit_panels(logs, fit, title=experiment, length=length),
         warnings=warnings,
         details=details,
         sources=list(dict.fromkeys(log.source for log in logs if log.source)),
