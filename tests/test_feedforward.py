@@ -153,6 +153,22 @@ def test_real_sysid_flywheel(real_dir):
     assert abs(result.value("kS") / ols["kS"] - 1) < 0.2
 
 
+def test_real_frc_characterization_drivetrain(real_dir):
+    """The older frc-characterization JSON of a real robot (metres): the same fit, per-metre gains."""
+    from motorlab.io import read_frc_char_json
+
+    runs = read_frc_char_json(real_dir / "frc-characterization-drivetrain-linear.json").split()
+    result = feedforward(runs)
+    ols = sysid_ols(runs)
+    assert result["kV"].unit == "V*s/m"
+    assert result.rmse_unit == "m"
+    for name in ("kS", "kV", "kA"):
+        assert result[name].determined, name
+        assert result.value(name) > 0, name
+    assert abs(result.value("kV") / ols["kV"] - 1) < 0.1
+    assert all(" rad" not in w for w in result.warnings)
+
+
 def test_cli_on_sysid_json(real_dir):
     parser = argparse.ArgumentParser()
     add_arguments(parser, "feedforward")

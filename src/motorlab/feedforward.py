@@ -348,9 +348,10 @@ def feedforward(
     if not fit.success:
         warnings.append(f"the optimiser stopped early: {fit.message}")
     if fit.noise_model.startswith("Newey"):
+        what, unit = ("position", "m") if linear else ("angle", "rad")
         warnings.append(
-            "the angle departs from the model by more than the measured noise explains "
-            f"(residual RMS {fit.residual_rms['position']:.3g} rad): uncertainties come from the residuals"
+            f"the {what} departs from the model by more than the measured noise explains "
+            f"(residual RMS {fit.residual_rms['position']:.3g} {unit}): uncertainties come from the residuals"
         )
     warnings.extend(_gain_warnings(logs, fit, values, corr))
     details: dict[str, Any] = {
