@@ -118,3 +118,30 @@ def test_cli_bad_input_is_one_line_exit_2(monkeypatch, capsys, argv, message):
     assert code == 2
     assert message in err
     assert len(err.strip().splitlines()) == 1
+
+
+def test_results_json_of_characterize_uses_one_units_motor_parameters(tmp_path, capsys):
+    """A characterize results.json: only the chosen unit's combined (bare-motor) parameters make the plant.
+
+    Its per-experiment results include flywheel runs (kA of motor + flywheel): mixing them in would
+    design for a plant hundreds of times heavier than the motor simulated.
+    """
+
+    from motorlab.characterize import characterize, write_outputs
+    from motorlab.session import load_session, write_simulated_session
+
+    toml = write_simulated_session(
+        "neverest40", out_dir=tmp_path / "s", units=2, experiments=("lcr", "spindown", "identify", "feedforward")
+    )
+    write_outputs(characterize(load_session(toml), control=False, figures=False), tmp_path / "r", report=False)
+    results = tmp_path / "r" / "results.json"
+    code = motorlab.cli.main(["tune", "velocity", "--params", str(results)])
+    assert code == 2
+    assert "choose one with --unit" in capsys.readouterr().err
+    assert motorlab.cli.main(["tune", "velocity", "--params", str(results), "--unit", "B", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    unit_b = json.loads(results.read_text())["units"]["B"]["parameters"]
+    params = MotorParams.from_dict(unit_b)
+    expected = feedforward_from_params(params)
+    assert doc["feedforward"]["kA"] == pytest.approx(expected["kA"], rel=1e-6)  # the bare motor's kA
+    assert doc["response"]["overshoot"] < 10

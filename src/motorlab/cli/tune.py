@@ -55,6 +55,9 @@ def register(subparsers: Any) -> None:
         metavar="FILE.json",
         help="motorlab analyze/characterize JSON with K, R, J (b, Tf, L) or kS, kV, kA; repeat to merge",
     )
+    plant.add_argument(
+        "--unit", metavar="NAME", help="which unit of a characterize results.json (required when it has several)"
+    )
     plant.add_argument("--units", choices=UNIT_NAMES, default="rad", help="length unit of kV, kA, tolerances, step")
     plant.add_argument("--cpr", type=_positive_float, help="encoder counts per revolution of the shaft")
     plant.add_argument(
@@ -84,7 +87,7 @@ def plant_from_args(args: argparse.Namespace, units: MechanismUnits) -> Plant:
     given = args.kv is not None or args.ka is not None
     check_option(not (given and args.params), "give either --kv/--ka/--ks or --params, not both")
     if args.params:
-        return load_plant(args.params)
+        return load_plant(args.params, unit=args.unit)
     check_option(args.kv is not None and args.ka is not None, "give the plant: --kv and --ka, or --params FILE.json")
     # Numbers are per user unit: V·s/unit × unit/rad = V·s/rad.
     ff = Feedforward(args.ks, args.kv * units.per_radian, args.ka * units.per_radian).check_plant()

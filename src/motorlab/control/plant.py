@@ -139,15 +139,37 @@ def _collect(obj: Any, found: list[dict[str, Any]]) -> None:
             _collect(item, found)
 
 
-def load_plant(paths: list[str | PathLike[str]]) -> Plant:
+def _unit_parameters(doc: dict[str, Any], unit: str | None, path: str | PathLike[str]) -> dict[str, Any]:
+    """The combined (bare-motor) parameters of one unit of a ``characterize`` results.json.
+
+    Only ``units.<name>.parameters`` is read: the per-experiment results beside it include runs with
+    the flywheel on (their kS, kV, kA and J describe motor + flywheel) and must not be mixed in.
+    """
+    units = doc["units"]
+    names = list(units)
+    if unit is None:
+        if len(names) != 1:
+            raise OptionError(f"{path} holds units {', '.join(names)}: choose one with --unit")
+        unit = names[0]
+    if unit not in units:
+        raise OptionError(f"{path} has no unit {unit!r} (it has {', '.join(names)})")
+    params = units[unit].get("parameters") if isinstance(units[unit], dict) else None
+    if not isinstance(params, dict):
+        raise LogFormatError(f"unit {unit} has no parameters", path=path)
+    return params
+
+
+def load_plant(paths: list[str | PathLike[str]], *, unit: str | None = None) -> Plant:
     """The plant from ``motorlab analyze --json`` / ``characterize`` JSON files.
 
     Parameters
     ----------
     paths
         JSON files: an ``analyze --json`` object (``{"parameters": {"K": {"value": ...}, ...}}``),
-        a list of such objects, or any document (``results.json`` of ``characterize``) holding
-        objects with a ``"parameters"`` member. Later values override earlier ones.
+        a list of such objects, or the ``results.json`` of ``motorlab characterize`` (then only the
+        chosen unit's combined motor parameters are used). Later values override earlier ones.
+    unit
+        Which unit of a ``results.json`` (required when it holds several).
 
     Returns
     -------
@@ -176,7 +198,10 @@ def load_plant(paths: list[str | PathLike[str]]) -> Plant:
         except UnicodeDecodeError:
             raise LogFormatError("not a text (JSON) file", path=path) from None
         found: list[dict[str, Any]] = []
-        _collect(doc, found)
+        if isinstance(doc, dict) and isinstance(doc.get("units"), dict):  # characterize's results.json
+            found.append(_unit_parameters(doc, unit, path))
+        else:
+            _collect(doc, found)
         before = len(merged)
         for entry in found:
             for name in names:
