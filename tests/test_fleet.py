@@ -118,3 +118,12 @@ def test_few_units_and_undetermined_estimates() -> None:
     assert summary.parameters["K"].n == 3
     d = summary.to_dict()
     assert d["parameters"]["K"]["n"] == 3
+
+
+def test_fewer_than_three_units_say_no_test_ran() -> None:
+    two = fleet_summary(fleet_estimates(0, units=2))
+    assert not two.tested
+    assert two.verdict().startswith("no outlier test")
+    three = fleet_summary(fleet_estimates(0, units=3))
+    assert three.tested
+    assert three.verdict().startswith("no unit stands out")

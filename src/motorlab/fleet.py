@@ -168,6 +168,19 @@ class FleetSummary:
     threshold: float
     notes: list[str] = field(default_factory=list)
 
+    @property
+    def tested(self) -> bool:
+        """True when the outlier test ran on at least one parameter (it needs three units)."""
+        return any(stats.z for stats in self.parameters.values())
+
+    def verdict(self) -> str:
+        """One sentence: who stands out, that nobody does, or that no test could run."""
+        if self.outliers:
+            return "; ".join(f"unit {o.unit} stands out: {o.message()}" for o in self.outliers)
+        if not self.tested:
+            return f"no outlier test: it needs at least {MIN_UNITS} units with estimates of a parameter"
+        return f"no unit stands out (|z| ≤ {self.threshold:g})"
+
     def outliers_of(self, unit: str) -> list[Outlier]:
         """The outliers of one unit."""
         return [o for o in self.outliers if o.unit == unit]

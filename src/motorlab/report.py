@@ -327,6 +327,8 @@ def _fleet_section(result: Characterization) -> str:
             f"<li><b>{_e(result.units[o.unit].spec.display_name)}</b>: {_e(o.message())}</li>" for o in fleet.outliers
         )
         verdict = f'<p class="warn">Units that stand out (|z| &gt; {fleet.threshold:g}):</p><ul>{found}</ul>'
+    elif not fleet.tested:
+        verdict = f'<p class="muted">{_e(fleet.verdict().capitalize())}.</p>'
     else:
         verdict = f'<p class="ok">No unit stands out (every |z| ≤ {fleet.threshold:g}).</p>'
     notes = "".join(f"<li>{_e(n)}</li>" for n in fleet.notes)

@@ -162,4 +162,4 @@ def print_table(result: Any, *, truth: bool = True) -> None:
         for o in result.fleet.outliers:
             console.print(f"[bold red]fleet: unit {o.unit} stands out: {o.message()}[/]")
     else:
-        console.print(f"fleet: no unit stands out (|z| ≤ {result.fleet.threshold:g})")
+        console.print(f"fleet: {result.fleet.verdict()}")
