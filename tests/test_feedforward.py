@@ -124,6 +124,17 @@ def test_motor_estimates_follow_what_is_given():
     both = motor_estimates(result, resistance=MOTOR.R, torque_constant=MOTOR.K)
     assert abs(both["J"].value / MOTOR.J - 1) < 0.03
     assert abs(both["Tf"].value / MOTOR.Tf - 1) < 0.05
+    # The given R and K are measurements too: their standard errors reach J, b and Tf.
+    sr, sk = 0.02 * MOTOR.R, 0.01 * MOTOR.K
+    unsure = motor_estimates(result, resistance=MOTOR.R, torque_constant=MOTOR.K,
+                             resistance_stderr=sr, torque_constant_stderr=sk)
+    ka = result["kA"]
+    assert unsure["J"].stderr == pytest.approx(
+        both["J"].value * math.sqrt((ka.stderr / ka.value) ** 2 + 0.01**2 + 0.02**2), rel=1e-9)
+    assert unsure["R"].stderr == sr
+    assert unsure["K"].stderr == sk
+    for name in ("J", "b", "Tf"):
+        assert unsure[name].stderr > both[name].stderr
 
 
 def test_excitation_warnings():

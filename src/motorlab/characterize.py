@@ -476,7 +476,13 @@ def _run_feedforward(ctx: _UnitContext) -> FitResult:
     r, k = ctx.estimate("R"), ctx.estimate("K")
     if r is not None:
         result.parameters.update(
-            motor_estimates(result, resistance=r.value, torque_constant=None if k is None else k.value)
+            motor_estimates(
+                result,
+                resistance=r.value,
+                resistance_stderr=_stderr(r) or 0.0,
+                torque_constant=None if k is None else k.value,
+                torque_constant_stderr=0.0 if k is None else _stderr(k) or 0.0,
+            )
         )
     return result
 

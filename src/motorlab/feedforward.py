@@ -400,14 +400,21 @@ def _gain_warnings(logs: list[_oe.Log], fit: _oe.Fit, values: np.ndarray, corr: 
 
 
 def motor_estimates(
-    result: FitResult, *, resistance: float | None, torque_constant: float | None
+    result: FitResult,
+    *,
+    resistance: float | None,
+    torque_constant: float | None,
+    resistance_stderr: float = 0.0,
+    torque_constant_stderr: float = 0.0,
 ) -> dict[str, Estimate]:
     """R, K, J, b, Tf from fitted gains, as far as the given R (and K) determine them.
 
     Without R nothing follows. With R only, kV = K + R·b/K cannot be split: K and b are not
     determined, and J = kA·K/R, Tf = kS·K/R are only bounded (K ≤ kV since b ≥ 0). With R and K:
-    J = kA·K/R, b = (kV − K)·K/R, Tf = kS·K/R, standard errors from those of the gains (R and K taken
-    as exact).
+    J = kA·K/R, b = (kV − K)·K/R, Tf = kS·K/R. Standard errors to first order from those of the gains
+    and of the given R and K [Ω], [V·s/rad] (independent measurements: another experiment's):
+    σJ/J = √((σkA/kA)² + (σK/K)² + (σR/R)²), likewise Tf, and
+    σb² = (K/R)²·σkV² + ((kV − 2K)/R)²·σK² + (b/R)²·σR² (K enters b twice).
     """
     ks, kv, ka = (result.parameters[n] for n in ("kS", "kV", "kA"))
     out: dict[str, Estimate] = {}
@@ -419,8 +426,8 @@ def motor_estimates(
         for name in ("K", "R", "J", "b", "Tf"):
             out[name] = undetermined(name, "needs the winding resistance R (--R) or a current log")
         return out
-    r = resistance
-    out["R"] = Estimate("R", r, 0.0, SI_UNITS["R"], True, "given")
+    r, sr, sk = resistance, float(resistance_stderr or 0.0), float(torque_constant_stderr or 0.0)
+    out["R"] = Estimate("R", r, sr, SI_UNITS["R"], True, "given")
     if torque_constant is None:
         out["K"] = undetermined("K", f"only kV = K + R·b/K is seen; K ≤ {kv.value:.4g} V·s/rad (supply --K or current)")
         out["b"] = undetermined("b", "only kV = K + R·b/K is seen (supply --K or a current log)")
@@ -428,13 +435,22 @@ def motor_estimates(
         out["Tf"] = undetermined("Tf", f"Tf = kS·K/R needs K; Tf ≤ kS·kV/R = {ks.value * kv.value / r:.4g} N·m")
         return out
     k = torque_constant
-    out["K"] = Estimate("K", k, 0.0, SI_UNITS["K"], True, "given")
-    out["J"] = Estimate("J", ka.value * k / r, ka.stderr * k / r, SI_UNITS["J"], ka.determined)
+    out["K"] = Estimate("K", k, sk, SI_UNITS["K"], True, "given")
+
+    def product(gain: Estimate) -> tuple[float, float]:  # gain·K/R and its standard error
+        value = gain.value * k / r
+        rel = math.sqrt((gain.stderr / gain.value) ** 2 + (sk / k) ** 2 + (sr / r) ** 2) if gain.value else math.inf
+        return value, abs(value) * rel if gain.value else gain.stderr * k / r
+
+    j_value, j_se = product(ka)
+    out["J"] = Estimate("J", j_value, j_se, SI_UNITS["J"], ka.determined)
     b_value = (kv.value - k) * k / r
-    b_ok = kv.determined and kv.stderr * k / r <= MAX_RELATIVE_STDERR * abs(b_value)
-    out["b"] = Estimate("b", b_value, kv.stderr * k / r, SI_UNITS["b"], bool(b_ok),
-                        "" if b_ok else "kV − K is within the noise of kV")
-    out["Tf"] = Estimate("Tf", ks.value * k / r, ks.stderr * k / r, SI_UNITS["Tf"], ks.determined)
+    b_se = math.sqrt((k / r * kv.stderr) ** 2 + ((kv.value - 2 * k) / r * sk) ** 2 + (b_value / r * sr) ** 2)
+    b_ok = kv.determined and b_se <= MAX_RELATIVE_STDERR * abs(b_value)
+    out["b"] = Estimate("b", b_value, b_se, SI_UNITS["b"], bool(b_ok),
+                        "" if b_ok else "kV − K is within the noise of kV and K")
+    tf_value, tf_se = product(ks)
+    out["Tf"] = Estimate("Tf", tf_value, tf_se, SI_UNITS["Tf"], ks.determined)
     return out
 
 

@@ -332,6 +332,8 @@ def fit_least_squares(
     cov, stderr, corr, determined, bandwidth = _covariance(
         sol.jac, sol.fun, sol.x, sigma_known=sigma_known, covariance=covariance, groups=groups
     )
+    if sol.fun.size == sol.x.size and not sigma_known:  # no residual degrees of freedom: scatter unknown
+        stderr = np.full(sol.x.size, np.nan)
     return LeastSquares(
         names=list(names),
         values=sol.x,

@@ -84,7 +84,8 @@ def disc_inertia(radius: float, thickness: float, density: float) -> float:
     0.0124, which is r⁴·ρ·h without the ½·π of its own formula).
     """
     _positive(radius=radius, thickness=thickness, density=density)
-    return 0.5 * math.pi * radius**4 * density * thickness
+    r2 = radius * radius  # products, not powers: float ** raises OverflowError where * gives inf
+    return 0.5 * math.pi * r2 * r2 * density * thickness
 
 
 def disc_mass(radius: float, thickness: float, density: float) -> float:

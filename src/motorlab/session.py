@@ -51,7 +51,7 @@ from pathlib import Path
 from typing import Any
 
 from motorlab.errors import MotorlabError, OptionError, SessionError
-from motorlab.plan import MATERIALS
+from motorlab.plan import MATERIALS, disc_inertia
 from motorlab.units import format_unit, parse_quantity
 
 #: Densities of flywheel materials [kg/m³]: the one table of :mod:`motorlab.plan`.
@@ -605,10 +605,7 @@ def _read_flywheel(table: _Table) -> FlywheelSpec:
         density = MATERIAL_DENSITY[material.lower()]
     if density is None:
         raise disc.error(None, "missing key 'material' (or 'density')")
-    # Uniform disc about its axis: J = ½·m·r² = ½·π·r⁴·ρ·h (seed 1, "First Experiment"). Products, not
-    # powers: float ** raises OverflowError on absurd sizes where * gives inf, which is checked below.
-    r2 = radius * radius
-    inertia = 0.5 * math.pi * r2 * r2 * density * thickness
+    inertia = disc_inertia(radius, thickness, density)  # ½·π·r⁴·ρ·h; inf (checked below) for absurd sizes
     if not math.isfinite(inertia):
         raise table.error("disc", f"a disc of radius {radius:g} m has an inertia too large to represent")
     what = material or f"ρ = {density:g} kg/m³"

@@ -174,7 +174,7 @@ def to_target(
         ff_pow = {"kS": feedforward.kS / voltage, "kV": feedforward.kV * scale, "kA": feedforward.kA * scale}
         conv = [
             f"ticks: cpr = {units.cpr:g}, 1 rad = {ticks_per_rad:.6g} ticks",
-            f"power = volts / {voltage:g} V: gains [V per rad] × {scale:.6g} = power per tick",
+            f"power = volts / {voltage:g} V: gains [V per rad, per rad/s ...] × {scale:.6g} = power per tick",
             f"in the OpMode multiply the power by {voltage:g} / battery voltage (VoltageSensor)",
         ]
         unit_map = {
@@ -204,7 +204,7 @@ def to_target(
     conv = [
         f"ticks: cpr = {units.cpr:g}, 1 rad = {ticks_per_rad:.6g} ticks",
         f"hub output ('hub'): 32767 = full power = {voltage:g} V, i.e. {per_volt:.6g} per volt",
-        f"P, I, D = kP, kI, kD [V per rad] × {per_volt:.6g} / {ticks_per_rad:.6g} = × {scale:.6g}",
+        f"P, I, D = kP, kI, kD [V per rad/s, rad, rad/s²] × {per_volt:.6g} / {ticks_per_rad:.6g} = × {scale:.6g}",
         f"max velocity at {voltage:g} V = (V − kS)/kV = {free_ticks:.6g} ticks/s; "
         f"F = 32767 / {free_ticks:.6g} = {f:.6g}",
     ]
