@@ -348,7 +348,7 @@ def test_arm_ignoring_gravity_is_visible():
     arm = feedforward(recs, mechanism="arm")
     simple = feedforward(recs, mechanism="simple")
     assert simple.details["residual_rms"]["position"] > 10 * arm.details["residual_rms"]["position"]
-    assert any("departs from the model" in w for w in simple.warnings)
+    assert any("measured noise does not explain the residuals" in w for w in simple.warnings)
 
 
 # --------------------------------------------------------------------------------------------------

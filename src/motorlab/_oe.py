@@ -678,10 +678,23 @@ def fit_output_error(
         blocks.append((start, m))
         start += m * len(signals)
     values = sol.x * x_scale
+    # The residual is made of the logged voltage's noise run through the plant (integrated twice into
+    # the angle: a random walk no stationary residual model captures), counting noise and current
+    # noise. Propagate them, unless the residuals are more than twice what they explain: then the
+    # model misses something real (a load, a delay, stale samples) and only the residuals say how
+    # uncertain the fit is. Residuals well below the prediction (the propagation is conservative for
+    # stale status frames; or what looked like voltage noise is real ripple the motor saw) keep the
+    # propagated, larger, uncertainty.
+    cov_prop, predicted = noise_propagation_covariance(jx, model, p, logs, sims, blocks, sigma,
+                                                       current_noise=current_noise)
+    actual = float(np.mean(res**2))
+    ratio = actual / predicted if predicted > 0 else math.inf
+    explained = ratio <= 2.0
     bias = np.zeros(values.size)
-    if model.uses_current:
+    if model.uses_current and 0.5 <= ratio <= 2.0:
         # The logged voltage's noise reaches the simulated current (errors in the input variable) and
-        # biases L and R: remove the first-order bias (see input_noise_bias).
+        # biases L and R: remove the first-order bias (see input_noise_bias). Only when the residuals
+        # look like that noise: real ripple on the voltage is input the motor saw, and biases nothing.
         bias = input_noise_bias(jx, model, p, logs, sigma["current"])
         if np.all(np.isfinite(bias)) and np.all(values - bias >= lower_z * x_scale) and np.any(bias):
             values = values - bias
@@ -690,23 +703,12 @@ def fit_output_error(
         else:
             bias = np.zeros(values.size)
     cov_hac, cov_white, null, bandwidth = hac_covariance(jx, res, blocks, len(signals), values)
-    cov_full = cov_hac
-    noise_model = "Newey–West"
-    # The residual is made of the logged voltage's noise run through the plant (integrated twice into
-    # the angle: a random walk no stationary residual model captures), counting noise and current
-    # noise. Propagate them; fall back on the residuals when they are larger than this noise explains.
-    cov_prop, predicted = noise_propagation_covariance(jx, model, p, logs, sims, blocks, sigma,
-                                                       current_noise=current_noise)
-    actual = float(np.mean(res**2))
-    if actual <= 2.0 * predicted:
-        cov_full = cov_prop
+    if explained:
+        cov_full = cov_prop * max(1.0, ratio)  # never below what the residuals themselves show
         noise_model = "measured noise propagated (voltage, counting" + (", current)" if model.uses_current else ")")
     else:
-        # the residuals are larger than the measured noise explains: the model misses something
-        # real (a load, a delay, stale samples), and only the residuals themselves say how much
-        noise_model = (
-            f"Newey–West (residuals {math.sqrt(actual / predicted):.3g}× larger than the measured noise explains)"
-        )
+        cov_full = cov_hac
+        noise_model = f"Newey–West (residuals {math.sqrt(ratio):.3g}× larger than the measured noise explains)"
     rms: dict[str, float] = {}
     for name in signals:
         err = np.concatenate(
@@ -745,6 +747,42 @@ def integrated_autocorrelation(x: np.ndarray) -> float:
     return float(1.0 + 2.0 * np.sum(acf[1:stop]))
 
 
+def noise_warning(fit: Fit, *, rms_text: str) -> list[str]:
+    """The warning to give when the uncertainties had to come from the residuals (empty otherwise)."""
+    if not fit.noise_model.startswith("Newey"):
+        return []
+    return [
+        f"the measured noise does not explain the residuals (residual RMS {rms_text}; {fit.noise_model}): "
+        "uncertainties come from the residuals"
+    ]
+
+
+#: Eigenvalues of the column-scaled Gram matrix JᵀJ below this fraction of the largest carry no
+#: information (a scaled condition number of J above ~1e5): finite-difference Jacobians of a
+#: simulation with events are not more accurate than that, and a parameter on such a direction has
+#: a relative standard error far above 100 % anyway.
+INFO_TOLERANCE = 1e-10
+
+
+def scaled_gram_inverse(jac: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(JᵀJ)⁻¹ through the eigen-decomposition of the column-scaled Gram matrix, and the null mask.
+
+    Directions with (almost) no information are dropped (pseudo-inverse) and every parameter that
+    loads on one is returned as ``null`` (not determined), so no variance is silently set to zero.
+    """
+    p = jac.shape[1]
+    col = np.linalg.norm(jac, axis=0)
+    col = np.where(col > 0, col, 1.0)
+    js = jac / col
+    eig, vec = np.linalg.eigh(js.T @ js)
+    eig = np.clip(eig, 0.0, None)
+    keep = eig > INFO_TOLERANCE * float(eig.max() if eig.size else 1.0)
+    null_dirs = vec[:, ~keep].T
+    null = (np.abs(null_dirs) > 1e-3).any(axis=0) if null_dirs.size else np.zeros(p, dtype=bool)
+    inv_eig = np.where(keep, 1.0 / np.where(keep, eig, 1.0), 0.0)
+    return ((vec * inv_eig) @ vec.T) / np.outer(col, col), null
+
+
 def hac_covariance(
     jac: np.ndarray, res: np.ndarray, blocks: list[tuple[int, int]], n_signals: int, values: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
@@ -754,7 +792,7 @@ def hac_covariance(
     S = Σ_{|l|≤M} (1 − |l|/(M+1))·Γ_l (Bartlett weights), summed over runs. For white residuals it is
     the usual s²·(JᵀJ)⁻¹. The bandwidth M is three times the largest integrated autocorrelation time
     of the residuals (quantised angles at rest, stale samples and voltage noise integrated twice
-    make position residuals strongly correlated), at most a third of the shortest run.
+    make position residuals strongly correlated), at most half of each run.
 
     Returns
     -------
@@ -767,18 +805,7 @@ def hac_covariance(
     autocorrelation consistent covariance matrix", Econometrica 55 (1987) 703–708.
     """
     n, p = jac.shape
-    # Information through the eigen-decomposition of the column-scaled Gram matrix JᵀJ (p × p: cheap,
-    # and the same null directions as motorlab.fitting's SVD of the scaled Jacobian).
-    col = np.linalg.norm(jac, axis=0)
-    col = np.where(col > 0, col, 1.0)
-    js = jac / col
-    eig, vec = np.linalg.eigh(js.T @ js)
-    eig = np.clip(eig, 0.0, None)
-    keep = eig > (1e-9) ** 2 * float(eig.max() if eig.size else 1.0)
-    null_dirs = vec[:, ~keep].T
-    null = (np.abs(null_dirs) > 1e-3).any(axis=0) if null_dirs.size else np.zeros(p, dtype=bool)
-    inv_eig = np.where(keep, 1.0 / np.where(keep, eig, 1.0), 0.0)
-    h_inv = ((vec * inv_eig) @ vec.T) / np.outer(col, col)
+    h_inv, null = scaled_gram_inverse(jac)
     cov_white = h_inv * float(res @ res) / max(n - p, 1)
     # One bandwidth per run: three integrated autocorrelation times of its residuals, at most half
     # the run (quasistatic ramps have far longer correlation than short dynamic steps).
@@ -1027,7 +1054,7 @@ def noise_propagation_covariance(
             p00 = float(linalg.solve_discrete_lyapunov(d.ad, np.outer(d.bv, d.bv))[0, 0])
             expected_square += m * sig_v**2 * p00 / sigma["current"] ** 2
         score += sig_v**2 * (a.T @ a)
-    h_inv = np.linalg.pinv(jac.T @ jac)
+    h_inv, _ = scaled_gram_inverse(jac)
     return h_inv @ score @ h_inv, expected_square / max(n, 1)
 
 
@@ -1077,7 +1104,7 @@ def input_noise_bias(
         q = p.copy()
         q[k] += h
         grad[k] = (noise_cost(q) - base) / h
-    return -0.5 * np.linalg.pinv(jac.T @ jac) @ grad
+    return -0.5 * scaled_gram_inverse(jac)[0] @ grad
 
 
 def _grid_mask(log: Log, moving_at_samples: np.ndarray) -> np.ndarray:

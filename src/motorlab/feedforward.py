@@ -347,12 +347,7 @@ def feedforward(
     np.fill_diagonal(corr, 1.0)
     if not fit.success:
         warnings.append(f"the optimiser stopped early: {fit.message}")
-    if fit.noise_model.startswith("Newey"):
-        what, unit = ("position", "m") if linear else ("angle", "rad")
-        warnings.append(
-            f"the {what} departs from the model by more than the measured noise explains "
-            f"(residual RMS {fit.residual_rms['position']:.3g} {unit}): uncertainties come from the residuals"
-        )
+    warnings.extend(_oe.noise_warning(fit, rms_text=f"{fit.residual_rms['position']:.3g} {'m' if linear else 'rad'}"))
     warnings.extend(_gain_warnings(logs, fit, values, corr))
     details: dict[str, Any] = {
         "method": "output error (angle simulated from the voltage)",

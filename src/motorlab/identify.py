@@ -448,13 +448,15 @@ def identify(
         params[name] = _estimate(name, values[k], stderr[k], determined=determined, note=note)
     if not fit.success:
         warnings.append(f"the optimiser stopped early: {fit.message}")
+    warnings.extend(_oe.noise_warning(fit, rms_text=f"{fit.residual_rms['position']:.3g} rad"))
     warnings.extend(excitation_warnings(logs, [s["speed"] for s in fit.simulations]))
     with np.errstate(invalid="ignore", divide="ignore"):
         corr = cov / np.outer(stderr, stderr)
     np.fill_diagonal(corr, 1.0)
     motor = MotorParams(*(float(v) for v in np.maximum(values, [1e-12, 1e-12, 0, 1e-12, 0, 0])))
     details: dict[str, Any] = {
-        "method": "output error (angle and current simulated from the voltage), errors-in-variables bias removed",
+        "method": "output error (angle and current simulated from the voltage)"
+        + (", errors-in-variables bias removed" if np.any(fit.bias_correction) else ""),
         "residual_rms": {**fit.residual_rms},
         "residual_rms_units": {"position": "rad", "current": "A"},
         "noise_weights": sigma,
