@@ -468,11 +468,14 @@ def plan_rig(
     rate_target = target_speed * counts_per_rad
     rate_top = w_supply_final * counts_per_rad
     counts_target = rate_target * log_period
-    t_spin = t_supply if math.isfinite(t_supply) else t_constant
+    # Count samples on the slower (pessimistic) estimate: the model's times use K = Ke, optimistic
+    # where the gearbox loses torque (the data sheet's Kt < Ke).
+    t_spin = max(t for t in (t_supply, t_constant) if math.isfinite(t)) if math.isfinite(t_constant) else t_supply
     samples = t_spin / log_period
-    # Counts in the first log period from rest (θ = ½·α·t²): how well the start is resolved.
-    alpha_rig = (rig.K * current - rig.Tf) / rig.J
-    counts_first = 0.5 * max(alpha_rig, 0.0) * log_period**2 * counts_per_rad
+    # Counts in the first log period from rest (θ = ½·α·t² with the data sheet's torque, at most
+    # the target speed's rate): how well the start is resolved.
+    alpha_rig = (torque - rig.Tf) / rig.J
+    counts_first = min(0.5 * max(alpha_rig, 0.0) * log_period**2, target_speed * log_period) * counts_per_rad
     if counts_target < MIN_COUNTS_PER_PERIOD:
         warnings.append(
             f"only {counts_target:.3g} encoder counts per {log_period * 1e3:g} ms log period at the target speed: "
