@@ -47,3 +47,8 @@ def test_format_unit_for_people():
     assert format_unit("N*m*s/rad") == "N·m·s/rad"
     assert format_unit("kg*m^2") == "kg·m²"
     assert format_unit("ohm") == "Ω"
+
+
+def test_rotation_is_a_unit_as_wpilib_writes_it():
+    assert parse_quantity("2 rotations", "rad") == pytest.approx(4 * math.pi)
+    assert parse_quantity("1 V*s/rotation", "V*s/rad") == pytest.approx(1 / (2 * math.pi))

@@ -23,6 +23,7 @@ def registry() -> pint.UnitRegistry:
     """The one pint registry motorlab uses (created on first use)."""
     ureg: pint.UnitRegistry = pint.UnitRegistry()
     ureg.define("count = [] = counts = ct")
+    ureg.define("rotation = revolution")  # WPILib/SysId write "Rotations"
     return ureg
 
 

@@ -204,3 +204,15 @@ def test_writer_tick_variant_and_bad_arguments(tmp_path):
         write_ftc_log(path, [0.0, np.nan], [0, 1])
     with pytest.raises(OptionError, match="values"):
         write_ftc_log(path, [0.0, 1.0], [0])
+
+
+def test_a_time_column_in_seconds_is_refused(tmp_path):
+    """An OpMode logging getRuntime() (seconds) would make every rate 1000× wrong: refused, not guessed."""
+    from motorlab.errors import LogFormatError
+    from motorlab.io import read_ftc_log
+
+    path = tmp_path / "seconds.txt"
+    path.write_text("".join(f"{0.1 * k:.3f} {10 * k} 12.0 0.5\n" for k in range(50)))
+    with pytest.raises(LogFormatError, match="looks like seconds"):
+        read_ftc_log(path)
+    assert path.read_text().startswith("0.000 0 12.0 0.5")

@@ -221,3 +221,18 @@ def test_bad_logs(tmp_path):
         read_wpilog(path)
     with pytest.raises(OptionError, match="duplicate"):
         write_wpilog(path, [WpilogEntry("a", "double", t, t), WpilogEntry("a", "double", t, t)])
+
+
+def test_velocity_entry_metadata_wins_when_the_position_unit_is_given(tmp_path):
+    """Position without metadata (unit given by the user), velocity logged in rpm: read as rpm."""
+    t = np.arange(0, 0.5, 0.01)
+    entries = [
+        WpilogEntry("sysid-test-state-arm", "string", t[:1], ["quasistatic-forward"]),
+        WpilogEntry("voltage-arm", "double", t, np.ones(t.size)),
+        WpilogEntry("position-arm", "double", t, t),
+        WpilogEntry("velocity-arm", "double", t, np.full(t.size, 60.0), metadata="rpm"),
+    ]
+    path = tmp_path / "arm.wpilog"
+    write_wpilog(path, entries)
+    rec = read_wpilog(path, position_unit="rotation")
+    np.testing.assert_allclose(rec["velocity"], 2 * np.pi)  # 60 rpm = 1 rev/s = 2π rad/s

@@ -116,6 +116,17 @@ def read_ftc_log(
                 line=int(part.lines[0]),
             )
     times, offsets = _join_times(parts, time_restart)
+    if ncol == 4 and times.size > 2:
+        # The OpMode logs milliseconds; a loop that reads an INA219 over I²C cannot run faster than
+        # ~1 kHz. Steps far below a millisecond mean the time column is in seconds (getRuntime()).
+        step_ms = float(np.median(np.diff(times))) * 1e3
+        if 0 < step_ms < 0.2:
+            raise LogFormatError(
+                f"the time column steps by {step_ms:.3g} ms (median): it looks like seconds, but this "
+                "format's first column is milliseconds (time_ms); convert it, or write a CSV with a time_s column",
+                path=parts[0].path,
+                line=int(parts[0].lines[0]),
+            )
     rows = np.concatenate([p.rows for p in parts])
     header = next((p.header for p in parts if p.header is not None), None)
     # Each file's own header decides its current unit (unless the caller says).

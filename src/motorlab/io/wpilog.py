@@ -394,8 +394,8 @@ def read_wpilog(
     position_unit, velocity_unit
         Units the entries are logged in (pint strings: ``"rotation"``, ``"rad"``, ``"m"``,
         ``"rotation/s"``, ``"rpm"``). By default the entries' metadata (SysId writes ``Rotation``,
-        ``Rotation per Second``, ``Meter`` …); the velocity unit defaults to the position unit per
-        second.
+        ``Rotation per Second``, ``Meter`` …); the velocity unit defaults to the velocity entry's
+        metadata, else to the position unit per second.
 
     Returns
     -------
@@ -450,7 +450,8 @@ def read_wpilog(
             path=name,
         )
     pos_factor, pos_si = _si_factor(pos_unit, per_time=False)
-    vel_unit = velocity_unit or (None if position_unit else _pint_unit(velocity.metadata)) or f"({pos_unit})/s"
+    # The velocity entry's own metadata wins over "position unit per second" (a log may give rpm).
+    vel_unit = velocity_unit or _pint_unit(velocity.metadata) or f"({pos_unit})/s"
     vel_factor, vel_si = _si_factor(vel_unit, per_time=True)
     if vel_si != f"{pos_si}/s":
         raise OptionError(f"velocity unit {vel_unit!r} does not match position unit {pos_unit!r}")
