@@ -154,3 +154,12 @@ def test_max_profile_is_followable_by_feedforward_alone():
     # Feedforward alone (no feedback) on the matching plant tracks the profile closely.
     r = simulate_closed_loop(Gains("position", 0.0), FF, FF, ref, duration=total, kind="profile", target=30.0)
     assert r.metrics["max_tracking_error"] < 0.01 * 30.0
+
+
+def test_oscillation_detector_tells_a_creep_from_a_swing():
+    from motorlab.control.simulation import _oscillates
+
+    t = np.linspace(0.0, 1.0, 200)
+    assert not _oscillates(1.0 - 0.5 * np.exp(-t), 0.01)  # monotone creep over a wide range
+    assert _oscillates(np.sin(20 * t), 0.01)  # a sustained swing
+    assert not _oscillates(0.002 * np.sin(20 * t), 0.01)  # inside the band

@@ -517,9 +517,33 @@ def response_metrics(resp: ClosedLoopResponse, *, resolution: float = 0.0) -> di
     out["max_tracking_error"] = float(np.max(np.abs(resp.reference - y)))
     v_lim = resp.settings.get("voltage", math.inf)
     out["saturated_fraction"] = float(np.mean(np.abs(resp.voltage) >= v_lim * (1 - 1e-12)))
-    last = t >= 0.7 * t[-1]
-    out["sustained_oscillation"] = bool(np.ptp(y[last]) > 2 * band)
+    out["sustained_oscillation"] = _oscillates(y[t >= 0.7 * t[-1]], band)
     return out
+
+
+def _oscillates(y: np.ndarray, band: float) -> bool:
+    """True when the tail swings back and forth: at least two reversals wider than the settling band.
+
+    A slow, monotone creep towards the target (a P-only loop against Coulomb friction) is not an
+    oscillation, however wide its range.
+    """
+    if y.size < 3 or np.ptp(y) <= 2 * band:
+        return False
+    # Extrema that differ from the last kept one by more than 2·band (hysteresis against quantisation).
+    turns = 0
+    direction = 0
+    anchor = float(y[0])
+    for value in y[1:]:
+        step = float(value) - anchor
+        if direction >= 0 and step < -2 * band:
+            turns += direction > 0
+            direction, anchor = -1, float(value)
+        elif direction <= 0 and step > 2 * band:
+            turns += direction < 0
+            direction, anchor = 1, float(value)
+        elif (direction > 0 and value > anchor) or (direction < 0 and value < anchor):
+            anchor = float(value)
+    return turns >= 2
 
 
 def _crossing(t: np.ndarray, y: np.ndarray, level: float) -> float:
