@@ -70,3 +70,24 @@ def test_simulate_session_is_wired(tmp_path: Path) -> None:
     assert (out / "session.toml").is_file()
     runs = json.loads((out / "A" / "truth.json").read_text())["runs"]
     assert all(run["unit"] == "A" for run in runs.values())
+
+
+def test_simulate_session_with_a_worn_unit(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """``--worn B --wear 2``: unit B's true b is doubled; the session's notes say so; bad units refused."""
+    out = tmp_path / "session"
+    argv = ["simulate", "session", "--motor", "neverest40", "--units", "2", "-o", str(out), "--worn", "B"]
+    assert main(argv) == 0
+    healthy = tmp_path / "healthy"
+    assert main(["simulate", "session", "--motor", "neverest40", "--units", "2", "-o", str(healthy)]) == 0
+
+    def true_b(folder: Path, unit: str) -> float:
+        runs = json.loads((folder / unit / "truth.json").read_text())["runs"]
+        return float(next(iter(runs.values()))["params"]["b"])
+
+    assert "b × 2" in (out / "session.toml").read_text()
+    assert true_b(out, "B") == pytest.approx(2 * true_b(healthy, "B"))
+    assert true_b(out, "A") == pytest.approx(true_b(healthy, "A"))
+    capsys.readouterr()
+    assert main(["simulate", "session", "--motor", "neverest40", "--units", "2", "-o", str(tmp_path / "x"),
+                 "--worn", "Z"]) == 2
+    assert "no unit 'Z'" in capsys.readouterr().err

@@ -9,7 +9,6 @@ file(s) a real rig gives plus ``truth.json`` beside them. ``spindown --split`` w
 from __future__ import annotations
 
 import argparse
-import importlib
 from collections.abc import Callable
 from typing import Any
 
@@ -146,6 +145,9 @@ def register(subparsers: Any) -> None:
     session.add_argument("--units", type=positive_int, default=3, help="number of units (3: A, B, C)")
     session.add_argument("--seed", type=nonnegative_int, default=0, help="noise seed (0)")
     session.add_argument("-o", "--output", required=True, metavar="DIR", help="folder to write")
+    session.add_argument("--worn", metavar="UNIT", help="make one unit worn: its viscous friction b multiplied")
+    session.add_argument("--wear", type=quantity("", positive=True), default=2.0, metavar="FACTOR",
+                         help="factor applied to the worn unit's b (default 2)")
     session.set_defaults(func=run_session)
 
 
@@ -256,10 +258,9 @@ def run(args: argparse.Namespace) -> int:
 
 def run_session(args: argparse.Namespace) -> int:
     """Write a simulated session with :func:`motorlab.session.write_simulated_session`."""
-    session = importlib.import_module("motorlab.session")
-    writer = getattr(session, "write_simulated_session", None)
-    if writer is None:
-        raise OptionError("simulated sessions are not available in this version of motorlab.session")
-    result = writer(args.motor, units=args.units, out_dir=args.output, seed=args.seed)
-    print(f"session: wrote {result if result is not None else args.output}")
+    from motorlab.session import write_simulated_session
+
+    degrade = {args.worn: {"b": args.wear}} if args.worn else None
+    result = write_simulated_session(args.motor, units=args.units, out_dir=args.output, seed=args.seed, degrade=degrade)
+    print(f"session: wrote {result}")
     return 0
