@@ -1,0 +1,9 @@
+// motorlab stub of the FTC SDK API (written from its public signatures; no SDK code). Compile-time only:
+// on a robot the real SDK class is used. See docs/ftc-robot.md.
+package com.qualcomm.robotcore.hardware;
+
+public interface I2cAddrConfig {
+    void setI2cAddress(I2cAddr newAddress);
+
+    I2cAddr getI2cAddress();
+}

@@ -1,0 +1,5 @@
+// motorlab stub of the FTC SDK API (written from its public signatures; no SDK code). Compile-time only:
+// on a robot the real SDK class is used. See docs/ftc-robot.md.
+package com.qualcomm.robotcore.hardware;
+
+public enum I2cWaitControl { NONE, ATOMIC, WRITTEN }
