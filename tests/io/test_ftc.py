@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from motorlab.errors import LogFormatError, OptionError
+from motorlab.io import detect_format
 from motorlab.io.ftc import read_ftc_log, write_ftc_log
 
 # The eight rows of tests/data/ftc/power_log.txt (time_ms, counts, V, A).
@@ -216,3 +217,30 @@ def test_a_time_column_in_seconds_is_refused(tmp_path):
     with pytest.raises(LogFormatError, match="looks like seconds"):
         read_ftc_log(path)
     assert path.read_text().startswith("0.000 0 12.0 0.5")
+
+
+def test_header_fields_name_motor_cpr_and_ratio(tmp_path):
+    """motorlab's OpModes write '# key: value' lines; '# cpr:' gives position when no cpr is passed."""
+    path = tmp_path / "motorlab-spindown.txt"
+    fields = {"experiment": "spindown", "motor": "neverest40", "cpr": 1120, "gear_ratio": 40}
+    write_ftc_log(path, np.array([0.0, 0.005, 0.01]), np.array([0, 1120, 2240]), np.array([12.0, 11.9, 11.8]),
+                  np.array([1.0, 1.0, 0.9]), fields=fields)
+    assert path.read_text().splitlines()[:2] == ["# experiment: spindown", "# motor: neverest40"]
+    rec = read_ftc_log(path)
+    assert rec.metadata["motor"] == "neverest40"
+    assert rec.metadata["gear_ratio"] == 40.0
+    assert rec.metadata["cpr"] == 1120.0
+    assert rec.metadata["format"] == "ftc-log"
+    np.testing.assert_allclose(rec.signals["position"], [0.0, 2 * np.pi, 4 * np.pi])
+    # An explicit cpr wins over the file's.
+    assert read_ftc_log(path, cpr=560).metadata["cpr"] == 560.0
+    assert detect_format(path) == "ftc-log"
+
+
+def test_header_with_an_impossible_cpr_names_the_file(tmp_path):
+    path = tmp_path / "bad.txt"
+    path.write_text("# cpr: -4\ntime_ms encoder_counts\n0 0\n5 3\n")
+    with pytest.raises(LogFormatError, match=r"bad\.txt.*# cpr"):
+        read_ftc_log(path)
+    with pytest.raises(OptionError):
+        write_ftc_log(tmp_path / "x.txt", np.zeros(2), np.zeros(2), fields={"bad key": 1})

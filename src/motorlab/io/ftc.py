@@ -7,6 +7,10 @@ of the arrays) and a run is split over ``testFile.txt`` and ``testFile2.txt``. T
 student to clean all this by hand; :func:`read_ftc_log` does it and says what it did in
 ``metadata``. The two-column variant ``time_ms encoder_counts`` is the tick log of the seed's "Our
 First Motor Test Counting Encoder Ticks" (one row per encoder count).
+
+motorlab's own OpModes (``ftc/``, docs/ftc-robot.md) start the file with ``# key: value`` lines
+naming the motor, the counts per revolution and the gear ratio (``# cpr: 1120``); they go into
+``metadata`` and ``# cpr:`` is used when no ``cpr`` is given. Files without them read as before.
 """
 
 from __future__ import annotations
@@ -17,11 +21,13 @@ import os
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
 from motorlab.errors import LogFormatError, OptionError
 from motorlab.io._text import PathArg, check_cpr, is_number, parse_number, read_text, unit_factor
+from motorlab.io.csv_table import parse_comments
 from motorlab.recording import Recording
 
 #: Column names of the four-column and two-column variants, in file order.
@@ -41,6 +47,7 @@ class _Part:
     header: str | None
     placeholders: int
     warnings: list[str] = field(default_factory=list)
+    fields: dict[str, Any] = field(default_factory=dict)  # leading "# key: value" lines
 
 
 def read_ftc_log(
@@ -57,8 +64,8 @@ def read_ftc_log(
     paths
         One path, or the files of one run in order (``["testFile.txt", "testFile2.txt"]``).
     cpr
-        Encoder counts per revolution of the counted shaft [count/rev]. When given, ``position``
-        [rad] = counts·2π/cpr is added beside ``counts``.
+        Encoder counts per revolution of the counted shaft [count/rev]. When given (or written in
+        the file as ``# cpr: 1120``), ``position`` [rad] = counts·2π/cpr is added beside ``counts``.
     current_unit
         Unit of the shunt-current column (``"A"`` or ``"mA"``, any pint current unit). By default
         each file's header decides (a column name containing ``mA``), else amperes.
@@ -74,7 +81,8 @@ def read_ftc_log(
         variant ``voltage`` [V] (INA219 bus voltage) and ``current`` [A]. ``metadata`` holds
         ``format="ftc-log"``, ``variant`` (``"power"`` or ``"ticks"``), ``cpr``, ``current_unit``,
         ``header``, ``files``, ``file_starts`` (sample index where each file begins),
-        ``placeholder_rows_dropped`` and ``warnings``.
+        ``placeholder_rows_dropped`` and ``warnings``, and every leading ``# key: value`` line of
+        the (first) file (numbers as floats: ``motor``, ``gear_ratio``, ``experiment`` …).
 
     Raises
     ------
@@ -82,7 +90,7 @@ def read_ftc_log(
         Empty or binary file, a non-numeric or non-finite value, a row with a different number of
         columns (except a truncated last line, which is dropped with a warning), a column count other
         than 2 or 4, time going backwards (within a file or across a join), a file holding only
-        placeholder zeros.
+        placeholder zeros, an impossible ``# cpr:`` line.
     OptionError
         Impossible ``cpr``, ``current_unit`` or ``time_restart``.
 
@@ -107,6 +115,12 @@ def read_ftc_log(
     if not path_list:
         raise OptionError("read_ftc_log needs at least one file")
     parts = [_read_part(p) for p in path_list]
+    fields = {k: v for p in reversed(parts) for k, v in p.fields.items()}  # the first file's win
+    if cpr is None and "cpr" in fields:
+        try:
+            cpr = check_cpr(fields["cpr"])
+        except OptionError as exc:
+            raise LogFormatError(f"# cpr: {exc.message.removeprefix('cpr: ')}", path=parts[0].path) from None
     ncol = parts[0].rows.shape[1]
     for part in parts[1:]:
         if part.rows.shape[1] != ncol:
@@ -142,6 +156,7 @@ def read_ftc_log(
         signals["current"] = rows[:, 3] * factors
     starts = np.cumsum([0] + [p.rows.shape[0] for p in parts[:-1]])
     metadata = {
+        **fields,
         "format": "ftc-log",
         "variant": "power" if ncol == 4 else "ticks",
         "columns": list(POWER_COLUMNS if ncol == 4 else TICK_COLUMNS),
@@ -166,6 +181,7 @@ def read_ftc_log(
 def _read_part(path: PathArg) -> _Part:
     text = read_text(path)
     name = text.path
+    fields, _comments, _first = parse_comments(text)
     header: str | None = None
     ncol: int | None = None
     values: list[list[float]] = []
@@ -173,6 +189,8 @@ def _read_part(path: PathArg) -> _Part:
     warnings: list[str] = []
     for number, line in text.numbered():
         tokens = line.split()
+        if ncol is None and line.startswith("#"):
+            continue  # "# key: value" lines (fields) and comments before the data
         if ncol is None and not all(is_number(t) for t in tokens):
             if header is not None:
                 raise LogFormatError(f"a second text line before the data: {line[:40]!r}", path=name, line=number)
@@ -214,7 +232,7 @@ def _read_part(path: PathArg) -> _Part:
             path=name,
             line=int(line_arr[i]),
         )
-    return _Part(name, rows, line_arr, header, placeholders, warnings)
+    return _Part(name, rows, line_arr, header, placeholders, warnings, fields)
 
 
 def _join_times(parts: list[_Part], time_restart: str) -> tuple[np.ndarray, list[float]]:
@@ -267,6 +285,7 @@ def write_ftc_log(
     crlf: bool = False,
     blank_lines: int = 0,
     current_unit: str = "A",
+    fields: dict[str, Any] | None = None,
 ) -> None:
     """Write a log exactly as the FTC OpMode does, for the virtual rig and for tests.
 
@@ -290,6 +309,9 @@ def write_ftc_log(
         Blank lines written before everything else (the phone's files start with some).
     current_unit
         ``"A"`` or ``"mA"``: the unit the current is written in (INA219 libraries differ).
+    fields
+        ``# key: value`` lines written first, as motorlab's OpModes do (``{"cpr": 1120,
+        "motor": "neverest40", "gear_ratio": 40}``).
 
     Raises
     ------
@@ -313,6 +335,11 @@ def write_ftc_log(
     if placeholder_rows < 0:
         raise OptionError("write_ftc_log: placeholder_rows must not be negative")
     out = [""] * blank_lines
+    for key, value in (fields or {}).items():
+        text = str(value)
+        if not key.isidentifier() or "\n" in text or "\r" in text:
+            raise OptionError(f"write_ftc_log: field {key!r}: {text!r} cannot be written as '# key: value'")
+        out.append(f"# {key}: {text}")
     if header:
         out.append(" ".join(names))
     four = len(columns) == 4
