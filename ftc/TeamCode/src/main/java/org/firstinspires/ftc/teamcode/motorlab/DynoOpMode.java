@@ -19,7 +19,8 @@ import org.firstinspires.ftc.robotcore.internal.system.AppUtil;
  * experiment's {@link #step(Sample)} commands the drive. Whatever ends the loop (done, a limit, the
  * INA219's over-voltage refusal, STOP, an exception), the relay opens and the hub power goes to 0.
  *
- * <p>Sample time: the midpoint of the bulk read, from the OpMode's start [s].
+ * <p>Each loop reads the voltage, then the encoder (one bulk read), then the current. Sample time: the
+ * midpoint of the bulk read, from the OpMode's start [s].
  */
 public abstract class DynoOpMode extends LinearOpMode {
     public final DynoConfig config = new DynoConfig();
@@ -109,10 +110,11 @@ public abstract class DynoOpMode extends LinearOpMode {
             ElapsedTime clock = newTimer();
             double lastTelemetry = -1.0;
             while (opModeIsActive()) {
+                rig.readVoltage(s);
                 double before = clock.seconds();
                 rig.readEncoder(s);
                 s.time = 0.5 * (before + clock.seconds());
-                rig.readPower(s);
+                rig.readCurrent(s);
                 log.write(s);
                 String reason = limits.check(s);
                 if (reason == null && config.stopOnB && gamepad1 != null && gamepad1.b) {
@@ -182,14 +184,17 @@ public abstract class DynoOpMode extends LinearOpMode {
         f.put("limits", String.format(Locale.US, "%.0f s, %.2f A, %.0f counts/s, %.0f counts", config.maxSeconds,
                 config.maxCurrent, config.maxSpeed, config.maxTravel));
         describe(f);
-        f.put("opmode", getClass().getSimpleName());
+        Class<?> named = getClass();
+        while (named.isAnonymousClass()) {
+            named = named.getSuperclass();
+        }
+        f.put("opmode", named.getSimpleName());
         f.put("started", new SimpleDateFormat("yyyy-MM-dd'T'HH:mm:ss", Locale.US).format(new Date()));
         return f;
     }
 
     protected static String fmt(double value) {
-        return value == Math.rint(value) && Math.abs(value) < 1e15 ? String.valueOf((long) value)
-                : String.format(Locale.US, "%.6g", value);
+        return value == Math.rint(value) && Math.abs(value) < 1e15 ? String.valueOf((long) value) : String.valueOf(value);
     }
 
     private void showInit(String problem) {

@@ -88,17 +88,16 @@ public final class DynoRig {
     }
 
     /**
-     * Voltage and current: the INA219's bus voltage and current with the relay drive (refusing above
-     * its limit); with the hub drive the commanded voltage power·V_battery and the INA219's current if
-     * there is one, else the hub's motor current signed by the power.
+     * Voltage: the INA219's bus voltage with the relay drive (refusing above its limit); with the hub
+     * drive the commanded voltage power·V_battery. Read just before the encoder, so that the voltage
+     * and the encoder latch are about one I2C transaction apart (docs/ftc-robot.md, "Timing").
      */
-    public void readPower(Sample s) {
-        if (drive == Drive.RELAY) {
-            s.voltage = ina219.readBusVoltage();
-            s.current = ina219.readCurrent();
-            return;
-        }
-        s.voltage = power * batteryVoltage();
+    public void readVoltage(Sample s) {
+        s.voltage = drive == Drive.RELAY ? ina219.readBusVoltage() : power * batteryVoltage();
+    }
+
+    /** Current: the INA219's if there is one, else the hub's motor current signed by the power. */
+    public void readCurrent(Sample s) {
         s.current = ina219 != null ? ina219.readCurrent() : Math.signum(power) * motor.getCurrent(CurrentUnit.AMPS);
     }
 

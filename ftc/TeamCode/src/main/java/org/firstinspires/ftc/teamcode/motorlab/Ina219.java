@@ -164,7 +164,7 @@ public class Ina219 extends I2cDeviceSynchDevice<I2cDeviceSynch> {
         if (!(p.shuntOhms > 0) || Double.isInfinite(p.shuntOhms)) {
             throw new IllegalArgumentException("INA219: shunt resistance must be positive, got " + p.shuntOhms);
         }
-        if (!(p.maxExpectedCurrent > 0) || p.maxExpectedCurrent * p.shuntOhms > p.shuntRange.volts) {
+        if (!(p.maxExpectedCurrent > 0) || p.maxExpectedCurrent * p.shuntOhms > p.shuntRange.volts * (1 + 1e-9)) {
             throw new IllegalArgumentException(String.format(Locale.US,
                     "INA219: %.3g A through %.3g Ω is outside the ±%.0f mV shunt range", p.maxExpectedCurrent,
                     p.shuntOhms, p.shuntRange.volts * 1e3));
@@ -192,12 +192,17 @@ public class Ina219 extends I2cDeviceSynchDevice<I2cDeviceSynch> {
         return (p.busRange.code << 13) | (p.shuntRange.code << 11) | (p.busAdc.code << 7) | (p.shuntAdc.code << 3) | 0x7;
     }
 
-    /** Bus voltage [V] (IN- to GND). @throws OverVoltageException above the limit. */
+    /**
+     * Bus voltage [V] (IN- to GND).
+     *
+     * @throws OverVoltageException at or above the limit: a reading at the top of the 16 V range may be
+     *     a saturated one, so reaching the limit already counts as exceeding it
+     */
     public double readBusVoltage() {
         int raw = readRegister(REG_BUS_VOLTAGE);
         overflow = (raw & 0x1) != 0;
         double volts = (raw >> 3) * BUS_LSB;
-        if (volts > parameters.maxBusVoltage) {
+        if (volts >= parameters.maxBusVoltage) {
             throw new OverVoltageException(volts, parameters.maxBusVoltage);
         }
         return volts;
