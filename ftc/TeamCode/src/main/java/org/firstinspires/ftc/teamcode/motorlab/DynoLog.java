@@ -45,7 +45,7 @@ public final class DynoLog implements Closeable {
 
     public void write(Sample s) throws IOException {
         if (power) {
-            out.write(String.format(Locale.US, "%.3f %d %.4f %.5f\n", s.time * 1e3, s.counts, s.voltage, s.current));
+            out.write(String.format(Locale.US, "%.3f %d %.4f %.5f\n", s.time * 1e3, s.counts, s.voltage + 0.0, s.current + 0.0));
         } else {
             out.write(String.format(Locale.US, "%.3f %d\n", s.time * 1e3, s.counts));
         }

@@ -19,8 +19,10 @@ import org.firstinspires.ftc.robotcore.internal.system.AppUtil;
  * experiment's {@link #step(Sample)} commands the drive. Whatever ends the loop (done, a limit, the
  * INA219's over-voltage refusal, STOP, an exception), the relay opens and the hub power goes to 0.
  *
- * <p>Each loop reads the voltage, then the encoder (one bulk read), then the current. Sample time: the
- * midpoint of the bulk read, from the OpMode's start [s].
+ * <p>Each loop reads the encoder with one bulk read, the voltage (relay drive: the INA219 just before
+ * the encoder; hub drive: the command in effect, just after) and the current, then commands the drive.
+ * Sample time: the midpoint of the bulk read, from the OpMode's start [s]. Timing offsets of about one
+ * hub transaction remain (docs/ftc-robot.md, "Timing").
  */
 public abstract class DynoOpMode extends LinearOpMode {
     public final DynoConfig config = new DynoConfig();
@@ -110,10 +112,16 @@ public abstract class DynoOpMode extends LinearOpMode {
             ElapsedTime clock = newTimer();
             double lastTelemetry = -1.0;
             while (opModeIsActive()) {
-                rig.readVoltage(s);
+                boolean relay = rig.drive == DynoRig.Drive.RELAY;
+                if (relay) {
+                    rig.readVoltage(s); // measured: just before the encoder latch
+                }
                 double before = clock.seconds();
                 rig.readEncoder(s);
                 s.time = 0.5 * (before + clock.seconds());
+                if (!relay) {
+                    rig.readVoltage(s); // the command in effect since the last loop, × the battery now
+                }
                 rig.readCurrent(s);
                 log.write(s);
                 String reason = limits.check(s);

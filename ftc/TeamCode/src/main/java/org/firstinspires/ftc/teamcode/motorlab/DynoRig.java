@@ -89,8 +89,7 @@ public final class DynoRig {
 
     /**
      * Voltage: the INA219's bus voltage with the relay drive (refusing above its limit); with the hub
-     * drive the commanded voltage power·V_battery. Read just before the encoder, so that the voltage
-     * and the encoder latch are about one I2C transaction apart (docs/ftc-robot.md, "Timing").
+     * drive the commanded voltage power·V_battery (the power in effect, the battery read now).
      */
     public void readVoltage(Sample s) {
         s.voltage = drive == Drive.RELAY ? ina219.readBusVoltage() : power * batteryVoltage();
