@@ -35,8 +35,17 @@ pytestmark = pytest.mark.skipif(
 )
 
 
-def _javac(sources: list[Path], out: Path, classpath: Path | None = None) -> None:
-    args = [str(JAVAC), "--release", "8", "-Xlint:all", "-Werror", "-encoding", "UTF-8", "-d", str(out)]
+#: Official samples (FtcRobotController/.../external/samples) that use motors, bulk reads, telemetry and
+#: gamepads, and nothing else of the SDK: they must compile unmodified against ftc/sdk-stubs.
+SAMPLES = (
+    "BasicOpMode_Linear", "BasicOpMode_Iterative", "BasicOmniOpMode_Linear", "ConceptMotorBulkRead",
+    "ConceptRampMotorSpeed", "ConceptNullOp", "RobotAutoDriveByEncoder_Linear", "RobotAutoDriveByTime_Linear",
+)
+
+
+def _javac(sources: list[Path], out: Path, classpath: Path | None = None, *, strict: bool = True) -> None:
+    args = [str(JAVAC), "--release", "8", "-encoding", "UTF-8", "-d", str(out)]
+    args += ["-Xlint:all", "-Werror"] if strict else ["-nowarn"]
     if classpath is not None:
         args += ["-cp", str(classpath)]
     listing = out.parent / f"{out.name}-sources.txt"
@@ -72,17 +81,20 @@ def test_every_source_compiles_for_java_8(classes: Path) -> None:
 
 
 @pytest.mark.skipif(not os.environ.get("MOTORLAB_FTC_SAMPLES"),
-                    reason="set MOTORLAB_FTC_SAMPLES to a folder of official FTC samples (e.g. BasicOpMode_Linear.java)")
+                    reason="set MOTORLAB_FTC_SAMPLES to FtcRobotController's external/samples folder")
 def test_official_samples_compile_unmodified_against_the_stubs(tmp_path: Path) -> None:
     """The FTC SDK's samples cannot be shipped here; point MOTORLAB_FTC_SAMPLES at them (docs/ftc-robot.md)."""
-    samples = sorted(Path(os.environ["MOTORLAB_FTC_SAMPLES"]).glob("*.java"))
-    assert samples, "MOTORLAB_FTC_SAMPLES holds no .java file"
+    folder = Path(os.environ["MOTORLAB_FTC_SAMPLES"])
+    samples = [folder / f"{name}.java" for name in SAMPLES if (folder / f"{name}.java").is_file()]
+    found = {p.stem for p in samples}
+    assert {"BasicOpMode_Linear", "ConceptMotorBulkRead"} <= found, f"{folder} lacks the official samples"
     stubs = tmp_path / "stubs"
     stubs.mkdir()
     _javac(sorted((FTC / "sdk-stubs").rglob("*.java")), stubs)
     out = tmp_path / "samples"
     out.mkdir()
-    _javac(samples, out, classpath=stubs)
+    _javac(samples, out, classpath=stubs, strict=False)
+    assert len(list(out.rglob("*.class"))) >= len(samples)
 
 
 @pytest.mark.parametrize("seed", [1, 2])
