@@ -114,6 +114,10 @@ def test_spindown_round_trip_through_the_jvm(classes: Path, tmp_path: Path, seed
     assert 3.0 < step_ms < 8.0  # one bulk read + two INA219 registers per loop
     assert summary["bulk_reads"] >= rec.time.size  # MANUAL caching: one bulk read per sample
 
+    # The INA219 path (calibration, current register): the supply's constant-current phase reads 2.5 A.
+    current = rec.signals["current"]
+    assert float(np.median(current[current > 1.0])) == pytest.approx(2.5, rel=2e-3)
+
     result = spindown(rec, inertia=truth["J"])
     p = result.parameters
     for name, true in (("gamma", truth["b"] / truth["J"]), ("Tf_over_J", truth["Tf"] / truth["J"])):
