@@ -10,12 +10,14 @@ import java.util.Map;
  *
  * <p>Relay drive: the bench supply in constant current (seed 1, "First Experiment"), analysed with
  * {@code motorlab analyze spinup}. Hub drive: constant power; the log holds the commanded voltage
- * (power × hub input voltage) and the motor current, for {@code motorlab analyze identify}.
+ * (power × hub input voltage) and the motor current, for {@code motorlab analyze identify}; it ends at
+ * the cut, because a coasting motor (FLOAT) is open-circuit, not driven at the logged 0 V.
  */
 @TeleOp(name = "motorlab: spin-up", group = "motorlab")
 public class SpinUpOpMode extends DynoOpMode {
     public double restSeconds = 0.5;
     public double runSeconds = 30.0;
+    /** Relay drive only: logged after the cut [s]. */
     public double afterSeconds = 2.0;
     /** Hub drive only: the power [-1, 1]. */
     public double hubPower = 1.0;
@@ -46,6 +48,7 @@ public class SpinUpOpMode extends DynoOpMode {
     protected boolean step(Sample s) {
         boolean on = s.time >= restSeconds && s.time < restSeconds + runSeconds;
         rig.drive(on, hubPower);
-        return s.time < restSeconds + runSeconds + afterSeconds;
+        double after = rig.drive == DynoRig.Drive.HUB ? 0.0 : afterSeconds;
+        return s.time < restSeconds + runSeconds + after;
     }
 }
