@@ -204,3 +204,22 @@ def test_limits_stop_the_motor(classes: Path, tmp_path: Path, option: str, reaso
     assert not summary["relay_closed"]
     rec = read_ftc_log(summary["log"])
     assert rec.time[-1] < 4.0  # stopped well before the 4.5 s schedule ends
+
+
+def test_ina219_register_arithmetic_matches_the_data_sheet(classes: Path) -> None:
+    """0x399F reset word, calibration 4096 for 0.1 Ω and 100 µA, refusals (RegisterCheck.java)."""
+    done = subprocess.run([str(JAVA), "-cp", str(classes), "org.firstinspires.ftc.teamcode.motorlab.sim.RegisterCheck"],
+                          capture_output=True, text=True, timeout=60, check=False)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert done.stdout.strip() == "ok"
+
+
+def test_a_current_beyond_the_shunt_range_is_flagged(classes: Path, tmp_path: Path) -> None:
+    """Seed 1 sets a 4 A supply limit for the AM20, but 0.1 Ω and ±320 mV end at 3.2 A: the clipped rows
+    are counted and the Driver Station says so (the run itself continues)."""
+    summary = run_sim(classes, tmp_path, experiment="spinup", supply_A=4.0, seed=7)
+    assert summary["stop_reason"] == "complete"
+    assert summary["saturated_rows"] > 10
+    assert any(line.startswith("WARNING") and "3.20 A" in line for line in summary["screen"])
+    rec = read_ftc_log(summary["log"])
+    assert float(np.max(rec.signals["current"])) == pytest.approx(3.2, rel=2e-3)

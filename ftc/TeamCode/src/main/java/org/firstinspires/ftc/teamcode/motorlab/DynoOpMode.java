@@ -30,6 +30,7 @@ public abstract class DynoOpMode extends LinearOpMode {
     private String stopReason = "not started";
     private File logFile;
     private int rows;
+    private int saturated;
 
     /** Experiment name written in the header ({@code # experiment:}) and the file name. */
     protected abstract String experiment();
@@ -123,6 +124,9 @@ public abstract class DynoOpMode extends LinearOpMode {
                     rig.readVoltage(s); // the command in effect since the last loop, × the battery now
                 }
                 rig.readCurrent(s);
+                if (rig.ina219 != null && (rig.ina219.isSaturated(s.current) || rig.ina219.overflowed())) {
+                    saturated++; // the row is still written: the count is shown at the end
+                }
                 log.write(s);
                 String reason = limits.check(s);
                 if (reason == null && config.stopOnB && gamepad1 != null && gamepad1.b) {
@@ -229,6 +233,11 @@ public abstract class DynoOpMode extends LinearOpMode {
 
     private void showResult() {
         telemetry.addData("motorlab", "%s: %s", experiment(), stopReason);
+        if (saturated > 0) {
+            telemetry.addData("WARNING", "%d rows with the INA219 at the end of its current range (%.2f A): "
+                    + "use a smaller shunt or a lower current limit", saturated,
+                    rig.ina219.getParameters().shuntRange.volts / rig.ina219.getParameters().shuntOhms);
+        }
         if (logFile != null) {
             telemetry.addData("log", "%d rows in %s", rows, logFile.getPath());
             telemetry.addData("pull", "adb pull %s", logFile.getPath());
@@ -248,5 +257,10 @@ public abstract class DynoOpMode extends LinearOpMode {
 
     public int rows() {
         return rows;
+    }
+
+    /** Rows whose current was at the end of the INA219's range (clipped). */
+    public int saturatedRows() {
+        return saturated;
     }
 }

@@ -179,7 +179,9 @@ public class Ina219 extends I2cDeviceSynchDevice<I2cDeviceSynch> {
     /** Calibration register: trunc(0.04096/(LSB·R)) with LSB = I_max/32767, even (bit 0 is void), ≤ 0xFFFE. */
     public static int calibrationFor(double shuntOhms, double maxExpectedCurrent) {
         double lsb = maxExpectedCurrent / 32767.0;
-        long cal = (long) Math.floor(0.04096 / (lsb * shuntOhms));
+        // The tiny relative margin keeps an exact quotient (the data sheet's 0.1 Ω, 100 µA: 4096) from
+        // flooring to one less through rounding.
+        long cal = (long) Math.floor(0.04096 / (lsb * shuntOhms) * (1 + 1e-12));
         cal = Math.min(cal, 0xFFFE) & 0xFFFE;
         if (cal < 2) {
             throw new IllegalArgumentException("INA219: current LSB too coarse for this shunt");
@@ -221,6 +223,14 @@ public class Ina219 extends I2cDeviceSynchDevice<I2cDeviceSynch> {
     /** Power [W] (LSB 20·current LSB). */
     public double readPower() {
         return readRegister(REG_POWER) * 20.0 * currentLsb;
+    }
+
+    /**
+     * True when {@code current} [A] is at the end of the shunt range (±range/R, 3.2 A for 0.1 Ω and
+     * ±320 mV): the shunt voltage was clipped and the true current may be larger.
+     */
+    public boolean isSaturated(double current) {
+        return Math.abs(current) >= 0.995 * parameters.shuntRange.volts / parameters.shuntOhms;
     }
 
     /** True when the last bus-voltage read flagged a math overflow (current or power out of range). */

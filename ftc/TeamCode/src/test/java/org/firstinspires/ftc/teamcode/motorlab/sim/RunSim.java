@@ -74,6 +74,7 @@ public final class RunSim {
         json.append(q("stop_reason")).append(':').append(q(op.stopReason())).append(',');
         json.append(q("log")).append(':').append(op.logFile() == null ? "null" : q(op.logFile().getPath())).append(',');
         json.append(q("rows")).append(':').append(op.rows()).append(',');
+        json.append(q("saturated_rows")).append(':').append(op.saturatedRows()).append(',');
         json.append(q("relay_closed")).append(':').append(plant.relayClosed).append(',');
         json.append(q("hub_power")).append(':').append(plant.hubPower).append(',');
         json.append(q("sim_seconds")).append(':').append(plant.seconds()).append(',');
