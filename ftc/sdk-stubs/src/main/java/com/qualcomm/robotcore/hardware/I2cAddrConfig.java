@@ -2,8 +2,6 @@
 // on a robot the real SDK class is used. See docs/ftc-robot.md.
 package com.qualcomm.robotcore.hardware;
 
-public interface I2cAddrConfig {
+public interface I2cAddrConfig extends I2cAddressableDevice {
     void setI2cAddress(I2cAddr newAddress);
-
-    I2cAddr getI2cAddress();
 }

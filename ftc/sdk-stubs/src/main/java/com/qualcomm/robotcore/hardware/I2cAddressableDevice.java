@@ -1,0 +1,7 @@
+// motorlab stub of the FTC SDK API (written from its public signatures; no SDK code). Compile-time only:
+// on a robot the real SDK class is used. See docs/ftc-robot.md.
+package com.qualcomm.robotcore.hardware;
+
+public interface I2cAddressableDevice {
+    I2cAddr getI2cAddress();
+}
