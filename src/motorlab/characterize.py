@@ -20,6 +20,11 @@ Combination
   contribute only K: their J, b and Tf describe motor + gearbox + flywheel and are reported with
   the experiment, not as the motor's.
 - The LCR meter's R = 2πfL/Q is an AC resistance; the model's R is its ``R_dc``.
+- K is the back-EMF constant Ke (at the output shaft, = N·K_motor). A lever at the output (torque)
+  and a torque balance through the gearbox (spin-up) measure Kt = η·Ke instead: they give K only
+  when no back-EMF source (spin-down, identification) was run. With both a back-EMF K and a torque
+  test, each unit gets the gearbox ``efficiency`` η = Kt/Ke ± σ and its ``loss_torque`` τ0
+  (:data:`GEARBOX_PARAMETERS`; :mod:`motorlab.gearbox`), tested across the fleet like the others.
 - One failing experiment or unit does not stop the others: every
   :class:`~motorlab.errors.MotorlabError` is caught per unit and experiment and its message kept.
 """
@@ -72,6 +77,30 @@ CONTRIBUTIONS: dict[str, dict[str, str]] = {
     "feedforward": {},
     "amplifier": {},
     "tachometer": {},
+}
+
+#: Gearbox figures per unit (output shaft), when a back-EMF K and a torque test are both there.
+GEARBOX_PARAMETERS = ("efficiency", "loss_torque")
+#: Experiments whose K is the back-EMF constant Ke (the model's K).
+BACK_EMF_SOURCES = frozenset({"spindown", "identify"})
+#: Experiments whose K is a torque constant measured through the gearbox (Kt = η·Ke at the output).
+TORQUE_SOURCES = frozenset({"torque", "spinup"})
+#: Healthy unit-to-unit spread of the gearbox efficiency (σ of ln η), for the fleet test.
+EFFICIENCY_HEALTHY_SPREAD = 0.03
+
+#: Which shaft, load and torque units each experiment's figures refer to (short, for tables).
+SHAFTS: dict[str, str] = {
+    "lcr": "electrical (motor terminals)",
+    "amplifier": "electrical",
+    "tachometer": "electrical",
+    "spindown": "output + flywheel, coasting: gearbox back-driven, physical torques",
+    "spinup": "output + flywheel, motor driving: K = Kt through the gearbox",
+    "torque": "output (lever), physical torque: K = Kt = η·Ke",
+    "terminal": "output, bare gearmotor, per unit of K·i",
+    "free-spinup": "output, bare gearmotor, per unit of K·i",
+    "pulse": "output, bare gearmotor, per unit of K·i",
+    "identify": "output, what the log drove, per unit of K·i",
+    "feedforward": "output + the SysId mechanism, per unit of K·i",
 }
 
 #: Two estimates disagree when they differ by more than this many combined standard errors.
@@ -538,8 +567,9 @@ def characterize(
     fleet = fleet_summary(
         {n: u.estimates() for n, u in units.items()},
         model=session.motor.name,
-        healthy_spread=session.healthy_spread,
+        healthy_spread={"efficiency": EFFICIENCY_HEALTHY_SPREAD, **session.healthy_spread},
         threshold=threshold,
+        parameters=(*PARAMETERS, "efficiency"),
     )
     result = Characterization(session=session, units=units, fleet=fleet)
     if control:
@@ -570,6 +600,8 @@ def _characterize_unit(session: Session, spec: UnitSpec, progress: Progress | No
             unit.failures[exp_name] = str(exc)
             continue
         unit.fits[exp_name] = fit
+        if exp_name in SHAFTS:
+            fit.details.setdefault("shaft", SHAFTS[exp_name])
         for result_name, motor_name in CONTRIBUTIONS.get(exp_name, {}).items():
             if exp_name in LOADED_EXPERIMENTS and motor_name != "K":
                 continue
@@ -578,18 +610,52 @@ def _characterize_unit(session: Session, spec: UnitSpec, progress: Progress | No
                 candidates[motor_name][exp_name] = est
         # Re-combine after each experiment so that later analyses see the best K so far.
         for name in PARAMETERS:
-            combined, _ = combine(name, candidates[name])
+            combined, _ = combine(name, _sources_of(name, candidates[name]))
             if combined is not None:
                 unit.parameters[name] = combined
     unit.parameters = {}
     for name in PARAMETERS:
-        combined, disagreements = combine(name, candidates[name])
+        combined, disagreements = combine(name, _sources_of(name, candidates[name]))
         if combined is not None:
             unit.parameters[name] = combined
         unit.disagreements.extend(disagreements)
+    unit.parameters.update(gearbox_parameters(unit.fits, unit.parameters.get("K")))
     if progress is not None:
         progress(spec.name, "")
     return unit
+
+
+def _sources_of(name: str, candidates: dict[str, Estimate]) -> dict[str, Estimate]:
+    """K's candidates: the torque constants through the gearbox only when no back-EMF K is there."""
+    if name != "K" or not BACK_EMF_SOURCES & set(candidates):
+        return candidates
+    return {k: v for k, v in candidates.items() if k not in TORQUE_SOURCES}
+
+
+def gearbox_parameters(fits: Mapping[str, FitResult], k: Combined | None) -> dict[str, Combined]:
+    """η = Kt(torque test, output) / Ke(back-EMF, output) and the loss torque τ0, per unit.
+
+    Both constants are at the output shaft (the encoder's), so N cancels: Kt/Ke = η·N·K_m/(N·K_m).
+    Empty without a torque fit or without a back-EMF K.
+    """
+    from motorlab.gearbox import efficiency_estimate
+
+    fit = fits.get("torque")
+    if fit is None or k is None or k.source not in BACK_EMF_SOURCES or "K" not in fit:
+        return {}
+    kt, ke = fit["K"], k.estimate
+    if not (kt.determined and ke.determined):
+        return {}
+    source = f"torque ÷ {k.source}"
+    eta = efficiency_estimate(kt.value, kt.stderr, ke.value, ke.stderr,
+                              note=f"gearbox efficiency η = Kt (lever, output) / Ke ({k.source}, output)")
+    out = {"efficiency": Combined(eta, source, {source: eta})}
+    if "tau0" in fit:
+        t = fit["tau0"]
+        loss = Estimate("loss_torque", -t.value, t.stderr, "N*m", t.determined,
+                        "gearbox loss torque τ0 at the output shaft (minus the torque test's intercept)")
+        out["loss_torque"] = Combined(loss, "torque", {"torque": loss})
+    return out
 
 
 def _controller_gains(result: Characterization, *, plot: bool = True) -> dict[str, Any] | None:
@@ -634,7 +700,7 @@ def results_table(result: Characterization) -> list[dict[str, Any]]:
     rows = []
     for name, unit in result.units.items():
         row: dict[str, Any] = {"unit": name, "label": unit.spec.display_name}
-        for p in PARAMETERS:
+        for p in table_parameters(result):
             combined = unit.parameters.get(p)
             est = combined.estimate if combined is not None else None
             ok = est is not None and est.determined
@@ -648,12 +714,21 @@ def results_table(result: Characterization) -> list[dict[str, Any]]:
     return rows
 
 
+_GEARBOX_UNITS = {"efficiency": "1", "loss_torque": "N*m"}
+
+
+def table_parameters(result: Characterization) -> tuple[str, ...]:
+    """The final table's parameters: :data:`PARAMETERS`, plus the gearbox's when some unit has them."""
+    extra = tuple(p for p in GEARBOX_PARAMETERS if any(p in u.parameters for u in result.units.values()))
+    return (*PARAMETERS, *extra)
+
+
 def write_csv(result: Characterization, path: str | Path) -> Path:
     """Write ``results.csv``: one row per unit, SI units named in the header."""
     path = Path(path)
     header = ["unit", "label"]
-    for p in PARAMETERS:
-        unit = SI_UNITS[p]
+    for p in table_parameters(result):
+        unit = _GEARBOX_UNITS.get(p) or SI_UNITS[p]
         header += [f"{p} ({unit})", f"{p} stderr ({unit})", f"{p} source"]
     header += ["fleet outliers", "status"]
     with path.open("w", newline="", encoding="utf-8") as handle:
@@ -661,7 +736,7 @@ def write_csv(result: Characterization, path: str | Path) -> Path:
         writer.writerow(header)
         for row in results_table(result):
             cells: list[Any] = [row["unit"], row["label"]]
-            for p in PARAMETERS:
+            for p in table_parameters(result):
                 cells += [_csv_float(row[p]), _csv_float(row[f"{p}_stderr"]), row[f"{p}_source"]]
             cells += [row["fleet"], row["status"]]
             writer.writerow(cells)

@@ -264,3 +264,88 @@ def efficiency_estimate(
     stderr = abs(value) * rel if math.isfinite(rel) else math.nan
     return Estimate("efficiency", value, stderr, "1", math.isfinite(stderr),
                     note or "gearbox efficiency η = Kt(output, lever) / (N·Ke(motor, back-EMF))")
+
+
+@dataclass(frozen=True)
+class OutputCurves:
+    """A gearmotor's curves at the output shaft: the forward single-K model and the efficiency η.
+
+    Anything that plots ``curves(voltage)`` (:func:`motorlab.plot.plot_motor_curves`) draws it.
+    """
+
+    params: MotorParams
+    efficiency: float = 1.0
+
+    def curves(self, voltage: float, *, points: int = 201) -> dict[str, np.ndarray]:
+        """:func:`output_curves` of this gearmotor."""
+        return output_curves(self.params, self.efficiency, voltage, points=points)
+
+    def stall_torque(self, voltage: float) -> float:
+        """Output stall torque η·(K·V/R − Tf) [N·m]."""
+        return output_stall_torque(self.params, self.efficiency, voltage)
+
+    def peak_power(self, voltage: float) -> tuple[float, float]:
+        """Peak output power [W] (η times the model's) and the speed at which it occurs [rad/s]."""
+        power, speed = self.params.peak_power(voltage)
+        return self.efficiency * power, speed
+
+
+def gearbox_answer(torque_fit: Any, k: Any, efficiency: Any, *, ratio: float | None) -> dict[str, str] | None:
+    """Seed 1's question for one unit: Ke×N, Kt at the output, η, and whether the mismatch is explained.
+
+    Parameters
+    ----------
+    torque_fit
+        The unit's torque-test :class:`~motorlab.results.FitResult` (lever at the output), or None.
+    k, efficiency
+        The unit's combined K (back-EMF, output shaft) and efficiency (``characterize``'s ``Combined``).
+    ratio
+        Gear ratio N (None: the motor-shaft Ke is not given).
+
+    Returns
+    -------
+    dict or None
+        Display strings ``ke_motor``, ``ke_n``, ``kt``, ``eta``, ``loss``, ``mismatch``, ``verdict``;
+        None when the unit lacks a torque test or a back-EMF K.
+
+    Notes
+    -----
+    The mismatch Ke×N − Kt is measured in its combined standard error. It is "explained by the
+    gearbox" when η = Kt/(Ke×N) is a physical efficiency (≤ 1 within two standard errors) and the loss
+    torque is not negative beyond two standard errors; a Kt above Ke×N or a negative loss torque would
+    point to a calibration error (arm length, scale, current) instead.
+    """
+    if torque_fit is None or k is None or efficiency is None or "K" not in torque_fit:
+        return None
+    kt, ke, eta = torque_fit["K"], k.estimate, efficiency.estimate
+    if not (kt.determined and ke.determined and eta.determined):
+        return None
+
+    def pm(value: float, stderr: float) -> str:
+        return f"{value:.4g} ± {stderr:.2g}" if math.isfinite(stderr) else f"{value:.4g} ± ?"
+
+    diff = ke.value - kt.value
+    sigma = math.hypot(ke.stderr, kt.stderr)
+    z = diff / sigma if sigma > 0 else math.inf
+    loss = -torque_fit["tau0"].value if "tau0" in torque_fit else math.nan
+    loss_se = torque_fit["tau0"].stderr if "tau0" in torque_fit else math.nan
+    physical = eta.value - 2 * eta.stderr <= 1.0 and not (math.isfinite(loss) and loss + 2 * loss_se < 0)
+    if abs(z) < 2:
+        verdict = (f"Kt and Ke×N agree within {abs(z):.1f} combined standard errors: no measurable gearbox loss "
+                   f"(η = {pm(eta.value, eta.stderr)}).")
+    elif physical:
+        verdict = (f"Kt is {z:.0f} σ below Ke×N: the mismatch is real, far beyond the measurement noise, and the "
+                   f"gearbox explains it: η = {pm(eta.value, eta.stderr)} (a loss of {100 * (1 - eta.value):.0f} % of "
+                   f"the motor's torque under load) with a loss torque τ0 = {pm(loss, loss_se)} N·m.")
+    else:
+        verdict = (f"Kt and Ke×N differ by {z:+.0f} σ but the implied η = {pm(eta.value, eta.stderr)} or loss torque "
+                   f"is not physical: check the arm length, the scale's tare and the current reading.")
+    return {
+        "ke_motor": pm(ke.value / ratio, ke.stderr / ratio) if ratio else "—",
+        "ke_n": pm(ke.value, ke.stderr),
+        "kt": pm(kt.value, kt.stderr),
+        "eta": pm(eta.value, eta.stderr),
+        "loss": pm(loss, loss_se) if math.isfinite(loss) else "—",
+        "mismatch": f"{z:+.1f}",
+        "verdict": verdict,
+    }

@@ -726,9 +726,14 @@ def read_truth(path: str | Path) -> dict[str, float]:
         raise SessionError(f"cannot read the truth file ({exc})", path=path) from None
     if isinstance(data, dict) and isinstance(data.get("runs"), dict) and data["runs"]:
         data = next(iter(data["runs"].values()))
+    box = data.get("gearbox") if isinstance(data, dict) else None
     if isinstance(data, dict) and isinstance(data.get("params"), dict):
         data = data["params"]
     out: dict[str, float] = {}
+    if isinstance(box, dict):  # the virtual rig's gearbox (motorlab.gearbox): η and τ0 at the output
+        for name in ("efficiency", "loss_torque"):
+            if isinstance(box.get(name), int | float):
+                out[name] = float(box[name])
     if isinstance(data, dict):
         for name in ("K", "R", "L", "J", "b", "Tf"):
             value = data.get(name)
@@ -736,7 +741,7 @@ def read_truth(path: str | Path) -> dict[str, float]:
                 value = value.get("value")
             if isinstance(value, int | float) and not isinstance(value, bool):
                 out[name] = float(value)
-    if not out:
+    if not set(out) - {"efficiency", "loss_torque"}:
         raise SessionError("no motor parameters (K, R, L, J, b, Tf) in the truth file", path=path)
     return out
 

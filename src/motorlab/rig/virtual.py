@@ -236,7 +236,11 @@ class VirtualRig:
             "unit": self.unit,
             "unit_seed": self.unit_seed,
             "noise_seed": self.noise_seed,
-            "params": self.params.to_dict(),
+            # The model's parameters of the bare gearmotor at the output shaft (forward single-K
+            # equivalent: the gearbox's drag and output inertia ÷ η included); "motor_params" are the
+            # motor's own through an ideal gearbox. The two are equal with an ideal gearbox.
+            "params": self._loaded(False).to_dict(),
+            "motor_params": self.params.to_dict(),
             "params_units": self.params.units(),
             "nominal_params": self.motor.nominal_params().to_dict(),
             "unit_spread": self.spread.to_dict(),
