@@ -51,15 +51,13 @@ def register(subparsers: Any) -> None:
 def experiment_rows(result: Any) -> list[tuple[str, str, str, list[str]]]:
     """Every analysis's own estimates against the rig's expectation for that run, unit by unit.
 
-    Returns rows ``(experiment, parameter, unit, cells)`` with one cell per unit (the experiment
-    named with the shaft and load its figures refer to, :data:`motorlab.characterize.SHAFTS`):
+    Returns rows ``(experiment, parameter, unit, cells)`` with one cell per unit:
     ``"value ± stderr (+z σ)"`` where z = (estimate − truth)/stderr, or the estimate alone when the
     rig recorded no expected value for it.
     """
     import json
     import math
 
-    from motorlab.characterize import SHAFTS
     from motorlab.units import format_unit
 
     expected: dict[str, dict[str, dict[str, float]]] = {}  # unit -> experiment -> parameter -> truth
@@ -91,8 +89,7 @@ def experiment_rows(result: Any) -> list[tuple[str, str, str, list[str]]]:
             if isinstance(truth, int | float) and math.isfinite(est.stderr) and est.stderr > 0:
                 cell += f" ({(est.value - truth) / est.stderr:+.1f}σ)"
             cells.append(cell)
-        label = f"{exp}\n[dim]{SHAFTS[exp]}[/]" if exp in SHAFTS else exp
-        rows.append((label, par, format_unit(unit_str), cells))
+        rows.append((exp, par, format_unit(unit_str), cells))
     return rows
 
 
@@ -101,7 +98,10 @@ def print_experiment_table(result: Any) -> None:
     from rich.console import Console
     from rich.table import Table
 
-    table = Table(title="Every analysis against the simulated truth (estimate ± stderr, distance in σ)")
+    from motorlab.characterize import SHAFTS
+
+    table = Table(title="Every analysis against the simulated truth (estimate ± stderr, distance in σ); under each "
+                  "experiment, the shaft and load its figures refer to")
     table.add_column("experiment")
     table.add_column("parameter")
     table.add_column("unit")
@@ -109,7 +109,8 @@ def print_experiment_table(result: Any) -> None:
         table.add_column(unit.spec.display_name, justify="right")
     previous = ""
     for exp, par, unit_str, cells in experiment_rows(result):
-        table.add_row("" if exp == previous else exp, par, unit_str, *cells)
+        label = f"{exp}\n[dim]{SHAFTS[exp]}[/]" if exp in SHAFTS else exp
+        table.add_row("" if exp == previous else label, par, unit_str, *cells)
         previous = exp
     Console(width=160).print(table)
 
