@@ -620,6 +620,7 @@ def _characterize_unit(session: Session, spec: UnitSpec, progress: Progress | No
             unit.parameters[name] = combined
         unit.disagreements.extend(disagreements)
     unit.parameters.update(gearbox_parameters(unit.fits, unit.parameters.get("K")))
+    _warn_spinup_through_gearbox(unit)
     if progress is not None:
         progress(spec.name, "")
     return unit
@@ -656,6 +657,21 @@ def gearbox_parameters(fits: Mapping[str, FitResult], k: Combined | None) -> dic
                         "gearbox loss torque τ0 at the output shaft (minus the torque test's intercept)")
         out["loss_torque"] = Combined(loss, "torque", {"torque": loss})
     return out
+
+
+def _warn_spinup_through_gearbox(unit: UnitResult) -> None:
+    """Say, on the spin-up's result, that its K is not Ke when the gearbox measurably loses torque."""
+    fit, eta = unit.fits.get("spinup"), unit.parameters.get("efficiency")
+    if fit is None or eta is None or not eta.estimate.determined:
+        return
+    e = eta.estimate
+    if e.value < 1 - 3 * e.stderr:
+        fit.warnings.append(
+            f"the gearbox passes η = {e.value:.3g} of the motor's torque: this K is a torque constant through it "
+            "(Kt = η·Ke at the output), and the friction taken from the spin-down (the flywheel back-driving the "
+            "gearbox) is larger than while the motor drives it, so it overestimates Kt; use the torque test's "
+            "Kt and the efficiency (docs/gearbox.md)"
+        )
 
 
 def _controller_gains(result: Characterization, *, plot: bool = True) -> dict[str, Any] | None:

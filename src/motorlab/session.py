@@ -758,7 +758,9 @@ SIMULATED_EXPERIMENTS: tuple[tuple[str, str, str, dict[str, Any]], ...] = (
     ("tachometer", "tachometer", "tachometer.csv", {}),
     ("pulse", "pulse", "pulse.csv", {}),
     ("identify", "transient", "transient.csv", {}),
-    ("feedforward", "sysid", "sysid.json", {}),
+    # Long enough for the flywheel's mechanical time constant (≈ 37 s through a NeveRest 40's lossy
+    # gearbox): SysId's dynamic test must approach steady state or kV and kA are confounded.
+    ("feedforward", "sysid", "sysid.json", {"quasistatic_duration": 60.0, "dynamic_duration": 40.0}),
 )
 
 
