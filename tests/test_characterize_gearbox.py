@@ -21,7 +21,7 @@ def worn_gearbox_session(tmp_path_factory):
 
 
 def test_efficiency_per_unit_and_the_worn_gearbox_stands_out(worn_gearbox_session):
-    out, result = worn_gearbox_session
+    _, result = worn_gearbox_session
     for unit in result.units.values():
         eta = unit.parameters["efficiency"]
         assert eta.source == "torque ÷ spindown"
@@ -46,7 +46,9 @@ def test_results_files_and_report_answer_the_seed(worn_gearbox_session):
     with paths["csv"].open() as handle:
         rows = list(csv.DictReader(handle))
     assert "efficiency (1)" in rows[0]
-    assert float(rows[0]["efficiency (1)"]) == pytest.approx(result.units["A"].parameters["efficiency"].estimate.value, rel=1e-5)
+    eta_a = result.units["A"].parameters["efficiency"].estimate.value
+    assert float(rows[0]["efficiency (1)"]) == pytest.approx(eta_a, rel=1e-5)
     html = paths["html"].read_text()
     assert 'id="gearbox"' in html
-    assert "Ke×N" in html and "the gearbox explains it" in html
+    assert "Ke×N" in html
+    assert "the gearbox explains it" in html

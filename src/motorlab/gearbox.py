@@ -230,7 +230,9 @@ def output_stall_torque(params: MotorParams, efficiency: float, voltage: float) 
     return efficiency * params.stall_torque(voltage)
 
 
-def output_curves(params: MotorParams, efficiency: float, voltage: float, *, points: int = 201) -> dict[str, np.ndarray]:
+def output_curves(
+    params: MotorParams, efficiency: float, voltage: float, *, points: int = 201
+) -> dict[str, np.ndarray]:
     """Torque–speed, current, power and efficiency at the OUTPUT shaft, gearbox included.
 
     ``params`` is the forward single-K model (every load-side loss ÷ η, as :meth:`Drivetrain.forward`

@@ -243,16 +243,16 @@ def _nav(result: Characterization) -> str:
 def _final_table(result: Characterization) -> str:
     from motorlab.characterize import table_parameters
 
-    PARAMETERS = table_parameters(result)  # noqa: N806 - the table's columns
+    columns = table_parameters(result)
     flagged = {(o.unit, o.parameter) for o in result.fleet.outliers}
     head = "".join(
-        f"<th>{_e(COLUMN_TITLES[p])}<br><span class='muted'>[{_e(DISPLAY_UNITS[p][0])}]</span></th>" for p in PARAMETERS
+        f"<th>{_e(COLUMN_TITLES[p])}<br><span class='muted'>[{_e(DISPLAY_UNITS[p][0])}]</span></th>" for p in columns
     )
     rows = []
     any_truth = any(u.truth for u in result.units.values())
     for name, unit in result.units.items():
         cells = []
-        for p in PARAMETERS:
+        for p in columns:
             combined = unit.parameters.get(p)
             est = combined.estimate if combined is not None else None
             cls = "flag" if (name, p) in flagged else ""
@@ -263,7 +263,7 @@ def _final_table(result: Characterization) -> str:
         rows.append(f'<tr><td class="name">{_e(unit.spec.display_name)}</td>{"".join(cells)}{status_html}</tr>')
         if unit.truth:
             truth_cells = []
-            for p in PARAMETERS:
+            for p in columns:
                 t = unit.truth.get(p)
                 combined = unit.parameters.get(p)
                 text = "—"
@@ -493,9 +493,8 @@ def _curves_section(result: Characterization, *, figures: bool) -> str:
 
 
 def _curves_figure(params: Any, voltage: float, motor: Any) -> Figure | None:
-    from motorlab.plot import plot_motor_curves
-
     from motorlab.gearbox import OutputCurves
+    from motorlab.plot import plot_motor_curves
 
     reference = OutputCurves(motor.nominal_params(), motor.gearbox().efficiency) if motor is not None else None
     fig = plot_motor_curves(params, voltage, catalog=reference)

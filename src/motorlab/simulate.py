@@ -597,8 +597,7 @@ def simulate(
         raise OptionError(f"simulation duration must be positive, got {duration}")
     initial = initial or State()
     drivetrain = params if isinstance(params, Drivetrain) else None
-    if drivetrain is not None:
-        params = drivetrain.forward()
+    motor: MotorParams = params.forward() if isinstance(params, Drivetrain) else params
     items = _schedule(drive)
     n = round(duration / dt)
     t = np.arange(n + 1) * dt
@@ -607,7 +606,7 @@ def simulate(
     pos = np.empty(n + 1)
     volt = np.empty(n + 1)
     mode = np.empty(n + 1, dtype=np.int8)
-    runner = _Runner(params, dt, drivetrain)
+    runner = _Runner(motor, dt, drivetrain)
     i, w, theta = float(initial.current), float(initial.speed), float(initial.position)
     cur[0], spd[0], pos[0] = i, w, theta
 
@@ -650,7 +649,7 @@ def simulate(
                 elif reg.kind == "I":
                     is_ = dvals[:good]  # the held current of the step just finished
                 else:
-                    is_ = (dvals[:good] - params.K * ws) / params.R
+                    is_ = (dvals[:good] - motor.K * ws) / motor.R
                 sl = slice(k + 1, k + good + 1)
                 spd[sl] = ws
                 cur[sl] = is_
@@ -669,8 +668,8 @@ def simulate(
                 chunk = 256
         # Current and terminal voltage at the segment's grid points are those of the held regime.
     mode[n] = mode[n - 1] if n > 0 else MODE_VOLTAGE
-    _fill_outputs(runner, items, starts, bounds, t, cur, spd, volt, mode, params)
-    return Simulation(t, cur, spd, pos, volt, mode, params, runner.events)
+    _fill_outputs(runner, items, starts, bounds, t, cur, spd, volt, mode, motor)
+    return Simulation(t, cur, spd, pos, volt, mode, motor, runner.events)
 
 
 _MODE = {"V": MODE_VOLTAGE, "I": MODE_CURRENT, "O": MODE_OPEN}

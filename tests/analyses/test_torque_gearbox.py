@@ -35,7 +35,8 @@ def test_round_trip_efficiency_at_several_etas_and_seeds(tmp_path):
         result = torque(read_csv(run.paths[0]), ratio=motor.gear_ratio, motor_constant=k_given,
                         motor_constant_stderr=k_se)
         est, loss = result["efficiency"], result["loss_torque"]
-        assert est.determined and loss.determined
+        assert est.determined
+        assert loss.determined
         assert abs(est.value - eta) < 0.03, (eta, seed)
         assert 0 < est.stderr < 0.03
         assert run.truth["expected"]["efficiency"] == eta
@@ -73,7 +74,8 @@ def test_without_k_the_old_behaviour():
     current = np.array([1.0, 2.0, 3.0])
     rec = Recording(np.arange(3.0), {"current": current, "torque": 0.2 * current + np.array([1e-3, -2e-3, 1e-3])})
     result = torque(rec)
-    assert "efficiency" not in result and "loss_torque" not in result
+    assert "efficiency" not in result
+    assert "loss_torque" not in result
     with pytest.raises(OptionError):
         torque(rec, ratio=0.0, motor_constant=0.01)
     with pytest.raises(OptionError):

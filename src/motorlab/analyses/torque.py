@@ -277,7 +277,8 @@ def _single_current(
         se = math.hypot(se, mean * arm_stderr / arm)
     ke_out = ratio * motor_constant
     apparent = efficiency_estimate(mean / i0, se / i0, ke_out, ratio * motor_constant_stderr,
-                                   note=f"apparent efficiency τ/(N·K·I) at {i0:.3g} A: η − τ0/(N·K·I), a lower bound on η")
+                                   note=f"apparent efficiency τ/(N·K·I) at {i0:.3g} A: η − τ0/(N·K·I), "
+                                   "a lower bound on η")
     apparent = replace(apparent, name="apparent_efficiency")
     undetermined = "not determined: one current cannot separate the efficiency from the loss torque"
     parameters = {

@@ -148,7 +148,8 @@ def print_gearbox_table(result: Any) -> None:
             torque = OutputCurves(model, eta.estimate.value).stall_torque(voltage)
             stall = f"{torque:.3g}"
             if motor is not None:
-                stall += f" ({100 * (torque / motor.stall_torque - 1):+.0f} % of the catalogue's {motor.stall_torque:.3g})"
+                change = 100 * (torque / motor.stall_torque - 1)
+                stall += f" ({change:+.0f} % of the catalogue's {motor.stall_torque:.3g})"
         table.add_row(unit.spec.display_name, *cells, stall)
     Console(width=160).print(table)
 

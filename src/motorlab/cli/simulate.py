@@ -292,9 +292,8 @@ def check_sizes(args: argparse.Namespace) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run the experiment; print the files written (errors: MotorlabError -> exit code 2)."""
-    from motorlab.rig import VirtualRig
-
     from motorlab.catalog import Motor
+    from motorlab.rig import VirtualRig
 
     check_sizes(args)
     motor = Motor.from_catalog(args.motor)

@@ -338,7 +338,6 @@ class VirtualRig:
         if relay_delay < 0:
             raise OptionError("relay delay must not be negative")
         rng = self._rng("spindown")
-        loaded = self._loaded(True)
         t_close = relay_delay + ins.relay.operate_time
         t_command_off = relay_delay + on_time
         t_open = t_command_off + ins.relay.release_time
