@@ -379,6 +379,18 @@ def _run_spinup(ctx: _UnitContext) -> FitResult:
     recording = common.read_position_log(ctx.files, cpr=ctx.cpr)
     inertia, inertia_se = _loaded_inertia(ctx)
     assert inertia is not None  # a flywheel was checked above
+    friction = _motoring_friction(ctx)
+    if friction is not None:
+        b, b_se, tf, tf_se, eta = friction
+        fit = spinup(recording, inertia=inertia, inertia_stderr=inertia_se, cpr=ctx.cpr, viscous_friction=b,
+                     viscous_friction_stderr=b_se, coulomb_friction=tf, coulomb_friction_stderr=tf_se,
+                     start=ctx.setting("start"), end=ctx.setting("end"))
+        fit.warnings.append(
+            f"friction from the spin-down corrected for the gearbox (η = {eta:.3g}, back-driving efficiency taken "
+            "equal): the coasting flywheel back-drives the gearbox and sees the motor's friction ÷ η, the motor "
+            "driving it passes only η of it; this K is the output's Kt = η·Ke (docs/gearbox.md)"
+        )
+        return fit
     return spinup(
         recording,
         inertia=inertia,
@@ -388,6 +400,35 @@ def _run_spinup(ctx: _UnitContext) -> FitResult:
         start=ctx.setting("start"),
         end=ctx.setting("end"),
     )
+
+
+def _motoring_friction(ctx: _UnitContext) -> tuple[float, float, float, float, float] | None:
+    """The flywheel rig's friction at the output while the motor drives it, when the gearbox loses torque.
+
+    The spin-down's b, Tf (physical, output, back-driven) hold the motor's friction F_m ÷ η_b plus the
+    gearbox drag τ0 and the flywheel's; motoring, the output sees η·F_m instead. With η and τ0 from the
+    torque test and F_m from the bare gearmotor (identify, pulse: per unit of K·i, τ0/η included), and
+    η_b = η: F_motoring = F_spindown − (1/η − η)·F_m. None when the gearbox's loss is not measured
+    (then the spin-down's friction is used as it is).
+    """
+    spin = ctx.fits.get("spindown")
+    box = gearbox_parameters(ctx.fits, ctx.known.get("K"))
+    b_bare, tf_bare = ctx.estimate("b"), ctx.estimate("Tf")
+    if spin is None or "efficiency" not in box or "loss_torque" not in box or b_bare is None or tf_bare is None:
+        return None
+    eta, tau0 = box["efficiency"].estimate, box["loss_torque"].estimate
+    if not (eta.determined and eta.value < 1 - 3 * eta.stderr and "b" in spin and "Tf" in spin):
+        return None
+    factor = 1.0 / eta.value - eta.value
+    tf_motor = tf_bare.value - tau0.value / eta.value
+    b = spin["b"].value - factor * b_bare.value
+    tf = spin["Tf"].value - factor * tf_motor
+    if b < 0 or tf < 0:
+        return None
+    b_se = math.hypot(spin["b"].stderr, factor * (_stderr(b_bare) or 0.0))
+    tf_se = math.hypot(spin["Tf"].stderr, factor * (_stderr(tf_bare) or 0.0),
+                       factor * (_stderr(tau0) or 0.0) / eta.value)
+    return b, b_se, tf, tf_se, eta.value
 
 
 def _run_terminal(ctx: _UnitContext) -> FitResult:
@@ -663,6 +704,8 @@ def _warn_spinup_through_gearbox(unit: UnitResult) -> None:
     """Say, on the spin-up's result, that its K is not Ke when the gearbox measurably loses torque."""
     fit, eta = unit.fits.get("spinup"), unit.parameters.get("efficiency")
     if fit is None or eta is None or not eta.estimate.determined:
+        return
+    if any("corrected for the gearbox" in w for w in fit.warnings):
         return
     e = eta.estimate
     if e.value < 1 - 3 * e.stderr:
