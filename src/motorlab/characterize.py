@@ -39,6 +39,17 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from motorlab.efficiency import (  # noqa: F401 - re-exported: the session's gearbox figures and shafts
+    BACK_EMF_SOURCES,
+    EFFICIENCY_HEALTHY_SPREAD,
+    GEARBOX_PARAMETERS,
+    SHAFTS,
+    TORQUE_SOURCES,
+    gearbox_estimates,
+    motoring_friction,
+    sources_of,
+    spinup_warning,
+)
 from motorlab.errors import MotorlabError, OptionError
 from motorlab.fleet import DEFAULT_THRESHOLD, FleetSummary, fleet_summary
 from motorlab.results import Estimate, FitResult
@@ -77,30 +88,6 @@ CONTRIBUTIONS: dict[str, dict[str, str]] = {
     "feedforward": {},
     "amplifier": {},
     "tachometer": {},
-}
-
-#: Gearbox figures per unit (output shaft), when a back-EMF K and a torque test are both there.
-GEARBOX_PARAMETERS = ("efficiency", "loss_torque")
-#: Experiments whose K is the back-EMF constant Ke (the model's K).
-BACK_EMF_SOURCES = frozenset({"spindown", "identify"})
-#: Experiments whose K is a torque constant measured through the gearbox (Kt = η·Ke at the output).
-TORQUE_SOURCES = frozenset({"torque", "spinup"})
-#: Healthy unit-to-unit spread of the gearbox efficiency (σ of ln η), for the fleet test.
-EFFICIENCY_HEALTHY_SPREAD = 0.03
-
-#: Which shaft, load and torque units each experiment's figures refer to (short, for tables).
-SHAFTS: dict[str, str] = {
-    "lcr": "electrical (motor terminals)",
-    "amplifier": "electrical",
-    "tachometer": "electrical",
-    "spindown": "output + flywheel, coasting: gearbox back-driven, physical torques",
-    "spinup": "output + flywheel, motor driving: K = Kt through the gearbox",
-    "torque": "output (lever), physical torque: K = Kt = η·Ke",
-    "terminal": "output, bare gearmotor, per unit of K·i",
-    "free-spinup": "output, bare gearmotor, per unit of K·i",
-    "pulse": "output, bare gearmotor, per unit of K·i",
-    "identify": "output, what the log drove, per unit of K·i",
-    "feedforward": "output + the SysId mechanism, per unit of K·i",
 }
 
 #: Two estimates disagree when they differ by more than this many combined standard errors.
@@ -403,32 +390,9 @@ def _run_spinup(ctx: _UnitContext) -> FitResult:
 
 
 def _motoring_friction(ctx: _UnitContext) -> tuple[float, float, float, float, float] | None:
-    """The flywheel rig's friction at the output while the motor drives it, when the gearbox loses torque.
-
-    The spin-down's b, Tf (physical, output, back-driven) hold the motor's friction F_m ÷ η_b plus the
-    gearbox drag τ0 and the flywheel's; motoring, the output sees η·F_m instead. With η and τ0 from the
-    torque test and F_m from the bare gearmotor (identify, pulse: per unit of K·i, τ0/η included), and
-    η_b = η: F_motoring = F_spindown − (1/η − η)·F_m. None when the gearbox's loss is not measured
-    (then the spin-down's friction is used as it is).
-    """
-    spin = ctx.fits.get("spindown")
-    box = gearbox_parameters(ctx.fits, ctx.known.get("K"))
-    b_bare, tf_bare = ctx.estimate("b"), ctx.estimate("Tf")
-    if spin is None or "efficiency" not in box or "loss_torque" not in box or b_bare is None or tf_bare is None:
-        return None
-    eta, tau0 = box["efficiency"].estimate, box["loss_torque"].estimate
-    if not (eta.determined and eta.value < 1 - 3 * eta.stderr and "b" in spin and "Tf" in spin):
-        return None
-    factor = 1.0 / eta.value - eta.value
-    tf_motor = tf_bare.value - tau0.value / eta.value
-    b = spin["b"].value - factor * b_bare.value
-    tf = spin["Tf"].value - factor * tf_motor
-    if b < 0 or tf < 0:
-        return None
-    b_se = math.hypot(spin["b"].stderr, factor * (_stderr(b_bare) or 0.0))
-    tf_se = math.hypot(spin["Tf"].stderr, factor * (_stderr(tf_bare) or 0.0),
-                       factor * (_stderr(tau0) or 0.0) / eta.value)
-    return b, b_se, tf, tf_se, eta.value
+    """:func:`motorlab.efficiency.motoring_friction` with what the unit has measured so far."""
+    return motoring_friction(ctx.fits.get("spindown"), gearbox_estimates(ctx.fits, ctx.known.get("K")),
+                             ctx.estimate("b"), ctx.estimate("Tf"))
 
 
 def _run_terminal(ctx: _UnitContext) -> FitResult:
@@ -651,12 +615,12 @@ def _characterize_unit(session: Session, spec: UnitSpec, progress: Progress | No
                 candidates[motor_name][exp_name] = est
         # Re-combine after each experiment so that later analyses see the best K so far.
         for name in PARAMETERS:
-            combined, _ = combine(name, _sources_of(name, candidates[name]))
+            combined, _ = combine(name, sources_of(name, candidates[name]))
             if combined is not None:
                 unit.parameters[name] = combined
     unit.parameters = {}
     for name in PARAMETERS:
-        combined, disagreements = combine(name, _sources_of(name, candidates[name]))
+        combined, disagreements = combine(name, sources_of(name, candidates[name]))
         if combined is not None:
             unit.parameters[name] = combined
         unit.disagreements.extend(disagreements)
@@ -667,54 +631,15 @@ def _characterize_unit(session: Session, spec: UnitSpec, progress: Progress | No
     return unit
 
 
-def _sources_of(name: str, candidates: dict[str, Estimate]) -> dict[str, Estimate]:
-    """K's candidates: the torque constants through the gearbox only when no back-EMF K is there."""
-    if name != "K" or not BACK_EMF_SOURCES & set(candidates):
-        return candidates
-    return {k: v for k, v in candidates.items() if k not in TORQUE_SOURCES}
-
-
 def gearbox_parameters(fits: Mapping[str, FitResult], k: Combined | None) -> dict[str, Combined]:
-    """η = Kt(torque test, output) / Ke(back-EMF, output) and the loss torque τ0, per unit.
-
-    Both constants are at the output shaft (the encoder's), so N cancels: Kt/Ke = η·N·K_m/(N·K_m).
-    Empty without a torque fit or without a back-EMF K.
-    """
-    from motorlab.gearbox import efficiency_estimate
-
-    fit = fits.get("torque")
-    if fit is None or k is None or k.source not in BACK_EMF_SOURCES or "K" not in fit:
-        return {}
-    kt, ke = fit["K"], k.estimate
-    if not (kt.determined and ke.determined):
-        return {}
-    source = f"torque ÷ {k.source}"
-    eta = efficiency_estimate(kt.value, kt.stderr, ke.value, ke.stderr,
-                              note=f"gearbox efficiency η = Kt (lever, output) / Ke ({k.source}, output)")
-    out = {"efficiency": Combined(eta, source, {source: eta})}
-    if "tau0" in fit:
-        t = fit["tau0"]
-        loss = Estimate("loss_torque", -t.value, t.stderr, "N*m", t.determined,
-                        "gearbox loss torque τ0 at the output shaft (minus the torque test's intercept)")
-        out["loss_torque"] = Combined(loss, "torque", {"torque": loss})
-    return out
+    """The unit's gearbox ``efficiency`` and ``loss_torque`` (:func:`motorlab.efficiency.gearbox_estimates`)."""
+    return {name: Combined(est, source, {source: est}) for name, (est, source) in gearbox_estimates(fits, k).items()}
 
 
 def _warn_spinup_through_gearbox(unit: UnitResult) -> None:
-    """Say, on the spin-up's result, that its K is not Ke when the gearbox measurably loses torque."""
     fit, eta = unit.fits.get("spinup"), unit.parameters.get("efficiency")
-    if fit is None or eta is None or not eta.estimate.determined:
-        return
-    if any("corrected for the gearbox" in w for w in fit.warnings):
-        return
-    e = eta.estimate
-    if e.value < 1 - 3 * e.stderr:
-        fit.warnings.append(
-            f"the gearbox passes η = {e.value:.3g} of the motor's torque: this K is a torque constant through it "
-            "(Kt = η·Ke at the output), and the friction taken from the spin-down (the flywheel back-driving the "
-            "gearbox) is larger than while the motor drives it, so it overestimates Kt; use the torque test's "
-            "Kt and the efficiency (docs/gearbox.md)"
-        )
+    if fit is not None and eta is not None and (warning := spinup_warning(fit, eta.estimate)):
+        fit.warnings.append(warning)
 
 
 def _controller_gains(result: Characterization, *, plot: bool = True) -> dict[str, Any] | None:

@@ -355,7 +355,7 @@ def _fleet_section(result: Characterization) -> str:
 
 def _gearbox_section(result: Characterization) -> str:
     """Seed 1's open question ("our Kt and Ke measurements don't quite match") answered per unit."""
-    from motorlab.gearbox import gearbox_answer
+    from motorlab.efficiency import gearbox_answer
 
     motor = _catalog_motor(result)
     ratio = result.session.motor.gear_ratio or (motor.gear_ratio if motor is not None else None)
