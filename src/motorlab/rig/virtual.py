@@ -33,6 +33,7 @@ from typing import Any
 
 import numpy as np
 
+from motorlab.analyses.torque import approach_direction
 from motorlab.catalog import Motor
 from motorlab.errors import OptionError, RigError
 from motorlab.gearbox import Drivetrain, Gearbox
@@ -42,6 +43,7 @@ from motorlab.model import MotorParams, feedforward_from_params
 from motorlab.rig.base import MAX_READINGS, PathArg, RigRun, _jsonable, check_size, write_truth
 from motorlab.rig.flywheel import Flywheel
 from motorlab.rig.instruments import Encoder, Instruments, quantize
+from motorlab.rig.profiles import voltage_profile
 from motorlab.rig.units import Commutator, UnitSpread, draw_unit, unit_name
 from motorlab.simulate import (
     BenchSupply,
@@ -811,7 +813,7 @@ class VirtualRig:
         if float(np.max(amps)) > ins.supply.max_current:
             raise OptionError(f"currents above the supply's {ins.supply.max_current:g} A")
         rng = self._rng("torque")
-        approach = _approach(amps)
+        approach = approach_direction(amps)
         # Through the gearbox (forward, the motor pushing the arm): τ_out = η·K·I − τ0, the motor's own
         # Coulomb friction held either way by the stalled shaft (× η at the output).
         eta, tau0 = self.gearbox.efficiency, self.gearbox.loss_torque
@@ -1067,7 +1069,7 @@ class VirtualRig:
         if voltage_noise < 0 or current_noise < 0:
             raise OptionError("noise levels must not be negative")
         rng = self._rng("transient")
-        voltage_of = _profile(profile, duration, max_voltage, rng)
+        voltage_of = voltage_profile(profile, duration, max_voltage, rng)
         loaded = self._loaded(flywheel)
         period = 1.0 / rate
         substeps = max(1, math.ceil(period / 1e-3))
@@ -1229,20 +1231,6 @@ def _plain(value: Any) -> Any:
     return _jsonable(value)
 
 
-def _approach(currents: np.ndarray) -> np.ndarray:
-    """+1 where a current was reached from below (or from rest), −1 from above; a repeated setting
-    keeps the direction of the one before."""
-    out = np.ones(currents.size)
-    previous = 0.0
-    for k, value in enumerate(np.abs(currents)):
-        if value != previous:
-            out[k] = 1.0 if value > previous else -1.0
-        elif k:
-            out[k] = out[k - 1]
-        previous = value
-    return out
-
-
 def _stop_time(sim: Simulation, after: float) -> float | None:
     """First time ≥ ``after`` at which the shaft is at rest (None if it still turns at the end)."""
     idx = np.flatnonzero((sim.time >= after) & (sim.speed == 0.0))
@@ -1266,25 +1254,3 @@ def _strictly_increasing(times: np.ndarray, step: float) -> np.ndarray:
         if out[k] <= out[k - 1]:
             out[k] = out[k - 1] + step
     return out
-
-
-def _profile(profile: str, duration: float, max_voltage: float,
-             rng: np.random.Generator) -> Callable[[np.ndarray], np.ndarray]:
-    """Voltage profile ``f(t) -> V`` of a transient test."""
-    if profile == "steps":
-        levels = np.array([0.0, 0.5, 1.0, 0.25, -0.5, -1.0, 0.0]) * max_voltage
-        edges = np.linspace(0.0, duration, levels.size + 1)[1:-1]
-        return lambda t: levels[np.searchsorted(edges, np.asarray(t), side="right")]
-    if profile == "ramps":
-        knots_t = np.linspace(0.0, duration, 5)
-        knots_v = np.array([0.0, 1.0, 0.0, -1.0, 0.0]) * max_voltage
-        return lambda t: np.interp(np.asarray(t), knots_t, knots_v)
-    if profile == "random":
-        holds = [0.0]
-        while holds[-1] < duration:
-            holds.append(holds[-1] + float(rng.uniform(0.1, 0.5)))
-        starts = np.array(holds[1:-1])
-        levels = rng.uniform(-max_voltage, max_voltage, starts.size + 1)
-        levels[0] = 0.0
-        return lambda t: levels[np.searchsorted(starts, np.asarray(t), side="right")]
-    raise OptionError(f"unknown profile {profile!r}; choose steps, ramps or random")
