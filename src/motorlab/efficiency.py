@@ -34,7 +34,7 @@ SHAFTS: dict[str, str] = {
     "tachometer": "electrical",
     "spindown": "output + flywheel, coasting: gearbox back-driven, physical torques",
     "spinup": "output + flywheel, motor driving: K = Kt through the gearbox",
-    "torque": "output (lever), physical torque: K = Kt = η·Ke",
+    "torque": "output (lever), physical torque, K = Kt = η·Ke",
     "terminal": "output, bare gearmotor, per unit of K·i",
     "free-spinup": "output, bare gearmotor, per unit of K·i",
     "pulse": "output, bare gearmotor, per unit of K·i",
