@@ -100,3 +100,12 @@ def test_cli_reports_efficiency_in_json(tmp_path, capsys):
     with pytest.raises(SystemExit) as exc:
         cli.main(["analyze", "torque", str(out), "--K", "-1"])
     assert exc.value.code == 2
+
+
+def test_unphysical_efficiency_is_warned():
+    current = np.array([1.0, 2.0, 3.0, 4.0])
+    tau = 0.7 * current + np.array([1e-3, -1e-3, 1e-3, -1e-3])  # Kt = 0.7 at the output, but K_m given ÷ 80
+    result = torque(Recording(np.arange(4.0), {"current": current, "torque": tau}), ratio=40,
+                    motor_constant=0.7 / 80)
+    assert result["efficiency"].value > 1
+    assert any("exceeds 1" in w for w in result.warnings)

@@ -181,6 +181,7 @@ def torque(
         parameters["K"] = replace(parameters["K"], note="Kt at the lever's (output) shaft: slope of torque vs current")
         parameters.update(_gearbox_estimates(parameters["K"], intercept, arm_used, arm_stderr, ratio,
                                              motor_constant, motor_constant_stderr))
+        warnings.extend(_unphysical_gearbox(parameters["efficiency"], parameters["loss_torque"]))
     if hysteresis:
         h = est["tau_h"]
         parameters["tau_h"] = Estimate(
@@ -261,6 +262,18 @@ def _gearbox_estimates(
     loss = Estimate("loss_torque", -intercept.value, tau0_se, "N*m", intercept.determined,
                     "gearbox loss torque τ0 at the output shaft (minus the intercept)")
     return {"efficiency": eta, "loss_torque": loss}
+
+
+def _unphysical_gearbox(eta: Estimate, loss: Estimate) -> list[str]:
+    """Warnings for an efficiency above 1 or a negative loss torque beyond two standard errors."""
+    out = []
+    if eta.determined and eta.value - 2 * eta.stderr > 1:
+        out.append(f"the efficiency {eta.value:.3g} ± {eta.stderr:.2g} exceeds 1, which no gearbox does: check the "
+                   "arm length, the gear ratio (--ratio) and that --K is at the MOTOR shaft (Ke at the output ÷ N)")
+    if loss.determined and loss.value + 2 * loss.stderr < 0:
+        out.append(f"the loss torque {loss.value:.3g} ± {loss.stderr:.2g} N·m is negative, which no gearbox gives: "
+                   "a scale not tared with the arm resting on it?")
+    return out
 
 
 def _single_current(
