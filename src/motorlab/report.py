@@ -572,6 +572,8 @@ def _fit_block(experiment: str, fit: FitResult, *, figures: bool) -> str:
     correlations = fit.correlations(0.5)
     if correlations:
         stats.append("correlations " + ", ".join(f"C({a}, {b}) = {c:+.2f}" for a, b, c in correlations[:4]))
+    if isinstance(fit.details.get("shaft"), str):
+        stats.append(f"shaft: {fit.details['shaft']}")
     warnings = "".join(f"<li>{_e(w)}</li>" for w in fit.warnings)
     files = ", ".join(Path(s).name for src in fit.sources for s in src.split(" + "))
     figure = ""
