@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from motorlab.errors import InputError, OptionError
+from motorlab.gearbox import Gearbox
 from motorlab.model import MotorParams
 from motorlab.units import parse_quantity
 
@@ -32,6 +33,10 @@ DEFAULT_MECHANICAL_TIME_CONSTANT = 0.030
 
 #: Default electrical time constant L/R [s] when no source gives the inductance.
 DEFAULT_ELECTRICAL_TIME_CONSTANT = 0.3e-3
+
+#: Share of the free-running Coulomb loss taken as the gearbox's load-independent drag τ0 (the rest is
+#: the motor's brush and bearing friction). A data sheet cannot separate them: an ASSUMPTION.
+DEFAULT_GEARBOX_DRAG_SHARE = 0.5
 
 # TOML field -> SI unit. Required fields first.
 _REQUIRED_QUANTITIES = {
@@ -169,6 +174,44 @@ class Motor:
         """Kt/Ke [-]: the fraction of the electromagnetic stall torque that reaches the output."""
         return self.torque_constant / self.back_emf_constant
 
+    def gearbox(self, *, drag_share: float = DEFAULT_GEARBOX_DRAG_SHARE) -> Gearbox:
+        """Gearbox figures consistent with the sheet's stall torque, stall current and free running.
+
+        Parameters
+        ----------
+        drag_share
+            Share of the free-running Coulomb loss put in the gearbox's drag τ0 [-] (assumption).
+
+        Returns
+        -------
+        Gearbox
+            ``ratio`` N, ``efficiency`` η, ``loss_torque`` τ0 at the output [N·m].
+
+        Notes
+        -----
+        The forward single-K model of the whole gearmotor is :meth:`nominal_params` (it reproduces
+        the free speed, free current and stall current). Its output torque at stall is
+        η·(K·I_stall − Tf), so the sheet's stall torque gives η = τ_stall/(K·I_stall − Tf): the
+        stall-torque-to-(Ke·I_stall) ratio, corrected for the friction the stalled motor still
+        fights. The free-running loss K·I_free = b·ω_free + Tf is split into the motor's friction
+        and the gearbox's drag τ0/η = ``drag_share``·Tf (an assumption: the sheet cannot tell them
+        apart, and η does not depend on it).
+        """
+        if not 0.0 <= drag_share <= 1.0:
+            raise OptionError(f"gearbox drag share must lie in [0, 1], got {drag_share}")
+        p = self.nominal_params()
+        eta = min(self.stall_torque / (p.K * self.stall_current - p.Tf), 1.0)
+        return Gearbox(ratio=self.gear_ratio, efficiency=eta, loss_torque=eta * drag_share * p.Tf)
+
+    def motor_params(self, *, drag_share: float = DEFAULT_GEARBOX_DRAG_SHARE) -> MotorParams:
+        """The motor alone, reflected to the output through an ideal gearbox (:meth:`gearbox` excluded).
+
+        ``Drivetrain(motor_params(), gearbox()).forward()`` equals :meth:`nominal_params`.
+        """
+        p = self.nominal_params()
+        box = self.gearbox(drag_share=drag_share)
+        return p.scaled(Tf=p.Tf - box.loss_torque / box.efficiency)
+
     def nominal_params(
         self,
         *,
@@ -260,6 +303,8 @@ class Motor:
                 "R": {"value": self.resistance, "unit": "ohm"},
                 "Kt": {"value": self.torque_constant, "unit": "N*m/A"},
                 "Ke": {"value": self.back_emf_constant, "unit": "V*s/rad"},
+                "efficiency": {"value": self.gearbox().efficiency, "unit": "1"},
+                "loss_torque": {"value": self.gearbox().loss_torque, "unit": "N*m"},
             },
             "unconfirmed": list(self.unconfirmed),
             "sources": dict(self.sources),

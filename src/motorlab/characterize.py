@@ -20,6 +20,11 @@ Combination
   contribute only K: their J, b and Tf describe motor + gearbox + flywheel and are reported with
   the experiment, not as the motor's.
 - The LCR meter's R = 2πfL/Q is an AC resistance; the model's R is its ``R_dc``.
+- K is the back-EMF constant Ke (at the output shaft, = N·K_motor). A lever at the output (torque)
+  and a torque balance through the gearbox (spin-up) measure Kt = η·Ke instead: they give K only
+  when no back-EMF source (spin-down, identification) was run. With both a back-EMF K and a torque
+  test, each unit gets the gearbox ``efficiency`` η = Kt/Ke ± σ and its ``loss_torque`` τ0
+  (:data:`GEARBOX_PARAMETERS`; :mod:`motorlab.gearbox`), tested across the fleet like the others.
 - One failing experiment or unit does not stop the others: every
   :class:`~motorlab.errors.MotorlabError` is caught per unit and experiment and its message kept.
 """
@@ -34,6 +39,17 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from motorlab.efficiency import (  # noqa: F401 - re-exported: the session's gearbox figures and shafts
+    BACK_EMF_SOURCES,
+    EFFICIENCY_HEALTHY_SPREAD,
+    GEARBOX_PARAMETERS,
+    SHAFTS,
+    TORQUE_SOURCES,
+    gearbox_estimates,
+    motoring_friction,
+    sources_of,
+    spinup_warning,
+)
 from motorlab.errors import MotorlabError, OptionError
 from motorlab.fleet import DEFAULT_THRESHOLD, FleetSummary, fleet_summary
 from motorlab.results import Estimate, FitResult
@@ -350,6 +366,18 @@ def _run_spinup(ctx: _UnitContext) -> FitResult:
     recording = common.read_position_log(ctx.files, cpr=ctx.cpr)
     inertia, inertia_se = _loaded_inertia(ctx)
     assert inertia is not None  # a flywheel was checked above
+    friction = _motoring_friction(ctx)
+    if friction is not None:
+        b, b_se, tf, tf_se, eta = friction
+        fit = spinup(recording, inertia=inertia, inertia_stderr=inertia_se, cpr=ctx.cpr, viscous_friction=b,
+                     viscous_friction_stderr=b_se, coulomb_friction=tf, coulomb_friction_stderr=tf_se,
+                     start=ctx.setting("start"), end=ctx.setting("end"))
+        fit.warnings.append(
+            f"friction from the spin-down corrected for the gearbox (η = {eta:.3g}, back-driving efficiency taken "
+            "equal): the coasting flywheel back-drives the gearbox and sees the motor's friction ÷ η, the motor "
+            "driving it passes only η of it; this K is the output's Kt = η·Ke (docs/gearbox.md)"
+        )
+        return fit
     return spinup(
         recording,
         inertia=inertia,
@@ -359,6 +387,12 @@ def _run_spinup(ctx: _UnitContext) -> FitResult:
         start=ctx.setting("start"),
         end=ctx.setting("end"),
     )
+
+
+def _motoring_friction(ctx: _UnitContext) -> tuple[float, float, float, float, float] | None:
+    """:func:`motorlab.efficiency.motoring_friction` with what the unit has measured so far."""
+    return motoring_friction(ctx.fits.get("spindown"), gearbox_estimates(ctx.fits, ctx.known.get("K")),
+                             ctx.estimate("b"), ctx.estimate("Tf"))
 
 
 def _run_terminal(ctx: _UnitContext) -> FitResult:
@@ -538,8 +572,9 @@ def characterize(
     fleet = fleet_summary(
         {n: u.estimates() for n, u in units.items()},
         model=session.motor.name,
-        healthy_spread=session.healthy_spread,
+        healthy_spread={"efficiency": EFFICIENCY_HEALTHY_SPREAD, **session.healthy_spread},
         threshold=threshold,
+        parameters=(*PARAMETERS, "efficiency"),
     )
     result = Characterization(session=session, units=units, fleet=fleet)
     if control:
@@ -570,6 +605,8 @@ def _characterize_unit(session: Session, spec: UnitSpec, progress: Progress | No
             unit.failures[exp_name] = str(exc)
             continue
         unit.fits[exp_name] = fit
+        if exp_name in SHAFTS:
+            fit.details.setdefault("shaft", SHAFTS[exp_name])
         for result_name, motor_name in CONTRIBUTIONS.get(exp_name, {}).items():
             if exp_name in LOADED_EXPERIMENTS and motor_name != "K":
                 continue
@@ -578,18 +615,31 @@ def _characterize_unit(session: Session, spec: UnitSpec, progress: Progress | No
                 candidates[motor_name][exp_name] = est
         # Re-combine after each experiment so that later analyses see the best K so far.
         for name in PARAMETERS:
-            combined, _ = combine(name, candidates[name])
+            combined, _ = combine(name, sources_of(name, candidates[name]))
             if combined is not None:
                 unit.parameters[name] = combined
     unit.parameters = {}
     for name in PARAMETERS:
-        combined, disagreements = combine(name, candidates[name])
+        combined, disagreements = combine(name, sources_of(name, candidates[name]))
         if combined is not None:
             unit.parameters[name] = combined
         unit.disagreements.extend(disagreements)
+    unit.parameters.update(gearbox_parameters(unit.fits, unit.parameters.get("K")))
+    _warn_spinup_through_gearbox(unit)
     if progress is not None:
         progress(spec.name, "")
     return unit
+
+
+def gearbox_parameters(fits: Mapping[str, FitResult], k: Combined | None) -> dict[str, Combined]:
+    """The unit's gearbox ``efficiency`` and ``loss_torque`` (:func:`motorlab.efficiency.gearbox_estimates`)."""
+    return {name: Combined(est, source, {source: est}) for name, (est, source) in gearbox_estimates(fits, k).items()}
+
+
+def _warn_spinup_through_gearbox(unit: UnitResult) -> None:
+    fit, eta = unit.fits.get("spinup"), unit.parameters.get("efficiency")
+    if fit is not None and eta is not None and (warning := spinup_warning(fit, eta.estimate)):
+        fit.warnings.append(warning)
 
 
 def _controller_gains(result: Characterization, *, plot: bool = True) -> dict[str, Any] | None:
@@ -634,7 +684,7 @@ def results_table(result: Characterization) -> list[dict[str, Any]]:
     rows = []
     for name, unit in result.units.items():
         row: dict[str, Any] = {"unit": name, "label": unit.spec.display_name}
-        for p in PARAMETERS:
+        for p in table_parameters(result):
             combined = unit.parameters.get(p)
             est = combined.estimate if combined is not None else None
             ok = est is not None and est.determined
@@ -648,12 +698,21 @@ def results_table(result: Characterization) -> list[dict[str, Any]]:
     return rows
 
 
+_GEARBOX_UNITS = {"efficiency": "1", "loss_torque": "N*m"}
+
+
+def table_parameters(result: Characterization) -> tuple[str, ...]:
+    """The final table's parameters: :data:`PARAMETERS`, plus the gearbox's when some unit has them."""
+    extra = tuple(p for p in GEARBOX_PARAMETERS if any(p in u.parameters for u in result.units.values()))
+    return (*PARAMETERS, *extra)
+
+
 def write_csv(result: Characterization, path: str | Path) -> Path:
     """Write ``results.csv``: one row per unit, SI units named in the header."""
     path = Path(path)
     header = ["unit", "label"]
-    for p in PARAMETERS:
-        unit = SI_UNITS[p]
+    for p in table_parameters(result):
+        unit = _GEARBOX_UNITS.get(p) or SI_UNITS[p]
         header += [f"{p} ({unit})", f"{p} stderr ({unit})", f"{p} source"]
     header += ["fleet outliers", "status"]
     with path.open("w", newline="", encoding="utf-8") as handle:
@@ -661,7 +720,7 @@ def write_csv(result: Characterization, path: str | Path) -> Path:
         writer.writerow(header)
         for row in results_table(result):
             cells: list[Any] = [row["unit"], row["label"]]
-            for p in PARAMETERS:
+            for p in table_parameters(result):
                 cells += [_csv_float(row[p]), _csv_float(row[f"{p}_stderr"]), row[f"{p}_source"]]
             cells += [row["fleet"], row["status"]]
             writer.writerow(cells)

@@ -43,10 +43,13 @@ DISPLAY_UNITS: dict[str, tuple[str, float]] = {
     "K": ("V·s/rad", 1.0),
     "R": ("Ω", 1.0),
     "L": ("µH", 1e6),
+    "efficiency": ("1", 1.0),
+    "loss_torque": ("N·m", 1.0),
 }
 
 #: Column titles of the final table (seed 1 calls K "Ke (spin down)").
-COLUMN_TITLES = {"J": "J", "b": "b", "Tf": "Tf", "K": "K = Ke = Kt", "R": "R", "L": "L"}
+COLUMN_TITLES = {"J": "J", "b": "b", "Tf": "Tf", "K": "K = Ke", "R": "R", "L": "L",
+                 "efficiency": "η (gearbox)", "loss_torque": "τ0 (gearbox)"}
 
 #: Resolution of embedded figures [dots per inch].
 FIGURE_DPI = 80
@@ -188,6 +191,7 @@ def render_report(result: Characterization, *, figures: bool = True) -> str:
         _final_table(result),
         _issues(result),
         _fleet_section(result),
+        _gearbox_section(result),
         _curves_section(result, figures=figures),
         _gains_section(result, figures=figures),
     ]
@@ -225,6 +229,7 @@ def _nav(result: Characterization) -> str:
         ("parameters", "Final parameters"),
         ("issues", "Disagreements and failures"),
         ("fleet", "Fleet"),
+        ("gearbox", "The gearbox: Kt against Ke"),
         ("curves", "Motor curves"),
     ]
     if result.gains:
@@ -236,17 +241,18 @@ def _nav(result: Characterization) -> str:
 
 
 def _final_table(result: Characterization) -> str:
-    from motorlab.characterize import PARAMETERS
+    from motorlab.characterize import table_parameters
 
+    columns = table_parameters(result)
     flagged = {(o.unit, o.parameter) for o in result.fleet.outliers}
     head = "".join(
-        f"<th>{_e(COLUMN_TITLES[p])}<br><span class='muted'>[{_e(DISPLAY_UNITS[p][0])}]</span></th>" for p in PARAMETERS
+        f"<th>{_e(COLUMN_TITLES[p])}<br><span class='muted'>[{_e(DISPLAY_UNITS[p][0])}]</span></th>" for p in columns
     )
     rows = []
     any_truth = any(u.truth for u in result.units.values())
     for name, unit in result.units.items():
         cells = []
-        for p in PARAMETERS:
+        for p in columns:
             combined = unit.parameters.get(p)
             est = combined.estimate if combined is not None else None
             cls = "flag" if (name, p) in flagged else ""
@@ -257,7 +263,7 @@ def _final_table(result: Characterization) -> str:
         rows.append(f'<tr><td class="name">{_e(unit.spec.display_name)}</td>{"".join(cells)}{status_html}</tr>')
         if unit.truth:
             truth_cells = []
-            for p in PARAMETERS:
+            for p in columns:
                 t = unit.truth.get(p)
                 combined = unit.parameters.get(p)
                 text = "—"
@@ -282,7 +288,11 @@ def _final_table(result: Characterization) -> str:
         '<section id="parameters"><h2>Final parameters</h2>'
         f'<table><thead><tr><th class="name">Unit</th>{head}<th class="name">Status</th></tr></thead>'
         f"<tbody>{''.join(rows)}</tbody></table>"
-        f'<p class="muted">{_e(note)} All quantities at the output shaft whose encoder is counted.</p></section>'
+        f'<p class="muted">{_e(note)} All quantities at the output shaft whose encoder is counted. K is the '
+        "back-EMF constant Ke; J, b and Tf are those of the bare gearmotor per unit of the motor's torque K·i "
+        "(the gearbox's efficiency not applied: the physical torques at the output are η times them; the "
+        "spin-down's and spin-up's figures, which include the flywheel, are in each unit's section). "
+        "η and τ0 are the gearbox's efficiency and loss torque at the output (see The gearbox).</p></section>"
     )
 
 
@@ -343,6 +353,53 @@ def _fleet_section(result: Characterization) -> str:
     )
 
 
+def _gearbox_section(result: Characterization) -> str:
+    """Seed 1's open question ("our Kt and Ke measurements don't quite match") answered per unit."""
+    from motorlab.efficiency import gearbox_answer
+
+    motor = _catalog_motor(result)
+    ratio = result.session.motor.gear_ratio or (motor.gear_ratio if motor is not None else None)
+    rows, verdicts = [], []
+    for unit in result.units.values():
+        a = gearbox_answer(unit.fits.get("torque"), unit.parameters.get("K"), unit.parameters.get("efficiency"),
+                           ratio=ratio)
+        if a is None:
+            continue
+        name = _e(unit.spec.display_name)
+        rows.append(
+            f'<tr><td class="name">{name}</td><td>{_e(a["ke_motor"])}</td><td>{_e(a["ke_n"])}</td>'
+            f"<td>{_e(a['kt'])}</td><td>{_e(a['eta'])}</td><td>{_e(a['loss'])}</td><td>{_e(a['mismatch'])}</td></tr>"
+        )
+        verdicts.append(f"<li><b>{name}</b>: {_e(a['verdict'])}</li>")
+    if not rows:
+        return (
+            '<section id="gearbox"><h2>The gearbox: Kt against Ke</h2><p class="muted">Not determined: the gearbox '
+            "efficiency needs a back-EMF K (spin-down or identification) and a torque test at the output shaft "
+            "(lever on a scale) of the same unit.</p></section>"
+        )
+    sheet = ""
+    if motor is not None:
+        box = motor.gearbox()
+        sheet = (
+            f" The catalogue's figures for the {motor.name} imply Kt/Ke = {motor.gearbox_efficiency_at_stall:.2f} at "
+            f"stall, i.e. η = {box.efficiency:.3f} once the stalled motor's own friction is allowed for."
+        )
+    return (
+        '<section id="gearbox"><h2>The gearbox: Kt against Ke</h2>'
+        "<p>Seed 1 ends with an open question: the torque constant Kt from a torque measurement does not match "
+        "the back-EMF constant Ke, and the team suspected the gearbox. Ke comes from the back-EMF (spin-down: "
+        "V = Ke·ω with no current, so the gearbox's losses do not enter); Kt from a lever at the output shaft, "
+        "which feels τ = η·N·Ke_motor·i − τ0. Their ratio is the gearbox efficiency η." + _e(sheet) + "</p>"
+        '<table><thead><tr><th class="name">Unit</th><th>Ke, motor shaft [V·s/rad]</th>'
+        "<th>Ke×N (Kt if lossless) [N·m/A]</th><th>Kt at the output [N·m/A]</th><th>η = Kt/(Ke×N)</th>"
+        "<th>loss torque τ0 [N·m]</th><th>(Ke×N − Kt)/σ</th></tr></thead>"
+        f"<tbody>{''.join(rows)}</tbody></table><ul>{''.join(verdicts)}</ul>"
+        '<p class="muted">Estimate ± one standard error; the error of η includes those of both constants and of '
+        "the arm. N is the catalogue's gear ratio; Ke×N is what an encoder at the output measures directly. See "
+        "docs/gearbox.md.</p></section>"
+    )
+
+
 def _unit_params(unit: UnitResult) -> Any:
     """MotorParams of a unit for its curves (None when K, R or J are missing)."""
     from motorlab.errors import MotorlabError
@@ -375,20 +432,32 @@ def _catalog_motor(result: Characterization) -> Any:
 
 
 def _curves_section(result: Characterization, *, figures: bool) -> str:
+    from motorlab.gearbox import OutputCurves
+
     motor = _catalog_motor(result)
     voltage = result.session.motor.nominal_voltage or (motor.nominal_voltage if motor is not None else 12.0)
     blocks = []
     rows = []
+    catalogue_eta = motor.gearbox().efficiency if motor is not None else 1.0
+    eta_notes = []
     for unit in result.units.values():
-        params = _unit_params(unit)
-        if params is None:
+        model = _unit_params(unit)
+        if model is None:
             blocks.append(f"<p>{_e(unit.spec.display_name)}: K or R not measured, no curves.</p>")
             continue
+        eta_est = unit.parameters.get("efficiency")
+        if eta_est is not None and eta_est.estimate.determined and 0 < eta_est.estimate.value <= 1:
+            eta = eta_est.estimate.value
+        else:
+            eta = catalogue_eta
+            eta_notes.append(f"{unit.spec.display_name}: gearbox efficiency not measured, the catalogue's "
+                             f"η = {eta:.3g} used")
+        params = OutputCurves(model, eta)
         peak_p, _ = params.peak_power(voltage)
         rows.append(
             f'<tr><td class="name">{_e(unit.spec.display_name)}</td>'
-            f"<td>{params.stall_torque(voltage):.3g}</td><td>{params.free_speed(voltage) * 60 / (2 * math.pi):.4g}</td>"
-            f"<td>{params.stall_current(voltage):.3g}</td><td>{params.free_current(voltage):.3g}</td>"
+            f"<td>{params.stall_torque(voltage):.3g}</td><td>{model.free_speed(voltage) * 60 / (2 * math.pi):.4g}</td>"
+            f"<td>{model.stall_current(voltage):.3g}</td><td>{model.free_current(voltage):.3g}</td>"
             f"<td>{peak_p:.3g}</td></tr>"
         )
         if figures:
@@ -413,7 +482,9 @@ def _curves_section(result: Characterization, *, figures: bool) -> str:
     caption = (
         f"At the nominal {voltage:g} V: torque–speed, current, output power and efficiency of each unit "
         "(solid) against the catalogue's nominal model (dashed); dots mark the published figures "
-        "(stall torque, free speed, stall and free current)."
+        "(stall torque, free speed, stall and free current). Torques and powers are at the output shaft, "
+        "the gearbox included: η times the motor model's (each unit's measured η; the catalogue's derived "
+        f"from its sheet, {catalogue_eta:.3g})." + "".join(f" {n}." for n in eta_notes)
     )
     return (
         f'<section id="curves"><h2>Motor curves at {voltage:g} V</h2>{table}<p class="muted">{_e(caption)}</p>'
@@ -422,9 +493,10 @@ def _curves_section(result: Characterization, *, figures: bool) -> str:
 
 
 def _curves_figure(params: Any, voltage: float, motor: Any) -> Figure | None:
+    from motorlab.gearbox import OutputCurves
     from motorlab.plot import plot_motor_curves
 
-    reference = motor.nominal_params() if motor is not None else None
+    reference = OutputCurves(motor.nominal_params(), motor.gearbox().efficiency) if motor is not None else None
     fig = plot_motor_curves(params, voltage, catalog=reference)
     fig.set_size_inches(6.4, 4.0)
     if motor is not None and fig.axes:
@@ -500,6 +572,8 @@ def _fit_block(experiment: str, fit: FitResult, *, figures: bool) -> str:
     correlations = fit.correlations(0.5)
     if correlations:
         stats.append("correlations " + ", ".join(f"C({a}, {b}) = {c:+.2f}" for a, b, c in correlations[:4]))
+    if isinstance(fit.details.get("shaft"), str):
+        stats.append(f"shaft: {fit.details['shaft']}")
     warnings = "".join(f"<li>{_e(w)}</li>" for w in fit.warnings)
     files = ", ".join(Path(s).name for src in fit.sources for s in src.split(" + "))
     figure = ""

@@ -726,9 +726,14 @@ def read_truth(path: str | Path) -> dict[str, float]:
         raise SessionError(f"cannot read the truth file ({exc})", path=path) from None
     if isinstance(data, dict) and isinstance(data.get("runs"), dict) and data["runs"]:
         data = next(iter(data["runs"].values()))
+    box = data.get("gearbox") if isinstance(data, dict) else None
     if isinstance(data, dict) and isinstance(data.get("params"), dict):
         data = data["params"]
     out: dict[str, float] = {}
+    if isinstance(box, dict):  # the virtual rig's gearbox (motorlab.gearbox): η and τ0 at the output
+        for name in ("efficiency", "loss_torque"):
+            if isinstance(box.get(name), int | float):
+                out[name] = float(box[name])
     if isinstance(data, dict):
         for name in ("K", "R", "L", "J", "b", "Tf"):
             value = data.get(name)
@@ -736,7 +741,7 @@ def read_truth(path: str | Path) -> dict[str, float]:
                 value = value.get("value")
             if isinstance(value, int | float) and not isinstance(value, bool):
                 out[name] = float(value)
-    if not out:
+    if not set(out) - {"efficiency", "loss_torque"}:
         raise SessionError("no motor parameters (K, R, L, J, b, Tf) in the truth file", path=path)
     return out
 
@@ -753,7 +758,9 @@ SIMULATED_EXPERIMENTS: tuple[tuple[str, str, str, dict[str, Any]], ...] = (
     ("tachometer", "tachometer", "tachometer.csv", {}),
     ("pulse", "pulse", "pulse.csv", {}),
     ("identify", "transient", "transient.csv", {}),
-    ("feedforward", "sysid", "sysid.json", {}),
+    # Long enough for the flywheel's mechanical time constant (≈ 37 s through a NeveRest 40's lossy
+    # gearbox): SysId's dynamic test must approach steady state or kV and kA are confounded.
+    ("feedforward", "sysid", "sysid.json", {"quasistatic_duration": 60.0, "dynamic_duration": 40.0}),
 )
 
 
@@ -766,6 +773,7 @@ def write_simulated_session(
     degrade: Mapping[str, Mapping[str, float]] | None = None,
     spread: Any = None,
     experiments: Iterable[str] | None = None,
+    gearbox: str | float | None = None,
 ) -> Path:
     """Simulate a whole characterisation session on the virtual dynamometer and describe it in TOML.
 
@@ -790,6 +798,11 @@ def write_simulated_session(
     experiments
         Session keys of the experiments to run (default: every one of
         :data:`SIMULATED_EXPERIMENTS`).
+    gearbox
+        ``"catalog"``: each unit's gearbox drawn around the catalogue's figures
+        (:meth:`motorlab.catalog.Motor.gearbox`, :func:`motorlab.rig.units.draw_gearbox`); a number:
+        that efficiency η for every unit (the catalogue's drag); ``None``: an ideal gearbox. A
+        ``degrade`` factor ``"efficiency"`` scales a unit's η (a worn gearbox).
 
     Returns
     -------
@@ -818,8 +831,8 @@ def write_simulated_session(
         if unit not in names:
             raise OptionError(f"degrade: no unit {unit!r} in a session of {units} unit(s)")
         for name, factor in factors.items():
-            if name not in ("K", "R", "L", "J", "b", "Tf"):
-                raise OptionError(f"degrade: unknown parameter {name!r} (K, R, L, J, b, Tf)")
+            if name not in ("K", "R", "L", "J", "b", "Tf", "efficiency"):
+                raise OptionError(f"degrade: unknown parameter {name!r} (K, R, L, J, b, Tf, efficiency)")
             if not (isinstance(factor, int | float) and math.isfinite(factor) and factor > 0):
                 raise OptionError(f"degrade: factor of {unit}.{name} must be positive, got {factor!r}")
     chosen = [e[0] for e in SIMULATED_EXPERIMENTS] if experiments is None else list(experiments)
@@ -861,9 +874,13 @@ def write_simulated_session(
         lines += ["", "[fleet.spread]"] + [f"{k} = {v:g}" for k, v in spread.to_dict().items()]
     for k, name in enumerate(names):
         params = draw_unit(motor, 1000 * seed + k, spread=spread)  # type: ignore[arg-type]  # rig protocol wants a settable key
-        if name in degrade:
-            params = params.scaled(**{p: getattr(params, p) * f for p, f in degrade[name].items()})
-        rig = VirtualRig(motor, unit_seed=k, noise_seed=seed, params=params, flywheel=flywheel)
+        factors = dict(degrade.get(name, {}))
+        box = _unit_gearbox(motor, gearbox, 1000 * seed + k, factors.pop("efficiency", 1.0))
+        if factors:
+            params = params.scaled(**{p: getattr(params, p) * f for p, f in factors.items()})
+        if box.loss_torque > 0:  # the drawn unit runs free at the catalogue's current, gearbox drag included
+            params = params.scaled(Tf=max(params.Tf - box.loss_torque / box.efficiency, 0.0))
+        rig = VirtualRig(motor, unit_seed=k, noise_seed=seed, params=params, flywheel=flywheel, gearbox=box)
         folder = out / name
         folder.mkdir(exist_ok=True)
         truth = folder / "truth.json"
@@ -881,6 +898,24 @@ def write_simulated_session(
     path = out / "session.toml"
     path.write_text("\n".join(lines) + "\n", encoding="utf-8")
     return path
+
+
+def _unit_gearbox(motor: Any, gearbox: str | float | None, unit_seed: int, factor: float) -> Any:
+    """The gearbox of one simulated unit (see :func:`write_simulated_session`)."""
+    from dataclasses import replace
+
+    from motorlab.gearbox import Gearbox
+    from motorlab.rig.units import draw_gearbox
+
+    if gearbox is None:
+        box = Gearbox(ratio=motor.gear_ratio)
+    elif gearbox == "catalog":
+        box = draw_gearbox(motor.key, motor.gearbox(), unit_seed)
+    elif isinstance(gearbox, int | float) and 0 < gearbox <= 1:
+        box = replace(motor.gearbox(), efficiency=float(gearbox))
+    else:
+        raise OptionError(f"gearbox must be 'catalog', an efficiency in (0, 1] or None, got {gearbox!r}")
+    return replace(box, efficiency=min(box.efficiency * factor, 1.0))
 
 
 def _degrade_note(degrade: Mapping[str, Mapping[str, float]]) -> str:

@@ -36,6 +36,7 @@ import numpy as np
 from scipy import linalg, optimize, signal
 
 from motorlab.errors import OptionError
+from motorlab.gearbox import Drivetrain
 from motorlab.model import MotorParams
 
 MODE_VOLTAGE = 0
@@ -170,6 +171,7 @@ class Simulation:
 class _Regime:
     kind: str  # "V" voltage source, "I" current source, "O" open circuit
     s: int  # friction sign while moving; 0 when stuck
+    flow: int = 1  # +1 the motor drives the load through the gearbox, −1 the load drives the motor
 
 
 @dataclass(frozen=True)
@@ -305,10 +307,23 @@ def _flow(lin: _Linear, x0: np.ndarray, u: np.ndarray, tau: float) -> tuple[np.n
 class _Runner:
     """Carries the full state (i, ω, θ) and the regime through a schedule of drives."""
 
-    def __init__(self, p: MotorParams, dt: float):
+    def __init__(self, p: MotorParams, dt: float, drivetrain: Drivetrain | None = None):
+        # ``p`` is the forward equivalent; a drivetrain whose gearbox loses power switches to its
+        # back-driven equivalent while the load drives the motor (motorlab.gearbox).
         self.p = p
         self.dt = dt
         self.events: list[tuple[float, str]] = []
+        self.drivetrain = drivetrain if drivetrain is not None and drivetrain.switches else None
+        self.p_back = self.drivetrain.backward() if self.drivetrain is not None else p
+
+    def params_for(self, reg: _Regime) -> MotorParams:
+        """The single-K equivalent of the regime's direction of power flow."""
+        return self.p_back if reg.flow < 0 else self.p
+
+    def flow_of(self, i: Any, w: Any, s: int) -> Any:
+        """Gearbox power-flow indicator D (positive: the motor drives the load)."""
+        assert self.drivetrain is not None
+        return self.drivetrain.flow(i, w, s)
 
     # ---- algebraic outputs ------------------------------------------------------------------
     def current_of(self, kind: str, lin_names: tuple[str, ...], x: np.ndarray, d: float, w: float) -> float:
@@ -369,6 +384,12 @@ class _Runner:
             i = (d - p.K * w) / p.R
         if reg.s != 0:
             out.append((-reg.s * w, "speed reached zero"))
+            if self.drivetrain is not None:
+                d_flow = self.flow_of(i, w, reg.s)
+                if reg.flow > 0:
+                    out.append((-d_flow, "gearbox back-driven"))
+                else:
+                    out.append((d_flow, "gearbox drives the load"))
         elif reg.kind != "O":
             out.append((np.abs(p.K * i) - p.Tf, "break-away"))
         if isinstance(drive, BenchSupply):
@@ -408,7 +429,13 @@ class _Runner:
         s = self.friction_state(kind, i_eff, w)
         if forced == "break-away":
             s = 1 if self.p.K * i_eff > 0 else -1
-        return _Regime(kind, s), d
+        flow = 1
+        if self.drivetrain is not None and s != 0:
+            if forced in ("forward", "backward"):
+                flow = 1 if forced == "forward" else -1
+            else:
+                flow = 1 if float(self.flow_of(i_eff, w, s)) >= 0 else -1
+        return _Regime(kind, s, flow), d
 
     def to_local(self, reg: _Regime, lin: _Linear, i: float, w: float) -> np.ndarray:
         vals = {"i": i, "w": w}
@@ -440,7 +467,7 @@ class _Runner:
         instant = 0  # events found at the very start of what remains: a guard against ping-pong
         for _ in range(64):
             reg, d = self.regime_for(drive, d_drive, (i, w), forced=forced)
-            lin = _discretise(self.p, reg, self.dt)
+            lin = _discretise(self.params_for(reg), reg, self.dt)
             x0 = self.to_local(reg, lin, i, w)
             u = np.array([d, 1.0])
             x1, dth = _flow(lin, x0, u, remaining)
@@ -488,6 +515,8 @@ _EVENT_REGIME: dict[str, str | None] = {
     "supply enters constant voltage": "V",
     "supply stops sourcing current": "O",
     "supply starts sourcing current": "V",
+    "gearbox back-driven": "backward",
+    "gearbox drives the load": "forward",
 }
 
 
@@ -523,7 +552,7 @@ def _drive_values(drive: Drive, t: np.ndarray) -> np.ndarray:
 
 
 def simulate(
-    params: MotorParams,
+    params: MotorParams | Drivetrain,
     drive: Drive | Sequence[tuple[float, Drive]],
     *,
     duration: float,
@@ -535,7 +564,11 @@ def simulate(
     Parameters
     ----------
     params
-        The motor (use :meth:`MotorParams.with_load` for a flywheel through a gear ratio).
+        The motor (use :meth:`MotorParams.with_load` for a flywheel through a gear ratio), or a
+        :class:`~motorlab.gearbox.Drivetrain`: a gearmotor whose gearbox loses power, with its load;
+        the run then switches between the forward and back-driven equivalents as the power through
+        the gearbox changes direction (event "gearbox back-driven" / "gearbox drives the load").
+        Speeds and angles are at the output shaft.
     drive
         One drive for the whole run, or ``[(t_start, drive), ...]`` (e.g. relay on, then
         :class:`OpenCircuit`). Start times are rounded to the grid.
@@ -563,6 +596,8 @@ def simulate(
     if not (duration > 0 and math.isfinite(duration)):
         raise OptionError(f"simulation duration must be positive, got {duration}")
     initial = initial or State()
+    drivetrain = params if isinstance(params, Drivetrain) else None
+    motor: MotorParams = params.forward() if isinstance(params, Drivetrain) else params
     items = _schedule(drive)
     n = round(duration / dt)
     t = np.arange(n + 1) * dt
@@ -571,7 +606,7 @@ def simulate(
     pos = np.empty(n + 1)
     volt = np.empty(n + 1)
     mode = np.empty(n + 1, dtype=np.int8)
-    runner = _Runner(params, dt)
+    runner = _Runner(motor, dt, drivetrain)
     i, w, theta = float(initial.current), float(initial.speed), float(initial.position)
     cur[0], spd[0], pos[0] = i, w, theta
 
@@ -586,7 +621,7 @@ def simulate(
         chunk = 256
         while k < k1:
             reg, d = runner.regime_for(drv, float(d_all[k - k0]), (i, w))
-            lin = _discretise(params, reg, dt)
+            lin = _discretise(runner.params_for(reg), reg, dt)
             # How far can this regime run on the grid? Constant-valued drives (bench supply) keep d.
             m = min(chunk, k1 - k)
             dvals = d_all[k - k0 : k - k0 + m].copy()
@@ -614,7 +649,7 @@ def simulate(
                 elif reg.kind == "I":
                     is_ = dvals[:good]  # the held current of the step just finished
                 else:
-                    is_ = (dvals[:good] - params.K * ws) / params.R
+                    is_ = (dvals[:good] - motor.K * ws) / motor.R
                 sl = slice(k + 1, k + good + 1)
                 spd[sl] = ws
                 cur[sl] = is_
@@ -633,8 +668,8 @@ def simulate(
                 chunk = 256
         # Current and terminal voltage at the segment's grid points are those of the held regime.
     mode[n] = mode[n - 1] if n > 0 else MODE_VOLTAGE
-    _fill_outputs(runner, items, starts, bounds, t, cur, spd, volt, mode, params)
-    return Simulation(t, cur, spd, pos, volt, mode, params, runner.events)
+    _fill_outputs(runner, items, starts, bounds, t, cur, spd, volt, mode, motor)
+    return Simulation(t, cur, spd, pos, volt, mode, motor, runner.events)
 
 
 _MODE = {"V": MODE_VOLTAGE, "I": MODE_CURRENT, "O": MODE_OPEN}

@@ -4,6 +4,10 @@ Seed 2 ("The Motor Torque Constant") clamps a lever arm to the load and reads th
 postage scale at several amplifier currents; seed 1 reads a scale under its torque arm in the
 flywheel experiment. Either way the torque is τ = m·g·r and the torque constant is the slope of
 τ against the current, T = Km·I (seed 2) = K·i (seed 1, eq. (1)).
+
+At the output of a gearmotor the lever feels τ = η·N·K_m·i − τ0 (:mod:`motorlab.gearbox`): with the
+motor's K_m known from a back-EMF experiment and the ratio N, the slope gives the gearbox efficiency η
+and the intercept the loss torque τ0, both at the OUTPUT shaft.
 """
 
 from __future__ import annotations
@@ -11,6 +15,7 @@ from __future__ import annotations
 import argparse
 import math
 from collections.abc import Sequence
+from dataclasses import replace
 
 import numpy as np
 
@@ -27,6 +32,7 @@ from motorlab.analyses._common import (
 )
 from motorlab.errors import LogFormatError, OptionError
 from motorlab.fitting import fit_linear, r_squared
+from motorlab.gearbox import efficiency_estimate
 from motorlab.recording import Recording
 from motorlab.results import Estimate, FitResult, Panel, Series
 from motorlab.units import SI_UNITS, STANDARD_GRAVITY
@@ -40,6 +46,9 @@ def torque(
     *,
     arm: float | None = None,
     arm_stderr: float = 0.0,
+    ratio: float = 1.0,
+    motor_constant: float | None = None,
+    motor_constant_stderr: float = 0.0,
 ) -> FitResult:
     """Torque constant K [N·m/A] = [V·s/rad] from rows of current and scale reading.
 
@@ -54,6 +63,15 @@ def torque(
     arm_stderr
         Standard uncertainty of the arm length [m]; its relative part is added in quadrature to
         the relative standard error of K (it scales every torque alike, so the fit cannot see it).
+    ratio
+        Gear ratio N between the motor shaft and the lever's (output) shaft [-].
+    motor_constant
+        The motor's back-EMF constant K_m at the MOTOR shaft [V·s/rad] (a back-EMF experiment at
+        the output gives N·K_m: divide by N). With it the result also holds ``efficiency`` η =
+        slope/(N·K_m) and ``loss_torque`` τ0 = −intercept; with a single current η cannot be
+        separated from τ0 and both are "not determined" (``apparent_efficiency`` τ/(N·K_m·I) is given).
+    motor_constant_stderr
+        Standard error of ``motor_constant`` [V·s/rad], propagated into η's.
 
     Returns
     -------
@@ -117,6 +135,7 @@ def torque(
         tau = rec["mass"] * STANDARD_GRAVITY * arm_used
     if arm_stderr < 0:
         raise OptionError("the arm length uncertainty must not be negative")
+    _check_gearbox_options(ratio, motor_constant, motor_constant_stderr)
     try:
         check_limits(arm_used, "arm", "the lever arm (--arm)")
     except OptionError as exc:
@@ -126,6 +145,8 @@ def torque(
     check_stderr_limit(arm_stderr, "arm", "the lever arm's standard error (--arm-stderr)")
     current = rec["current"]
     sources = sources_of(recs)
+    if motor_constant is not None and np.unique(np.abs(current)).size == 1:
+        return _single_current(rec, tau, recs, arm_used, arm_stderr, ratio, motor_constant, motor_constant_stderr)
     line = fit_straight_line(current, tau, source=" + ".join(sources), what="current",
                              response="scale reading" if arm_used is not None else "torque")
     approach = np.concatenate([approach_direction(r["current"]) for r in recs])
@@ -156,6 +177,11 @@ def torque(
             "torque at zero current (intercept)",
         ),
     }
+    if motor_constant is not None:
+        parameters["K"] = replace(parameters["K"], note="Kt at the lever's (output) shaft: slope of torque vs current")
+        parameters.update(_gearbox_estimates(parameters["K"], intercept, arm_used, arm_stderr, ratio,
+                                             motor_constant, motor_constant_stderr))
+        warnings.extend(_unphysical_gearbox(parameters["efficiency"], parameters["loss_torque"]))
     if hysteresis:
         h = est["tau_h"]
         parameters["tau_h"] = Estimate(
@@ -179,6 +205,8 @@ def torque(
         )
     details: dict[str, object] = {"g": STANDARD_GRAVITY, "approach": [int(d) for d in approach],
                                   "hysteresis_fitted": hysteresis}
+    if motor_constant is not None:
+        details.update(_gearbox_details(ratio, motor_constant, motor_constant_stderr))
     if arm_used is not None:
         details["arm_m"] = arm_used
     panel = Panel(
@@ -201,6 +229,89 @@ def torque(
         warnings=reader_warnings(recs) + warnings,
         details=details,
         sources=sources,
+    )
+
+
+def _check_gearbox_options(ratio: float, motor_constant: float | None, motor_constant_stderr: float) -> None:
+    if not (math.isfinite(ratio) and ratio > 0):
+        raise OptionError(f"the gear ratio (--ratio) must be positive, got {ratio}")
+    if motor_constant is not None and not (math.isfinite(motor_constant) and motor_constant > 0):
+        raise OptionError(f"the motor's K (--K) must be positive, got {motor_constant} V·s/rad")
+    if not (math.isfinite(motor_constant_stderr) and motor_constant_stderr >= 0):
+        raise OptionError(f"K's standard error (--K-stderr) must not be negative, got {motor_constant_stderr}")
+
+
+def _gearbox_details(ratio: float, motor_constant: float, motor_constant_stderr: float) -> dict[str, object]:
+    return {"ratio": ratio, "K_motor": motor_constant, "K_motor_stderr": motor_constant_stderr,
+            "Ke_output": ratio * motor_constant,
+            "shafts": "K, loss_torque: output (lever) shaft; K_motor: motor shaft; Ke_output = N·K_motor"}
+
+
+def _gearbox_estimates(
+    slope: Estimate, intercept: Estimate, arm: float | None, arm_stderr: float, ratio: float,
+    motor_constant: float, motor_constant_stderr: float,
+) -> dict[str, Estimate]:
+    """η = Kt/(N·K_m) and τ0 = −intercept (output shaft), each with its standard error."""
+    ke_out = ratio * motor_constant
+    eta = efficiency_estimate(slope.value, slope.stderr, ke_out, ratio * motor_constant_stderr)
+    if not slope.determined:
+        eta = replace(eta, determined=False, note="not determined: the slope is not")
+    tau0_se = intercept.stderr
+    if arm is not None and arm_stderr > 0 and math.isfinite(tau0_se):
+        tau0_se = math.hypot(tau0_se, intercept.value * arm_stderr / arm)
+    loss = Estimate("loss_torque", -intercept.value, tau0_se, "N*m", intercept.determined,
+                    "gearbox loss torque τ0 at the output shaft (minus the intercept)")
+    return {"efficiency": eta, "loss_torque": loss}
+
+
+def _unphysical_gearbox(eta: Estimate, loss: Estimate) -> list[str]:
+    """Warnings for an efficiency above 1 or a negative loss torque beyond two standard errors."""
+    out = []
+    if eta.determined and eta.value - 2 * eta.stderr > 1:
+        out.append(f"the efficiency {eta.value:.3g} ± {eta.stderr:.2g} exceeds 1, which no gearbox does: check the "
+                   "arm length, the gear ratio (--ratio) and that --K is at the MOTOR shaft (Ke at the output ÷ N)")
+    if loss.determined and loss.value + 2 * loss.stderr < 0:
+        out.append(f"the loss torque {loss.value:.3g} ± {loss.stderr:.2g} N·m is negative, which no gearbox gives: "
+                   "a scale not tared with the arm resting on it?")
+    return out
+
+
+def _single_current(
+    rec: Recording, tau: np.ndarray, recs: list[Recording], arm: float | None, arm_stderr: float,
+    ratio: float, motor_constant: float, motor_constant_stderr: float,
+) -> FitResult:
+    """One current: τ = η·N·K·I − τ0 cannot separate η from τ0; only their combination is measured."""
+    current = np.abs(rec["current"])
+    i0 = float(current[0])
+    n = int(tau.size)
+    mean = float(np.mean(tau))
+    se = float(np.std(tau, ddof=1) / math.sqrt(n)) if n > 1 else math.nan
+    if arm is not None and arm_stderr > 0 and math.isfinite(se):
+        se = math.hypot(se, mean * arm_stderr / arm)
+    ke_out = ratio * motor_constant
+    apparent = efficiency_estimate(mean / i0, se / i0, ke_out, ratio * motor_constant_stderr,
+                                   note=f"apparent efficiency τ/(N·K·I) at {i0:.3g} A: η − τ0/(N·K·I), "
+                                   "a lower bound on η")
+    apparent = replace(apparent, name="apparent_efficiency")
+    undetermined = "not determined: one current cannot separate the efficiency from the loss torque"
+    parameters = {
+        "K": Estimate("K", math.nan, math.nan, SI_UNITS["K"], False, undetermined),
+        "efficiency": Estimate("efficiency", math.nan, math.nan, "1", False, undetermined),
+        "loss_torque": Estimate("loss_torque", math.nan, math.nan, "N*m", False, undetermined),
+        "apparent_efficiency": apparent,
+    }
+    panel = Panel(title="Torque vs current", x_label="current [A]", y_label="torque [N·m]",
+                  data=Series(current, tau, "scale readings", "data"),
+                  model=Series(current, np.full_like(tau, mean), "mean torque", "model"))
+    return FitResult(
+        experiment="torque", parameters=parameters, correlation=None, correlation_names=[],
+        rmse=float(np.sqrt(np.mean((tau - mean) ** 2))), rmse_unit="N*m", r2=math.nan, n_points=n,
+        panels=[panel],
+        warnings=[*reader_warnings(recs), "every row has the same current: the efficiency and the loss torque "
+                  "are not determined separately (measure at several currents)"],
+        details={"g": STANDARD_GRAVITY, **({"arm_m": arm} if arm is not None else {}),
+                 **_gearbox_details(ratio, motor_constant, motor_constant_stderr)},
+        sources=sources_of(recs),
     )
 
 
@@ -232,8 +343,22 @@ def add_arguments(parser: argparse.ArgumentParser, experiment: str) -> None:
         "--arm-stderr", type=quantity("m", nonnegative=True), default=0.0, metavar="LENGTH",
         help="standard uncertainty of the arm length [m], added to K's standard error",
     )
+    parser.add_argument(
+        "--ratio", type=quantity("", positive=True), default=1.0, metavar="N",
+        help="gear ratio between the motor shaft and the lever's shaft (default 1)",
+    )
+    parser.add_argument(
+        "--K", dest="motor_constant", type=quantity("V*s/rad", positive=True), default=None, metavar="K_MOTOR",
+        help="the motor's back-EMF constant at the MOTOR shaft [V·s/rad] (e.g. from spindown, ÷ N if measured "
+        "at the output): reports the gearbox efficiency and loss torque",
+    )
+    parser.add_argument(
+        "--K-stderr", dest="motor_constant_stderr", type=quantity("V*s/rad", nonnegative=True), default=0.0,
+        metavar="S", help="standard error of --K [V·s/rad], propagated into the efficiency's",
+    )
 
 
 def from_cli(experiment: str, paths: list[str], args: argparse.Namespace) -> FitResult:
     """Run ``motorlab analyze torque FILE...``."""
-    return torque(read_tables(paths), arm=args.arm, arm_stderr=args.arm_stderr)
+    return torque(read_tables(paths), arm=args.arm, arm_stderr=args.arm_stderr, ratio=args.ratio,
+                  motor_constant=args.motor_constant, motor_constant_stderr=args.motor_constant_stderr)

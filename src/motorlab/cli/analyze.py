@@ -62,6 +62,11 @@ def run(args: argparse.Namespace) -> int:
         check_figure_path(plot_path)
     groups = [[path] for path in args.files] if args.each else [list(args.files)]
     results = [module.from_cli(args.experiment, paths, args) for paths in groups]
+    from motorlab.efficiency import SHAFTS
+
+    for result in results:  # which shaft, load and torque units the figures refer to (docs/gearbox.md)
+        if args.experiment in SHAFTS:
+            result.details.setdefault("shaft", SHAFTS[args.experiment])
     if plot_path is not None:
         _save_plots(results, plot_path, each=args.each)
     if args.json:
@@ -153,6 +158,8 @@ def _print_tables(results: Sequence[FitResult]) -> None:
         if math.isfinite(result.r2):
             stats.append(f"R² {result.r2:.6f}")
         console.print("fit: " + ", ".join(stats))
+        if "shaft" in result.details:
+            console.print(f"shaft: {result.details['shaft']}")
         pairs = result.correlations(MIN_CORRELATION)
         if pairs:
             console.print(

@@ -121,7 +121,7 @@ def print_table(result: Any, *, truth: bool = True) -> None:
     from rich.console import Console
     from rich.table import Table
 
-    from motorlab.characterize import PARAMETERS
+    from motorlab.characterize import table_parameters
     from motorlab.report import DISPLAY_UNITS, format_value
 
     console = Console()
@@ -132,7 +132,7 @@ def print_table(result: Any, *, truth: bool = True) -> None:
     for unit in units:
         table.add_column(unit.spec.display_name, justify="right")
     flagged = {(o.unit, o.parameter) for o in result.fleet.outliers}
-    for p in PARAMETERS:
+    for p in table_parameters(result):
         label, scale = DISPLAY_UNITS[p]
         cells = []
         for unit in units:

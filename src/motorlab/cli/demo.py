@@ -38,6 +38,13 @@ def register(subparsers: Any) -> None:
         metavar="FACTOR",
         help="factor applied to the worn unit's b (default 3)",
     )
+    parser.add_argument(
+        "--worn-efficiency",
+        type=quantity("", positive=True),
+        default=0.8,
+        metavar="FACTOR",
+        help="factor applied to the worn unit's gearbox efficiency (default 0.8)",
+    )
     parser.set_defaults(func=run)
 
 
@@ -91,7 +98,10 @@ def print_experiment_table(result: Any) -> None:
     from rich.console import Console
     from rich.table import Table
 
-    table = Table(title="Every analysis against the simulated truth (estimate ± stderr, distance in σ)")
+    from motorlab.characterize import SHAFTS
+
+    table = Table(title="Every analysis against the simulated truth (estimate ± stderr, distance in σ); under each "
+                  "experiment, the shaft and load its figures refer to")
     table.add_column("experiment")
     table.add_column("parameter")
     table.add_column("unit")
@@ -99,8 +109,48 @@ def print_experiment_table(result: Any) -> None:
         table.add_column(unit.spec.display_name, justify="right")
     previous = ""
     for exp, par, unit_str, cells in experiment_rows(result):
-        table.add_row("" if exp == previous else exp, par, unit_str, *cells)
+        label = f"{exp}\n[dim]{SHAFTS[exp]}[/]" if exp in SHAFTS else exp
+        table.add_row("" if exp == previous else label, par, unit_str, *cells)
         previous = exp
+    Console(width=160).print(table)
+
+
+def print_gearbox_table(result: Any) -> None:
+    """η ± σ per unit against the truth, and the output stall torque at the nominal voltage against the catalogue."""
+    from rich.console import Console
+    from rich.table import Table
+
+    from motorlab.catalog import Motor
+    from motorlab.gearbox import OutputCurves
+    from motorlab.report import _unit_params
+
+    motor = Motor.from_catalog(result.session.motor.catalog) if result.session.motor.catalog else None
+    voltage = motor.nominal_voltage if motor is not None else 12.0
+    table = Table(title=f"The gearbox (output shaft) and the output stall torque at {voltage:g} V")
+    for col in ("unit", "η (Kt/Ke)", "τ0 [N·m]", f"stall torque at {voltage:g} V [N·m]"):
+        table.add_column(col, justify="right")
+    for unit in result.units.values():
+        eta, loss = unit.parameters.get("efficiency"), unit.parameters.get("loss_torque")
+        cells = []
+        for c, name in ((eta, "efficiency"), (loss, "loss_torque")):
+            if c is None or not c.estimate.determined:
+                cells.append("not determined")
+                continue
+            e = c.estimate
+            text = f"{e.value:.4g} ± {e.stderr:.2g}"
+            t = unit.truth.get(name)
+            if t is not None and e.stderr > 0:
+                text += f" (truth {t:.4g}, {(e.value - t) / e.stderr:+.1f}σ)"
+            cells.append(text)
+        model = _unit_params(unit)
+        stall = "—"
+        if model is not None and eta is not None and eta.estimate.determined:
+            torque = OutputCurves(model, eta.estimate.value).stall_torque(voltage)
+            stall = f"{torque:.3g}"
+            if motor is not None:
+                change = 100 * (torque / motor.stall_torque - 1)
+                stall += f" ({change:+.0f} % of the catalogue's {motor.stall_torque:.3g})"
+        table.add_row(unit.spec.display_name, *cells, stall)
     Console(width=160).print(table)
 
 
@@ -117,10 +167,10 @@ def run(args: argparse.Namespace) -> int:
     console = Console(stderr=True)
     out = Path(args.output)
     started = time.perf_counter()
-    degrade = {args.worn: {"b": args.wear}} if args.worn else None
+    degrade = {args.worn: {"b": args.wear, "efficiency": args.worn_efficiency}} if args.worn else None
     with console.status(f"simulating {args.units} unit(s) of {args.motor} on the virtual dynamometer"):
         toml = write_simulated_session(
-            args.motor, units=args.units, out_dir=out / "session", seed=args.seed, degrade=degrade
+            args.motor, units=args.units, out_dir=out / "session", seed=args.seed, degrade=degrade, gearbox="catalog"
         )
     console.print(f"simulated session: {toml}")
     session = load_session(toml)
@@ -135,6 +185,7 @@ def run(args: argparse.Namespace) -> int:
             save_figure(figure, out / "step_response.png")
             paths["step"] = out / "step_response.png"
     print_table(result)
+    print_gearbox_table(result)
     print_experiment_table(result)
     if gains.get("text"):
         print(f"\nController gains for the median unit ({args.motor}, {gains.get('voltage', 12):g} V):")

@@ -45,6 +45,10 @@ def run(args: argparse.Namespace) -> int:
     voltage = motor.nominal_voltage if args.voltage is None else args.voltage
     params = motor.nominal_params()
     figures = params.figures(voltage)
+    # The model's stall torque and power are before the gearbox's efficiency; at the output they are η times them.
+    eta = motor.gearbox().efficiency
+    figures["stall torque at the output (× gearbox η)"] = (eta * figures["stall torque"][0], "N*m")
+    figures["peak power at the output (× gearbox η)"] = (eta * figures["peak power"][0], "W")
     if args.json:
         out = motor.to_dict()
         out["nominal_params"] = {
@@ -134,6 +138,9 @@ def _print_one(
     derived.add_row("Kt = τ_stall/I_stall", f"{motor.torque_constant:.4g} N·m/A")
     derived.add_row("Ke = (V − R·I_free)/ω_free", f"{motor.back_emf_constant:.4g} V·s/rad")
     derived.add_row("Kt/Ke (gearbox efficiency at stall)", f"{motor.gearbox_efficiency_at_stall:.2f}")
+    box = motor.gearbox()
+    derived.add_row("gearbox η = τ_stall/(Ke·I_stall − Tf)", f"{box.efficiency:.3f}")
+    derived.add_row("gearbox loss torque τ0 (assumed ½ of Tf·η)", f"{box.loss_torque:.3g} N·m")
     console.print(derived)
     nominal = Table(title="Nominal model parameters (assumptions: docs/catalog.md)")
     nominal.add_column("parameter")

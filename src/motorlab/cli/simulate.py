@@ -52,6 +52,47 @@ def _common(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--noise-seed", type=nonnegative_int, default=0,
                         help="seed of the reading noise and timing jitter (default 0)")
     parser.add_argument("-o", "--output", required=True, metavar="FILE", help="file to write")
+    _gearbox_options(parser)
+
+
+def _efficiency(text: str) -> str | float:
+    """argparse type: ``catalog`` or an efficiency in (0, 1]."""
+    if text.strip().lower() in ("catalog", "catalogue"):
+        return "catalog"
+    value = quantity("")(text)
+    if not 0 < value <= 1:
+        raise argparse.ArgumentTypeError(f"an efficiency must lie in (0, 1], got {text!r}")
+    return value
+
+
+def _gearbox_options(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--efficiency", type=_efficiency, default=None, metavar="ETA",
+                        help="gearbox efficiency η in (0, 1] when the motor drives the load, or 'catalog' for the "
+                        "catalogue's (derived from the sheet's stall torque); default: an ideal gearbox")
+    parser.add_argument("--back-efficiency", type=_efficiency, default=None, metavar="ETA",
+                        help="efficiency when the load back-drives the motor (default: --efficiency)")
+    parser.add_argument("--loss-torque", type=quantity("N*m", nonnegative=True), default=None, metavar="TORQUE",
+                        help="gearbox drag τ0 at the output shaft [N·m] (default: the catalogue's with "
+                        "--efficiency, else 0)")
+
+
+def gearbox_from_args(args: argparse.Namespace, motor: Any) -> Any:
+    """The :class:`motorlab.gearbox.Gearbox` the options ask for (``None``: an ideal one)."""
+    from dataclasses import replace
+
+    from motorlab.gearbox import Gearbox
+
+    if args.efficiency is None and args.back_efficiency is None and args.loss_torque is None:
+        return None
+    box = motor.gearbox() if args.efficiency is not None else Gearbox(ratio=motor.gear_ratio)
+    if isinstance(args.efficiency, float):
+        box = replace(box, efficiency=args.efficiency)
+    if args.back_efficiency is not None:
+        back = box.efficiency if args.back_efficiency == "catalog" else args.back_efficiency
+        box = replace(box, back_efficiency=back)
+    if args.loss_torque is not None:
+        box = replace(box, loss_torque=args.loss_torque)
+    return box
 
 
 def register(subparsers: Any) -> None:
@@ -148,6 +189,11 @@ def register(subparsers: Any) -> None:
     session.add_argument("--worn", metavar="UNIT", help="make one unit worn: its viscous friction b multiplied")
     session.add_argument("--wear", type=quantity("", positive=True), default=2.0, metavar="FACTOR",
                          help="factor applied to the worn unit's b (default 2)")
+    session.add_argument("--efficiency", type=_efficiency, default=None, metavar="ETA",
+                         help="'catalog' (each unit's gearbox drawn around the catalogue's) or one efficiency "
+                         "for every unit; default: ideal gearboxes")
+    session.add_argument("--worn-efficiency", type=quantity("", positive=True), default=1.0, metavar="FACTOR",
+                         help="factor applied to the worn unit's gearbox efficiency (default 1)")
     session.set_defaults(func=run_session)
 
 
@@ -246,10 +292,13 @@ def check_sizes(args: argparse.Namespace) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run the experiment; print the files written (errors: MotorlabError -> exit code 2)."""
+    from motorlab.catalog import Motor
     from motorlab.rig import VirtualRig
 
     check_sizes(args)
-    rig = VirtualRig(args.motor, unit_seed=args.unit_seed, noise_seed=args.noise_seed)
+    motor = Motor.from_catalog(args.motor)
+    rig = VirtualRig(motor, unit_seed=args.unit_seed, noise_seed=args.noise_seed,
+                     gearbox=gearbox_from_args(args, motor))
     result = rig.run(args.experiment, args.output, **_settings(args))
     files = " + ".join(str(p) for p in result.paths)
     print(f"{args.experiment}: {rig.motor.key} unit {rig.unit}: wrote {files}; truth in {result.truth_path}")
@@ -260,7 +309,8 @@ def run_session(args: argparse.Namespace) -> int:
     """Write a simulated session with :func:`motorlab.session.write_simulated_session`."""
     from motorlab.session import write_simulated_session
 
-    degrade = {args.worn: {"b": args.wear}} if args.worn else None
-    result = write_simulated_session(args.motor, units=args.units, out_dir=args.output, seed=args.seed, degrade=degrade)
+    degrade = {args.worn: {"b": args.wear, "efficiency": args.worn_efficiency}} if args.worn else None
+    result = write_simulated_session(args.motor, units=args.units, out_dir=args.output, seed=args.seed,
+                                     degrade=degrade, gearbox=args.efficiency)
     print(f"session: wrote {result}")
     return 0

@@ -29,7 +29,7 @@ from motorlab.rig.instruments import (
     Scale,
     Tachometer,
 )
-from motorlab.rig.units import Commutator, UnitSpread, draw_unit, unit_name
+from motorlab.rig.units import Commutator, UnitSpread, draw_gearbox, draw_unit, unit_name
 from motorlab.rig.virtual import EXPERIMENTS, VirtualRig, steady_state
 
 __all__ = [
@@ -55,6 +55,7 @@ __all__ = [
     "Tachometer",
     "UnitSpread",
     "VirtualRig",
+    "draw_gearbox",
     "draw_unit",
     "read_truth",
     "steady_state",

@@ -11,12 +11,13 @@ from __future__ import annotations
 
 import math
 import zlib
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from typing import Any, Protocol
 
 import numpy as np
 
 from motorlab.errors import OptionError
+from motorlab.gearbox import Gearbox
 from motorlab.model import PARAMETER_NAMES, MotorParams
 
 
@@ -191,3 +192,28 @@ class Commutator:
         out: dict[str, Any] = asdict(self)
         out["poor_contact_range"] = list(self.poor_contact_range)
         return out
+
+
+#: σ of ln η between units of one gearmotor [-] (gear cutting, grease, run-in).
+EFFICIENCY_SPREAD = 0.03
+
+
+def draw_gearbox(key: str, nominal: Gearbox, unit_seed: int, *, spread: float = EFFICIENCY_SPREAD) -> Gearbox:
+    """One unit's gearbox: the efficiency drawn log-normally around ``nominal``'s (clipped at ±3 σ, ≤ 0.99).
+
+    Parameters
+    ----------
+    key
+        The motor's catalogue key (the draw depends only on it and the seed).
+    nominal
+        The catalogue gearbox (:meth:`motorlab.catalog.Motor.gearbox`).
+    unit_seed
+        Which unit (≥ 0).
+    spread
+        σ of ln η [-].
+    """
+    if unit_seed < 0:
+        raise OptionError(f"unit seed must not be negative, got {unit_seed}")
+    z = float(np.clip(_rng(key, unit_seed, 1).standard_normal(), -3.0, 3.0))
+    eta = min(nominal.efficiency * math.exp(spread * z), 0.99)
+    return replace(nominal, efficiency=eta, back_efficiency=None)

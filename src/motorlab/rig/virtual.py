@@ -33,14 +33,17 @@ from typing import Any
 
 import numpy as np
 
+from motorlab.analyses.torque import approach_direction
 from motorlab.catalog import Motor
 from motorlab.errors import OptionError, RigError
+from motorlab.gearbox import Drivetrain, Gearbox
 from motorlab.io.csv_table import write_csv
 from motorlab.io.ftc import write_ftc_log
 from motorlab.model import MotorParams, feedforward_from_params
 from motorlab.rig.base import MAX_READINGS, PathArg, RigRun, _jsonable, check_size, write_truth
 from motorlab.rig.flywheel import Flywheel
 from motorlab.rig.instruments import Encoder, Instruments, quantize
+from motorlab.rig.profiles import voltage_profile
 from motorlab.rig.units import Commutator, UnitSpread, draw_unit, unit_name
 from motorlab.simulate import (
     BenchSupply,
@@ -136,6 +139,12 @@ class VirtualRig:
         The instruments (default figures: :mod:`motorlab.rig.instruments`).
     commutator
         Position dependence of the LCR readings.
+    gearbox
+        The gearmotor's gearbox losses (:class:`~motorlab.gearbox.Gearbox`; ``motor.gearbox()`` gives
+        the catalogue's). Default: an ideal gearbox (η = 1, no drag). With a lossy gearbox and a drawn
+        unit, the gearbox's drag τ0/η is taken out of the unit's Coulomb friction, so the unit still
+        runs free at the catalogue's free current; ``params`` are the motor's own, reflected to the
+        output through an ideal gearbox (:func:`motorlab.gearbox.reflect_to_output`).
 
     Raises
     ------
@@ -156,6 +165,7 @@ class VirtualRig:
         flywheel: Flywheel | None = None,
         instruments: Instruments | None = None,
         commutator: Commutator | None = None,
+        gearbox: Gearbox | None = None,
     ):
         self.motor = Motor.from_catalog(motor) if isinstance(motor, str) else motor
         if unit_seed < 0 or noise_seed < 0:
@@ -163,7 +173,13 @@ class VirtualRig:
         self.unit_seed = int(unit_seed)
         self.noise_seed = int(noise_seed)
         self.spread = spread or UnitSpread()
-        self.params = params if params is not None else draw_unit(self.motor, self.unit_seed, spread=self.spread)
+        self.gearbox = gearbox if gearbox is not None else Gearbox(ratio=self.motor.gear_ratio)
+        if params is None:
+            params = draw_unit(self.motor, self.unit_seed, spread=self.spread)
+            drag = self.gearbox.loss_torque / self.gearbox.efficiency
+            if drag > 0:
+                params = params.scaled(Tf=max(params.Tf - drag, 0.0))
+        self.params = params
         self.flywheel = flywheel or Flywheel()
         self.instruments = instruments or Instruments()
         self.commutator = commutator or Commutator()
@@ -192,8 +208,16 @@ class VirtualRig:
             [self.noise_seed, self.unit_seed, zlib.crc32(self.motor.key.encode()), zlib.crc32(experiment.encode())]
         )
 
+    def _drivetrain(self, with_flywheel: bool) -> Drivetrain:
+        fw = self.flywheel
+        if not with_flywheel:
+            return Drivetrain(self.params, self.gearbox)
+        return Drivetrain(self.params, self.gearbox, fw.reflected_inertia, fw.reflected_viscous_friction,
+                          fw.reflected_coulomb_friction)
+
     def _loaded(self, with_flywheel: bool) -> MotorParams:
-        return self.flywheel.attach(self.params) if with_flywheel else self.params
+        """The forward single-K equivalent (what a motoring analysis finds; = motor + load when ideal)."""
+        return self._drivetrain(with_flywheel).forward()
 
     def _finish(
         self,
@@ -214,12 +238,18 @@ class VirtualRig:
             "unit": self.unit,
             "unit_seed": self.unit_seed,
             "noise_seed": self.noise_seed,
-            "params": self.params.to_dict(),
+            # The model's parameters of the bare gearmotor at the output shaft (forward single-K
+            # equivalent: the gearbox's drag and output inertia ÷ η included); "motor_params" are the
+            # motor's own through an ideal gearbox. The two are equal with an ideal gearbox.
+            "params": self._loaded(False).to_dict(),
+            "motor_params": self.params.to_dict(),
             "params_units": self.params.units(),
             "nominal_params": self.motor.nominal_params().to_dict(),
             "unit_spread": self.spread.to_dict(),
             "flywheel": self.flywheel.settings() if flywheel else None,
             "totals": {"J": loaded.J, "b": loaded.b, "Tf": loaded.Tf},
+            "gearbox": self.gearbox.to_dict(),
+            "output_figures": self._drivetrain(flywheel).output_figures(),
             "expected": expected,
             "settings": settings,
             "instruments": instruments,
@@ -228,7 +258,7 @@ class VirtualRig:
         return RigRun(experiment, tuple(paths), truth_path, json.loads(json.dumps(_plain(entry))))
 
     def _simulate(
-        self, params: MotorParams, schedule: Sequence[tuple[float, Drive]], *, duration: float, dt: float,
+        self, params: MotorParams | Drivetrain, schedule: Sequence[tuple[float, Drive]], *, duration: float, dt: float,
         initial_speed: float = 0.0, initial_position: float = 0.0,
     ) -> Simulation:
         # Refused before the simulator allocates its arrays (on_time = 1e9 s asked for 7 TiB).
@@ -310,14 +340,14 @@ class VirtualRig:
         if relay_delay < 0:
             raise OptionError("relay delay must not be negative")
         rng = self._rng("spindown")
-        loaded = self._loaded(True)
         t_close = relay_delay + ins.relay.operate_time
         t_command_off = relay_delay + on_time
         t_open = t_command_off + ins.relay.release_time
         duration = relay_delay + on_time + coast_time
         schedule: list[tuple[float, Drive]] = [
             (0.0, OpenCircuit()), (t_close, BenchSupply(voltage, current_limit)), (t_open, OpenCircuit())]
-        sim = self._simulate(loaded, schedule, duration=duration + 0.01, dt=FLYWHEEL_DT)
+        train = self._drivetrain(True)
+        sim = self._simulate(train, schedule, duration=duration + 0.01, dt=FLYWHEEL_DT)
         times, counts, bus, current = self._log_ftc(sim, duration, rng)
         path = Path(path)
         paths = [path]
@@ -336,13 +366,19 @@ class VirtualRig:
                           placeholder_rows=placeholder_rows or 0, crlf=crlf, blank_lines=blank_lines or 0)
         on = (sim.time >= t_close) & (sim.time < t_open)
         speed_off = float(np.interp(t_open, sim.time, sim.speed))
+        # The coast is seen through the gearbox in the direction the power flows at its start: a
+        # flywheel drives the motor's friction (back-driven), so J, b, Tf are physical figures at the
+        # output shaft for that direction (= the totals with an ideal gearbox).
+        back = train.switches and float(train.flow(0.0, speed_off, 1.0)) < 0
+        coast = train.output_figures(back_driven=back)
         expected = {
             "K": self.params.K,
-            "J": loaded.J,
-            "b": loaded.b,
-            "Tf": loaded.Tf,
-            "gamma": loaded.b / loaded.J,
-            "Tf_over_J": loaded.Tf / loaded.J,
+            "J": coast["J"],
+            "b": coast["b"],
+            "Tf": coast["Tf"],
+            "gamma": coast["b"] / coast["J"],
+            "Tf_over_J": coast["Tf"] / coast["J"],
+            "gearbox_flow": "back-driven" if back else "forward",
             "coast_start": t_open,
             "speed_at_coast_start": speed_off,
             "supply_current_limited": bool(np.any(sim.mode[on] == 1)),
@@ -431,16 +467,21 @@ class VirtualRig:
         total = relay_delay + duration + coast_time
         schedule: list[tuple[float, Drive]] = [
             (0.0, OpenCircuit()), (t_close, BenchSupply(voltage, current)), (t_open, OpenCircuit())]
-        sim = self._simulate(loaded, schedule, duration=total + 0.01, dt=FLYWHEEL_DT)
+        train = self._drivetrain(True)
+        sim = self._simulate(train, schedule, duration=total + 0.01, dt=FLYWHEEL_DT)
         times, counts, bus, amps = self._log_ftc(sim, total, rng)
         path = Path(path)
         write_ftc_log(path, times, counts, bus, amps, header=header, crlf=crlf)
         on = (sim.time >= t_close + 0.05) & (sim.time < t_open)
+        # The motor drives the flywheel through the gearbox: a torque balance at the output finds the
+        # output's Kt = η·K with the physical J, b, Tf there (K, J, b, Tf themselves when ideal).
+        phys = train.output_figures()
         expected = {
-            "K": self.params.K,
-            "J": loaded.J,
-            "b": loaded.b,
-            "Tf": loaded.Tf,
+            "K": phys["Kt"],
+            "Ke": self.params.K,
+            "J": phys["J"],
+            "b": phys["b"],
+            "Tf": phys["Tf"],
             "current": current,
             "acceleration_initial": max(self.params.K * current - loaded.Tf, 0.0) / loaded.J,
             "constant_current_throughout": bool(np.all(sim.mode[on] == 1)),
@@ -519,7 +560,7 @@ class VirtualRig:
         check_size(edges, "rising edges (--edges)", limit=MAX_READINGS, hint="the seed records 20")
         _positive(dt, "dt", "s")
         rng = self._rng("free-spinup")
-        p = self.params
+        p = self._loaded(False)
         w0 = 0.05 * self.motor.free_speed if hand_speed is None else float(hand_speed)
         if not 0 <= w0 <= 2 * self.motor.free_speed:  # a hand does not spin it past its own free speed
             raise OptionError(f"the hand-start speed (--hand-speed) must lie between 0 and twice the free speed "
@@ -531,7 +572,8 @@ class VirtualRig:
         guess = max(self.motor.free_speed * 0.5, 1e-3)
         duration = max(4 * needed / guess, 0.05)
         for _ in range(12):
-            sim = self._simulate(p, drive, duration=duration, dt=dt, initial_speed=w0, initial_position=theta0)
+            sim = self._simulate(self._drivetrain(False), drive, duration=duration, dt=dt, initial_speed=w0,
+                                 initial_position=theta0)
             if sim.position[-1] >= needed or sim.speed[-1] <= 0:
                 break
             duration *= 2
@@ -632,14 +674,14 @@ class VirtualRig:
         if amps is None:
             amps = self._default_terminal_currents(voltage)
             # The experimenter raises a setting that leaves the shaft at rest (K·I ≤ Tf).
-            need = self.params.Tf / self.params.K
+            need = self._loaded(False).Tf / self.params.K
             amps = np.array([a if a > need * 1.02 else math.ceil(need * 1.02 / 0.01 + 1) * 0.01 for a in amps])
             amps = np.unique(np.round(amps, 3))
         ins.supply.check(voltage, float(np.max(amps)) if amps.size else 1.0)
         if np.any(amps == 0):
             raise OptionError("a current setting of 0 A cannot spin the motor")
         rng = self._rng("terminal")
-        p = self.params
+        p = self._loaded(False)
         states = [steady_state(p, float(i), voltage_limit=voltage) for i in amps]
         speeds = np.array([s[0] for s in states])
         true_i = np.array([s[1] for s in states])
@@ -751,7 +793,8 @@ class VirtualRig:
 
         Notes
         -----
-        τ = K·I (seed 2, T(t) = Km·I(t)); the scale shows m = τ_arm/(g₀·arm). The stalled shaft
+        τ = K·I (seed 2, T(t) = Km·I(t)); the scale shows m = τ_arm/(g₀·arm). Through a lossy
+        gearbox the arm at the output feels τ = η·K·I − τ0 (:mod:`motorlab.gearbox`). The stalled shaft
         creeps towards the new balance after each change of current, so the friction it holds
         opposes that creep: τ_arm = K·I − d·f with d = ±1 the sign of the change (from rest for the
         first reading) and f uniform in [0, r·Tf], r = 0.1 with the dither and 1 without. A sweep
@@ -770,15 +813,20 @@ class VirtualRig:
         if float(np.max(amps)) > ins.supply.max_current:
             raise OptionError(f"currents above the supply's {ins.supply.max_current:g} A")
         rng = self._rng("torque")
-        approach = _approach(amps)
-        held = p.Tf * (0.1 if dither else 1.0) * rng.uniform(0.0, 1.0, amps.shape)
-        torque = np.where(amps > 0, p.K * amps - approach * held, 0.0)
+        approach = approach_direction(amps)
+        # Through the gearbox (forward, the motor pushing the arm): τ_out = η·K·I − τ0, the motor's own
+        # Coulomb friction held either way by the stalled shaft (× η at the output).
+        eta, tau0 = self.gearbox.efficiency, self.gearbox.loss_torque
+        held = eta * p.Tf * (0.1 if dither else 1.0) * rng.uniform(0.0, 1.0, amps.shape)
+        torque = np.where(amps > 0, eta * p.K * amps - tau0 - approach * held, 0.0)
         mass = ins.scale.read(np.clip(torque, 0.0, None), arm, rng)
         shown = ins.multimeter.read_current(amps, rng)
         path = Path(path)
         write_csv(path, {"current_A": shown, "mass_kg": mass},
                   metadata={"experiment": "torque", "motor": self.motor.key, "arm_m": arm})
-        expected = {"K": p.K, "torques": torque, "currents": amps, "friction_held": -approach * held,
+        expected = {"K": eta * p.K, "Ke": p.K, "efficiency": eta, "loss_torque": tau0,
+                    "ratio": self.gearbox.ratio, "K_motor": p.K / self.gearbox.ratio,
+                    "torques": torque, "currents": amps, "friction_held": -approach * held,
                     "approach": approach}
         instruments = {"scale": ins.scale.settings(), "multimeter": ins.multimeter.settings()}
         return self._finish("torque", [path], settings={"currents": amps, "arm": arm, "dither": dither},
@@ -846,7 +894,7 @@ class VirtualRig:
         """
         ins = self.instruments
         amp = ins.amplifier
-        p = self.params
+        p = self._loaded(False)
         if commands is None:
             nominal = self.motor.nominal_params()
             targets = np.linspace(0.3, 0.9, 5) * self.motor.free_speed
@@ -938,7 +986,7 @@ class VirtualRig:
         for k in range(periods):
             schedule += [(pre + k * period, on_drive), (pre + (k + duty) * period, CurrentDrive(i_off))]
         span = period * periods
-        sim = self._simulate(loaded, schedule, duration=span + dt, dt=dt)
+        sim = self._simulate(self._drivetrain(flywheel), schedule, duration=span + dt, dt=dt)
         t = np.arange(-pre, span - pre, sample_interval)
         state = sim.sample(t + pre)
         phase = np.mod(t, period)
@@ -1021,12 +1069,13 @@ class VirtualRig:
         if voltage_noise < 0 or current_noise < 0:
             raise OptionError("noise levels must not be negative")
         rng = self._rng("transient")
-        voltage_of = _profile(profile, duration, max_voltage, rng)
+        voltage_of = voltage_profile(profile, duration, max_voltage, rng)
         loaded = self._loaded(flywheel)
         period = 1.0 / rate
         substeps = max(1, math.ceil(period / 1e-3))
         dt = period / substeps
-        sim = self._simulate(loaded, [(0.0, VoltageDrive(voltage_of))], duration=duration + period, dt=dt)
+        sim = self._simulate(self._drivetrain(flywheel), [(0.0, VoltageDrive(voltage_of))],
+                             duration=duration + period, dt=dt)
         t = np.arange(round(duration * rate) + 1) * period
         state = sim.sample(t)
         applied = voltage_of(t)
@@ -1142,7 +1191,8 @@ class VirtualRig:
                 k = np.searchsorted(t_rows, np.asarray(t) + half, side="right") - 1
                 return held[np.clip(k, 0, held.size - 1)]
 
-            sim = self._simulate(loaded, [(0.0, VoltageDrive(staircase))], duration=length + lead + dt, dt=dt,
+            sim = self._simulate(self._drivetrain(flywheel), [(0.0, VoltageDrive(staircase))],
+                                 duration=length + lead + dt, dt=dt,
                                  initial_position=position0)
             volts = held + rng.normal(0.0, ctrl.voltage_noise, n)
             # Status frames: the value logged at t is the one refreshed at the last frame ≤ t. The
@@ -1181,20 +1231,6 @@ def _plain(value: Any) -> Any:
     return _jsonable(value)
 
 
-def _approach(currents: np.ndarray) -> np.ndarray:
-    """+1 where a current was reached from below (or from rest), −1 from above; a repeated setting
-    keeps the direction of the one before."""
-    out = np.ones(currents.size)
-    previous = 0.0
-    for k, value in enumerate(np.abs(currents)):
-        if value != previous:
-            out[k] = 1.0 if value > previous else -1.0
-        elif k:
-            out[k] = out[k - 1]
-        previous = value
-    return out
-
-
 def _stop_time(sim: Simulation, after: float) -> float | None:
     """First time ≥ ``after`` at which the shaft is at rest (None if it still turns at the end)."""
     idx = np.flatnonzero((sim.time >= after) & (sim.speed == 0.0))
@@ -1218,25 +1254,3 @@ def _strictly_increasing(times: np.ndarray, step: float) -> np.ndarray:
         if out[k] <= out[k - 1]:
             out[k] = out[k - 1] + step
     return out
-
-
-def _profile(profile: str, duration: float, max_voltage: float,
-             rng: np.random.Generator) -> Callable[[np.ndarray], np.ndarray]:
-    """Voltage profile ``f(t) -> V`` of a transient test."""
-    if profile == "steps":
-        levels = np.array([0.0, 0.5, 1.0, 0.25, -0.5, -1.0, 0.0]) * max_voltage
-        edges = np.linspace(0.0, duration, levels.size + 1)[1:-1]
-        return lambda t: levels[np.searchsorted(edges, np.asarray(t), side="right")]
-    if profile == "ramps":
-        knots_t = np.linspace(0.0, duration, 5)
-        knots_v = np.array([0.0, 1.0, 0.0, -1.0, 0.0]) * max_voltage
-        return lambda t: np.interp(np.asarray(t), knots_t, knots_v)
-    if profile == "random":
-        holds = [0.0]
-        while holds[-1] < duration:
-            holds.append(holds[-1] + float(rng.uniform(0.1, 0.5)))
-        starts = np.array(holds[1:-1])
-        levels = rng.uniform(-max_voltage, max_voltage, starts.size + 1)
-        levels[0] = 0.0
-        return lambda t: levels[np.searchsorted(starts, np.asarray(t), side="right")]
-    raise OptionError(f"unknown profile {profile!r}; choose steps, ramps or random")
