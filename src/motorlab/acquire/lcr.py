@@ -189,7 +189,8 @@ def open_serial(port: str, *, rts: bool = False, dtr: bool = True, read_timeout:
     return ser
 
 
-def _check_output(path: str) -> None:
+def check_new_output(path: str) -> None:
+    """Refuse an output path that is a folder, has no folder, or is a file with content (never overwritten)."""
     if not path.strip():
         raise OptionError("-o: the file name is empty")
     if os.path.isdir(path):
@@ -312,7 +313,7 @@ def acquire_lcr(
         raise OptionError(f"--timeout must lie between 0 and 3600 s, got {timeout:g} s")
     if kind not in KINDS:
         raise OptionError(f"the kind of reading must be one of {', '.join(KINDS)}, got {kind!r}")
-    _check_output(path)
+    check_new_output(path)
     ask = ask or input
     say = report or (lambda text: None)
     ser = open_serial(port, rts=rts, dtr=dtr)
