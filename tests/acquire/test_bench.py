@@ -102,7 +102,7 @@ def test_ina219_refuses_above_16_volts_before_anything_is_switched(tmp_path: Pat
     rig = BenchRig(_dp800(sent), clock=FakeClock())
     with pytest.raises(RigError, match="16 V"):
         rig.spinup(tmp_path / "u.csv", voltage=18.0, current=1.0, duration=1.0)
-    assert not any(c.startswith(":OUTP") or c.startswith(":SOUR") for c in sent)
+    assert not any(c.startswith((":OUTP", ":SOUR")) for c in sent)
     assert not (tmp_path / "u.csv").exists()
 
 
