@@ -61,6 +61,7 @@ def test_calibration_and_sorting_modes_are_flagged() -> None:
     assert decode(_packet(0x08, 2 << 5, bytes([1, 0, 10, 6 << 3, 0]), bytes(5))).special_mode == "calibration"
     p = decode(_packet(0x10, 2 << 5, bytes([1, 0, 10, 6 << 3, 0]), bytes(5), tolerance=5))
     assert p.special_mode == "sorting"
+    assert decode(_packet(0x04, 2 << 5, bytes([1, 0, 10, 6 << 3, 0]), bytes(5))).special_mode == "delta"
     assert p.tolerance == "±1%"
 
 

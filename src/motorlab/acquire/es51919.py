@@ -144,8 +144,9 @@ class Packet:
 
     @property
     def special_mode(self) -> str | None:
-        """``"calibration"`` or ``"sorting"`` when the meter is in one (libsigrok ignores those packets)."""
-        for name in ("calibration", "sorting"):
+        """``"calibration"``, ``"sorting"`` (libsigrok ignores those packets) or ``"delta"`` (relative mode:
+        the displays show differences from a stored reference, not the part's values)."""
+        for name in ("calibration", "sorting", "delta"):
             if self.flags[name]:
                 return name
         return None
