@@ -16,6 +16,7 @@ from motorlab.acquire.scpi import SIM_RESOURCES, KoradSupply, RigolDP800, RigolD
 from motorlab.cli import main
 from motorlab.errors import RigError
 from motorlab.io.csv_table import read_csv
+from motorlab.rig import Dynamometer
 
 
 class Spy:
@@ -78,6 +79,7 @@ def test_terminal_limit_before_output_and_off_at_the_end(tmp_path: Path) -> None
     assert _index(sent, ":OUTP ON") < _index(sent, ":SOUR:CURR 0.4000")
     assert sent[-1] == ":OUTP OFF"
     assert not supply.output_is_on()
+    assert isinstance(rig, Dynamometer)  # the virtual rig's interface
     rec = read_csv(run.paths[0])
     assert rec["current"].tolist() == pytest.approx([0.512, 0.512])  # the profile's :MEAS:CURR?
     assert rec["frequency"].tolist() == pytest.approx([156.25, 156.25])  # its :MEAS:ITEM? FREQ,CHAN1

@@ -70,6 +70,8 @@ def test_unknown_codes_are_refused() -> None:
         decode(_packet(0, 7 << 5, bytes([1, 0, 1, 6 << 3, 0]), bytes(5)))
     with pytest.raises(PacketError, match="unit"):
         decode(_packet(0, 2 << 5, bytes([1, 0, 1, 4 << 3, 0]), bytes(5)))
+    locked = decode(_packet(0, 2 << 5, bytes([1, 0, 12, 0x80 | (6 << 3) | 1, 0]), bytes(5)))  # bit 7: units locked
+    assert locked.primary.value == pytest.approx(1.2e-3)
     with pytest.raises(PacketError, match="quantity"):
         decode(_packet(0, 2 << 5, bytes([9, 0, 1, 6 << 3, 0]), bytes(5)))
     with pytest.raises(PacketError, match="header"):

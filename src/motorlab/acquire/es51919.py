@@ -13,7 +13,8 @@ DER EE LCR Meter DE-5000 serial bitstream", 2014). Layout (byte offsets)::
           (bits 0-4 unknown; the forum post reads bit 3 as auto-power-off)
     4     tolerance in sorting mode (0 none, 3 ±0.25 % … 10 −20/+80 %)
     5-9   primary display: 5 quantity (1 L, 2 C, 3 R, 4 DCR); 6-7 value, big-endian signed
-          16-bit; 8 bits 0-2 decimals (value·10^−n), bits 3-7 unit; 9 bits 0-3 display state
+          16-bit; 8 bits 0-2 decimals (value·10^−n), bits 3-6 unit (bit 7: units locked, per
+          the forum post; libsigrok counts it in the unit); 9 bits 0-3 display state
     10-14 secondary display, same layout; quantity 0 none, 1 D, 2 Q, 3 R (ESR or Rp), 4 θ
 
 Units: 0 none, 1 Ω, 2 kΩ, 3 MΩ, 5 µH, 6 mH, 7 H, 8 kH, 9 pF, 10 nF, 11 µF, 12 mF, 13 %, 14 °.
@@ -158,7 +159,9 @@ def _display(data: bytes, names: dict[int, str], where: str) -> Display:
         raise PacketError(f"unknown {where} quantity code {code}")
     count = int.from_bytes(data[1:3], "big", signed=True)
     decimals = data[3] & 0x07
-    unit_code = data[3] >> 3
+    # Bits 3-6: libsigrok reads bits 3-7 and rejects codes above 14; the EEVblog decoding reads bit 7
+    # as "units locked". Masking it agrees with libsigrok on every packet libsigrok accepts.
+    unit_code = (data[3] >> 3) & 0x0F
     if unit_code not in UNITS:
         raise PacketError(f"unknown {where} unit code {unit_code}")
     unit, factor = UNITS[unit_code]
