@@ -12,10 +12,10 @@ from __future__ import annotations
 
 import argparse
 import sys
-from collections.abc import Callable
 from typing import Any
 
 from motorlab.cli.common import positive_int, quantity
+from motorlab.cli.simulate import _list_of
 from motorlab.errors import OptionError
 
 
@@ -85,18 +85,6 @@ _BENCH_HELP = {
     "spindown": "seed 1 'Flywheel and INA219': the supply as relay, on then off; logs the supply's readback",
     "spinup": "seed 1 'First Experiment': constant current from the supply as relay; logs its readback",
 }
-
-
-def _list_of(unit: str) -> Callable[[str], list[float]]:
-    single = quantity(unit, positive=True)
-
-    def convert(text: str) -> list[float]:
-        parts = [p for p in text.split(",") if p.strip()]
-        if not parts:
-            raise argparse.ArgumentTypeError("expected a comma-separated list")
-        return [single(p) for p in parts]
-
-    return convert
 
 
 def _register_bench(sub: Any) -> None:
