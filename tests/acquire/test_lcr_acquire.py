@@ -54,8 +54,10 @@ def test_dc_resistance_readings_and_mode_lock(tmp_path: Path) -> None:
     stream += b"".join(encode(("dc_resistance", r), frequency=0.0) for r in dcr[2:])
     out = tmp_path / "dcr.csv"
     messages: list[str] = []
+    with DE5000Emulator(b"".join(encode(("dc_resistance", r), frequency=0.0) for r in dcr)) as meter:
+        assert acquire_lcr(meter.url, str(tmp_path / "auto.csv"), readings=4).kind == "dc_resistance"
     with DE5000Emulator(stream) as meter:
-        log = acquire_lcr(meter.url, str(out), readings=4, report=messages.append)
+        log = acquire_lcr(meter.url, str(out), readings=4, kind="dc_resistance", report=messages.append)
     assert log.kind == "dc_resistance"
     assert log.rows == 4
     from motorlab.analyses.lcr import lcr
@@ -64,6 +66,15 @@ def test_dc_resistance_readings_and_mode_lock(tmp_path: Path) -> None:
     result = lcr(read_csv(out))
     assert result.parameters["R_dc"].value == pytest.approx(np.mean(dcr), rel=1e-6)
     assert any("inductance reading in a file of dc_resistance" in m for m in messages)
+
+
+def test_auto_prefers_inductance_in_a_mixed_stream(tmp_path: Path) -> None:
+    stream = b"".join(encode(("dc_resistance", 1.7), frequency=0.0) + encode(("inductance", v), ("quality_factor", 9.0))
+                      for v in (2.0e-3, 2.1e-3, 2.2e-3))
+    with DE5000Emulator(stream) as meter:
+        log = acquire_lcr(meter.url, str(tmp_path / "m.csv"), readings=3)
+    assert log.kind == "inductance"
+    assert log.rows == 3
 
 
 def test_interactive_discards_the_reading_taken_while_turning(tmp_path: Path) -> None:

@@ -8,7 +8,8 @@ pyserial URL (``socket://host:port``, ``rfc2217://host:port``).
 Readings whose primary display is blank, "----", "OL" (or any non-value), made in calibration or
 sorting mode, or without a usable secondary value, are skipped and counted. The first accepted
 reading fixes what the file holds: inductance with Q (any secondary display Q, D, θ or ESR/Rp is
-converted to Q exactly) in the meter's series or parallel circuit, or DC resistance. Each row is
+converted to Q exactly) in the meter's series or parallel circuit, or DC resistance (``kind``; in
+"auto", an interactive run follows its first reading, a consecutive run prefers inductance). Each row is
 written and flushed as soon as it is taken, so an interrupted run keeps what it had.
 """
 
@@ -286,7 +287,8 @@ def acquire_lcr(
         flushed, the first reading after Enter (possibly taken while the shaft moved) is discarded
         and the next accepted one is kept.
     kind
-        ``"auto"`` (the first accepted reading decides), ``"inductance"`` or ``"dc_resistance"``.
+        ``"inductance"``, ``"dc_resistance"`` or ``"auto"``: interactively the first accepted reading
+        decides; for consecutive readings inductance wins if any arrives (see :func:`_consecutive`).
     timeout
         Longest wait for one accepted reading [s].
     rts, dtr
@@ -320,22 +322,55 @@ def acquire_lcr(
     log = LCRLog(path, port)
     stream = _Stream(ser, port)
     try:
-        for k in range(1, readings + 1):
-            if interactive:
+        if interactive:
+            for k in range(1, readings + 1):
                 answer = ask(f"Turn the shaft to position {k} of {readings}, then press Enter (q stops): ")
                 if answer.strip().lower() in ("q", "quit"):
                     break
                 stream.flush()
-                stream.next_reading(kind if not log.kind else log.kind, log.circuit, timeout)  # may predate Enter
-            reading = stream.next_reading(kind if not log.kind else log.kind, log.circuit, timeout)
-            log.write(reading, k if interactive else None)
-            say(f"reading {k}: {reading.primary}, {reading.secondary}"
-                + (f" at {reading.frequency:g} Hz ({reading.circuit})" if reading.kind == "inductance" else ""))
-            if progress is not None:
-                progress(k, readings)
+                stream.next_reading(log.kind or kind, log.circuit, timeout)  # may predate Enter: discarded
+                _record(log, stream.next_reading(log.kind or kind, log.circuit, timeout), k, say)
+                if progress is not None:
+                    progress(k, readings)
+        else:
+            _consecutive(stream, log, readings, kind, timeout, say, progress)
     finally:
         log.close()
         ser.close()
     if stream.skipped:
         say("skipped: " + ", ".join(f"{n} × {why}" for why, n in stream.skipped.items()))
     return log
+
+
+def _record(log: LCRLog, reading: LCRReading, position: int | None, say: Callable[[str], None]) -> None:
+    log.write(reading, position)
+    say(f"reading {log.rows}: {reading.primary}, {reading.secondary}"
+        + (f" at {reading.frequency:g} Hz ({reading.circuit})" if reading.kind == "inductance" else ""))
+
+
+def _consecutive(stream: _Stream, log: LCRLog, readings: int, kind: str, timeout: float,
+                 say: Callable[[str], None], progress: Callable[[int, int], None] | None) -> None:
+    """``readings`` consecutive accepted readings.
+
+    With ``kind="auto"`` the file holds inductance readings when the meter gives any: DC
+    resistances are held back until ``readings`` of them arrived with no inductance reading among
+    them (a meter in DCR mode); an inductance reading first discards them (a meter switched between
+    modes gives the L/Q file; take the DCR file with ``--kind dc_resistance``).
+    """
+    held: list[LCRReading] = []
+    while log.rows < readings:
+        reading = stream.next_reading(log.kind or kind, log.circuit, timeout)
+        if not log.kind and kind == "auto" and reading.kind == "dc_resistance":
+            held.append(reading)
+            if len(held) < readings:
+                continue
+            for r in held:
+                _record(log, r, None, say)
+            break
+        if held:
+            why = "dc_resistance reading before the inductance ones"
+            stream.skipped[why] = stream.skipped.get(why, 0) + len(held)
+            held.clear()
+        _record(log, reading, None, say)
+        if progress is not None:
+            progress(log.rows, readings)

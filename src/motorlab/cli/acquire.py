@@ -40,7 +40,7 @@ def register(subparsers: Any) -> None:
     p.add_argument("--interactive", action="store_true",
                    help="ask before each reading (one per shaft position); q stops early")
     p.add_argument("--kind", choices=("auto", "inductance", "dc_resistance"), default="auto",
-                   help="what the file holds: L with Q, or DC resistance (default: the first reading decides)")
+                   help="what the file holds: L with Q, or DC resistance (default auto: L/Q if the meter gives any)")
     p.add_argument("--timeout", type=quantity("s", positive=True), default=10.0,
                    help="longest wait for one usable reading [s] (default 10)")
     p.add_argument("--rts", choices=("on", "off"), default="off", help="RTS line (default off)")
