@@ -5,11 +5,11 @@ at 9600 baud 8N1; the IR-USB cable takes its power from DTR (on) with RTS off. T
 with pyserial's ``serial_for_url``, so it may be a device (``/dev/ttyUSB0``, ``COM3``) or any
 pyserial URL (``socket://host:port``, ``rfc2217://host:port``).
 
-Readings whose primary display is blank, "----", "OL" (or any non-value), made in calibration or
-sorting mode, or without a usable secondary value, are skipped and counted. The first accepted
-reading fixes what the file holds: inductance with Q (any secondary display Q, D, θ or ESR/Rp is
-converted to Q exactly) in the meter's series or parallel circuit, or DC resistance (``kind``; in
-"auto", an interactive run follows its first reading, a consecutive run prefers inductance). Each row is
+Readings whose primary display is blank, "----", "OL" (or any non-value), made in calibration,
+sorting or delta mode, or without a usable secondary value, are skipped and counted. A file holds
+one kind of reading (``kind``): inductance with Q (any secondary display Q, D, θ or ESR/Rp is
+converted to Q exactly) in one equivalent circuit, or DC resistance. In "auto", an interactive run
+follows its first reading and a run of consecutive readings prefers inductance. Each row is
 written and flushed as soon as it is taken, so an interrupted run keeps what it had.
 """
 
