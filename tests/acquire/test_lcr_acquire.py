@@ -78,8 +78,8 @@ def test_auto_prefers_inductance_in_a_mixed_stream(tmp_path: Path) -> None:
 
 
 def test_interactive_discards_the_reading_taken_while_turning(tmp_path: Path) -> None:
-    values = [1e-3, 2e-3, 3e-3, 4e-3]
-    stream = b"".join(encode(("inductance", v), ("quality_factor", 5.0)) for v in values)
+    first = encode(("inductance", 1e-3), ("quality_factor", 5.0))  # measured while the shaft turned
+    steady = encode(("inductance", 2e-3), ("quality_factor", 5.0))
     prompts: list[str] = []
     answers = iter(["", "q"])
 
@@ -87,7 +87,7 @@ def test_interactive_discards_the_reading_taken_while_turning(tmp_path: Path) ->
         prompts.append(text)
         return next(answers)
 
-    with DE5000Emulator(stream) as meter:
+    with DE5000Emulator(first, chunk=17, interval=0.01, repeat=steady) as meter:  # a meter left on
         log = acquire_lcr(meter.url, str(tmp_path / "i.csv"), readings=3, interactive=True, ask=ask)
     assert log.rows == 1
     assert len(prompts) == 2
@@ -119,3 +119,20 @@ def test_bad_input_is_one_line_exit_2(tmp_path: Path, capsys: pytest.CaptureFixt
     with pytest.raises(SystemExit) as exc:
         main(["acquire", "lcr", "--port", "x", "--readings", "0", "-o", str(out)])
     assert exc.value.code == 2
+
+
+def test_cli_interactive_reads_enter_from_stdin(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import io
+
+    steady = encode(("inductance", 3e-3), ("quality_factor", 7.0))
+    monkeypatch.setattr("sys.stdin", io.StringIO("\n\n"))  # two positions, then end of input stops
+    out = tmp_path / "p.csv"
+    with DE5000Emulator(b"", chunk=17, interval=0.01, repeat=steady) as meter:
+        assert main(["acquire", "lcr", "--port", meter.url, "--interactive", "--readings", "3", "-o", str(out)]) == 0
+    captured = capsys.readouterr()
+    assert "wrote 2 L/Q readings" in captured.out
+    assert "position 3 of 3" in captured.err
+    rows = [line.split(",") for line in out.read_text().splitlines() if line[0].isdigit()]
+    assert [r[3] for r in rows] == ["1", "2"]  # the shaft positions

@@ -7,8 +7,9 @@ For tests and for trying ``motorlab acquire lcr`` without a meter::
         acquire_lcr(meter.url, "lcr.csv", readings=2)
 
 Each client that connects receives the whole byte stream (cut into ``chunk``-byte writes with
-``interval`` seconds between them, so that reads see partial packets), then the connection stays
-open, silent, until the emulator stops (as a meter that was switched off mid-run).
+``interval`` seconds between them, so that reads see partial packets), then ``repeat`` over and
+over (a meter left on, as for interactive runs) or, without it, silence until the emulator stops
+(a meter switched off mid-run).
 """
 
 from __future__ import annotations
@@ -92,13 +93,16 @@ class DE5000Emulator:
         Bytes per write (7 cuts every packet in three).
     interval
         Pause between writes [s].
+    repeat
+        Bytes sent again and again after ``stream`` until the emulator stops (empty: silence).
     host, port
         Address to listen on (port 0 picks a free one; see :attr:`url`).
     """
 
-    def __init__(self, stream: bytes, *, chunk: int = 7, interval: float = 0.0005, host: str = "127.0.0.1",
-                 port: int = 0):
+    def __init__(self, stream: bytes, *, chunk: int = 7, interval: float = 0.0005, repeat: bytes = b"",
+                 host: str = "127.0.0.1", port: int = 0):
         self.stream = bytes(stream)
+        self.repeat = bytes(repeat)
         self.chunk = max(1, int(chunk))
         self.interval = float(interval)
         self._server = socket.create_server((host, port))
@@ -145,13 +149,17 @@ class DE5000Emulator:
             threading.Thread(target=self._send, args=(client,), daemon=True).start()
 
     def _send(self, client: socket.socket) -> None:
-        data = self.stream
         try:
-            for start in range(0, len(data), self.chunk):
-                if self._stop.is_set():
-                    return
-                client.sendall(data[start : start + self.chunk])
-                if self.interval:
-                    self._stop.wait(self.interval)
+            self._send_all(client, self.stream)
+            while self.repeat and not self._stop.is_set():
+                self._send_all(client, self.repeat)
         except OSError:  # the client went away
             return
+
+    def _send_all(self, client: socket.socket, data: bytes) -> None:
+        for start in range(0, len(data), self.chunk):
+            if self._stop.is_set():
+                return
+            client.sendall(data[start : start + self.chunk])
+            if self.interval:
+                self._stop.wait(self.interval)
