@@ -62,7 +62,8 @@ class Dynamometer(Protocol):
     """What a rig offers: ``run(experiment, path, **settings)`` for each name in ``experiments``.
 
     The virtual rig (:class:`motorlab.rig.virtual.VirtualRig`) also has one method per experiment
-    (``rig.spindown(path, voltage=12.0)``); a real rig driving hardware implements the same names.
+    (``rig.spindown(path, voltage=12.0)``); a real rig driving hardware implements the same names
+    (:class:`motorlab.acquire.bench.BenchRig`: a bench supply and a scope through PyVISA).
     """
 
     experiments: tuple[str, ...]
