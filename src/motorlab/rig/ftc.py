@@ -1,0 +1,358 @@
+"""FTC sensors for the virtual rig: what a REV hub, its battery and the OpMode loop really report.
+
+* :class:`HubEncoder`: counts (32-bit) and the hub's velocity, 20 × the count change over the hub's
+  50 ms window, sent as a signed 16-bit integer that wraps at ±2¹⁵ ticks/s (the reason Road Runner
+  repairs velocities: road-runner-ftc ``Encoders.kt``, ``inverseOverflow``).
+* :class:`BulkReadLoop`: an OpMode loop of bulk reads and ``setPower`` commands whose period jitters
+  between about 10 and 40 ms; each logged time is a ``MidpointTimer`` split (Tuning.kt).
+* :class:`Battery`: a 12 V NiMH pack with internal resistance, sagging under the drive's current
+  and drifting down as it discharges; :class:`HubVoltageSensor` reads it (1 mV, a little noise).
+* :class:`LCFilter`: the seed's two-stage LC low-pass on the INA219's bus voltage (L1 = 33.5 mH,
+  C1 = 8.3 µF, L2 = 23 mH, C2 = 2 µF; seed 1, "Noisy Bus Voltage Data and Filter"). The seed's
+  diagram is not in its text: the ladder L1–C1–L2–C2 and the inductors' resistance are assumptions.
+* INA219 conversion averaging lives on :class:`motorlab.rig.instruments.INA219`
+  (``averaging=128``: 128 × 532 µs = 68.1 ms per result, TI SBOS448 Table 5).
+
+:func:`simulate_ramp` drives a mecanum robot through Road Runner's ``ForwardRampLogger`` with these
+sensors and writes the file in Road Runner's own JSON layout (:mod:`motorlab.io.roadrunner`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from scipy import signal as sps
+
+from motorlab.errors import OptionError
+from motorlab.model import MotorParams, feedforward_from_params
+from motorlab.simulate import VoltageDrive, simulate
+
+#: The hub's velocity register: signed 16-bit.
+INT16 = 2**16
+
+
+def wrap_int16(values: np.ndarray) -> np.ndarray:
+    """Signed 16-bit two's-complement wrap of integer values."""
+    v = np.asarray(values, dtype=np.int64)
+    return ((v + 2**15) % INT16) - 2**15
+
+
+@dataclass(frozen=True)
+class HubEncoder:
+    """A quadrature encoder on a REV hub port.
+
+    Parameters
+    ----------
+    counts_per_revolution
+        Counts per turn of the encoder's shaft (8192 for a REV Through Bore, 2000 for a goBILDA pod).
+    window
+        The hub's velocity window [s]: velocity = count change over it / window (50 ms, so the
+        velocity is a multiple of 20 ticks/s).
+    update
+        How often the hub recomputes the velocity [s] (not documented; 1 ms assumed).
+    """
+
+    counts_per_revolution: float
+    window: float = 0.05
+    update: float = 1e-3
+
+    def counts(self, angle: np.ndarray) -> np.ndarray:
+        """Counts at shaft angles [rad] (⌊θ·cpr/2π⌋)."""
+        return np.floor(np.asarray(angle, dtype=float) * self.counts_per_revolution / (2 * math.pi) + 1e-9).astype(
+            np.int64)
+
+    def velocity(self, times: np.ndarray, angle_at: Any) -> np.ndarray:
+        """The 16-bit velocity [ticks/s] the hub reports at ``times`` [s].
+
+        ``angle_at(t)`` gives the shaft angle [rad] at any times. The count change over the last
+        completed window, ×(1/window), wrapped to a signed 16-bit integer.
+        """
+        t = np.floor(np.asarray(times, dtype=float) / self.update) * self.update
+        delta = self.counts(angle_at(t)) - self.counts(angle_at(t - self.window))
+        return wrap_int16(np.round(delta / self.window).astype(np.int64))
+
+    def true_velocity(self, times: np.ndarray, angle_at: Any) -> np.ndarray:
+        """The same window velocity without the 16-bit wrap [ticks/s] (what a repair must give)."""
+        t = np.floor(np.asarray(times, dtype=float) / self.update) * self.update
+        return (self.counts(angle_at(t)) - self.counts(angle_at(t - self.window))) / self.window
+
+
+@dataclass(frozen=True)
+class BulkReadLoop:
+    """An OpMode loop: powers set, battery read, bulk read, each command taking a little time.
+
+    Parameters
+    ----------
+    min_period, max_period
+        Range of the loop period [s] (bulk reads of one or two hubs: 10–40 ms).
+    mean_extra
+        Mean of the exponential extra time above ``min_period`` [s].
+    command_time
+        Duration of one ``setPower`` (a Lynx command) [s].
+    voltage_read_time, bulk_read_time
+        Duration of the battery read and of the bulk read [s].
+    """
+
+    min_period: float = 0.010
+    max_period: float = 0.040
+    mean_extra: float = 0.006
+    command_time: float = 0.6e-3
+    voltage_read_time: float = 1.5e-3
+    bulk_read_time: float = 2.5e-3
+
+    def __post_init__(self) -> None:
+        if not 0 < self.min_period <= self.max_period:
+            raise OptionError("loop periods must satisfy 0 < min_period ≤ max_period")
+
+    def starts(self, duration: float, rng: np.random.Generator) -> np.ndarray:
+        """Start times [s] of the iterations within ``duration``."""
+        n = int(duration / self.min_period) + 2
+        steps = np.clip(self.min_period + rng.exponential(self.mean_extra, n), self.min_period, self.max_period)
+        t = np.concatenate([[0.0], np.cumsum(steps)])
+        return t[t < duration]
+
+    def schedule(self, starts: np.ndarray, motors: int) -> dict[str, np.ndarray]:
+        """End times of each command in every iteration: ``power`` (iterations × motors), ``voltage``, ``bulk``."""
+        power = starts[:, None] + self.command_time * np.arange(1, motors + 1)[None, :]
+        voltage = power[:, -1] + self.voltage_read_time
+        bulk = voltage + self.bulk_read_time
+        return {"power": power, "voltage": voltage, "bulk": bulk}
+
+
+@dataclass(frozen=True)
+class Battery:
+    """A 12 V FTC battery pack: open-circuit voltage, internal resistance, discharge drift.
+
+    Parameters
+    ----------
+    open_circuit
+        Open-circuit voltage at the start [V].
+    internal_resistance
+        Pack + wiring + hub resistance [Ω].
+    drift
+        Fall of the open-circuit voltage [V/s] (discharge).
+    other_current
+        Current of everything else on the robot [A].
+    """
+
+    open_circuit: float = 13.2
+    internal_resistance: float = 0.12
+    drift: float = 0.01
+    other_current: float = 0.4
+
+    def bus_voltage(self, time: np.ndarray, drive_current: np.ndarray) -> np.ndarray:
+        """Voltage at the hub [V] while the drive draws ``drive_current`` [A] from the battery."""
+        t = np.asarray(time, dtype=float)
+        return self.open_circuit - self.drift * t - self.internal_resistance * (self.other_current + drive_current)
+
+
+@dataclass(frozen=True)
+class HubVoltageSensor:
+    """The hub's battery ``VoltageSensor``: millivolt resolution and a little noise [V]."""
+
+    resolution: float = 1e-3
+    noise: float = 0.01
+
+    def read(self, voltage: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        """Readings [V] of true bus voltages [V]."""
+        v = np.asarray(voltage, dtype=float)
+        return np.round((v + rng.normal(0.0, self.noise, v.shape)) / self.resolution) * self.resolution
+
+
+@dataclass(frozen=True)
+class LCFilter:
+    """The seed's two-stage LC low-pass on the bus voltage (ladder L1, C1, L2, C2; unloaded output).
+
+    Parameters
+    ----------
+    L1, L2
+        Inductances [H] (seed: 33.5 mH, 23 mH).
+    C1, C2
+        Capacitances [F] (seed: 8.3 µF, 2 µF).
+    resistance
+        Series resistance of each inductor [Ω] (not in the seed; assumed).
+    """
+
+    L1: float = 33.5e-3
+    L2: float = 23e-3
+    C1: float = 8.3e-6
+    C2: float = 2e-6
+    resistance: float = 5.0
+
+    def state_space(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(A, B, C, D) with state (i1, v1, i2, v2), input the source voltage, output v2."""
+        r, l1, l2, c1, c2 = self.resistance, self.L1, self.L2, self.C1, self.C2
+        a = np.array([
+            [-r / l1, -1 / l1, 0, 0],
+            [1 / c1, 0, -1 / c1, 0],
+            [0, 1 / l2, -r / l2, -1 / l2],
+            [0, 0, 1 / c2, 0],
+        ])
+        return a, np.array([[1 / l1], [0], [0], [0]]), np.array([[0, 0, 0, 1.0]]), np.zeros((1, 1))
+
+    def apply(self, time: np.ndarray, voltage: np.ndarray) -> np.ndarray:
+        """The filtered voltage [V] on a uniform time grid [s] (starting in steady state)."""
+        t = np.asarray(time, dtype=float)
+        v = np.asarray(voltage, dtype=float)
+        a, b, c, d = self.state_space()
+        x0 = np.linalg.solve(a, -b[:, 0] * v[0])
+        _, y, _ = sps.lsim((a, b, c, d), v, t - t[0], X0=x0)
+        return np.asarray(y, dtype=float)
+
+    def resonances(self) -> list[float]:
+        """Resonant frequencies [Hz] of the ladder (lossless)."""
+        a, *_ = self.state_space()
+        lossless = LCFilter(self.L1, self.L2, self.C1, self.C2, 0.0).state_space()[0] if self.resistance else a
+        w = np.abs(np.linalg.eigvals(lossless).imag)
+        return sorted({round(float(x) / (2 * math.pi), 3) for x in w if x > 0})
+
+
+# ---- Road Runner ramp on a simulated mecanum drive -----------------------------------------------
+
+
+@dataclass(frozen=True)
+class MecanumDrive:
+    """A mecanum robot: four identical gearmotors, dead wheels on hub encoder ports.
+
+    Parameters
+    ----------
+    motor
+        One drive motor at its output shaft (goBILDA 5203 312 rpm class by default) [SI].
+    mass
+        Robot mass [kg].
+    wheel_radius
+        Drive wheel radius [m].
+    dead_wheel_radius
+        Dead-wheel radius [m].
+    dead_wheel
+        The dead wheels' encoder (8192 counts per revolution: REV Through Bore).
+    par_y
+        Lateral offsets of the two parallel dead wheels [m].
+    """
+
+    motor: MotorParams = field(default_factory=lambda: MotorParams(K=0.34, R=1.3, L=1e-3, J=2e-3, b=1e-3, Tf=0.08))
+    mass: float = 12.0
+    wheel_radius: float = 0.048
+    dead_wheel_radius: float = 0.0175
+    dead_wheel: HubEncoder = field(default_factory=lambda: HubEncoder(8192))
+    par_y: tuple[float, float] = (0.15, -0.15)
+
+    def encoder_params(self) -> MotorParams:
+        """One motor with a quarter of the robot, seen at the dead wheel's shaft (forward motion).
+
+        The motor turns G = r_dead / r_wheel times per dead-wheel radian: K' = G·K, J' = G²·J_total,
+        b' = G²·b, Tf' = G·Tf, so kS is unchanged and kV, kA scale by G.
+        """
+        m = self.motor.with_load(0.25 * self.mass * self.wheel_radius**2)
+        g = self.dead_wheel_radius / self.wheel_radius
+        return MotorParams(K=g * m.K, R=m.R, L=m.L, J=g * g * m.J, b=g * g * m.b, Tf=g * m.Tf)
+
+    def truth(self) -> dict[str, float]:
+        """kS [V], kV [V·s/rad], kA [V·s²/rad] at the dead-wheel encoder."""
+        return feedforward_from_params(self.encoder_params())
+
+
+@dataclass(frozen=True)
+class RampSettings:
+    """Road Runner's ``ForwardRampLogger`` settings and the run's length."""
+
+    power_per_sec: float = 0.1
+    power_max: float = 0.9
+    duration: float = 6.0
+
+
+def _powers(set_times: np.ndarray, settings: RampSettings) -> np.ndarray:
+    return np.minimum(settings.power_per_sec * set_times, settings.power_max)
+
+
+def simulate_ramp(
+    path: Any,
+    *,
+    drive: MecanumDrive | None = None,
+    settings: RampSettings | None = None,
+    loop: BulkReadLoop | None = None,
+    battery: Battery | None = None,
+    sensor: HubVoltageSensor | None = None,
+    seed: int = 0,
+) -> dict[str, Any]:
+    """Simulate Road Runner's forward ramp on a mecanum drive and write its JSON file.
+
+    The power ramps by ``power_per_sec`` (capped at ``power_max``); the motors see power × bus
+    voltage, the bus sags with the drive's current through the battery's internal resistance
+    (solved by fixed-point iteration of the simulation); the dead wheels are counted by the hub,
+    their 16-bit velocities wrap.
+
+    Returns
+    -------
+    dict
+        The truth: ``kS``, ``kV``, ``kA`` at the dead-wheel encoder, ``cpr``, the number of wrapped
+        velocity samples and the settings.
+    """
+    from motorlab.io.roadrunner import write_roadrunner_ramp
+
+    drive = drive or MecanumDrive()
+    settings = settings or RampSettings()
+    loop = loop or BulkReadLoop()
+    battery = battery or Battery()
+    sensor = sensor or HubVoltageSensor()
+    rng = np.random.default_rng(seed)
+    starts = loop.starts(settings.duration, rng)
+    sched = loop.schedule(starts, 4)
+    # MidpointTimer: the power is computed from t.seconds() just before setPower
+    set_times = sched["power"][:, 0] - loop.command_time
+    powers = _powers(set_times, settings)
+    applied = sched["power"].mean(axis=1)  # the four commands land within 2 ms: their mean time
+    params = drive.encoder_params()
+    dt = 1e-3
+    bus_t = np.arange(0.0, settings.duration + 0.2, dt)
+    bus_v = battery.bus_voltage(bus_t, np.zeros_like(bus_t))
+
+    def power_at(t: np.ndarray) -> np.ndarray:
+        k = np.searchsorted(applied, t, side="right") - 1
+        return np.where(k >= 0, powers[np.clip(k, 0, None)], 0.0)
+
+    for _ in range(4):  # bus voltage depends on the current it drives
+        bv = bus_v.copy()
+        sim = simulate(params, VoltageDrive(lambda t, bv=bv: power_at(t) * np.interp(t, bus_t, bv)),
+                       duration=float(bus_t[-1]), dt=dt)
+        drive_current = 4.0 * power_at(sim.time) * sim.current
+        bus_v = battery.bus_voltage(sim.time, drive_current)
+    offsets = rng.uniform(0, 2 * math.pi / drive.dead_wheel.counts_per_revolution, 2)
+
+    def angle_at(t: np.ndarray, k: int) -> np.ndarray:
+        return np.interp(t, sim.time, sim.position, left=0.0) + offsets[k]
+
+    # MidpointTimer splits: each logged time is the midpoint of the previous split and this one
+    ends = np.column_stack([sched["power"], sched["voltage"], sched["bulk"]]).ravel()
+    mids = 0.5 * (np.concatenate([[0.0], ends[:-1]]) + ends)
+    mids = mids.reshape(-1, 6)
+    bulk_t = mids[:, 5]
+    readings = sensor.read(np.interp(sched["voltage"], sim.time, bus_v), rng)
+    enc_pos, enc_vel, wrapped = [], [], 0
+    for k in range(2):
+        counts = drive.dead_wheel.counts(angle_at(bulk_t, k)) - drive.dead_wheel.counts(angle_at(np.zeros(1), k))
+        vel = drive.dead_wheel.velocity(bulk_t, lambda t, k=k: angle_at(t, k))
+        true = drive.dead_wheel.true_velocity(bulk_t, lambda t, k=k: angle_at(t, k))
+        wrapped += int(np.count_nonzero(vel != true))
+        enc_pos.append((bulk_t, counts))
+        enc_vel.append((bulk_t, vel))
+    content = {
+        "type": "MECANUM",
+        "powers": [(mids[:, i], powers) for i in range(4)],
+        "voltages": (mids[:, 4], readings),
+        "forwardEncPositions": enc_pos,
+        "forwardEncVels": enc_vel,
+        "forwardEncFixVels": [True, True],
+    }
+    write_roadrunner_ramp(path, content)
+    return {
+        **drive.truth(),
+        "cpr": drive.dead_wheel.counts_per_revolution,
+        "wrapped_samples": wrapped,
+        "samples": int(starts.size),
+        "min_bus_voltage": float(bus_v.min()),
+        "max_speed": float(sim.speed.max()),
+    }
