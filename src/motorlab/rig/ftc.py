@@ -215,7 +215,7 @@ class LCFilter:
 
 @dataclass(frozen=True)
 class MecanumDrive:
-    """A mecanum robot: four identical gearmotors, dead wheels on hub encoder ports.
+    """A mecanum robot: four identical gearmotors, three dead wheels on hub encoder ports.
 
     Parameters
     ----------
@@ -223,54 +223,123 @@ class MecanumDrive:
         One drive motor at its output shaft (goBILDA 5203 312 rpm class by default) [SI].
     mass
         Robot mass [kg].
+    yaw_inertia
+        Robot moment of inertia about its vertical axis [kg·m²].
     wheel_radius
         Drive wheel radius [m].
+    track_width
+        Road Runner's mecanum ``trackWidth``: a wheel's rolling speed per yaw rate [m] (Kinematics.kt:
+        wheel velocity = … ± ω·trackWidth).
+    strafe_ratio
+        Lateral robot speed per forward speed at equal wheel speed (roller slip; 1 = ideal).
     dead_wheel_radius
         Dead-wheel radius [m].
     dead_wheel
         The dead wheels' encoder (8192 counts per revolution: REV Through Bore).
     par_y
         Lateral offsets of the two parallel dead wheels [m].
+    perp_x
+        Longitudinal offset of the perpendicular dead wheel [m].
     """
 
     motor: MotorParams = field(default_factory=lambda: MotorParams(K=0.34, R=1.3, L=1e-3, J=2e-3, b=1e-3, Tf=0.08))
     mass: float = 12.0
+    yaw_inertia: float = 0.35
     wheel_radius: float = 0.048
+    track_width: float = 0.32
+    strafe_ratio: float = 0.85
     dead_wheel_radius: float = 0.0175
     dead_wheel: HubEncoder = field(default_factory=lambda: HubEncoder(8192))
     par_y: tuple[float, float] = (0.15, -0.15)
+    perp_x: float = -0.1
 
-    def encoder_params(self) -> MotorParams:
-        """One motor with a quarter of the robot, seen at the dead wheel's shaft (forward motion).
+    def wheel_params(self, kind: str = "forward") -> MotorParams:
+        """One motor with its share of the robot at the wheel (forward, lateral or angular motion)."""
+        r = self.wheel_radius
+        if kind == "lateral":
+            load = 0.25 * self.mass * (self.strafe_ratio * r) ** 2
+        elif kind == "angular":
+            load = 0.25 * self.yaw_inertia * (r / self.track_width) ** 2
+        else:
+            load = 0.25 * self.mass * r**2
+        return self.motor.with_load(load)
 
-        The motor turns G = r_dead / r_wheel times per dead-wheel radian: K' = G·K, J' = G²·J_total,
-        b' = G²·b, Tf' = G·Tf, so kS is unchanged and kV, kA scale by G.
+    def encoder_params(self, kind: str = "forward") -> MotorParams:
+        """The motor seen at the dead wheel's shaft: G = r_dead/r_wheel motor radians per encoder radian.
+
+        K' = G·K, J' = G²·J, b' = G²·b, Tf' = G·Tf, so kS is unchanged and kV, kA scale by G. For the
+        lateral ramp the encoder is the perpendicular wheel, G = r_dead / (strafe_ratio·r_wheel).
         """
-        m = self.motor.with_load(0.25 * self.mass * self.wheel_radius**2)
+        m = self.wheel_params(kind)
         g = self.dead_wheel_radius / self.wheel_radius
+        if kind == "lateral":
+            g /= self.strafe_ratio
         return MotorParams(K=g * m.K, R=m.R, L=m.L, J=g * g * m.J, b=g * g * m.b, Tf=g * m.Tf)
 
     def truth(self) -> dict[str, float]:
-        """kS [V], kV [V·s/rad], kA [V·s²/rad] at the dead-wheel encoder."""
-        return feedforward_from_params(self.encoder_params())
+        """kS [V], kV [V·s/rad], kA [V·s²/rad] at the dead-wheel encoder, and the geometry in ticks."""
+        ticks_per_m = self.dead_wheel.counts_per_revolution / (2 * math.pi * self.dead_wheel_radius)
+        return {
+            **feedforward_from_params(self.encoder_params()),
+            "track_width_ticks": self.track_width * ticks_per_m,
+            "lateral_ratio": self.strafe_ratio,
+            "in_per_tick": 39.37007874 / ticks_per_m,
+        }
 
 
 @dataclass(frozen=True)
 class RampSettings:
-    """Road Runner's ``ForwardRampLogger`` settings and the run's length."""
+    """Road Runner's ramp logger settings (``POWER_PER_SEC``, ``POWER_MAX``) and the run's length."""
 
     power_per_sec: float = 0.1
     power_max: float = 0.9
     duration: float = 6.0
 
 
-def _powers(set_times: np.ndarray, settings: RampSettings) -> np.ndarray:
-    return np.minimum(settings.power_per_sec * set_times, settings.power_max)
+#: Power sign of each motor (leftFront, leftBack, rightFront, rightBack) in each ramp (Tuning.kt).
+SIGNS = {"forward": (1, 1, 1, 1), "lateral": (-1, 1, 1, -1), "angular": (-1, -1, 1, 1)}
+
+
+def _motion(drive: MecanumDrive, kind: str, wheel_angle: Any) -> dict[str, Any]:
+    """Dead-wheel angles [rad] (par0, par1, perp) and yaw rate as functions of time, from one wheel's angle."""
+    r, rd = drive.wheel_radius, drive.dead_wheel_radius
+
+    def along(t: np.ndarray) -> np.ndarray:  # wheel rolling distance [m]
+        return np.asarray(wheel_angle(t)) * r
+
+    if kind == "forward":
+        par = [lambda t: along(t) / rd] * 2
+        perp = [lambda t: 0.0 * along(t)]
+    elif kind == "lateral":
+        par = [lambda t: 0.0 * along(t)] * 2
+        perp = [lambda t: drive.strafe_ratio * along(t) / rd]
+    else:  # yaw angle = distance / trackWidth; a dead wheel at (x, y) moves by (−y·ψ, x·ψ)
+        par = [lambda t, y=y: -y * along(t) / drive.track_width / rd for y in drive.par_y]
+        perp = [lambda t: drive.perp_x * along(t) / drive.track_width / rd]
+    return {"par": par, "perp": perp}
+def _simulate_motion(params: MotorParams, applied: np.ndarray, powers: np.ndarray, battery: Battery,
+                     duration: float) -> tuple[Any, np.ndarray]:
+    """One wheel driven by power × bus voltage, the bus sagging with the four motors' current."""
+    dt = 1e-3
+    bus_t = np.arange(0.0, duration + 0.2, dt)
+    bus_v = battery.bus_voltage(bus_t, np.zeros_like(bus_t))
+
+    def power_at(t: np.ndarray) -> np.ndarray:
+        k = np.searchsorted(applied, t, side="right") - 1
+        return np.where(k >= 0, powers[np.clip(k, 0, None)], 0.0)
+
+    for _ in range(4):  # fixed point: the bus voltage depends on the current it drives
+        bv = bus_v.copy()
+        sim = simulate(params, VoltageDrive(lambda t, bv=bv: power_at(t) * np.interp(t, bus_t, bv)),
+                       duration=float(bus_t[-1]), dt=dt)
+        bus_v = battery.bus_voltage(sim.time, 4.0 * power_at(sim.time) * np.abs(sim.current))
+    return sim, bus_v
 
 
 def simulate_ramp(
     path: Any,
     *,
+    kind: str = "forward",
     drive: MecanumDrive | None = None,
     settings: RampSettings | None = None,
     loop: BulkReadLoop | None = None,
@@ -278,21 +347,31 @@ def simulate_ramp(
     sensor: HubVoltageSensor | None = None,
     seed: int = 0,
 ) -> dict[str, Any]:
-    """Simulate Road Runner's forward ramp on a mecanum drive and write its JSON file.
+    """Simulate one of Road Runner's ramp loggers on a mecanum drive and write its JSON file.
 
-    The power ramps by ``power_per_sec`` (capped at ``power_max``); the motors see power × bus
-    voltage, the bus sags with the drive's current through the battery's internal resistance
-    (solved by fixed-point iteration of the simulation); the dead wheels are counted by the hub,
-    their 16-bit velocities wrap.
+    The power ramps by ``power_per_sec`` (capped at ``power_max``) with each motor's sign of the
+    logger (Tuning.kt); the motors see power × bus voltage, the bus sags with the drive's current
+    through the battery's internal resistance (fixed-point iteration of the simulation); the dead
+    wheels are counted by the hub and their 16-bit velocities wrap; the angular ramp adds the IMU's
+    angular velocities.
+
+    Parameters
+    ----------
+    path
+        The ``.json`` file to write.
+    kind
+        ``"forward"``, ``"lateral"`` or ``"angular"``.
 
     Returns
     -------
     dict
-        The truth: ``kS``, ``kV``, ``kA`` at the dead-wheel encoder, ``cpr``, the number of wrapped
-        velocity samples and the settings.
+        The truth: ``kS``, ``kV``, ``kA`` at the dead-wheel encoder (forward motion), ``track_width_ticks``,
+        ``lateral_ratio``, ``cpr``, the number of wrapped velocity samples, the lowest bus voltage.
     """
     from motorlab.io.roadrunner import write_roadrunner_ramp
 
+    if kind not in SIGNS:
+        raise OptionError(f"ramp kind must be forward, lateral or angular, got {kind!r}")
     drive = drive or MecanumDrive()
     settings = settings or RampSettings()
     loop = loop or BulkReadLoop()
@@ -301,58 +380,60 @@ def simulate_ramp(
     rng = np.random.default_rng(seed)
     starts = loop.starts(settings.duration, rng)
     sched = loop.schedule(starts, 4)
-    # MidpointTimer: the power is computed from t.seconds() just before setPower
-    set_times = sched["power"][:, 0] - loop.command_time
-    powers = _powers(set_times, settings)
-    applied = sched["power"].mean(axis=1)  # the four commands land within 2 ms: their mean time
-    params = drive.encoder_params()
-    dt = 1e-3
-    bus_t = np.arange(0.0, settings.duration + 0.2, dt)
-    bus_v = battery.bus_voltage(bus_t, np.zeros_like(bus_t))
-
-    def power_at(t: np.ndarray) -> np.ndarray:
-        k = np.searchsorted(applied, t, side="right") - 1
-        return np.where(k >= 0, powers[np.clip(k, 0, None)], 0.0)
-
-    for _ in range(4):  # bus voltage depends on the current it drives
-        bv = bus_v.copy()
-        sim = simulate(params, VoltageDrive(lambda t, bv=bv: power_at(t) * np.interp(t, bus_t, bv)),
-                       duration=float(bus_t[-1]), dt=dt)
-        drive_current = 4.0 * power_at(sim.time) * sim.current
-        bus_v = battery.bus_voltage(sim.time, drive_current)
-    offsets = rng.uniform(0, 2 * math.pi / drive.dead_wheel.counts_per_revolution, 2)
-
-    def angle_at(t: np.ndarray, k: int) -> np.ndarray:
-        return np.interp(t, sim.time, sim.position, left=0.0) + offsets[k]
-
+    set_times = sched["power"][:, 0] - loop.command_time  # t.seconds() just before setPower
+    powers = np.minimum(settings.power_per_sec * set_times, settings.power_max)
+    sim, bus_v = _simulate_motion(drive.wheel_params(kind), sched["power"].mean(axis=1), powers, battery,
+                                  settings.duration)
     # MidpointTimer splits: each logged time is the midpoint of the previous split and this one
     ends = np.column_stack([sched["power"], sched["voltage"], sched["bulk"]]).ravel()
-    mids = 0.5 * (np.concatenate([[0.0], ends[:-1]]) + ends)
-    mids = mids.reshape(-1, 6)
+    mids = (0.5 * (np.concatenate([[0.0], ends[:-1]]) + ends)).reshape(-1, 6)
     bulk_t = mids[:, 5]
     readings = sensor.read(np.interp(sched["voltage"], sim.time, bus_v), rng)
-    enc_pos, enc_vel, wrapped = [], [], 0
-    for k in range(2):
-        counts = drive.dead_wheel.counts(angle_at(bulk_t, k)) - drive.dead_wheel.counts(angle_at(np.zeros(1), k))
-        vel = drive.dead_wheel.velocity(bulk_t, lambda t, k=k: angle_at(t, k))
-        true = drive.dead_wheel.true_velocity(bulk_t, lambda t, k=k: angle_at(t, k))
-        wrapped += int(np.count_nonzero(vel != true))
-        enc_pos.append((bulk_t, counts))
-        enc_vel.append((bulk_t, vel))
-    content = {
-        "type": "MECANUM",
-        "powers": [(mids[:, i], powers) for i in range(4)],
-        "voltages": (mids[:, 4], readings),
-        "forwardEncPositions": enc_pos,
-        "forwardEncVels": enc_vel,
-        "forwardEncFixVels": [True, True],
-    }
+    motion = _motion(drive, kind, lambda t: np.interp(t, sim.time, sim.position, left=0.0))
+    enc = drive.dead_wheel
+    signals: dict[str, list[tuple[np.ndarray, np.ndarray]]] = {}
+    wrapped = 0
+    for group, fns in motion.items():
+        pos, vel = [], []
+        for fn in fns:
+            offset = rng.uniform(0, 2 * math.pi / enc.counts_per_revolution)
+            angle = (lambda t, fn=fn, offset=offset: fn(t) + offset)
+            v = enc.velocity(bulk_t, angle)
+            wrapped += int(np.count_nonzero(v != enc.true_velocity(bulk_t, angle)))
+            pos.append((bulk_t, enc.counts(angle(bulk_t)) - enc.counts(angle(np.zeros(1)))))
+            vel.append((bulk_t, v))
+        signals[group + "Pos"], signals[group + "Vel"] = pos, vel
+    signs = SIGNS[kind]
+    content: dict[str, Any] = {"type": "MECANUM"}
+    if kind == "forward":
+        content["powers"] = [(mids[:, i], signs[i] * powers) for i in range(4)]
+        content["voltages"] = (mids[:, 4], readings)
+        content.update(forwardEncPositions=signals["parPos"], forwardEncVels=signals["parVel"],
+                       forwardEncFixVels=[True, True])
+    elif kind == "lateral":
+        for i, key in enumerate(("frontLeftPower", "backLeftPower", "frontRightPower", "backRightPower")):
+            content[key] = (mids[:, i], signs[(0, 1, 2, 3)[i]] * powers)
+        content["voltages"] = (mids[:, 4], readings)
+        content.update(perpEncPositions=signals["perpPos"], perpEncVels=signals["perpVel"], perpEncFixVels=[True])
+    else:
+        content["leftPowers"] = [(mids[:, i], -powers) for i in (0, 1)]
+        content["rightPowers"] = [(mids[:, i], powers) for i in (2, 3)]
+        content["voltages"] = (mids[:, 4], readings)
+        for side in ("left", "right"):
+            content.update({f"{side}EncPositions": [], f"{side}EncVels": [], f"{side}EncFixVels": []})
+        content.update(parEncPositions=signals["parPos"], parEncVels=signals["parVel"], parEncFixVels=[True, True],
+                       perpEncPositions=signals["perpPos"], perpEncVels=signals["perpVel"], perpEncFixVels=[True])
+        yaw_rate = np.interp(bulk_t, sim.time, sim.speed) * drive.wheel_radius / drive.track_width
+        imu_t = bulk_t + 1e-3
+        noise = 2e-3
+        content["angVels"] = [(imu_t, rng.normal(0, noise, bulk_t.size)), (imu_t, rng.normal(0, noise, bulk_t.size)),
+                              (imu_t, yaw_rate + rng.normal(0, noise, bulk_t.size))]
     write_roadrunner_ramp(path, content)
     return {
         **drive.truth(),
-        "cpr": drive.dead_wheel.counts_per_revolution,
+        "kind": kind,
+        "cpr": enc.counts_per_revolution,
         "wrapped_samples": wrapped,
         "samples": int(starts.size),
         "min_bus_voltage": float(bus_v.min()),
-        "max_speed": float(sim.speed.max()),
     }
