@@ -118,8 +118,10 @@ class TuneResult:
         }
 
     def _display_per_radian(self) -> float:
-        if self.target.target.startswith("ftc"):
+        if self.target.target.startswith("ftc") or self.target.target == "roadrunner":
             return (self.units.cpr or 2 * math.pi) / (2 * math.pi)
+        if self.target.target == "pedro":
+            return self.units.per_radian / 0.0254  # inches
         return self.units.per_radian
 
     def plot(self, *, fig: Any = None) -> Any:
