@@ -437,3 +437,67 @@ def simulate_ramp(
         "samples": int(starts.size),
         "min_bus_voltage": float(bus_v.min()),
     }
+
+
+def simulate_flight_log(
+    path: Any,
+    *,
+    motor: MotorParams | None = None,
+    cpr: float = 537.7,
+    duration: float = 8.0,
+    loop: BulkReadLoop | None = None,
+    battery: Battery | None = None,
+    seed: int = 0,
+) -> dict[str, Any]:
+    """A FlightRecorder log of a mecanum robot following back-and-forth moves (drive-encoder localizer).
+
+    Each wheel is the forward-motion wheel of :class:`MecanumDrive` (drive motor encoders, ``cpr`` at
+    the motor's output). The drive sets its powers every loop iteration from a smooth profile
+    (forward, back, with a pause); ``MECANUM_COMMAND`` is logged at most every 50 ms (Road Runner's
+    ``DownsampledWriter``), ``MECANUM_LOCALIZER_INPUTS`` every iteration, time stamps in ns.
+
+    Returns
+    -------
+    dict
+        Truth: ``kS``, ``kV``, ``kA`` of one wheel at its motor encoder, ``cpr``.
+    """
+    from motorlab.io.flightrecorder import MECANUM_WHEELS, write_flight_log
+
+    drive = MecanumDrive() if motor is None else MecanumDrive(motor=motor)
+    params = drive.wheel_params("forward")
+    loop = loop or BulkReadLoop()
+    battery = battery or Battery()
+    rng = np.random.default_rng(seed)
+    starts = loop.starts(duration, rng)
+    sched = loop.schedule(starts, 4)
+
+    def profile(t: np.ndarray) -> np.ndarray:  # two moves: forward then back, 0.6 power peak
+        move = lambda t0, t1: np.clip(np.sin(np.pi * (t - t0) / (t1 - t0)), 0, None) * ((t > t0) & (t < t1))  # noqa: E731
+        return 0.6 * move(0.5, 3.5) ** 0.7 - 0.45 * move(4.5, 7.5) ** 0.7
+
+    powers = profile(sched["power"][:, 0])
+    sim, bus_v = _simulate_motion(params, sched["power"].mean(axis=1), powers, battery, duration)
+    enc = HubEncoder(cpr)
+    offsets = rng.uniform(0, 2 * math.pi / cpr, 4)
+    bulk = sched["bulk"] - 0.5 * loop.bulk_read_time
+    ns = lambda t: int(round(1e9 * (t + 100.0)))  # noqa: E731  (nanoTime has an arbitrary origin)
+    messages: list[tuple[str, Any]] = []
+    last = -math.inf
+    for k in range(starts.size):
+        angle = np.interp(bulk[k], sim.time, sim.position)
+        pairs = {}
+        for w, off in zip(MECANUM_WHEELS, offsets, strict=True):
+            c = int(enc.counts(np.array([angle + off]))[0] - enc.counts(np.array([off]))[0])
+            v = int(enc.velocity(np.array([bulk[k]]), lambda t, off=off: np.interp(t, sim.time, sim.position) + off)[0])
+            pairs[w] = {"position": c, "rawPosition": c, "rawVelocity": v, "velocity": v}
+        messages.append(("MECANUM_LOCALIZER_INPUTS", {"timestamp": ns(bulk[k]), **pairs, "pitch": 0.0, "roll": 0.0,
+                                                      "yaw": 0.0}))
+        t_cmd = sched["power"][k, 0]
+        if t_cmd - last >= 0.05:  # DownsampledWriter(…, 50_000_000)
+            last = t_cmd
+            volt = float(np.round(np.interp(sched["voltage"][k], sim.time, bus_v), 3))
+            p = float(powers[k])
+            messages.append(("MECANUM_COMMAND", {"timestamp": ns(t_cmd), "voltage": volt, "leftFrontPower": p,
+                                                 "leftBackPower": p, "rightBackPower": p, "rightFrontPower": p}))
+    write_flight_log(path, messages)
+    return {**feedforward_from_params(params), "cpr": cpr}

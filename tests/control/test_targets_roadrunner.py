@@ -1,0 +1,57 @@
+"""Gains for Road Runner's MecanumDrive.PARAMS and Pedro Pathing's constants."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from motorlab.cli import main
+from motorlab.control import Feedforward, Gains, MechanismUnits, emit_snippet, to_target
+from motorlab.errors import OptionError
+
+FF = Feedforward(0.3, 0.125, 0.0124)  # V, V·s/rad, V·s²/rad at a dead wheel's encoder
+POS = Gains("position", kP=2.5, kD=0.45)
+
+
+def test_roadrunner_units_are_ticks():
+    units = MechanismUnits.from_options("rad", cpr=8192, wheel_radius=0.0175)
+    tg = to_target(POS, FF, "roadrunner", units=units)
+    per_tick = 2 * math.pi / 8192
+    assert tg.feedforward["kV"] == pytest.approx(0.125 * per_tick)
+    assert tg.feedforward["kA"] == pytest.approx(0.0124 * per_tick)
+    assert tg.feedforward["kS"] == 0.3
+    assert tg.feedforward["inPerTick"] == pytest.approx(2 * math.pi * 0.0175 / 8192 / 0.0254)
+    # a position error of e volts-worth: kV·axialGain = kP
+    assert tg.gains["axialGain"] * FF.kV == pytest.approx(POS.kP)
+    assert tg.gains["headingVelGain"] * FF.kV == pytest.approx(POS.kD)
+    java = emit_snippet(tg, "java")
+    assert "public double kV = " in java and "public double inPerTick" in java
+    kotlin = emit_snippet(tg, "kotlin")
+    assert "MecanumDrive.PARAMS.apply {" in kotlin and "    kA = " in kotlin
+    with pytest.raises(OptionError, match="Java or Kotlin"):
+        emit_snippet(tg, "python")
+    with pytest.raises(OptionError, match="--cpr"):
+        to_target(POS, FF, "roadrunner")
+
+
+def test_pedro_constants_from_the_model():
+    units = MechanismUnits.from_options("rad", cpr=8192, wheel_radius=0.0175)
+    tg = to_target(POS, FF, "pedro", units=units, voltage=12.0)
+    in_per_rad = 0.0175 / 0.0254
+    assert tg.feedforward["xVelocity"] == pytest.approx((12.0 - 0.3) / 0.125 * in_per_rad)
+    assert tg.feedforward["forwardZeroPowerAcceleration"] == pytest.approx(-0.3 / 0.0124 * in_per_rad)
+    assert tg.feedforward["staticFrictionCoefficient"] == pytest.approx(0.3 / 12.0)
+    java = emit_snippet(tg, "java")
+    assert ".xVelocity(" in java and "new FollowerConstants()" in java and java.count(";") >= 2
+    assert "val driveConstants = MecanumConstants()" in emit_snippet(tg, "kotlin")
+    with pytest.raises(OptionError, match="--wheel-radius"):
+        to_target(POS, FF, "pedro", units=MechanismUnits.from_options("rad", cpr=8192))
+
+
+def test_cli_target_roadrunner(capsys):
+    code = main(["tune", "position", "--kv", "0.125", "--ka", "0.0124", "--ks", "0.3", "--cpr", "8192",
+                 "--target", "roadrunner", "--emit", "java"])
+    out = capsys.readouterr().out
+    assert code == 0 and "public double kS = 0.3;" in out
+    assert main(["tune", "position", "--kv", "0.125", "--ka", "0.0124", "--target", "roadrunner"]) == 2
