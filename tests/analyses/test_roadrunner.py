@@ -16,7 +16,8 @@ from motorlab.rig.ftc import simulate_ramp
 def test_forward_ramp_gains_with_known_truth(tmp_path, seed):
     path = tmp_path / "forward.json"
     truth = simulate_ramp(path, seed=seed)
-    assert truth["wrapped_samples"] > 0 and truth["min_bus_voltage"] < 13.0
+    assert truth["wrapped_samples"] > 0
+    assert truth["min_bus_voltage"] < 13.0
     result = feedforward(read_any(path, cpr=truth["cpr"]), cpr=truth["cpr"])
     ks, kv, ka = result["kS"], result["kV"], result["kA"]
     assert ks.value == pytest.approx(truth["kS"], rel=0.05)
@@ -47,4 +48,5 @@ def test_side_ramps_need_the_forward_one(tmp_path, capsys):
     simulate_ramp(path, kind="lateral", seed=1)
     assert main(["analyze", "feedforward", str(path), "--cpr", "8192"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "forward ramp" in err[0]
+    assert len(err) == 1
+    assert "forward ramp" in err[0]

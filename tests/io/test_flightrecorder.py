@@ -53,17 +53,19 @@ def test_writer_round_trip_and_cut_off_file(tmp_path):
                                                                                       "ok": True})]
     write_flight_log(path, msgs)
     channels, _ = read_flight_log_channels(path)
-    assert [m["x"] for m in channels["P"].messages] == [1.0, 2.0] and channels["Q"].messages == [[1, 2, 3]]
+    assert [m["x"] for m in channels["P"].messages] == [1.0, 2.0]
+    assert channels["Q"].messages == [[1, 2, 3]]
     raw = path.read_bytes()
     path.write_bytes(raw[:-3])  # the robot lost power mid-write
     channels, warnings = read_flight_log_channels(path)
-    assert len(channels["P"].messages) == 1 and "cut off" in warnings[0]
+    assert len(channels["P"].messages) == 1
+    assert "cut off" in warnings[0]
 
 
 def test_bad_logs(tmp_path):
     bad = tmp_path / "b.log"
     bad.write_bytes(b"RR\x00\x01" + struct.pack(">i", 9))
-    with pytest.raises(LogFormatError, match="b.log: byte 4: unknown entry tag 9"):
+    with pytest.raises(LogFormatError, match=r"b\.log: byte 4: unknown entry tag 9"):
         read_flight_log_channels(bad)
     bad.write_bytes(b"RR\x00\x01" + struct.pack(">ii", 1, 0))
     with pytest.raises(LogFormatError, match="only 0 channels"):

@@ -46,7 +46,8 @@ def test_reader_gives_voltage_position_and_repaired_velocity(ramp):
     np.testing.assert_allclose(rec["voltage"], power * np.asarray(raw["voltages"]["values"])[1:-2])
     counts = np.mean([np.asarray(p["values"])[1:-2] for p in raw["forwardEncPositions"]], axis=0)
     np.testing.assert_allclose(rec["position"], counts * 2 * math.pi / truth["cpr"])
-    assert rec.metadata["repaired"] and rec.metadata["warnings"]
+    assert rec.metadata["repaired"]
+    assert rec.metadata["warnings"]
     speed = np.gradient(rec["counts"], rec.time)
     assert all(np.all(np.mod(v, 20) == 0) for v in data.velocities.values())
     vel = np.mean(list(data.velocities.values()), axis=0)
@@ -60,7 +61,8 @@ def test_needs_cpr_and_names_the_file(ramp, capsys):
         read_roadrunner_ramp(path)
     assert main(["analyze", "feedforward", str(path)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "cpr" in err[0]
+    assert len(err) == 1
+    assert "cpr" in err[0]
 
 
 def test_lowercase_drive_type_and_missing_flags(tmp_path, ramp):
@@ -71,7 +73,8 @@ def test_lowercase_drive_type_and_missing_flags(tmp_path, ramp):
     other = tmp_path / "old.json"
     other.write_text(json.dumps(raw))
     rec = read_roadrunner_ramp(other, cpr=truth["cpr"])
-    assert rec.metadata["drive"] == "mecanum" and rec.metadata["repaired"]
+    assert rec.metadata["drive"] == "mecanum"
+    assert rec.metadata["repaired"]
 
 
 @pytest.mark.parametrize(

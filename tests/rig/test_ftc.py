@@ -22,7 +22,8 @@ def test_hub_velocity_is_a_wrapping_multiple_of_twenty():
     t = np.linspace(0.1, 1.0, 50)
     true = enc.true_velocity(t, angle)
     reported = enc.velocity(t, angle)
-    assert np.all(np.mod(true, 20) == 0) and np.all(np.abs(reported) <= 2**15)
+    assert np.all(np.mod(true, 20) == 0)
+    assert np.all(np.abs(reported) <= 2**15)
     assert np.median(true) == pytest.approx(speed * 8192 / (2 * math.pi), rel=1e-3)
     np.testing.assert_array_equal(reported, wrap_int16(true))
     assert np.all(reported != true)
@@ -32,10 +33,12 @@ def test_bulk_read_loop_jitters_between_10_and_40_ms():
     loop = BulkReadLoop()
     starts = loop.starts(20.0, np.random.default_rng(1))
     periods = np.diff(starts)
-    assert periods.min() >= 0.010 - 1e-12 and periods.max() <= 0.040 + 1e-12
+    assert periods.min() >= 0.010 - 1e-12
+    assert periods.max() <= 0.040 + 1e-12
     assert np.std(periods) > 2e-3
     sched = loop.schedule(starts, 4)
-    assert np.all(sched["bulk"] > sched["voltage"]) and np.all(sched["voltage"] > sched["power"][:, -1])
+    assert np.all(sched["bulk"] > sched["voltage"])
+    assert np.all(sched["voltage"] > sched["power"][:, -1])
 
 
 def test_battery_sags_with_current():
@@ -51,7 +54,8 @@ def test_ina219_128_sample_averaging_lags_about_69_ms():
     times = np.sort(np.random.default_rng(2).uniform(0.5, 1.9, 400))
     lag = times - sensor.conversion_average(times, grid, ramp) / 5.0
     assert np.mean(lag) == pytest.approx(0.0681, rel=0.1)  # T/2 of averaging + T/2 of waiting on average
-    assert np.max(lag) <= 1.5 * 0.0681 + 1e-9 and np.min(lag) >= 0.5 * 0.0681 - 1e-9
+    assert np.max(lag) <= 1.5 * 0.0681 + 1e-9
+    assert np.min(lag) >= 0.5 * 0.0681 - 1e-9
     with pytest.raises(RigError, match="16 V"):
         sensor.check_supply(18.0)
 

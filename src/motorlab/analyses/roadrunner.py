@@ -151,8 +151,8 @@ def track_width(data: RampData, gains: np.ndarray | None, cov: np.ndarray | None
     out: list[Estimate] = []
     if left and right:  # drive encoders measure the wheel speeds
         wheel = (np.mean(right, axis=0) - np.mean(left, axis=0)) * (0.5 if mec else 1.0)
-        value, se = _slope(omega, wheel)
-        tw = Estimate("track_width_ticks", value, se, "tick", se < abs(value), "from the drive encoders")
+        slope, slope_se = _slope(omega, wheel)
+        tw = Estimate("track_width_ticks", slope, slope_se, "tick", slope_se < abs(slope), "from the drive encoders")
         x, y = omega, wheel
     else:
         if gains is None or cov is None:
@@ -166,17 +166,17 @@ def track_width(data: RampData, gains: np.ndarray | None, cov: np.ndarray | None
             c, *_ = integral_fit(data.time, volts, psi, omega, g[0])
             return factor * c[0] / (g[1] * per_tick)
 
-        c, se, lhs, model = integral_fit(data.time, volts, psi, omega, gains[0])
+        coef, se, _lhs, _model = integral_fit(data.time, volts, psi, omega, gains[0])
         value = width(gains)
-        tw = _with_gains("track_width_ticks", "tick", width, abs(value) * se[0] / abs(c[0]), gains, cov,
+        tw = _with_gains("track_width_ticks", "tick", width, abs(value) * se[0] / abs(coef[0]), gains, cov,
                          "∫(V − kS)dt = kV·tw·ψ + c₂·ω, kS and kV from the forward ramp")
         x, y = omega, factor * (volts - gains[0]) / (gains[1] * per_tick)
     out.append(tw)
     for k, x_ticks in data.positions.items():
         if k.startswith(("par", "perp")):  # positions against the integrated yaw: no 50 ms window lag
-            value, se = _slope(psi, x_ticks - x_ticks[0])
+            pos, pos_se = _slope(psi, x_ticks - x_ticks[0])
             label = f"{k}_y_ticks" if k.startswith("par") else f"{k}_x_ticks"
-            out.append(Estimate(label, value, se, "tick", se < abs(value),
+            out.append(Estimate(label, pos, pos_se, "tick", pos_se < abs(pos),
                                 "dead-wheel travel per radian of yaw (the page's "
                                 + ("y-position)" if k.startswith("par") else "x-position)")))
     order = np.argsort(x)

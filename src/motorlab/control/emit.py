@@ -224,7 +224,7 @@ def _ftc_pidf(tg: TargetGains, language: str) -> list[str]:
 
 def _roadrunner(tg: TargetGains, language: str) -> list[str]:
     """Road Runner quickstart fields: Java declarations for ``Params``, Kotlin assignments to ``PARAMS``."""
-    names = [k for k in ("inPerTick", "kS", "kV", "kA") if k in tg.feedforward]
+    names: list[str] = [k for k in ("inPerTick", "kS", "kV", "kA") if k in tg.feedforward]
     values = {**tg.feedforward, **tg.gains}
     names += list(tg.gains)
     if language == "java":
@@ -234,7 +234,7 @@ def _roadrunner(tg: TargetGains, language: str) -> list[str]:
     lines = ["", "// Kotlin: set the quickstart's PARAMS before building the drive (TankDrive.PARAMS likewise)",
              "MecanumDrive.PARAMS.apply {"]
     lines += [f"    {k} = {_num(values[k])}  // {tg.units.get(k, '')}" for k in names]
-    return lines + ["}"]
+    return [*lines, "}"]
 
 
 def _pedro(tg: TargetGains, language: str) -> list[str]:
@@ -255,7 +255,8 @@ def _pedro(tg: TargetGains, language: str) -> list[str]:
         head_f = "public static FollowerConstants followerConstants = new FollowerConstants()"
         end = ";"
     else:
-        head_d, head_f, end = "val driveConstants = MecanumConstants()", "val followerConstants = FollowerConstants()", ""
+        head_d, head_f = "val driveConstants = MecanumConstants()", "val followerConstants = FollowerConstants()"
+        end = ""
     out = ["", "// Constants (Pedro Pathing quickstart)", head_d]
     out += ["        " + line for line in drive]
     out[-1] += end

@@ -32,8 +32,8 @@ from typing import Any
 from motorlab.errors import LogFormatError, OptionError
 from motorlab.io._text import PathArg, is_number, read_bytes
 from motorlab.io.csv_table import COLUMNS, guess_delimiter, is_known_header, read_csv, split_fields, write_csv
-from motorlab.io.frc_json import read_frc_char_json, read_sysid_json
 from motorlab.io.flightrecorder import read_flight_log_channels, read_flight_recorder, write_flight_log
+from motorlab.io.frc_json import read_frc_char_json, read_sysid_json
 from motorlab.io.ftc import read_ftc_log, write_ftc_log
 from motorlab.io.roadrunner import read_roadrunner_ramp, write_roadrunner_ramp
 from motorlab.io.scope import find_rising_edges, read_scope_times, read_scope_waveform
@@ -161,9 +161,9 @@ __all__ = [
     "find_rising_edges",
     "read_any",
     "read_csv",
-    "read_frc_char_json",
     "read_flight_log_channels",
     "read_flight_recorder",
+    "read_frc_char_json",
     "read_ftc_log",
     "read_roadrunner_ramp",
     "read_scope_times",

@@ -191,6 +191,7 @@ def _blocks(times: np.ndarray) -> list[tuple[float, float]]:
 
 def _wheels(channels: dict[str, Channel]) -> tuple[Channel, Channel, dict[str, tuple[Any, ...]]]:
     """(command channel, inputs channel, wheel -> (power field, position path getter))."""
+    wheels: dict[str, tuple[Any, ...]]
     if "MECANUM_COMMAND" in channels and "MECANUM_LOCALIZER_INPUTS" in channels:
         wheels = {w: (f"{w}Power", (w, "position")) for w in MECANUM_WHEELS}
         return channels["MECANUM_COMMAND"], channels["MECANUM_LOCALIZER_INPUTS"], wheels
@@ -326,7 +327,9 @@ def _encode_value(schema: Schema, value: Any) -> bytes:
     return struct.pack(">i", len(value)) + b"".join(_encode_value(schema[1], v) for v in value)
 
 
-def write_flight_log(path: PathArg, messages: list[tuple[str, Any]], *, schemas: dict[str, Schema] | None = None) -> None:
+def write_flight_log(
+    path: PathArg, messages: list[tuple[str, Any]], *, schemas: dict[str, Schema] | None = None
+) -> None:
     """Write ``(channel, value)`` messages as LogFile.kt's ``LogWriter`` (version 1) does.
 
     A channel's schema is ``schemas[channel]`` or :func:`schema_of` its first value.

@@ -241,7 +241,7 @@ def read_ramp_data(path: PathArg) -> RampData:
     drive = str(p.get("type")).lower()
     if drive not in ("mecanum", "tank"):  # Jackson writes the enum's name (MECANUM); the page expects lowercase
         raise p.fail("type", f"drive type {data['type']!r} is neither mecanum nor tank")
-    battery_t, battery = p.signal(p.get("voltages"), "voltages")
+    _battery_t, battery = p.signal(p.get("voltages"), "voltages")
     n = battery.size
     powers: dict[str, np.ndarray] = {}
     for key in POWERS[kind]:
@@ -258,7 +258,7 @@ def read_ramp_data(path: PathArg) -> RampData:
         if len(vel) != len(pos):
             raise p.fail(f"{group}EncVels", f"{len(vel)} velocity signals for {len(pos)} encoders")
         fix = p.flags(f"{group}EncFixVels", len(pos))
-        for i, ((t, x), (tv, v)) in enumerate(zip(pos, vel, strict=True)):
+        for i, ((t, x), (_tv, v)) in enumerate(zip(pos, vel, strict=True)):
             label = f"{group}{i}"
             est = central_difference(t, x) if t.size > 1 and np.all(np.diff(t) > 0) else np.zeros_like(x)
             if v.size == 0:  # encoders without velocity: the page differentiates the positions

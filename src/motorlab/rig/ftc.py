@@ -20,6 +20,7 @@ sensors and writes the file in Road Runner's own JSON layout (:mod:`motorlab.io.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -307,6 +308,8 @@ def _motion(drive: MecanumDrive, kind: str, wheel_angle: Any) -> dict[str, Any]:
     def along(t: np.ndarray) -> np.ndarray:  # wheel rolling distance [m]
         return np.asarray(wheel_angle(t)) * r
 
+    par: list[Callable[[np.ndarray], np.ndarray]]
+    perp: list[Callable[[np.ndarray], np.ndarray]]
     if kind == "forward":
         par = [lambda t: along(t) / rd] * 2
         perp = [lambda t: 0.0 * along(t)]
@@ -314,7 +317,10 @@ def _motion(drive: MecanumDrive, kind: str, wheel_angle: Any) -> dict[str, Any]:
         par = [lambda t: 0.0 * along(t)] * 2
         perp = [lambda t: drive.strafe_ratio * along(t) / rd]
     else:  # yaw angle = distance / trackWidth; a dead wheel at (x, y) moves by (−y·ψ, x·ψ)
-        par = [lambda t, y=y: -y * along(t) / drive.track_width / rd for y in drive.par_y]
+        def par_wheel(y: float) -> Callable[[np.ndarray], np.ndarray]:
+            return lambda t: -y * along(t) / drive.track_width / rd
+
+        par = [par_wheel(y) for y in drive.par_y]
         perp = [lambda t: drive.perp_x * along(t) / drive.track_width / rd]
     return {"par": par, "perp": perp}
 def _simulate_motion(params: MotorParams, applied: np.ndarray, powers: np.ndarray, battery: Battery,
@@ -330,8 +336,11 @@ def _simulate_motion(params: MotorParams, applied: np.ndarray, powers: np.ndarra
 
     for _ in range(4):  # fixed point: the bus voltage depends on the current it drives
         bv = bus_v.copy()
-        sim = simulate(params, VoltageDrive(lambda t, bv=bv: power_at(t) * np.interp(t, bus_t, bv)),
-                       duration=float(bus_t[-1]), dt=dt)
+
+        def volts(t: np.ndarray, bv: np.ndarray = bv) -> np.ndarray:
+            return power_at(t) * np.interp(t, bus_t, bv)
+
+        sim = simulate(params, VoltageDrive(volts), duration=float(bus_t[-1]), dt=dt)
         bus_v = battery.bus_voltage(sim.time, 4.0 * power_at(sim.time) * np.abs(sim.current))
     return sim, bus_v
 
@@ -397,7 +406,8 @@ def simulate_ramp(
         pos, vel = [], []
         for fn in fns:
             offset = rng.uniform(0, 2 * math.pi / enc.counts_per_revolution)
-            angle = (lambda t, fn=fn, offset=offset: fn(t) + offset)
+            def angle(t, fn=fn, offset=offset):
+                return (fn(t) + offset)
             v = enc.velocity(bulk_t, angle)
             wrapped += int(np.count_nonzero(v != enc.true_velocity(bulk_t, angle)))
             pos.append((bulk_t, enc.counts(angle(bulk_t)) - enc.counts(angle(np.zeros(1)))))
@@ -480,7 +490,7 @@ def simulate_flight_log(
     enc = HubEncoder(cpr)
     offsets = rng.uniform(0, 2 * math.pi / cpr, 4)
     bulk = sched["bulk"] - 0.5 * loop.bulk_read_time
-    ns = lambda t: int(round(1e9 * (t + 100.0)))  # noqa: E731  (nanoTime has an arbitrary origin)
+    ns = lambda t: round(1e9 * (t + 100.0))  # noqa: E731  (nanoTime has an arbitrary origin)
     messages: list[tuple[str, Any]] = []
     last = -math.inf
     for k in range(starts.size):
