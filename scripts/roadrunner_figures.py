@@ -5,6 +5,7 @@
 
 from __future__ import annotations
 
+import json
 import sys
 import tempfile
 from pathlib import Path
@@ -12,14 +13,14 @@ from pathlib import Path
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
 
-from motorlab.analyses.roadrunner import from_runs  # noqa: E402
-from motorlab.io import read_any  # noqa: E402
-from motorlab.io.roadrunner import read_ramp_data  # noqa: E402
-from motorlab.plot import plot_fit, save_figure  # noqa: E402
-from motorlab.rig.ftc import simulate_ramp  # noqa: E402
+from motorlab.analyses.roadrunner import from_runs
+from motorlab.io import read_any
+from motorlab.io.roadrunner import read_ramp_data
+from motorlab.plot import plot_fit, save_figure
+from motorlab.rig.ftc import simulate_ramp
 
 
 def main(out: Path) -> None:
@@ -28,7 +29,7 @@ def main(out: Path) -> None:
         paths = {k: Path(tmp) / f"{k}-ramp.json" for k in ("forward", "lateral", "angular")}
         truth = {k: simulate_ramp(p, kind=k, seed=5) for k, p in paths.items()}["forward"]
         cpr = truth["cpr"]
-        raw = __import__("json").loads(paths["forward"].read_text())
+        raw = json.loads(paths["forward"].read_text())
         data = read_ramp_data(paths["forward"])
         fig, axes = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
         rec = read_any(paths["forward"], cpr=cpr)

@@ -396,7 +396,7 @@ def _signal(times: np.ndarray, values: np.ndarray) -> dict[str, list[float]]:
 
 
 def write_roadrunner_ramp(path: PathArg, content: dict[str, Any]) -> None:
-    """Write a ramp log as Road Runner's ``TuningFiles.save`` does (Jackson's pretty printer layout).
+    """Write a ramp log as Road Runner's ``TuningFiles.save`` does (Jackson's default pretty printer).
 
     ``content`` maps the file's field names to arrays: a signal is a ``(times, values)`` pair, a
     list of them a list of signals; ``type`` is the drive type string; ``*EncFixVels`` lists of bool.
@@ -409,6 +409,20 @@ def write_roadrunner_ramp(path: PathArg, content: dict[str, Any]) -> None:
             out[key] = [_signal(*v) for v in value]
         else:
             out[key] = value
-    text = json.dumps(out, indent=2, separators=(",", " : "))
     with open(path, "w", encoding="utf-8") as handle:
-        handle.write(text + "\n")
+        handle.write(_jackson(out, 0))
+
+
+def _jackson(value: Any, depth: int) -> str:
+    """JSON in the layout of Jackson's ``DefaultPrettyPrinter``: objects one field a line, arrays inline."""
+    pad = "  " * depth
+    if isinstance(value, dict):
+        if not value:
+            return "{ }"
+        fields = [f'{pad}  {json.dumps(k)} : {_jackson(v, depth + 1)}' for k, v in value.items()]
+        return "{\n" + ",\n".join(fields) + f"\n{pad}}}"
+    if isinstance(value, list):
+        if not value:
+            return "[ ]"
+        return "[ " + ", ".join(_jackson(v, depth) for v in value) + " ]"
+    return json.dumps(value)
