@@ -87,6 +87,7 @@ class RampData:
     repaired: dict[str, int] = field(default_factory=dict)
     ang_vels: list[np.ndarray] = field(default_factory=list)
     source: str = ""
+    power_time: np.ndarray | None = None
 
 
 def repair_velocity(raw: np.ndarray, estimate: np.ndarray) -> np.ndarray:
@@ -244,10 +245,12 @@ def read_ramp_data(path: PathArg) -> RampData:
     _battery_t, battery = p.signal(p.get("voltages"), "voltages")
     n = battery.size
     powers: dict[str, np.ndarray] = {}
+    power_times: list[np.ndarray] = []
     for key in POWERS[kind]:
-        for i, (_, values) in enumerate(p.signals(key)):
+        for i, (times, values) in enumerate(p.signals(key)):
             label = key if kind == "lateral" else f"{key}{i}"
             powers[label] = values
+            power_times.append(times)
     positions: dict[str, np.ndarray] = {}
     velocities: dict[str, np.ndarray] = {}
     repaired: dict[str, int] = {}
@@ -298,10 +301,29 @@ def read_ramp_data(path: PathArg) -> RampData:
         positions={k: v[keep] for k, v in positions.items()},
         velocities={k: v[keep] for k, v in velocities.items()},
         repaired=repaired, ang_vels=[a[keep] for a in ang], source=name,
+        power_time=np.mean(power_times, axis=0)[keep] if power_times else None,
     )
 
 
-def drive_voltage(data: RampData) -> np.ndarray:
+def smooth_battery(time: np.ndarray, battery: np.ndarray, *, window: float = 0.2) -> np.ndarray:
+    """The battery voltage with the sensor's sample-to-sample noise averaged out [V].
+
+    The bus voltage moves with the drive's current, smoothly on the scale of the mechanical time
+    constant; the hub's reading adds white noise of a few mV, which, multiplied by the power, is noise
+    on the fit's input. A local quadratic (Savitzky–Golay) over ``window`` seconds keeps the sag and
+    drops the noise.
+    """
+    from scipy.signal import savgol_filter
+
+    dt = float(np.median(np.diff(time))) if time.size > 1 else 0.0
+    n = int(window / dt) if dt > 0 else 0
+    n += 1 - n % 2  # odd
+    if n < 5 or battery.size <= n:
+        return battery
+    return np.asarray(savgol_filter(battery, n, 2, mode="interp"), dtype=float)
+
+
+def drive_voltage(data: RampData, *, smooth: bool = False) -> np.ndarray:
     """Applied voltage [V]: battery × the largest power driving the motion, as the tuning page does.
 
     Forward ramp: max of the powers; lateral: max(−frontLeft, backLeft, frontRight, −backRight);
@@ -314,7 +336,27 @@ def drive_voltage(data: RampData) -> np.ndarray:
         stack = np.vstack([v for k, v in data.powers.items() if k.startswith("rightPowers")])
     else:
         stack = np.vstack(list(data.powers.values()))
-    return np.maximum(np.max(stack, axis=0), 0.0) * data.battery
+    battery = smooth_battery(data.time, data.battery) if smooth else data.battery
+    return np.maximum(np.max(stack, axis=0), 0.0) * battery
+
+
+def held_voltage(data: RampData) -> np.ndarray:
+    """Applied voltage over each encoder interval [t_k, t_k+1) [V], the powers held as the hub holds them.
+
+    A power set in iteration k+1 (at its own logged time, a few ms before that iteration's encoder
+    read) takes effect before t_k+1: the interval's mean voltage is V_k·(1 − f) + V_k+1·f with f the
+    share of the interval after the next power was set (assigning each iteration's voltage to its
+    encoder read would put the voltage a few ms late, which on a ramp reads as a change of kS). The
+    battery voltage is smoothed (:func:`smooth_battery`).
+    """
+    volts = drive_voltage(data, smooth=True)
+    if data.power_time is None or volts.size < 2:
+        return volts
+    t = data.time
+    frac = np.clip((t[1:] - data.power_time[1:]) / np.diff(t), 0.0, 1.0)
+    out = volts.copy()
+    out[:-1] = volts[:-1] * (1.0 - frac) + volts[1:] * frac
+    return out
 
 
 def motion_counts(data: RampData) -> tuple[np.ndarray, np.ndarray, list[str]]:
@@ -372,7 +414,7 @@ def read_roadrunner_ramp(path: PathArg, *, cpr: float | None = None) -> Recordin
             "of the encoder: dead wheel or drive motor)")
     per_tick = 2 * math.pi / cpr
     counts, vel, names = motion_counts(data)
-    signals = {"voltage": drive_voltage(data), "battery": data.battery}
+    signals = {"voltage": held_voltage(data), "battery": data.battery}
     warnings = []
     if names:
         signals.update(position=counts * per_tick, counts=counts, velocity=vel * per_tick)
