@@ -345,6 +345,32 @@ def _simulate_motion(params: MotorParams, applied: np.ndarray, powers: np.ndarra
     return sim, bus_v
 
 
+def _ramp_content(kind: str, mids: np.ndarray, powers: np.ndarray, readings: np.ndarray,
+                  signals: dict[str, list[tuple[np.ndarray, np.ndarray]]]) -> dict[str, Any]:
+    """The fields of a ramp file (Tuning.kt's ``data`` objects) from the simulated signals."""
+    signs = SIGNS[kind]
+    content: dict[str, Any] = {"type": "MECANUM"}
+    if kind == "forward":
+        content["powers"] = [(mids[:, i], signs[i] * powers) for i in range(4)]
+        content["voltages"] = (mids[:, 4], readings)
+        content.update(forwardEncPositions=signals["parPos"], forwardEncVels=signals["parVel"],
+                       forwardEncFixVels=[True, True])
+    elif kind == "lateral":
+        for i, key in enumerate(("frontLeftPower", "backLeftPower", "frontRightPower", "backRightPower")):
+            content[key] = (mids[:, i], signs[i] * powers)
+        content["voltages"] = (mids[:, 4], readings)
+        content.update(perpEncPositions=signals["perpPos"], perpEncVels=signals["perpVel"], perpEncFixVels=[True])
+    else:
+        content["leftPowers"] = [(mids[:, i], -powers) for i in (0, 1)]
+        content["rightPowers"] = [(mids[:, i], powers) for i in (2, 3)]
+        content["voltages"] = (mids[:, 4], readings)
+        for side in ("left", "right"):
+            content.update({f"{side}EncPositions": [], f"{side}EncVels": [], f"{side}EncFixVels": []})
+        content.update(parEncPositions=signals["parPos"], parEncVels=signals["parVel"], parEncFixVels=[True, True],
+                       perpEncPositions=signals["perpPos"], perpEncVels=signals["perpVel"], perpEncFixVels=[True])
+    return content
+
+
 def simulate_ramp(
     path: Any,
     *,
@@ -413,29 +439,10 @@ def simulate_ramp(
             pos.append((bulk_t, enc.counts(angle(bulk_t)) - enc.counts(angle(np.zeros(1)))))
             vel.append((bulk_t, v))
         signals[group + "Pos"], signals[group + "Vel"] = pos, vel
-    signs = SIGNS[kind]
-    content: dict[str, Any] = {"type": "MECANUM"}
-    if kind == "forward":
-        content["powers"] = [(mids[:, i], signs[i] * powers) for i in range(4)]
-        content["voltages"] = (mids[:, 4], readings)
-        content.update(forwardEncPositions=signals["parPos"], forwardEncVels=signals["parVel"],
-                       forwardEncFixVels=[True, True])
-    elif kind == "lateral":
-        for i, key in enumerate(("frontLeftPower", "backLeftPower", "frontRightPower", "backRightPower")):
-            content[key] = (mids[:, i], signs[(0, 1, 2, 3)[i]] * powers)
-        content["voltages"] = (mids[:, 4], readings)
-        content.update(perpEncPositions=signals["perpPos"], perpEncVels=signals["perpVel"], perpEncFixVels=[True])
-    else:
-        content["leftPowers"] = [(mids[:, i], -powers) for i in (0, 1)]
-        content["rightPowers"] = [(mids[:, i], powers) for i in (2, 3)]
-        content["voltages"] = (mids[:, 4], readings)
-        for side in ("left", "right"):
-            content.update({f"{side}EncPositions": [], f"{side}EncVels": [], f"{side}EncFixVels": []})
-        content.update(parEncPositions=signals["parPos"], parEncVels=signals["parVel"], parEncFixVels=[True, True],
-                       perpEncPositions=signals["perpPos"], perpEncVels=signals["perpVel"], perpEncFixVels=[True])
+    content = _ramp_content(kind, mids, powers, readings, signals)
+    if kind == "angular":
         yaw_rate = np.interp(bulk_t, sim.time, sim.speed) * drive.wheel_radius / drive.track_width
-        imu_t = bulk_t + 1e-3
-        noise = 2e-3
+        imu_t, noise = bulk_t + 1e-3, 2e-3
         content["angVels"] = [(imu_t, rng.normal(0, noise, bulk_t.size)), (imu_t, rng.normal(0, noise, bulk_t.size)),
                               (imu_t, yaw_rate + rng.normal(0, noise, bulk_t.size))]
     write_roadrunner_ramp(path, content)
