@@ -89,3 +89,14 @@ def test_feedforward_from_an_ordinary_run(tmp_path):
     # commands are logged at most every 50 ms: kA carries an interpolation error its stderr leaves out
     assert result["kA"].value == pytest.approx(truth["kA"], rel=0.1)
     assert any("interpolated" in w for w in rec.metadata["warnings"])
+
+
+def test_three_dead_wheel_runs_give_wheel_travel_in_dead_wheel_ticks(tmp_path):
+    path = tmp_path / "auto-dw.log"
+    truth = simulate_flight_log(path, seed=5, dead_wheels=True)
+    rec = read_any(path, cpr=truth["cpr"])
+    assert len(rec.segments) == 4
+    result = feedforward(rec.split()[:1], cpr=truth["cpr"])
+    assert result["kS"].value == pytest.approx(truth["kS"], rel=0.05)
+    assert result["kV"].value == pytest.approx(truth["kV"], rel=0.01)
+    assert result["kA"].value == pytest.approx(truth["kA"], rel=0.1)

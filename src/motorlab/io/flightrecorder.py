@@ -189,24 +189,61 @@ def _blocks(times: np.ndarray) -> list[tuple[float, float]]:
     return [(float(times[a]), float(times[b])) for a, b in zip(starts, stops, strict=True) if b > a]
 
 
-def _wheels(channels: dict[str, Channel]) -> tuple[Channel, Channel, dict[str, tuple[Any, ...]]]:
-    """(command channel, inputs channel, wheel -> (power field, position path getter))."""
-    wheels: dict[str, tuple[Any, ...]]
+def _params(channels: dict[str, Channel], name: str, keys: tuple[str, ...]) -> dict[str, float]:
+    if name not in channels or not channels[name].messages:
+        raise LogFormatError(f"dead-wheel runs need the {name} channel (the quickstart writes it when the drive "
+                             "is built)")
+    msg = channels[name].messages[-1]
+    missing = [k for k in keys if k not in msg]
+    if missing:
+        raise LogFormatError(f"{name} lacks {', '.join(missing)}")
+    return {k: float(msg[k]) for k in keys}
+
+
+def _dead_wheel_travel(channels: dict[str, Channel]) -> dict[str, np.ndarray]:
+    """Each mecanum wheel's travel [dead-wheel ticks] from three dead wheels (robot frame).
+
+    ThreeDeadWheelLocalizer (quickstart): x = (par0Y·par1 − par1Y·par0)/(par0Y − par1Y),
+    y = perpX·(par1 − par0)/(par0Y − par1Y) + perp, ψ = (par0 − par1)/(par0Y − par1Y); then the wheels
+    by ``MecanumKinematics.inverse`` (road-runner Kinematics.kt): x ∓ y·lateralMultiplier ∓ ψ·trackWidth,
+    lateralMultiplier = inPerTick / lateralInPerTick (MecanumDrive.java). All linear, so totals work.
+    """
+    dw = _params(channels, "THREE_DEAD_WHEEL_PARAMS", ("par0YTicks", "par1YTicks", "perpXTicks"))
+    mp = _params(channels, "MECANUM_PARAMS", ("inPerTick", "lateralInPerTick", "trackWidthTicks"))
+    inputs = channels["THREE_DEAD_WHEEL_INPUTS"]
+    p0, p1, pp = (inputs.column(k, "position") for k in ("par0", "par1", "perp"))
+    p0, p1, pp = p0 - p0[0], p1 - p1[0], pp - pp[0]
+    span = dw["par0YTicks"] - dw["par1YTicks"]
+    if span == 0 or mp["lateralInPerTick"] == 0:
+        raise LogFormatError("THREE_DEAD_WHEEL_PARAMS / MECANUM_PARAMS are not tuned (par0YTicks = par1YTicks or "
+                             "lateralInPerTick = 0)")
+    x = (dw["par0YTicks"] * p1 - dw["par1YTicks"] * p0) / span
+    y = dw["perpXTicks"] * (p1 - p0) / span + pp
+    psi = (p0 - p1) / span
+    lm, tw = mp["inPerTick"] / mp["lateralInPerTick"], mp["trackWidthTicks"]
+    return {"leftFront": x - y * lm - psi * tw, "leftBack": x + y * lm - psi * tw,
+            "rightBack": x - y * lm + psi * tw, "rightFront": x + y * lm + psi * tw}
+
+
+def _wheels(channels: dict[str, Channel]) -> tuple[Channel, Channel, dict[str, tuple[str, np.ndarray]]]:
+    """(command channel, inputs channel, wheel -> (power field, wheel travel [ticks] per input message))."""
     if "MECANUM_COMMAND" in channels and "MECANUM_LOCALIZER_INPUTS" in channels:
-        wheels = {w: (f"{w}Power", (w, "position")) for w in MECANUM_WHEELS}
-        return channels["MECANUM_COMMAND"], channels["MECANUM_LOCALIZER_INPUTS"], wheels
+        inputs = channels["MECANUM_LOCALIZER_INPUTS"]
+        wheels = {w: (f"{w}Power", inputs.column(w, "position")) for w in MECANUM_WHEELS}
+        return channels["MECANUM_COMMAND"], inputs, wheels
+    if "MECANUM_COMMAND" in channels and "THREE_DEAD_WHEEL_INPUTS" in channels:
+        travel = _dead_wheel_travel(channels)
+        return channels["MECANUM_COMMAND"], channels["THREE_DEAD_WHEEL_INPUTS"], {
+            w: (f"{w}Power", travel[w]) for w in MECANUM_WHEELS}
     if "TANK_COMMAND" in channels and "TANK_LOCALIZER_INPUTS" in channels:
-        wheels = {s: (f"{s}Power", (s,)) for s in ("left", "right")}
-        return channels["TANK_COMMAND"], channels["TANK_LOCALIZER_INPUTS"], wheels
+        inputs = channels["TANK_LOCALIZER_INPUTS"]
+        wheels = {side: (f"{side}Power", np.asarray([np.mean([p["position"] for p in m[side]])
+                                                      for m in inputs.messages], dtype=float))
+                  for side in ("left", "right")}
+        return channels["TANK_COMMAND"], inputs, wheels
     raise LogFormatError(
-        "no drive commands with drive-encoder inputs (MECANUM_COMMAND + MECANUM_LOCALIZER_INPUTS, or "
-        "TANK_COMMAND + TANK_LOCALIZER_INPUTS); channels: " + ", ".join(sorted(channels)))
-
-
-def _positions(inputs: Channel, path: tuple[str, ...]) -> np.ndarray:
-    if len(path) == 1:  # tank: a list of PositionVelocityPair per side, averaged
-        return np.asarray([np.mean([p["position"] for p in m[path[0]]]) for m in inputs.messages], dtype=float)
-    return inputs.column(*path)
+        "no drive commands with localizer inputs (MECANUM_COMMAND + MECANUM_LOCALIZER_INPUTS or "
+        "THREE_DEAD_WHEEL_INPUTS, or TANK_COMMAND + TANK_LOCALIZER_INPUTS); channels: " + ", ".join(sorted(channels)))
 
 
 def read_flight_recorder(path: PathArg, *, cpr: float | None = None) -> Recording:
@@ -216,9 +253,11 @@ def read_flight_recorder(path: PathArg, *, cpr: float | None = None) -> Recordin
     ----------
     path
         A FlightRecorder ``.log`` of an OpMode that followed trajectories with the quickstart's
-        ``MecanumDrive`` or ``TankDrive`` (drive-encoder localizer).
+        ``MecanumDrive`` (drive-encoder or three-dead-wheel localizer) or ``TankDrive``.
     cpr
-        Counts per revolution of the drive motors' encoders (required).
+        Counts per revolution of the encoders whose ticks the positions count: the drive motors', or
+        the dead wheels' for a dead-wheel localizer (wheel travel is then in dead-wheel ticks, as Road
+        Runner's kV is).
 
     Returns
     -------
@@ -230,7 +269,7 @@ def read_flight_recorder(path: PathArg, *, cpr: float | None = None) -> Recordin
     Raises
     ------
     LogFormatError
-        As :func:`read_flight_log_channels`, or no drive commands with drive-encoder inputs.
+        As :func:`read_flight_log_channels`, or no drive commands with localizer inputs.
     OptionError
         Without ``cpr``.
     """
@@ -256,9 +295,9 @@ def read_flight_recorder(path: PathArg, *, cpr: float | None = None) -> Recordin
         inside = (ti >= a) & (ti <= b)
         if np.count_nonzero(inside) < 10:
             continue
-        for wheel, (power_key, pos_path) in wheels.items():
+        for wheel, (power_key, travel) in wheels.items():
             v = np.interp(ti[inside], tc, applied[power_key])
-            x = _positions(inputs, pos_path)[inside]
+            x = travel[inside]
             segments[f"{wheel}#{number}"] = (n, n + x.size)
             n += x.size
             times.append(ti[inside])

@@ -464,9 +464,14 @@ def simulate_flight_log(
     duration: float = 8.0,
     loop: BulkReadLoop | None = None,
     battery: Battery | None = None,
+    dead_wheels: bool = False,
     seed: int = 0,
 ) -> dict[str, Any]:
-    """A FlightRecorder log of a mecanum robot following back-and-forth moves (drive-encoder localizer).
+    """A FlightRecorder log of a mecanum robot following back-and-forth moves.
+
+    With ``dead_wheels`` the localizer is the quickstart's ThreeDeadWheelLocalizer (8192-count dead
+    wheels; ``THREE_DEAD_WHEEL_INPUTS`` and the ``MECANUM_PARAMS`` / ``THREE_DEAD_WHEEL_PARAMS`` it needs),
+    and the truth is at the dead wheel.
 
     Each wheel is the forward-motion wheel of :class:`MecanumDrive` (drive motor encoders, ``cpr`` at
     the motor's output). The drive sets its powers every loop iteration from a smooth profile
@@ -494,21 +499,40 @@ def simulate_flight_log(
 
     powers = profile(sched["power"][:, 0])
     sim, bus_v = _simulate_motion(params, sched["power"].mean(axis=1), powers, battery, duration)
-    enc = HubEncoder(cpr)
-    offsets = rng.uniform(0, 2 * math.pi / cpr, 4)
+    enc = drive.dead_wheel if dead_wheels else HubEncoder(cpr)
+    scale = drive.wheel_radius / drive.dead_wheel_radius if dead_wheels else 1.0
+    offsets = rng.uniform(0, 2 * math.pi / enc.counts_per_revolution, 4)
     bulk = sched["bulk"] - 0.5 * loop.bulk_read_time
     ns = lambda t: round(1e9 * (t + 100.0))  # noqa: E731  (nanoTime has an arbitrary origin)
     messages: list[tuple[str, Any]] = []
+    truth = drive.truth()
+    if dead_wheels:
+        ticks = truth["track_width_ticks"] / drive.track_width  # dead-wheel ticks per metre
+        messages.append(("MECANUM_PARAMS", {"inPerTick": truth["in_per_tick"], "lateralInPerTick": truth["in_per_tick"],
+                                            "trackWidthTicks": truth["track_width_ticks"], "kS": 0.0, "kV": 0.0,
+                                            "kA": 0.0}))
+        messages.append(("THREE_DEAD_WHEEL_PARAMS", {"par0YTicks": drive.par_y[0] * ticks,
+                                                     "par1YTicks": drive.par_y[1] * ticks,
+                                                     "perpXTicks": drive.perp_x * ticks}))
+    names = ("par0", "par1", "perp", "unused") if dead_wheels else MECANUM_WHEELS
     last = -math.inf
     for k in range(starts.size):
-        angle = np.interp(bulk[k], sim.time, sim.position)
         pairs = {}
-        for w, off in zip(MECANUM_WHEELS, offsets, strict=True):
-            c = int(enc.counts(np.array([angle + off]))[0] - enc.counts(np.array([off]))[0])
-            v = int(enc.velocity(np.array([bulk[k]]), lambda t, off=off: np.interp(t, sim.time, sim.position) + off)[0])
+        for w, off in zip(names, offsets, strict=True):
+            along = 0.0 if w == "perp" else scale
+
+            def angle(t: np.ndarray, off: float = off, along: float = along) -> np.ndarray:
+                return along * np.interp(t, sim.time, sim.position) + off
+
+            c = int(enc.counts(angle(np.array([bulk[k]])))[0] - enc.counts(np.array([off]))[0])
+            v = int(enc.velocity(np.array([bulk[k]]), angle)[0])
             pairs[w] = {"position": c, "rawPosition": c, "rawVelocity": v, "velocity": v}
-        messages.append(("MECANUM_LOCALIZER_INPUTS", {"timestamp": ns(bulk[k]), **pairs, "pitch": 0.0, "roll": 0.0,
-                                                      "yaw": 0.0}))
+        if dead_wheels:
+            pairs.pop("unused")
+            messages.append(("THREE_DEAD_WHEEL_INPUTS", {"timestamp": ns(bulk[k]), **pairs}))
+        else:
+            messages.append(("MECANUM_LOCALIZER_INPUTS", {"timestamp": ns(bulk[k]), **pairs, "pitch": 0.0,
+                                                          "roll": 0.0, "yaw": 0.0}))
         t_cmd = sched["power"][k, 0]
         if t_cmd - last >= 0.05:  # DownsampledWriter(…, 50_000_000)
             last = t_cmd
@@ -517,4 +541,6 @@ def simulate_flight_log(
             messages.append(("MECANUM_COMMAND", {"timestamp": ns(t_cmd), "voltage": volt, "leftFrontPower": p,
                                                  "leftBackPower": p, "rightBackPower": p, "rightFrontPower": p}))
     write_flight_log(path, messages)
+    if dead_wheels:
+        return {k: truth[k] for k in ("kS", "kV", "kA")} | {"cpr": enc.counts_per_revolution}
     return {**feedforward_from_params(params), "cpr": cpr}
