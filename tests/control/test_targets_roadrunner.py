@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import math
 
 import pytest
@@ -60,3 +61,24 @@ def test_cli_target_roadrunner(capsys):
     assert code == 0
     assert "public double kS = 0.3;" in out
     assert main(["tune", "position", "--kv", "0.125", "--ka", "0.0124", "--target", "roadrunner"]) == 2
+
+
+def test_ramp_geometry_reaches_the_snippets(tmp_path, capsys):
+    doc = {"experiment": "feedforward", "parameters": {
+        "kS": {"value": 0.3, "stderr": 0.01, "unit": "V"}, "kV": {"value": 0.125, "stderr": 1e-4, "unit": "V*s/rad"},
+        "kA": {"value": 0.0124, "stderr": 1e-3, "unit": "V*s^2/rad"},
+        "lateral_ratio": {"value": 0.85, "stderr": 1e-3, "unit": "1"},
+        "track_width_ticks": {"value": 23840.0, "stderr": 6.0, "unit": "tick"}}}
+    path = tmp_path / "rr.json"
+    path.write_text(json.dumps(doc))
+    common = ["tune", "position", "--params", str(path), "--cpr", "8192", "--wheel-radius", "17.5mm",
+              "--qp", "0.0127", "--qv", "0.127", "--emit", "java"]
+    assert main([*common, "--target", "roadrunner"]) == 0
+    out = capsys.readouterr().out
+    assert "public double trackWidthTicks = 23840.0;" in out
+    in_per_tick = 2 * math.pi * 0.0175 / 8192 / 0.0254
+    assert f"lateralInPerTick = {0.85 * in_per_tick:.6g};" in out
+    assert main([*common, "--target", "pedro"]) == 0
+    out = capsys.readouterr().out
+    x = (12.0 - 0.3) / 0.125 * 0.0175 / 0.0254
+    assert f".yVelocity({0.85 * x:.6g})" in out

@@ -224,7 +224,8 @@ def _ftc_pidf(tg: TargetGains, language: str) -> list[str]:
 
 def _roadrunner(tg: TargetGains, language: str) -> list[str]:
     """Road Runner quickstart fields: Java declarations for ``Params``, Kotlin assignments to ``PARAMS``."""
-    names: list[str] = [k for k in ("inPerTick", "kS", "kV", "kA") if k in tg.feedforward]
+    names: list[str] = [k for k in ("inPerTick", "lateralInPerTick", "trackWidthTicks", "kS", "kV", "kA")
+                        if k in tg.feedforward]
     values = {**tg.feedforward, **tg.gains}
     names += list(tg.gains)
     if language == "java":
@@ -242,7 +243,8 @@ def _pedro(tg: TargetGains, language: str) -> list[str]:
     ff = tg.feedforward
     java = language == "java"
     drive = [f".xVelocity({_num(ff['xVelocity'])})  // in/s at full power",
-             "// .yVelocity(lateral_ratio * xVelocity)  // from the lateral ramp",
+             f".yVelocity({_num(ff['yVelocity'])})  // in/s, lateral ratio × xVelocity" if "yVelocity" in ff
+             else "// .yVelocity(lateral_ratio * xVelocity)  // from the lateral ramp",
              f".nominalVoltage({_num(ff['nominalVoltage'])})",
              f".staticFrictionCoefficient({_num(ff['staticFrictionCoefficient'])})"]
     follower = []

@@ -135,6 +135,7 @@ def to_target(
     *,
     units: MechanismUnits | None = None,
     voltage: float = 12.0,
+    geometry: dict[str, float] | None = None,
 ) -> TargetGains:
     """Convert SI gains (volts per rad) and feedforward to a controller's units.
 
@@ -151,6 +152,9 @@ def to_target(
         (required by the FTC targets, which count ticks). Default: radians.
     voltage
         Nominal battery voltage for power and duty conversions [V].
+    geometry
+        Road Runner ramp results (``lateral_ratio``, ``track_width_ticks``) for ``roadrunner`` and
+        ``pedro``.
 
     Returns
     -------
@@ -188,9 +192,9 @@ def to_target(
         g_user, ff_user = gains.scaled(n).to_dict(), feedforward.scaled(n).to_dict()
         return TargetGains(target, loop, g_user, ff_user, unit_map, conv, [], feedforward, gains.period, voltage)
     if target == "roadrunner":
-        return _roadrunner(gains, feedforward, units, voltage)
+        return _roadrunner(gains, feedforward, units, voltage, geometry or {})
     if target == "pedro":
-        return _pedro(gains, feedforward, units, voltage)
+        return _pedro(gains, feedforward, units, voltage, geometry or {})
     if units.cpr is None:
         raise OptionError(f"target {target} works in encoder ticks: give --cpr (counts per revolution)")
     ticks_per_rad = units.cpr / (2 * math.pi)
@@ -253,7 +257,8 @@ def to_target(
     return TargetGains(target, loop, g_hub, ff_hub, unit_map, conv, notes, equivalent, gains.period, voltage)
 
 
-def _roadrunner(gains: Gains, feedforward: Feedforward, units: MechanismUnits, voltage: float) -> TargetGains:
+def _roadrunner(gains: Gains, feedforward: Feedforward, units: MechanismUnits, voltage: float,
+                geometry: dict[str, float]) -> TargetGains:
     """Road Runner 1.0 drive PARAMS (see the module docstring)."""
     if units.cpr is None:
         raise OptionError("target roadrunner counts ticks: give --cpr (counts per revolution of the encoder the "
@@ -279,10 +284,17 @@ def _roadrunner(gains: Gains, feedforward: Feedforward, units: MechanismUnits, v
     ]
     notes = ["kS, kV, kA are for the encoder whose cpr was given (dead wheels or drive motors): the same "
              "encoder as Road Runner's inPerTick"]
+    if "track_width_ticks" in geometry:
+        ff["trackWidthTicks"] = geometry["track_width_ticks"]
+        unit_map["trackWidthTicks"] = "tick"
     free = feedforward.free_speed(voltage)
     if units.name == "m":
         in_per_tick = units.per_radian * rad_per_tick / INCH
         ff["inPerTick"] = in_per_tick
+        if "lateral_ratio" in geometry:
+            ff["lateralInPerTick"] = geometry["lateral_ratio"] * in_per_tick
+            unit_map["lateralInPerTick"] = "in/tick"
+            conv.append(f"lateralInPerTick = lateral_ratio × inPerTick = {geometry['lateral_ratio']:.6g} × inPerTick")
         conv.append(f"inPerTick = 2π·r/cpr = {in_per_tick:.6g} in (wheel radius {units.per_radian:g} m)")
         notes.append(f"maxWheelVel must stay below the free speed (V − kS)/kV = {free * units.per_radian / INCH:.4g} "
                      f"in/s at {voltage:g} V")
@@ -291,7 +303,8 @@ def _roadrunner(gains: Gains, feedforward: Feedforward, units: MechanismUnits, v
     return TargetGains("roadrunner", gains.loop, g, ff, unit_map, conv, notes, feedforward, gains.period, voltage)
 
 
-def _pedro(gains: Gains, feedforward: Feedforward, units: MechanismUnits, voltage: float) -> TargetGains:
+def _pedro(gains: Gains, feedforward: Feedforward, units: MechanismUnits, voltage: float,
+           geometry: dict[str, float]) -> TargetGains:
     """Pedro Pathing tuner constants (see the module docstring)."""
     if units.name != "m":
         raise OptionError("target pedro works in inches: give --wheel-radius (the radius of the wheel the gains "
@@ -304,10 +317,13 @@ def _pedro(gains: Gains, feedforward: Feedforward, units: MechanismUnits, voltag
           "nominalVoltage": voltage}
     if feedforward.kA > 0:
         ff["forwardZeroPowerAcceleration"] = -feedforward.kS / feedforward.kA * in_per_rad
+    if "lateral_ratio" in geometry:
+        ff["yVelocity"] = geometry["lateral_ratio"] * ff["xVelocity"]
     power_per_in = 1.0 / (voltage * in_per_rad)
     g = {"driveP": gains.kP * power_per_in, "driveD": gains.kD * power_per_in} if gains.loop == "position" else \
         {"driveP": 0.0, "driveD": gains.kP * power_per_in}
-    unit_map = {"xVelocity": "in/s", "forwardZeroPowerAcceleration": "in/s^2", "staticFrictionCoefficient": "1",
+    unit_map = {"xVelocity": "in/s", "yVelocity": "in/s", "forwardZeroPowerAcceleration": "in/s^2",
+                "staticFrictionCoefficient": "1",
                 "nominalVoltage": "V", "driveP": "power/in", "driveD": "power*s/in", "output": "power",
                 "position": "in", "velocity": "in/s", "kS": "V", "kV": "V*s/in", "kA": "V*s^2/in"}
     conv = [
@@ -318,8 +334,8 @@ def _pedro(gains: Gains, feedforward: Feedforward, units: MechanismUnits, voltag
     notes = [
         "forwardZeroPowerAcceleration = −kS/kA assumes no viscous friction (K = kV): the coasting deceleration "
         "is at least this large; give --K to the analysis for the viscous part",
-        "yVelocity = lateral_ratio × xVelocity and lateralZeroPowerAcceleration need the lateral ramp "
-        "(motorlab analyze feedforward forward.json lateral.json)",
+        "yVelocity = lateral_ratio × xVelocity needs the lateral ramp (motorlab analyze feedforward forward.json "
+        "lateral.json); lateralZeroPowerAcceleration is not determined (strafing friction differs)",
         "staticFrictionCoefficient = kS / nominalVoltage (our reading of Mecanum.getVoltageNormalized)",
     ]
     if feedforward.kA <= 0:

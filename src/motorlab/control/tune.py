@@ -229,7 +229,7 @@ def tune(
         gains = replace(gains, settings={**gains.settings, **user})
     else:
         gains = design_pid_poles(loop, ff, rise_time=rise_time, overshoot=overshoot, period=period, delay=delay)
-    tg = to_target(gains, ff, target, units=units, voltage=voltage)
+    tg = to_target(gains, ff, target, units=units, voltage=voltage, geometry=plant.geometry)
     limits = max_profile(ff, voltage)
     free = ff.free_speed(voltage)
     if free <= 0:
