@@ -107,3 +107,19 @@ def test_truncated_json_names_the_line(tmp_path, ramp):
     bad.write_text(path.read_text()[:5000])
     with pytest.raises(LogFormatError, match=r"cut.json:\d+: not valid JSON"):
         read_roadrunner_ramp(bad, cpr=truth["cpr"])
+
+
+def test_real_hub_overflow_log_is_repaired():
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "data" / "real" / "roadrunner-overflow-enc1.csv"
+    raw = np.genfromtxt(path, delimiter=",", skip_header=1)
+    pos, vel, t = raw[:, 0], raw[:, 1], raw[:, 2]
+    estimate = np.gradient(pos, t)
+    assert np.all(np.abs(vel) < 2**15)
+    assert np.median(np.abs(estimate)) > 2e5
+    fixed = repair_velocity(vel, estimate)
+    assert np.all(np.mod(fixed - vel, 2**16) == 0)  # only whole wraps added
+    assert np.all(np.mod(fixed, 20) == 0)  # the hub's 50 ms window
+    inner = slice(1, -1)
+    assert np.median(np.abs(fixed[inner] - estimate[inner]) / np.abs(estimate[inner])) < 0.01
