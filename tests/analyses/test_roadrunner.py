@@ -50,3 +50,15 @@ def test_side_ramps_need_the_forward_one(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1
     assert "forward ramp" in err[0]
+
+
+def test_angular_ramp_with_drive_encoders(tmp_path, capsys):
+    path = tmp_path / "angular.json"
+    truth = simulate_ramp(path, kind="angular", drive_encoder_cpr=538, seed=4)
+    assert main(["analyze", "feedforward", str(path), "--cpr", "538", "--json"]) == 0
+    params = json.loads(capsys.readouterr().out)["parameters"]
+    tw = params["track_width_ticks"]
+    assert abs(tw["value"] - truth["drive_track_width_ticks"]) < 4 * tw["stderr"]
+    assert tw["value"] == pytest.approx(truth["drive_track_width_ticks"], rel=0.002)
+    # the feedforward of the turning wheels, fitted from the same file as the page does
+    assert params["kV"]["value"] == pytest.approx(0.3438, rel=0.01)

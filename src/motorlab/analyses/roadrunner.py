@@ -10,10 +10,11 @@ from the other ramps:
   multiplier is inPerTick / lateralInPerTick = 1/s.
 * angular ramp: ``trackWidthTicks`` from the IMU's yaw rate ω and the wheels' speed, by the
   definitions of road-runner ``Kinematics.kt``: a mecanum wheel turns at ω·trackWidth, tank sides at
-  ±ω·trackWidth/2. With drive encoders the wheel speeds are measured (½(v_right − v_left) = ω·tw for
-  mecanum, v_right − v_left = ω·tw for tank); with dead wheels they are predicted from the voltage by
-  the forward ramp's feedforward. The dead wheels' positions (slope of each wheel's speed against ω)
-  are reported as the page reports them.
+  ±ω·trackWidth/2. With drive encoders the wheels' travel is measured (½(x_right − x_left) = ψ·tw
+  for mecanum, x_right − x_left = ψ·tw for tank, ψ the integrated yaw rate; the page regresses the hub
+  velocities, which lag by half their 50 ms window: −0.7 % on the simulated ramp); with dead wheels
+  the wheel speeds follow from the voltage and the forward ramp's feedforward. The dead wheels'
+  positions (their travel per radian of yaw) are reported as the page reports them.
 
 With dead wheels the lateral and angular motions are fitted as the forward one is, integrated:
 ∫(V − kS)dt = c₁·Δx + c₂·Δv (:func:`integral_fit`), c₂ taking the inertia of that motion, which differs
@@ -76,7 +77,11 @@ def integral_fit(time: np.ndarray, voltage: np.ndarray, position: np.ndarray, ve
     t, v = time[start:], voltage[start:]
     lhs = _cumulative(t, np.sign(v) * np.maximum(np.abs(v) - ks, 0.0))
     design = np.column_stack([position[start:] - position[start], velocity[start:] - velocity[start]])
-    fit = fit_linear(design, lhs, ["c1", "c2"], covariance="hac")
+    # Fit the increments over windows of about 0.1 s: the cumulative sums carry random-walk errors
+    # (input noise integrated) that no covariance estimator of a few hundred samples gets right.
+    width = max(1, round(0.1 / float(np.median(np.diff(t)))))
+    edges = np.arange(0, t.size, width)
+    fit = fit_linear(np.diff(design[edges], axis=0), np.diff(lhs[edges]), ["c1", "c2"], covariance="hac")
     return fit.values, fit.stderr, lhs, design @ fit.values
 
 
@@ -148,14 +153,15 @@ def track_width(data: RampData, gains: np.ndarray | None, cov: np.ndarray | None
         raise FitError(f"{data.source}: the IMU's yaw rate is zero throughout (stuck IMU?)")
     mec = data.drive == "mecanum"
     psi = _cumulative(data.time, omega)
-    left = [v for k, v in data.velocities.items() if k.startswith("left")]
-    right = [v for k, v in data.velocities.items() if k.startswith("right")]
+    left = [v - v[0] for k, v in data.positions.items() if k.startswith("left")]
+    right = [v - v[0] for k, v in data.positions.items() if k.startswith("right")]
     out: list[Estimate] = []
-    if left and right:  # drive encoders measure the wheel speeds
+    if left and right:  # drive encoders measure the wheels' travel: against the integrated yaw rate
         wheel = (np.mean(right, axis=0) - np.mean(left, axis=0)) * (0.5 if mec else 1.0)
-        slope, slope_se = _slope(omega, wheel)
-        tw = Estimate("track_width_ticks", slope, slope_se, "tick", slope_se < abs(slope), "from the drive encoders")
-        x, y = omega, wheel
+        slope, slope_se = _slope(np.diff(psi), np.diff(wheel))  # increments: no random walk in the residuals
+        tw = Estimate("track_width_ticks", slope, slope_se, "tick", slope_se < abs(slope),
+                      "drive-encoder travel per radian of yaw")
+        x, y = psi, wheel
     else:
         if gains is None or cov is None:
             raise OptionError(f"{data.source}: an angular ramp with dead wheels needs kS and kV: give the forward "
@@ -176,7 +182,7 @@ def track_width(data: RampData, gains: np.ndarray | None, cov: np.ndarray | None
     out.append(tw)
     for k, x_ticks in data.positions.items():
         if k.startswith(("par", "perp")):  # positions against the integrated yaw: no 50 ms window lag
-            pos, pos_se = _slope(psi, x_ticks - x_ticks[0])
+            pos, pos_se = _slope(np.diff(psi), np.diff(x_ticks))
             label = f"{k}_y_ticks" if k.startswith("par") else f"{k}_x_ticks"
             out.append(Estimate(label, pos, pos_se, "tick", pos_se < abs(pos),
                                 "dead-wheel travel per radian of yaw (the page's "

@@ -380,6 +380,7 @@ def simulate_ramp(
     loop: BulkReadLoop | None = None,
     battery: Battery | None = None,
     sensor: HubVoltageSensor | None = None,
+    drive_encoder_cpr: float | None = None,
     seed: int = 0,
 ) -> dict[str, Any]:
     """Simulate one of Road Runner's ramp loggers on a mecanum drive and write its JSON file.
@@ -396,6 +397,9 @@ def simulate_ramp(
         The ``.json`` file to write.
     kind
         ``"forward"``, ``"lateral"`` or ``"angular"``.
+    drive_encoder_cpr
+        Angular ramp only: log the drive motors' encoders (counts per revolution of the wheel shaft)
+        instead of dead wheels; the truth's ``drive_track_width_ticks`` is then in those ticks.
 
     Returns
     -------
@@ -440,6 +444,23 @@ def simulate_ramp(
             vel.append((bulk_t, v))
         signals[group + "Pos"], signals[group + "Vel"] = pos, vel
     content = _ramp_content(kind, mids, powers, readings, signals)
+    extra: dict[str, float] = {}
+    if kind == "angular" and drive_encoder_cpr:
+        motor_enc = HubEncoder(drive_encoder_cpr)
+        for side, sign in (("left", -1.0), ("right", 1.0)):
+            pos, vel = [], []
+            for _ in range(2):
+                off = rng.uniform(0, 2 * math.pi / drive_encoder_cpr)
+
+                def wheel(t: np.ndarray, sign: float = sign, off: float = off) -> np.ndarray:
+                    return sign * np.interp(t, sim.time, sim.position, left=0.0) + off
+
+                pos.append((bulk_t, motor_enc.counts(wheel(bulk_t)) - motor_enc.counts(wheel(np.zeros(1)))))
+                vel.append((bulk_t, motor_enc.velocity(bulk_t, wheel)))
+            content.update({f"{side}EncPositions": pos, f"{side}EncVels": vel, f"{side}EncFixVels": [True, True]})
+        for group in ("par", "perp"):
+            content.update({f"{group}EncPositions": [], f"{group}EncVels": [], f"{group}EncFixVels": []})
+        extra["drive_track_width_ticks"] = drive.track_width / drive.wheel_radius * drive_encoder_cpr / (2 * math.pi)
     if kind == "angular":
         yaw_rate = np.interp(bulk_t, sim.time, sim.speed) * drive.wheel_radius / drive.track_width
         imu_t, noise = bulk_t + 1e-3, 2e-3
@@ -453,6 +474,7 @@ def simulate_ramp(
         "wrapped_samples": wrapped,
         "samples": int(starts.size),
         "min_bus_voltage": float(bus_v.min()),
+        **extra,
     }
 
 
