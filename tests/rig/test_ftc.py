@@ -69,3 +69,25 @@ def test_lc_filter_passes_dc_and_removes_commutator_noise():
     tail = out[t > 0.1]
     assert np.mean(tail) == pytest.approx(12.0, abs=0.01)
     assert np.std(tail) < 0.02 * 0.5
+
+
+def test_virtual_rig_ina219_averaging_lags_the_bus_voltage(tmp_path):
+    import dataclasses
+
+    from motorlab.io import read_ftc_log
+    from motorlab.rig import Instruments, VirtualRig
+
+    quiet = INA219(bus_noise=0.0, current_noise=0.0)
+    logs = {}
+    for n in (1, 128):
+        ins = dataclasses.replace(Instruments(), ina219=dataclasses.replace(quiet, averaging=n))
+        rig = VirtualRig("neverest40", unit_seed=1, noise_seed=3, instruments=ins)
+        path = tmp_path / f"avg{n}.txt"
+        rig.spindown(path, on_time=3.0, coast_time=2.0)
+        logs[n] = read_ftc_log(path)
+    plain, averaged = logs[1], logs[128]
+    np.testing.assert_array_equal(plain.time, averaged.time)
+    # the relay opens at 3 s: the bus voltage falls to the back-EMF; the averaged register follows late
+    after = (plain.time > 3.2) & (plain.time < 3.3)
+    assert np.all(averaged["voltage"][after] >= plain["voltage"][after] - 0.01)
+    assert np.mean(averaged["voltage"][after] - plain["voltage"][after]) > 0.05
