@@ -215,46 +215,7 @@ def to_target(
             "velocity": "tick/s",
         }
         return TargetGains(target, loop, g_pow, ff_pow, unit_map, conv, [], feedforward, gains.period, voltage)
-    # ftc-pidf
-    if loop != "velocity":
-        raise OptionError(
-            "target ftc-pidf is the hub's velocity loop (setVelocityPIDFCoefficients); "
-            "for a position loop use --target ftc-power"
-        )
-    free = feedforward.free_speed(voltage)
-    if free <= 0:
-        raise OptionError(f"at {voltage:g} V the motor does not turn (kS = {feedforward.kS:.3g} V)")
-    per_volt = HUB_FULL_SCALE / voltage
-    scale = per_volt / ticks_per_rad
-    free_ticks = free * ticks_per_rad
-    f = HUB_FULL_SCALE / free_ticks
-    g_hub = {"kP": gains.kP * scale, "kI": gains.kI * scale, "kD": gains.kD * scale, "kF": f}
-    # The model's own feedforward in hub units, for comparison with F (the hub has no kS, kA terms).
-    ff_hub = {"kS": feedforward.kS * per_volt, "kV": feedforward.kV * scale, "kA": feedforward.kA * scale}
-    conv = [
-        f"ticks: cpr = {units.cpr:g}, 1 rad = {ticks_per_rad:.6g} ticks",
-        f"hub output ('hub'): 32767 = full power = {voltage:g} V, i.e. {per_volt:.6g} per volt",
-        f"P, I, D = kP, kI, kD [V per rad/s, rad, rad/s²] × {per_volt:.6g} / {ticks_per_rad:.6g} = × {scale:.6g}",
-        f"max velocity at {voltage:g} V = (V − kS)/kV = {free_ticks:.6g} ticks/s; "
-        f"F = 32767 / {free_ticks:.6g} = {f:.6g}",
-    ]
-    notes = [
-        "F = 32767 / max ticks per second is FIRST's convention (Motor PIDF Tuning Guide, 2019)",
-        "P, I, D assume the hub runs a time-normalised PID on ticks/s error: not confirmed (closed "
-        "firmware, loop period unknown); start from them and check on the robot",
-        "the hub's F has no kS term: below max velocity it gives less than kS + kV·v, P and I make up the rest",
-    ]
-    unit_map = {
-        **_gain_units(loop, "hub", "tick"),
-        **_ff_units("hub", "tick"),
-        "kF": "hub/(tick/s)",
-        "output": f"hub output (32767 = {voltage:g} V)",
-        "position": "tick",
-        "velocity": "tick/s",
-    }
-    # What the hub applies as feedforward, in volts: F·v·V/32767 = V/v_free·v, a secant through 0.
-    equivalent = Feedforward(0.0, voltage / free, 0.0)
-    return TargetGains(target, loop, g_hub, ff_hub, unit_map, conv, notes, equivalent, gains.period, voltage)
+    return _ftc_pidf(gains, feedforward, units, voltage)
 
 
 def _roadrunner(gains: Gains, feedforward: Feedforward, units: MechanismUnits, voltage: float,
@@ -341,3 +302,49 @@ def _pedro(gains: Gains, feedforward: Feedforward, units: MechanismUnits, voltag
     if feedforward.kA <= 0:
         notes.append("kA not determined: forwardZeroPowerAcceleration not determined")
     return TargetGains("pedro", gains.loop, g, ff, unit_map, conv, notes, feedforward, gains.period, voltage)
+
+
+def _ftc_pidf(gains: Gains, feedforward: Feedforward, units: MechanismUnits, voltage: float) -> TargetGains:
+    """The REV hub's velocity PIDF (see the module docstring)."""
+    target, loop = "ftc-pidf", gains.loop
+    assert units.cpr is not None
+    ticks_per_rad = units.cpr / (2 * math.pi)
+    if loop != "velocity":
+        raise OptionError(
+            "target ftc-pidf is the hub's velocity loop (setVelocityPIDFCoefficients); "
+            "for a position loop use --target ftc-power"
+        )
+    free = feedforward.free_speed(voltage)
+    if free <= 0:
+        raise OptionError(f"at {voltage:g} V the motor does not turn (kS = {feedforward.kS:.3g} V)")
+    per_volt = HUB_FULL_SCALE / voltage
+    scale = per_volt / ticks_per_rad
+    free_ticks = free * ticks_per_rad
+    f = HUB_FULL_SCALE / free_ticks
+    g_hub = {"kP": gains.kP * scale, "kI": gains.kI * scale, "kD": gains.kD * scale, "kF": f}
+    # The model's own feedforward in hub units, for comparison with F (the hub has no kS, kA terms).
+    ff_hub = {"kS": feedforward.kS * per_volt, "kV": feedforward.kV * scale, "kA": feedforward.kA * scale}
+    conv = [
+        f"ticks: cpr = {units.cpr:g}, 1 rad = {ticks_per_rad:.6g} ticks",
+        f"hub output ('hub'): 32767 = full power = {voltage:g} V, i.e. {per_volt:.6g} per volt",
+        f"P, I, D = kP, kI, kD [V per rad/s, rad, rad/s²] × {per_volt:.6g} / {ticks_per_rad:.6g} = × {scale:.6g}",
+        f"max velocity at {voltage:g} V = (V − kS)/kV = {free_ticks:.6g} ticks/s; "
+        f"F = 32767 / {free_ticks:.6g} = {f:.6g}",
+    ]
+    notes = [
+        "F = 32767 / max ticks per second is FIRST's convention (Motor PIDF Tuning Guide, 2019)",
+        "P, I, D assume the hub runs a time-normalised PID on ticks/s error: not confirmed (closed "
+        "firmware, loop period unknown); start from them and check on the robot",
+        "the hub's F has no kS term: below max velocity it gives less than kS + kV·v, P and I make up the rest",
+    ]
+    unit_map = {
+        **_gain_units(loop, "hub", "tick"),
+        **_ff_units("hub", "tick"),
+        "kF": "hub/(tick/s)",
+        "output": f"hub output (32767 = {voltage:g} V)",
+        "position": "tick",
+        "velocity": "tick/s",
+    }
+    # What the hub applies as feedforward, in volts: F·v·V/32767 = V/v_free·v, a secant through 0.
+    equivalent = Feedforward(0.0, voltage / free, 0.0)
+    return TargetGains(target, loop, g_hub, ff_hub, unit_map, conv, notes, equivalent, gains.period, voltage)

@@ -371,6 +371,26 @@ def _ramp_content(kind: str, mids: np.ndarray, powers: np.ndarray, readings: np.
     return content
 
 
+def _drive_encoder_signals(cpr: float, sim: Any, bulk_t: np.ndarray, rng: np.random.Generator) -> dict[str, Any]:
+    """Angular ramp fields with two drive-motor encoders per side (left turning backwards), no dead wheels."""
+    enc = HubEncoder(cpr)
+    content: dict[str, Any] = {}
+    for side, sign in (("left", -1.0), ("right", 1.0)):
+        pos, vel = [], []
+        for _ in range(2):
+            off = rng.uniform(0, 2 * math.pi / cpr)
+
+            def wheel(t: np.ndarray, sign: float = sign, off: float = off) -> np.ndarray:
+                return sign * np.interp(t, sim.time, sim.position, left=0.0) + off
+
+            pos.append((bulk_t, enc.counts(wheel(bulk_t)) - enc.counts(wheel(np.zeros(1)))))
+            vel.append((bulk_t, enc.velocity(bulk_t, wheel)))
+        content.update({f"{side}EncPositions": pos, f"{side}EncVels": vel, f"{side}EncFixVels": [True, True]})
+    for group in ("par", "perp"):
+        content.update({f"{group}EncPositions": [], f"{group}EncVels": [], f"{group}EncFixVels": []})
+    return content
+
+
 def simulate_ramp(
     path: Any,
     *,
@@ -446,20 +466,7 @@ def simulate_ramp(
     content = _ramp_content(kind, mids, powers, readings, signals)
     extra: dict[str, float] = {}
     if kind == "angular" and drive_encoder_cpr:
-        motor_enc = HubEncoder(drive_encoder_cpr)
-        for side, sign in (("left", -1.0), ("right", 1.0)):
-            pos, vel = [], []
-            for _ in range(2):
-                off = rng.uniform(0, 2 * math.pi / drive_encoder_cpr)
-
-                def wheel(t: np.ndarray, sign: float = sign, off: float = off) -> np.ndarray:
-                    return sign * np.interp(t, sim.time, sim.position, left=0.0) + off
-
-                pos.append((bulk_t, motor_enc.counts(wheel(bulk_t)) - motor_enc.counts(wheel(np.zeros(1)))))
-                vel.append((bulk_t, motor_enc.velocity(bulk_t, wheel)))
-            content.update({f"{side}EncPositions": pos, f"{side}EncVels": vel, f"{side}EncFixVels": [True, True]})
-        for group in ("par", "perp"):
-            content.update({f"{group}EncPositions": [], f"{group}EncVels": [], f"{group}EncFixVels": []})
+        content.update(_drive_encoder_signals(drive_encoder_cpr, sim, bulk_t, rng))
         extra["drive_track_width_ticks"] = drive.track_width / drive.wheel_radius * drive_encoder_cpr / (2 * math.pi)
     if kind == "angular":
         yaw_rate = np.interp(bulk_t, sim.time, sim.speed) * drive.wheel_radius / drive.track_width
