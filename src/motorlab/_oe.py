@@ -430,11 +430,15 @@ def prepare_log(
         grid_v = np.asarray(voltage[:-1], dtype=float)
     else:
         n_grid = int(np.ceil(t[-1] / dt - 1e-9))
-        tg = dt * np.arange(n_grid)
-        # the row whose voltage holds over most of the step: the last one at or before its middle
-        # (rows jittered by ±ε around the grid would otherwise lag a whole step half of the time)
-        idx = np.clip(np.searchsorted(t, tg + 0.5 * dt, side="right") - 1, 0, t.size - 1)
-        grid_v = np.asarray(voltage, dtype=float)[idx]
+        # each row's voltage holds until the next row: the step's voltage is the mean of that
+        # staircase over the step (its integral is piecewise linear, so interpolation is exact),
+        # not the row nearest the step's middle, which is off by up to half a row period when the
+        # rows are irregular (an FTC loop of 10-40 ms)
+        v = np.asarray(voltage, dtype=float)
+        integral = np.concatenate([[0.0], np.cumsum(v[:-1] * steps)])
+        edges = np.interp(dt * np.arange(n_grid + 1), t, integral, right=np.nan)
+        edges = np.where(np.isnan(edges), integral[-1] + v[-1] * (dt * np.arange(n_grid + 1) - t[-1]), edges)
+        grid_v = np.diff(edges) / dt
     grid_theta = grid_angle(t, np.asarray(position, dtype=float), dt, grid_v.size)
     # Moving at the first sample: the angle changes by more than two quanta within the first samples.
     # Three samples: a step applied right after the first row must not count as motion at the start.

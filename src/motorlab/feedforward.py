@@ -471,7 +471,12 @@ def from_cli(experiment: str, paths: list[str], args: argparse.Namespace) -> Fit
     """Run ``motorlab analyze feedforward FILE...``."""
     cpr = getattr(args, "cpr", None)
     runs = read_runs(paths, cpr=cpr)
-    result = feedforward(runs, mechanism=getattr(args, "mechanism", "simple"), cpr=cpr)
+    if any(r.metadata.get("ramp") in ("lateral", "angular") for r in runs):  # Road Runner's other ramps
+        from motorlab.analyses.roadrunner import from_runs
+
+        result = from_runs(runs, cpr=cpr, mechanism=getattr(args, "mechanism", "simple"))
+    else:
+        result = feedforward(runs, mechanism=getattr(args, "mechanism", "simple"), cpr=cpr)
     resistance = getattr(args, "resistance", None)
     if resistance is not None:
         result.parameters.update(

@@ -75,8 +75,9 @@ def _numbers(text: str) -> list[float]:
 def test_snippets_contain_the_gains(target, language):
     loop = "velocity"
     g = design_velocity_lqr(FF.kV, FF.kA)
-    tg = to_target(g, FF, target, units=TICKS)
-    if language == "python" and target.startswith("ftc"):
+    units = MechanismUnits.from_options("rad", cpr=TICKS.cpr, wheel_radius=0.02) if target == "pedro" else TICKS
+    tg = to_target(g, FF, target, units=units)
+    if language == "python" and (target.startswith("ftc") or target in ("roadrunner", "pedro")):
         with pytest.raises(OptionError, match="Java or Kotlin"):
             emit_snippet(tg, language)
         return

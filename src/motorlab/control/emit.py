@@ -56,7 +56,7 @@ def emit_snippet(tg: TargetGains, language: str = "java") -> str:
     """
     if language not in LANGUAGES:
         raise OptionError(f"unknown language {language!r} (expected one of {', '.join(LANGUAGES)})")
-    if language == "python" and tg.target.startswith("ftc"):
+    if language == "python" and (tg.target.startswith("ftc") or tg.target in ("roadrunner", "pedro")):
         raise OptionError("FTC SDK OpModes are written in Java or Kotlin: use --emit java or --emit kotlin")
     c = _comment(language)
     vel = tg.loop == "velocity"
@@ -69,6 +69,10 @@ def emit_snippet(tg: TargetGains, language: str = "java") -> str:
     g, ff = tg.gains, tg.feedforward
     if tg.target == "ftc-pidf":
         body = _ftc_pidf(tg, language)
+    elif tg.target == "roadrunner":
+        body = _roadrunner(tg, language)
+    elif tg.target == "pedro":
+        body = _pedro(tg, language)
     else:
         consts = [("kP", "kP", g["kP"]), ("kI", "kI", g["kI"]), ("kD", "kD", g["kD"])]
         consts += [("kS", "kS", ff["kS"]), ("kV", "kV", ff["kV"]), ("kA", "kA", ff["kA"])]
@@ -216,3 +220,54 @@ def _ftc_pidf(tg: TargetGains, language: str) -> list[str]:
         f"motor.setVelocityPIDFCoefficients({_num(g['kP'])}, {_num(g['kI'])}, {_num(g['kD'])}, {_num(g['kF'])}){semi}",
         f"motor.setVelocity(targetTicksPerSecond){semi}  // ticks/s",
     ]
+
+
+def _roadrunner(tg: TargetGains, language: str) -> list[str]:
+    """Road Runner quickstart fields: Java declarations for ``Params``, Kotlin assignments to ``PARAMS``."""
+    names: list[str] = [k for k in ("inPerTick", "lateralInPerTick", "trackWidthTicks", "kS", "kV", "kA")
+                        if k in tg.feedforward]
+    values = {**tg.feedforward, **tg.gains}
+    names += list(tg.gains)
+    if language == "java":
+        lines = ["", "// MecanumDrive.java (TankDrive.java: the same feedforward fields), class Params:"]
+        lines += [f"public double {k} = {_num(values[k])};  // {tg.units.get(k, '')}" for k in names]
+        return lines
+    lines = ["", "// Kotlin: set the quickstart's PARAMS before building the drive (TankDrive.PARAMS likewise)",
+             "MecanumDrive.PARAMS.apply {"]
+    lines += [f"    {k} = {_num(values[k])}  // {tg.units.get(k, '')}" for k in names]
+    return [*lines, "}"]
+
+
+def _pedro(tg: TargetGains, language: str) -> list[str]:
+    """Pedro Pathing Constants: MecanumConstants and FollowerConstants builders."""
+    ff = tg.feedforward
+    java = language == "java"
+    drive = [f".xVelocity({_num(ff['xVelocity'])})  // in/s at full power",
+             f".yVelocity({_num(ff['yVelocity'])})  // in/s, lateral ratio × xVelocity" if "yVelocity" in ff
+             else "// .yVelocity(lateral_ratio * xVelocity)  // from the lateral ramp",
+             f".nominalVoltage({_num(ff['nominalVoltage'])})",
+             f".staticFrictionCoefficient({_num(ff['staticFrictionCoefficient'])})"]
+    follower = []
+    if "forwardZeroPowerAcceleration" in ff:
+        follower.append(f".forwardZeroPowerAcceleration({_num(ff['forwardZeroPowerAcceleration'])})  // in/s^2")
+    follower.append(f"// drive PIDF from the position gains: P = {_num(tg.gains['driveP'])} power/in, "
+                    f"D = {_num(tg.gains['driveD'])} power*s/in")
+    if java:
+        head_d = "public static MecanumConstants driveConstants = new MecanumConstants()"
+        head_f = "public static FollowerConstants followerConstants = new FollowerConstants()"
+        end = ";"
+    else:
+        head_d, head_f = "val driveConstants = MecanumConstants()", "val followerConstants = FollowerConstants()"
+        end = ""
+    out = ["", "// Constants (Pedro Pathing quickstart)", head_d]
+    out += ["        " + line for line in drive]
+    out[-1] += end
+    out.append(head_f)
+    chained = [line for line in follower if line.startswith(".")]
+    comments = [line for line in follower if not line.startswith(".")]
+    out += ["        " + line for line in chained]
+    if chained:
+        out[-1] = out[-1].replace("  //", end + "  //", 1) if "  //" in out[-1] else out[-1] + end
+    else:
+        out[-1] += end
+    return out + comments

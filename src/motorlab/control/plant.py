@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from os import PathLike
 from pathlib import Path
 from typing import Any
@@ -86,6 +86,10 @@ class MechanismUnits:
         return value * self.per_radian
 
 
+#: Road Runner ramp results a plant may carry (motorlab.analyses.roadrunner).
+GEOMETRY = ("lateral_ratio", "track_width_ticks")
+
+
 @dataclass(frozen=True)
 class Plant:
     """What the tuner knows about the motor.
@@ -98,11 +102,15 @@ class Plant:
         The full motor model, when K, R, J are known (simulated instead of the feedforward plant).
     source
         Where the numbers came from (for reports).
+    geometry
+        Drive geometry from Road Runner ramps (``lateral_ratio`` [-], ``track_width_ticks`` [tick]), when
+        the ``analyze --json`` file has it (for ``--target roadrunner`` / ``pedro``).
     """
 
     feedforward: Feedforward
     params: MotorParams | None = None
     source: str = ""
+    geometry: dict[str, float] = field(default_factory=dict)
 
     @property
     def simulated(self) -> MotorParams | Feedforward:
@@ -183,7 +191,7 @@ def load_plant(paths: list[str | PathLike[str]], *, unit: str | None = None) -> 
         For unreadable JSON, non-numeric values, or files without usable parameters.
     """
     merged: dict[str, float] = {}
-    names = (*PARAMETER_NAMES, "kS", "kV", "kA")
+    names = (*PARAMETER_NAMES, "kS", "kV", "kA", *GEOMETRY)
     for path in paths:
         try:
             raw = Path(path).read_bytes()
@@ -228,7 +236,7 @@ def load_plant(paths: list[str | PathLike[str]], *, unit: str | None = None) -> 
             params = MotorParams.from_dict(merged)
         if "kV" in merged and "kA" in merged:
             ff = Feedforward(max(merged.get("kS", 0.0), 0.0), merged["kV"], merged["kA"]).check_plant()
-            return Plant(ff, params, source)
+            return Plant(ff, params, source, {k: merged[k] for k in GEOMETRY if k in merged})
     except InputError as exc:
         raise LogFormatError(exc.message, path=paths[-1] if len(paths) == 1 else source) from None
     if params is not None:

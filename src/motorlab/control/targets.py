@@ -23,6 +23,25 @@ Targets
     period and internal scaling are undocumented, and community reverse engineering (wiki
     "(FTC) Motor PIDs", github.com/cwm9cwm9/TTGT-FTC-FRC) describes a velocity-form algorithm whose
     P and I roles differ. Treat these P/I/D as a starting point; F is the reliable part.
+``roadrunner``
+    Road Runner 1.0's ``MecanumDrive.PARAMS`` / ``TankDrive.PARAMS`` (road-runner-quickstart
+    ``MecanumDrive.java``): kS [V], kV [V per tick/s], kA [V per tick/s²] "in tick units" (the drive
+    builds ``MotorFeedforward(kS, kV / inPerTick, kA / inPerTick)`` on inches), and the path
+    controller gains of ``HolonomicController``: a position error e [in] becomes a velocity command
+    axialGain·e that the feedforward turns into kV·axialGain·e volts, so axialGain = kP/kV [1/s] and
+    axialVelGain = kD/kV [-] (velocity loop: axialVelGain = kP/kV); the lateral and heading gains are
+    given the same values (the same wheels do the work). inPerTick = 2π·r/cpr with ``--wheel-radius``.
+``pedro``
+    Pedro Pathing's tuner constants (Pedro-Pathing/PedroPathing ``MecanumConstants``,
+    ``FollowerConstants``; Quickstart ``Tuning.java``): ``xVelocity`` [in/s], the forward speed at full
+    power (ForwardVelocityTuner) = (V − kS)/kV; ``forwardZeroPowerAcceleration`` [in/s², negative], the
+    coasting deceleration with the motors floating (ForwardZeroPowerAccelerationTuner:
+    ``startTeleopDrive(false)``): open terminals leave friction only, −(kS + (kV − K)·v)/kA, given as
+    −kS/kA (K = kV, no viscous friction: the smallest magnitude); ``staticFrictionCoefficient`` =
+    kS / nominalVoltage (the share of the battery that static friction takes, in
+    ``Mecanum.getVoltageNormalized``); the drive PIDF (P, D on the remaining distance [in] → power)
+    from the position gains. ``yVelocity`` and ``lateralZeroPowerAcceleration`` need the lateral
+    ramp's ratio (``analyze feedforward … lateral.json``): yVelocity = lateral_ratio·xVelocity.
 """
 
 from __future__ import annotations
@@ -35,7 +54,10 @@ from motorlab.control.design import Feedforward, Gains
 from motorlab.control.plant import MechanismUnits
 from motorlab.errors import OptionError
 
-TARGETS = ("volts", "wpilib", "ftc-power", "ftc-pidf")
+TARGETS = ("volts", "wpilib", "ftc-power", "ftc-pidf", "roadrunner", "pedro")
+
+#: Metres per inch.
+INCH = 0.0254
 
 #: Full-scale output of the REV Expansion/Control Hub motor controller (16-bit signed duty).
 HUB_FULL_SCALE = 32767.0
@@ -113,6 +135,7 @@ def to_target(
     *,
     units: MechanismUnits | None = None,
     voltage: float = 12.0,
+    geometry: dict[str, float] | None = None,
 ) -> TargetGains:
     """Convert SI gains (volts per rad) and feedforward to a controller's units.
 
@@ -129,6 +152,9 @@ def to_target(
         (required by the FTC targets, which count ticks). Default: radians.
     voltage
         Nominal battery voltage for power and duty conversions [V].
+    geometry
+        Road Runner ramp results (``lateral_ratio``, ``track_width_ticks``) for ``roadrunner`` and
+        ``pedro``.
 
     Returns
     -------
@@ -165,6 +191,10 @@ def to_target(
         }
         g_user, ff_user = gains.scaled(n).to_dict(), feedforward.scaled(n).to_dict()
         return TargetGains(target, loop, g_user, ff_user, unit_map, conv, [], feedforward, gains.period, voltage)
+    if target == "roadrunner":
+        return _roadrunner(gains, feedforward, units, voltage, geometry or {})
+    if target == "pedro":
+        return _pedro(gains, feedforward, units, voltage, geometry or {})
     if units.cpr is None:
         raise OptionError(f"target {target} works in encoder ticks: give --cpr (counts per revolution)")
     ticks_per_rad = units.cpr / (2 * math.pi)
@@ -185,7 +215,100 @@ def to_target(
             "velocity": "tick/s",
         }
         return TargetGains(target, loop, g_pow, ff_pow, unit_map, conv, [], feedforward, gains.period, voltage)
-    # ftc-pidf
+    return _ftc_pidf(gains, feedforward, units, voltage)
+
+
+def _roadrunner(gains: Gains, feedforward: Feedforward, units: MechanismUnits, voltage: float,
+                geometry: dict[str, float]) -> TargetGains:
+    """Road Runner 1.0 drive PARAMS (see the module docstring)."""
+    if units.cpr is None:
+        raise OptionError("target roadrunner counts ticks: give --cpr (counts per revolution of the encoder the "
+                          "gains were measured at)")
+    rad_per_tick = 2 * math.pi / units.cpr
+    ff = {"kS": feedforward.kS, "kV": feedforward.kV * rad_per_tick, "kA": feedforward.kA * rad_per_tick}
+    kv = feedforward.kV
+    if gains.loop == "position":
+        path = {"axialGain": gains.kP / kv, "axialVelGain": gains.kD / kv}
+    else:
+        path = {"axialGain": 0.0, "axialVelGain": gains.kP / kv}
+    g = {**path, "lateralGain": path["axialGain"], "lateralVelGain": path["axialVelGain"],
+         "headingGain": path["axialGain"], "headingVelGain": path["axialVelGain"]}
+    unit_map = {
+        "kS": "V", "kV": "V*s/tick", "kA": "V*s^2/tick", "axialGain": "1/s", "lateralGain": "1/s",
+        "headingGain": "1/s", "axialVelGain": "1", "lateralVelGain": "1", "headingVelGain": "1",
+        "output": "V", "position": "tick", "velocity": "tick/s", "inPerTick": "in/tick",
+    }
+    conv = [
+        f"ticks: cpr = {units.cpr:g}; kV, kA [V per rad/s, rad/s²] × 2π/cpr = × {rad_per_tick:.6g} per tick",
+        f"path gains: axialGain = kP/kV = {gains.kP:.6g}/{kv:.6g}; axialVelGain = kD/kV (HolonomicController "
+        "turns a pose error into a velocity command that the feedforward converts to volts)",
+    ]
+    notes = ["kS, kV, kA are for the encoder whose cpr was given (dead wheels or drive motors): the same "
+             "encoder as Road Runner's inPerTick"]
+    if "track_width_ticks" in geometry:
+        ff["trackWidthTicks"] = geometry["track_width_ticks"]
+        unit_map["trackWidthTicks"] = "tick"
+    free = feedforward.free_speed(voltage)
+    if units.name == "m":
+        in_per_tick = units.per_radian * rad_per_tick / INCH
+        ff["inPerTick"] = in_per_tick
+        if "lateral_ratio" in geometry:
+            ff["lateralInPerTick"] = geometry["lateral_ratio"] * in_per_tick
+            unit_map["lateralInPerTick"] = "in/tick"
+            conv.append(f"lateralInPerTick = lateral_ratio × inPerTick = {geometry['lateral_ratio']:.6g} × inPerTick")
+        conv.append(f"inPerTick = 2π·r/cpr = {in_per_tick:.6g} in (wheel radius {units.per_radian:g} m)")
+        notes.append(f"maxWheelVel must stay below the free speed (V − kS)/kV = {free * units.per_radian / INCH:.4g} "
+                     f"in/s at {voltage:g} V")
+    else:
+        notes.append("give --wheel-radius (the encoder's wheel) to get inPerTick")
+    return TargetGains("roadrunner", gains.loop, g, ff, unit_map, conv, notes, feedforward, gains.period, voltage)
+
+
+def _pedro(gains: Gains, feedforward: Feedforward, units: MechanismUnits, voltage: float,
+           geometry: dict[str, float]) -> TargetGains:
+    """Pedro Pathing tuner constants (see the module docstring)."""
+    if units.name != "m":
+        raise OptionError("target pedro works in inches: give --wheel-radius (the radius of the wheel the gains "
+                          "were measured at: a dead wheel or a drive wheel)")
+    in_per_rad = units.per_radian / INCH
+    free = feedforward.free_speed(voltage)
+    if free <= 0:
+        raise OptionError(f"at {voltage:g} V the drive does not move (kS = {feedforward.kS:.3g} V)")
+    ff = {"xVelocity": free * in_per_rad, "staticFrictionCoefficient": feedforward.kS / voltage,
+          "nominalVoltage": voltage}
+    if feedforward.kA > 0:
+        ff["forwardZeroPowerAcceleration"] = -feedforward.kS / feedforward.kA * in_per_rad
+    if "lateral_ratio" in geometry:
+        ff["yVelocity"] = geometry["lateral_ratio"] * ff["xVelocity"]
+    power_per_in = 1.0 / (voltage * in_per_rad)
+    g = {"driveP": gains.kP * power_per_in, "driveD": gains.kD * power_per_in} if gains.loop == "position" else \
+        {"driveP": 0.0, "driveD": gains.kP * power_per_in}
+    unit_map = {"xVelocity": "in/s", "yVelocity": "in/s", "forwardZeroPowerAcceleration": "in/s^2",
+                "staticFrictionCoefficient": "1",
+                "nominalVoltage": "V", "driveP": "power/in", "driveD": "power*s/in", "output": "power",
+                "position": "in", "velocity": "in/s", "kS": "V", "kV": "V*s/in", "kA": "V*s^2/in"}
+    conv = [
+        f"inches: wheel radius {units.per_radian:g} m = {in_per_rad:.6g} in per rad",
+        f"xVelocity = (V − kS)/kV at {voltage:g} V = {ff['xVelocity']:.6g} in/s",
+        f"drive P, D [power per in]: kP, kD [V per rad] / {voltage:g} V / {in_per_rad:.6g}",
+    ]
+    notes = [
+        "forwardZeroPowerAcceleration = −kS/kA assumes no viscous friction (K = kV): the coasting deceleration "
+        "is at least this large; give --K to the analysis for the viscous part",
+        "yVelocity = lateral_ratio × xVelocity needs the lateral ramp (motorlab analyze feedforward forward.json "
+        "lateral.json); lateralZeroPowerAcceleration is not determined (strafing friction differs)",
+        "staticFrictionCoefficient = kS / nominalVoltage (our reading of Mecanum.getVoltageNormalized)",
+    ]
+    if feedforward.kA <= 0:
+        notes.append("kA not determined: forwardZeroPowerAcceleration not determined")
+    return TargetGains("pedro", gains.loop, g, ff, unit_map, conv, notes, feedforward, gains.period, voltage)
+
+
+def _ftc_pidf(gains: Gains, feedforward: Feedforward, units: MechanismUnits, voltage: float) -> TargetGains:
+    """The REV hub's velocity PIDF (see the module docstring)."""
+    target, loop = "ftc-pidf", gains.loop
+    assert units.cpr is not None
+    ticks_per_rad = units.cpr / (2 * math.pi)
     if loop != "velocity":
         raise OptionError(
             "target ftc-pidf is the hub's velocity loop (setVelocityPIDFCoefficients); "

@@ -118,8 +118,10 @@ class TuneResult:
         }
 
     def _display_per_radian(self) -> float:
-        if self.target.target.startswith("ftc"):
+        if self.target.target.startswith("ftc") or self.target.target == "roadrunner":
             return (self.units.cpr or 2 * math.pi) / (2 * math.pi)
+        if self.target.target == "pedro":
+            return self.units.per_radian / 0.0254  # inches
         return self.units.per_radian
 
     def plot(self, *, fig: Any = None) -> Any:
@@ -227,7 +229,7 @@ def tune(
         gains = replace(gains, settings={**gains.settings, **user})
     else:
         gains = design_pid_poles(loop, ff, rise_time=rise_time, overshoot=overshoot, period=period, delay=delay)
-    tg = to_target(gains, ff, target, units=units, voltage=voltage)
+    tg = to_target(gains, ff, target, units=units, voltage=voltage, geometry=plant.geometry)
     limits = max_profile(ff, voltage)
     free = ff.free_speed(voltage)
     if free <= 0:

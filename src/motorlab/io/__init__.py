@@ -16,6 +16,8 @@ SysId JSON                :func:`read_sysid_json`
 frc-characterization      :func:`read_frc_char_json`
 WPILib data log           :func:`read_wpilog`                     :func:`write_wpilog`,
                                                                   :func:`write_sysid_wpilog`
+Road Runner ramp (.json)  :func:`read_roadrunner_ramp`            :func:`write_roadrunner_ramp`
+Road Runner flight .log   :func:`read_flight_recorder`            :func:`write_flight_log`
 ========================  ======================================  ==================================
 """
 
@@ -30,8 +32,10 @@ from typing import Any
 from motorlab.errors import LogFormatError, OptionError
 from motorlab.io._text import PathArg, is_number, read_bytes
 from motorlab.io.csv_table import COLUMNS, guess_delimiter, is_known_header, read_csv, split_fields, write_csv
+from motorlab.io.flightrecorder import read_flight_log_channels, read_flight_recorder, write_flight_log
 from motorlab.io.frc_json import read_frc_char_json, read_sysid_json
 from motorlab.io.ftc import read_ftc_log, write_ftc_log
+from motorlab.io.roadrunner import read_roadrunner_ramp, write_roadrunner_ramp
 from motorlab.io.scope import find_rising_edges, read_scope_times, read_scope_waveform
 from motorlab.io.wpilog import (
     WpilogEntry,
@@ -51,10 +55,13 @@ READERS: dict[str, Callable[..., Recording]] = {
     "sysid-json": read_sysid_json,
     "frc-char-json": read_frc_char_json,
     "wpilog": read_wpilog,
+    "roadrunner-ramp": read_roadrunner_ramp,
+    "roadrunner-log": read_flight_recorder,
 }
 
 _CHANNEL = re.compile(r"^ch\d+(_v)?$", re.IGNORECASE)
 _SYSID_FLAG = re.compile(r'"sysid"\s*:\s*true')
+_RR_RAMP = re.compile(r'"(forwardEncPositions|perpEncPositions|angVels)"\s*:')
 
 
 def detect_format(path: PathArg) -> str:
@@ -69,12 +76,16 @@ def detect_format(path: PathArg) -> str:
     extension = os.path.splitext(name)[1].lower()
     if raw[:6] == b"WPILOG" or extension == ".wpilog":
         return "wpilog"
+    if raw[:4] in (b"RR\x00\x00", b"RR\x00\x01"):  # Road Runner FlightRecorder (LogFile.kt)
+        return "roadrunner-log"
     if not raw.strip():
         raise LogFormatError("the file is empty", path=name)
     if b"\0" in raw:
         raise LogFormatError("not a text file (it contains binary data) and not a WPILib data log", path=name)
     text = raw.decode("utf-8-sig", errors="replace")
     if extension == ".json" or text.lstrip().startswith("{"):
+        if _RR_RAMP.search(text):
+            return "roadrunner-ramp"
         return "sysid-json" if _SYSID_FLAG.search(text) else "frc-char-json"
     lines = [line.strip() for line in text.splitlines()]
     lines = [line for line in lines if line and not line.startswith("#")]
@@ -150,15 +161,20 @@ __all__ = [
     "find_rising_edges",
     "read_any",
     "read_csv",
+    "read_flight_log_channels",
+    "read_flight_recorder",
     "read_frc_char_json",
     "read_ftc_log",
+    "read_roadrunner_ramp",
     "read_scope_times",
     "read_scope_waveform",
     "read_sysid_json",
     "read_wpilog",
     "read_wpilog_entries",
     "write_csv",
+    "write_flight_log",
     "write_ftc_log",
+    "write_roadrunner_ramp",
     "write_sysid_wpilog",
     "write_wpilog",
 ]

@@ -84,6 +84,10 @@ class INA219:
         Highest supply setting allowed with the sensor in circuit [V] (seed 1: "do NOT set the
         voltage on the power supply to anything higher than 16 volts ... a high voltage will fry the
         sensor").
+    averaging
+        Samples averaged per result (1, 2, 4 … 128; the seed's sensor: 128).
+    conversion_time
+        Time of one 12-bit conversion [s] (532 µs, datasheet).
     """
 
     shunt_resistance: float = 0.1
@@ -96,6 +100,34 @@ class INA219:
     bus_offset: float = 0.0
     current_offset: float = -1e-3
     max_supply_voltage: float = 16.0
+    averaging: int = 1
+    conversion_time: float = 532e-6
+
+    @property
+    def result_period(self) -> float:
+        """Time of one (averaged) result [s]: ``averaging`` × 532 µs at 12 bits (128 samples: 68.1 ms)."""
+        return self.averaging * self.conversion_time
+
+    def conversion_average(self, times: np.ndarray, grid_time: np.ndarray, grid_value: np.ndarray) -> np.ndarray:
+        """What the register holds at ``times`` [s]: the mean of the input over the last completed result.
+
+        The INA219 converts continuously; with ``averaging`` = n (CONFIG BADC/SADC, datasheet SBOS448
+        Table 5: 2 … 128 samples, 1.06 … 68.10 ms) the register is updated once per n·532 µs with the
+        mean of those n conversions. A reading at t therefore shows the input averaged over
+        [t_k − T, t_k], t_k the last completion before t: between T/2 and 3T/2 old (T = 68.1 ms with
+        128 samples).
+        """
+        t = np.asarray(times, dtype=float)
+        gt = np.asarray(grid_time, dtype=float)
+        gv = np.asarray(grid_value, dtype=float)
+        if self.averaging <= 1:
+            return np.interp(t, gt, gv)
+        period = self.result_period
+        integral = np.concatenate([[0.0], np.cumsum(0.5 * (gv[1:] + gv[:-1]) * np.diff(gt))])
+        done = np.floor((t - gt[0]) / period) * period + gt[0]
+        start = done - period
+        mean = (np.interp(done, gt, integral) - np.interp(start, gt, integral)) / period
+        return np.where(start >= gt[0], mean, gv[0])
 
     @property
     def current_lsb(self) -> float:

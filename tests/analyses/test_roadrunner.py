@@ -1,0 +1,64 @@
+"""Road Runner ramps round-tripped on the simulated mecanum drive (known truth, several seeds)."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from motorlab.cli import main
+from motorlab.feedforward import feedforward
+from motorlab.io import read_any
+from motorlab.rig.ftc import simulate_ramp
+
+
+@pytest.mark.parametrize("seed", [11, 12, 13])
+def test_forward_ramp_gains_with_known_truth(tmp_path, seed):
+    path = tmp_path / "forward.json"
+    truth = simulate_ramp(path, seed=seed)
+    assert truth["wrapped_samples"] > 0
+    assert truth["min_bus_voltage"] < 13.0
+    result = feedforward(read_any(path, cpr=truth["cpr"]), cpr=truth["cpr"])
+    ks, kv, ka = result["kS"], result["kV"], result["kA"]
+    assert ks.value == pytest.approx(truth["kS"], rel=0.05)
+    assert kv.value == pytest.approx(truth["kV"], rel=0.02)
+    for est in (ks, kv, ka):
+        assert abs(est.value - truth[est.name]) < 3.5 * est.stderr, est
+    assert ka.determined  # the break-away at the start of the ramp shows the inertia
+
+
+def test_cli_all_three_ramps(tmp_path, capsys):
+    paths = {k: tmp_path / f"{k}.json" for k in ("forward", "lateral", "angular")}
+    truths = {k: simulate_ramp(p, kind=k, seed=5) for k, p in paths.items()}
+    code = main(["analyze", "feedforward", *map(str, paths.values()), "--cpr", "8192", "--json"])
+    out = capsys.readouterr().out
+    assert code == 0
+    params = json.loads(out)["parameters"]
+    truth = truths["forward"]
+    for name in ("kS", "kV", "track_width_ticks", "lateral_ratio"):
+        est = params[name]
+        assert abs(est["value"] - truth[name]) < 4 * est["stderr"], name
+    assert params["track_width_ticks"]["value"] == pytest.approx(truth["track_width_ticks"], rel=0.005)
+    assert params["lateral_multiplier"]["value"] == pytest.approx(1 / truth["lateral_ratio"], rel=0.005)
+    assert params["par0_y_ticks"]["unit"] == "tick"
+
+
+def test_side_ramps_need_the_forward_one(tmp_path, capsys):
+    path = tmp_path / "lateral.json"
+    simulate_ramp(path, kind="lateral", seed=1)
+    assert main(["analyze", "feedforward", str(path), "--cpr", "8192"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1
+    assert "forward ramp" in err[0]
+
+
+def test_angular_ramp_with_drive_encoders(tmp_path, capsys):
+    path = tmp_path / "angular.json"
+    truth = simulate_ramp(path, kind="angular", drive_encoder_cpr=538, seed=4)
+    assert main(["analyze", "feedforward", str(path), "--cpr", "538", "--json"]) == 0
+    params = json.loads(capsys.readouterr().out)["parameters"]
+    tw = params["track_width_ticks"]
+    assert abs(tw["value"] - truth["drive_track_width_ticks"]) < 4 * tw["stderr"]
+    assert tw["value"] == pytest.approx(truth["drive_track_width_ticks"], rel=0.002)
+    # the feedforward of the turning wheels, fitted from the same file as the page does
+    assert params["kV"]["value"] == pytest.approx(0.3438, rel=0.01)

@@ -1,0 +1,125 @@
+"""Road Runner ramp logs: reader, 16-bit velocity repair, errors (format: road-runner-ftc Tuning.kt)."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from motorlab.cli import main
+from motorlab.errors import LogFormatError, OptionError
+from motorlab.io import detect_format, read_any, read_roadrunner_ramp
+from motorlab.io.roadrunner import drive_voltage, read_ramp_data, repair_velocity
+from motorlab.rig.ftc import simulate_ramp, wrap_int16
+
+
+@pytest.fixture(scope="module")
+def ramp(tmp_path_factory):
+    path = tmp_path_factory.mktemp("rr") / "forward-ramp.json"
+    truth = simulate_ramp(path, seed=3)
+    return path, truth
+
+
+def test_repair_recovers_wrapped_hub_velocities():
+    rng = np.random.default_rng(0)
+    true = 20 * rng.integers(-12_000, 12_000, 2000)  # up to ±240 000 ticks/s, multiples of 20
+    wrapped = wrap_int16(true)
+    assert np.any(wrapped != true)
+    estimate = true + rng.normal(0, 40_000, true.size)  # central differences can be this far off
+    np.testing.assert_array_equal(repair_velocity(wrapped, estimate), true)
+    # negated readings (a reversed encoder) are recovered too
+    np.testing.assert_array_equal(repair_velocity(-wrapped, -estimate), -true)
+
+
+def test_reader_gives_voltage_position_and_repaired_velocity(ramp):
+    path, truth = ramp
+    assert truth["wrapped_samples"] > 50  # the simulated dead wheels do overflow
+    assert detect_format(path) == "roadrunner-ramp"
+    rec = read_any(path, cpr=truth["cpr"])
+    data = read_ramp_data(path)
+    raw = json.loads(path.read_text())
+    n = len(raw["voltages"]["values"])
+    assert len(rec) == n - 3  # the tuning page drops the first sample and the last two
+    power = np.asarray(raw["powers"][0]["values"])[1:-2]
+    applied = power * np.asarray(raw["voltages"]["values"])[1:-2]
+    np.testing.assert_allclose(drive_voltage(data), applied)
+    # the recording holds each interval's mean (powers held, battery noise smoothed)
+    np.testing.assert_allclose(rec["voltage"], applied, rtol=0.02, atol=0.03)
+    counts = np.mean([np.asarray(p["values"])[1:-2] for p in raw["forwardEncPositions"]], axis=0)
+    np.testing.assert_allclose(rec["position"], counts * 2 * math.pi / truth["cpr"])
+    assert rec.metadata["repaired"]
+    assert rec.metadata["warnings"]
+    speed = np.gradient(rec["counts"], rec.time)
+    assert all(np.all(np.mod(v, 20) == 0) for v in data.velocities.values())
+    vel = np.mean(list(data.velocities.values()), axis=0)
+    assert np.median(np.abs(vel - speed)) < 0.02 * np.max(np.abs(speed))  # no wrap left
+    assert np.all(drive_voltage(data) >= 0)
+
+
+def test_needs_cpr_and_names_the_file(ramp, capsys):
+    path, _ = ramp
+    with pytest.raises(OptionError, match="--cpr"):
+        read_roadrunner_ramp(path)
+    assert main(["analyze", "feedforward", str(path)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1
+    assert "cpr" in err[0]
+
+
+def test_lowercase_drive_type_and_missing_flags(tmp_path, ramp):
+    path, truth = ramp
+    raw = json.loads(path.read_text())
+    raw["type"] = "mecanum"
+    del raw["forwardEncFixVels"]  # older files: every encoder is repaired
+    other = tmp_path / "old.json"
+    other.write_text(json.dumps(raw))
+    rec = read_roadrunner_ramp(other, cpr=truth["cpr"])
+    assert rec.metadata["drive"] == "mecanum"
+    assert rec.metadata["repaired"]
+
+
+@pytest.mark.parametrize(
+    ("edit", "message"),
+    [
+        (lambda d: d.pop("voltages"), "not a Road Runner ramp"),
+        (lambda d: d["powers"][1]["values"].pop(), "times but"),
+        (lambda d: d.__setitem__("type", "SWERVE"), "neither mecanum nor tank"),
+        (lambda d: d["forwardEncPositions"][0].__setitem__("values", "x"), "lists of numbers"),
+        (lambda d: d.__setitem__("forwardEncFixVels", [True]), "true/false"),
+    ],
+)
+def test_bad_files_give_one_clear_error(tmp_path, ramp, edit, message):
+    path, truth = ramp
+    raw = json.loads(path.read_text())
+    edit(raw)
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps(raw, indent=2))
+    with pytest.raises(LogFormatError, match=message) as info:
+        read_roadrunner_ramp(bad, cpr=truth["cpr"])
+    assert "bad.json" in str(info.value)
+
+
+def test_truncated_json_names_the_line(tmp_path, ramp):
+    path, truth = ramp
+    bad = tmp_path / "cut.json"
+    bad.write_text(path.read_text()[:5000])
+    with pytest.raises(LogFormatError, match=r"cut.json:\d+: not valid JSON"):
+        read_roadrunner_ramp(bad, cpr=truth["cpr"])
+
+
+def test_real_hub_overflow_log_is_repaired():
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "data" / "real" / "roadrunner-overflow-enc1.csv"
+    raw = np.genfromtxt(path, delimiter=",", skip_header=1)
+    pos, vel, t = raw[:, 0], raw[:, 1], raw[:, 2]
+    estimate = np.gradient(pos, t)
+    assert np.all(np.abs(vel) < 2**15)
+    assert np.median(np.abs(estimate)) > 2e5
+    fixed = repair_velocity(vel, estimate)
+    assert np.all(np.mod(fixed - vel, 2**16) == 0)  # only whole wraps added
+    assert np.all(np.mod(fixed, 20) == 0)  # the hub's 50 ms window
+    inner = slice(1, -1)
+    assert np.median(np.abs(fixed[inner] - estimate[inner]) / np.abs(estimate[inner])) < 0.01
