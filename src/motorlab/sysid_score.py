@@ -1,0 +1,353 @@
+"""The fair score of a feedforward gain set on a SysId log: open-loop simulation from the logged voltage.
+
+Each test (both sides of a drivetrain count as tests of their own) is simulated from the voltage it
+logged, held per row, starting from the logged speed at the test's first row:
+
+    kA·dv/dt = V − kS·sgn(v) − kV·v,      dx/dt = v,      x(t₀) = logged first position,
+
+and the score is the RMSE, over every row of every test, of (a) the simulated speed against the
+logged speed and (b) the simulated position against the logged position
+(``shared/data/real/sysid/README.md``). The simulation is exact for a voltage held between rows: the
+speed relaxes exponentially towards (V − kS·s)/kV with τ = kA/kV between sign events, and a shaft
+that reaches zero speed stays at rest while |V| ≤ kS (static friction), so no step size enters the
+score. A negative kS (as some teams' own fits give) simply pushes away from rest.
+
+The score sees only (kS, kV, kA): it is what a three-gain feedforward pasted into robot code does
+with the logged commands. :func:`fit_gains` finds the three gains that minimise it (an output-error
+fit, each score weighed by its own size) — see docs/real-logs.md.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from motorlab.errors import FitError, OptionError
+from motorlab.recording import Recording
+
+#: Largest exponent range handled in one vectorised block of the linear recursion.
+_BLOCK_EXPONENT = 400.0
+
+
+@dataclass(frozen=True)
+class ScoreTest:
+    """One test of one side: time [s], held voltage [V], logged position and speed (SI: rad or m)."""
+
+    name: str
+    time: np.ndarray
+    voltage: np.ndarray
+    position: np.ndarray
+    velocity: np.ndarray
+
+
+@dataclass(frozen=True)
+class Score:
+    """RMSE of the open-loop simulation against the logged speed [unit/s] and position [unit]."""
+
+    speed: float
+    position: float
+
+    def ratio(self, other: Score) -> tuple[float, float]:
+        """(speed, position) RMSE of this score over ``other``'s."""
+        return self.speed / other.speed, self.position / other.position
+
+
+def score_tests(recordings: Recording | Iterable[Recording]) -> list[ScoreTest]:
+    """The tests of SysId recordings (one per ``Recording.split()`` part) as :class:`ScoreTest`.
+
+    Raises
+    ------
+    OptionError
+        A part without ``voltage``, ``position`` and ``velocity`` or with fewer than 3 rows.
+    """
+    recs = [recordings] if isinstance(recordings, Recording) else list(recordings)
+    tests = []
+    for rec in recs:
+        for part in rec.split():
+            if not part.has("voltage", "position", "velocity") or len(part) < 3:
+                raise OptionError(f"{part.source or 'recording'}: the score needs voltage, position and velocity rows")
+            name = part.metadata.get("segment") or part.source
+            tests.append(ScoreTest(str(name), part.time - part.time[0], part["voltage"], part["position"],
+                                   part["velocity"]))
+    return tests
+
+
+def _linear_block(v0: float, dt: np.ndarray, u: np.ndarray, tau: float) -> tuple[np.ndarray, np.ndarray]:
+    """Speeds after each step and the distance of each step of τ·v' = u − v from v0 (no sign event)."""
+    if tau <= 0.0:
+        v = u.copy()
+        return v, u * dt
+    a = np.exp(-dt / tau)
+    if dt.size == 1:  # one step (possibly of many time constants): directly
+        v_end = a * v0 + (1.0 - a) * u
+        return v_end, u * dt + (v0 - u) * tau * (1.0 - a)
+    c = np.concatenate([[0.0], np.cumsum(dt / tau)])
+    # v_i = e^(−c_i)·(v0 + Σ_{j<i} (e^(c_{j+1}) − e^(c_j))·u_j): the recursion v_{j+1} = a_j·v_j + (1 − a_j)·u_j
+    e = np.exp(c)
+    acc = v0 + np.cumsum((e[1:] - e[:-1]) * u)
+    v = acc / e[1:]
+    v_start = np.concatenate([[v0], v[:-1]])
+    return v, u * dt + (v_start - u) * tau * (1.0 - a)
+
+
+def simulate_gains(ks: float, kv: float, ka: float, test: ScoreTest) -> tuple[np.ndarray, np.ndarray]:
+    """Simulated speed and position at the test's rows (see the module notes)."""
+    t, volts = test.time, test.voltage
+    n = t.size
+    dt = np.diff(t)
+    tau = ka / kv
+    speed = np.zeros(n)
+    step_dist = np.zeros(max(n - 1, 0))
+    speed[0] = test.velocity[0]
+    threshold = max(ks, 0.0)
+    k = 0
+    while k < n - 1:
+        v = speed[k]
+        if v == 0.0:
+            free = np.flatnonzero(np.abs(volts[k:n - 1]) > threshold)
+            if free.size == 0:
+                break  # at rest to the end
+            k += int(free[0])  # speed and distance stay 0 until then
+            s = math.copysign(1.0, volts[k])
+        else:
+            s = math.copysign(1.0, v)
+        stop = n - 1
+        if tau > 0:  # one block at a time: the exponentials stay within range
+            span = np.searchsorted(np.cumsum(dt[k:] / tau), _BLOCK_EXPONENT)
+            stop = min(n - 1, k + max(int(span), 1))
+        u = (volts[k:stop] - ks * s) / kv
+        v_new, dist = _linear_block(v, dt[k:stop], u, tau)
+        cross = np.flatnonzero(s * v_new <= 0.0)
+        if cross.size == 0:
+            speed[k + 1:stop + 1] = v_new
+            step_dist[k:stop] = dist
+            k = stop
+            continue
+        j = int(cross[0])
+        speed[k + 1:k + j + 1] = v_new[:j]
+        step_dist[k:k + j] = dist[:j]
+        k += j
+        speed[k + 1], step_dist[k] = _stop_within_step(speed[k], u[j], dt[k], tau, volts[k], ks, kv, threshold)
+        k += 1
+    position = test.position[0] + np.concatenate([[0.0], np.cumsum(step_dist)])
+    return speed, position
+
+
+def _stop_within_step(
+    v: float, u: float, dt: float, tau: float, volts: float, ks: float, kv: float, threshold: float
+) -> tuple[float, float]:
+    """(speed at the step's end, distance) when the speed reaches zero inside a step."""
+    t0 = dt if tau <= 0 or u == 0 else min(dt, tau * math.log((v - u) / -u))
+    dist = 0.0 if tau <= 0 else u * t0 + (v - u) * tau * (1.0 - math.exp(-t0 / tau))
+    rest = dt - t0
+    if rest <= 0 or abs(volts) <= threshold:
+        return 0.0, dist
+    s = math.copysign(1.0, volts)  # static friction overcome: off in the voltage's direction
+    u2 = (volts - ks * s) / kv
+    if tau <= 0:
+        return u2, dist + u2 * rest
+    decay = math.exp(-rest / tau)
+    return u2 * (1.0 - decay), dist + u2 * rest - u2 * tau * (1.0 - decay)
+
+
+def residuals(gains: Sequence[float], tests: Sequence[ScoreTest]) -> tuple[np.ndarray, np.ndarray]:
+    """Simulated minus logged speed and position, all tests' rows one after the other."""
+    ks, kv, ka = (float(g) for g in gains[:3])
+    if not (kv > 0 and ka >= 0 and math.isfinite(ks)):
+        raise OptionError(f"the score needs kV > 0 and kA ≥ 0, got kS={ks:g}, kV={kv:g}, kA={ka:g}")
+    rs, rp = [], []
+    for test in tests:
+        speed, position = simulate_gains(ks, kv, ka, test)
+        rs.append(speed - test.velocity)
+        rp.append(position - test.position)
+    return np.concatenate(rs), np.concatenate(rp)
+
+
+def score(gains: Sequence[float], tests: Sequence[ScoreTest]) -> Score:
+    """The fair score of (kS [V], kV [V·s/unit], kA [V·s²/unit]) on the tests (units as the tests')."""
+    rs, rp = residuals(gains, tests)
+    return Score(float(np.sqrt(np.mean(rs**2))), float(np.sqrt(np.mean(rp**2))))
+
+
+#: Weight of the position score against the speed score in :func:`fit_gains` (on the log scale).
+#: The feedforward is a speed model (kV·v + kA·a): a position error is the time integral of the speed
+#: errors, dominated by the long quasistatic tests where small kS/kV offsets accumulate, so it
+#: re-counts the speed residuals; it is given a quarter of the speed's weight. Chosen on the five
+#: shared logs (0.1 to 0.4 all beat the teams' gains on both scores there), see docs/real-logs.md.
+POSITION_WEIGHT = 0.25
+
+
+@dataclass
+class GainFit:
+    """Outcome of :func:`fit_gains`: gains (kS [V], kV [V·s/unit], kA [V·s²/unit]) and their HAC covariance."""
+
+    gains: np.ndarray
+    covariance: np.ndarray
+    score: Score
+    bandwidth: float
+    nfev: int
+
+
+def _objective(sc: Score, weight: float) -> float:
+    return math.log(sc.speed) + weight * math.log(sc.position)
+
+
+def fit_gains(
+    tests: Sequence[ScoreTest],
+    starts: Sequence[Sequence[float]],
+    *,
+    position_weight: float = POSITION_WEIGHT,
+    rounds: int = 6,
+) -> GainFit:
+    """The (kS, kV, kA) that minimise log RMSE_speed + w·log RMSE_position of the score.
+
+    Output error: every test is simulated from its logged voltage and first row, and the residuals
+    are those of the score. Each round weighs the speed and position residuals by the inverse of
+    their RMSE at the previous round's gains (iteratively reweighted least squares, whose fixed
+    point minimises the criterion: each score counts by its relative change, independent of units).
+    Every start is tried and the best end kept. The covariance is the Newey–West sandwich of the
+    weighted residuals at the optimum (:func:`motorlab.fitting.hac_covariance`, runs of one test and
+    one signal taken as uncorrelated): the residuals of real logs are dominated by unmodelled,
+    serially correlated effects, not by measurement noise.
+
+    Raises
+    ------
+    FitError
+        When no gains with kV > 0 and kA ≥ 0 simulate the tests.
+    """
+    from scipy.optimize import least_squares
+
+    best: tuple[float, np.ndarray, Score] | None = None
+    nfev = 0
+    ns = sum(t.time.size for t in tests)
+    for start in starts:
+        x = np.array([float(start[0]), math.log(max(start[1], 1e-9)), math.log(max(start[2], 1e-9))])
+        current = score(_gains(x), tests)
+        for _ in range(rounds):
+            ws, wp = 1.0 / max(current.speed, 1e-300), math.sqrt(position_weight) / max(current.position, 1e-300)
+
+            def fun(p: np.ndarray, ws: float = ws, wp: float = wp) -> np.ndarray:
+                rs, rp = residuals(_gains(p), tests)
+                return np.concatenate([ws * rs, wp * rp]) / math.sqrt(ns)
+
+            sol = least_squares(fun, x, x_scale=np.array([max(abs(x[0]), 0.05), 0.1, 0.3]), diff_step=1e-4,
+                                max_nfev=60)
+            nfev += int(sol.nfev)
+            new = score(_gains(sol.x), tests)
+            if not _objective(new, position_weight) < _objective(current, position_weight) - 1e-7:
+                break
+            x, current = sol.x, new
+        value = _objective(current, position_weight)
+        if math.isfinite(value) and (best is None or value < best[0]):
+            best = (value, x, current)
+    if best is None:
+        raise FitError("no three gains simulate these tests")
+    gains = _gains(best[1])
+    cov, bandwidth = _hac(gains, tests, best[2], position_weight)
+    return GainFit(gains, cov, best[2], bandwidth, nfev)
+
+
+def _hac(gains: np.ndarray, tests: Sequence[ScoreTest], sc: Score, weight: float) -> tuple[np.ndarray, float]:
+    """Newey–West covariance of the gains from the weighted score residuals (central differences)."""
+    from motorlab.fitting import hac_covariance
+
+    ws, wp = 1.0 / sc.speed, math.sqrt(weight) / sc.position
+
+    def weighted(g: np.ndarray) -> np.ndarray:
+        rs, rp = residuals(g, tests)
+        return np.concatenate([ws * rs, wp * rp])
+
+    r0 = weighted(gains)
+    jac = np.empty((r0.size, 3))
+    for k in range(3):
+        h = 1e-4 * max(abs(gains[k]), 1e-3 * abs(gains[1]) if k == 0 else 1e-12)
+        up, down = gains.copy(), gains.copy()
+        up[k] += h
+        down[k] -= h
+        if k > 0:
+            down[k] = max(down[k], 0.0)
+        jac[:, k] = (weighted(up) - weighted(down)) / (up[k] - down[k])
+    sizes = [t.time.size for t in tests]
+    labels = np.concatenate([np.full(n, i) for i, n in enumerate(sizes)] +
+                            [np.full(n, len(sizes) + i) for i, n in enumerate(sizes)])
+    bread = np.linalg.pinv(jac.T @ jac)
+    return hac_covariance(jac, r0, bread, groups=labels)
+
+
+def _gains(p: np.ndarray) -> np.ndarray:
+    return np.array([p[0], math.exp(p[1]), math.exp(p[2])])
+
+
+def test_direction(name: str) -> int:
+    """+1 for a forward test, −1 for a backward one, 0 when the name does not say."""
+    from motorlab.io.frc_json import test_kind
+
+    return int(test_kind(name)["direction"])
+
+
+def speed_lag(gains: Sequence[float], tests: Sequence[ScoreTest], *, max_rows: int = 40) -> tuple[float, float]:
+    """(lag [s], RMSE ratio) of the logged speed behind the simulated one: the row shift that fits best.
+
+    The ratio is the speed RMSE with the best shift over the RMSE without (1 when no shift helps).
+    A logged speed that is the motor controller's filtered estimate (a TalonFX averages over about
+    100 ms) or a stale status frame lags the shaft by tens of milliseconds.
+    """
+    sims = [simulate_gains(*gains, t)[0] for t in tests]
+    errors = []
+    for k in range(max_rows + 1):
+        num = sum(float(np.sum((t.velocity[k:] - s[:s.size - k]) ** 2)) for t, s in zip(tests, sims, strict=True))
+        den = sum(max(t.time.size - k, 0) for t in tests)
+        errors.append(math.sqrt(num / max(den, 1)))
+    best = int(np.argmin(errors))
+    dt = float(np.median(np.concatenate([np.diff(t.time) for t in tests])))
+    return best * dt, errors[best] / errors[0] if errors[0] > 0 else 1.0
+
+
+def residual_diagnostics(gains: Sequence[float], tests: Sequence[ScoreTest]) -> dict[str, float]:
+    """What the score residuals look like: speed lag, direction asymmetry and position drift.
+
+    Returns
+    -------
+    dict
+        ``lag_s`` and ``lag_rmse_ratio`` (:func:`speed_lag`); ``asymmetry``: mean speed residual of
+        the forward tests minus the backward tests' (signed by direction), over the speed RMSE
+        (a kS or kV that differs by direction shows as a persistent offset of opposite sign);
+        ``drift``: share of the position residual's variance in the quasistatic tests explained by a
+        straight line in time (slip, turning, friction changing along the run).
+    """
+    lag, ratio = speed_lag(gains, tests)
+    rs_all, _ = residuals(gains, tests)
+    rms = float(np.sqrt(np.mean(rs_all**2))) or 1.0
+    by_dir: dict[int, list[float]] = {1: [], -1: []}
+    explained, total = 0.0, 0.0
+    for test in tests:
+        speed, position = simulate_gains(*gains, test)
+        d = test_direction(test.name)
+        if d:
+            by_dir[d].append(float(np.mean(d * (speed - test.velocity))))
+        if test.name.startswith(("slow", "quasistatic")):
+            rp = position - test.position
+            trend = np.polyval(np.polyfit(test.time, rp, 1), test.time)
+            explained += float(np.sum((trend - rp.mean()) ** 2))
+            total += float(np.sum((rp - rp.mean()) ** 2))
+    asym = (np.mean(by_dir[1]) - np.mean(by_dir[-1])) / rms if by_dir[1] and by_dir[-1] else 0.0
+    return {"lag_s": lag, "lag_rmse_ratio": ratio, "asymmetry": float(asym),
+            "drift": explained / total if total > 0 else 0.0}
+
+
+def describe_residuals(diag: dict[str, float]) -> str:
+    """One phrase naming the effects the residuals look like (empty when none stands out)."""
+    parts = []
+    if diag["lag_s"] > 0 and diag["lag_rmse_ratio"] < 0.9:
+        parts.append(f"lag (the logged speed trails the simulation by {1e3 * diag['lag_s']:.0f} ms: a filtered or "
+                     "stale velocity)")
+    if abs(diag["asymmetry"]) > 0.2:
+        parts.append(f"asymmetry (forward and backward tests miss in opposite senses, {abs(diag['asymmetry']):.2f}× "
+                     "the speed RMSE: kS or kV differ by direction)")
+    if diag["drift"] > 0.5:
+        parts.append(f"drift (a straight line explains {100 * diag['drift']:.0f} % of the position residual of the "
+                     "quasistatic tests: slip, turning or friction changing along the run)")
+    return "; ".join(parts)
