@@ -366,7 +366,70 @@ def feedforward(
         details["sysid_ols"] = sysid_ols(recs, mechanism=mechanism)
     except (FitError, np.linalg.LinAlgError, ZeroDivisionError):
         details["sysid_ols"] = None
-    return _result("feedforward", params, corr, names, logs, fit, warnings, details, length="m" if linear else "rad")
+    result = _result("feedforward", params, corr, names, logs, fit, warnings, details, length="m" if linear else "rad")
+    if mechanism == "simple" and fit.noise_model.startswith("Newey") and all("velocity" in rec for rec in recs):
+        _report_open_loop(result, recs, length="m" if linear else "rad")
+    return result
+
+
+def _report_open_loop(result: FitResult, recs: list[Recording], *, length: str) -> None:
+    """Replace kS, kV, kA by the gains that best simulate the logs open loop (real logs; docs/real-logs.md).
+
+    Called when the motor model leaves residuals the measured noise does not explain (real robots:
+    commanded, not applied, voltage; filtered and stale speeds; slip, backlash, direction-dependent
+    friction). The three gains a user pastes into a feedforward are then those that minimise the
+    open-loop simulation error of the logged speed and position (:func:`motorlab.sysid_score.fit_gains`),
+    with Newey–West standard errors from the residuals' correlation; the motor-model fit, the gains
+    of each direction and what the residuals look like are reported besides.
+    """
+    from motorlab import sysid_score
+
+    tests = sysid_score.score_tests(recs)
+    names = ("kS", "kV", "kA")
+    starts = [[max(result.value(n), 1e-6) if n == "kA" else result.value(n) for n in names]]
+    ols = result.details.get("sysid_ols")
+    if ols and ols["kV"] > 0 and ols["kA"] > 0:
+        starts.append([max(ols["kS"], 0.0), ols["kV"], ols["kA"]])
+    try:
+        out = sysid_score.open_loop_gains(tests, starts)
+    except (FitError, OptionError) as exc:
+        result.warnings.append(f"the open-loop fit of the three gains failed ({exc}); the motor-model fit is reported")
+        return
+    fit = out["fit"]
+    stderr = np.sqrt(np.clip(np.diag(fit.covariance), 0.0, None))
+    result.details["physics_fit"] = {n: {"value": result.value(n), "stderr": result[n].stderr} for n in names}
+    for k, name in enumerate(names):
+        old = result.parameters[name]
+        ok = bool(np.isfinite(stderr[k]) and stderr[k] <= MAX_RELATIVE_STDERR * abs(fit.gains[k]))
+        result.parameters[name] = Estimate(name, float(fit.gains[k]), float(stderr[k]), old.unit, ok,
+                                           "" if ok else "the data carry (almost) no information on it")
+    with np.errstate(invalid="ignore", divide="ignore"):
+        corr = fit.covariance / np.outer(stderr, stderr)
+    np.fill_diagonal(corr, 1.0)
+    result.correlation, result.correlation_names = corr, list(names)
+    result.details.update({
+        "method": "open-loop output error: kS, kV, kA minimise log RMSE(speed) + "
+                  f"{sysid_score.POSITION_WEIGHT:g}·log RMSE(position) of the simulation from the logged voltage",
+        "uncertainty": f"Newey–West from the residuals' correlation (bandwidth {fit.bandwidth:.1f} rows)",
+        "open_loop_score": {"speed": fit.score.speed, "position": fit.score.position,
+                            "units": {"speed": f"{length}/s", "position": length}},
+        "by_direction": {d: dict(zip(names, g, strict=True)) for d, g in out["by_direction"].items()},
+        "residual_diagnostics": out["diagnostics"],
+    })
+    about_model = ("the measured noise does not explain", "the optimiser stopped early", "kS and kV are",
+                   "no acceleration event")
+    result.details["physics_fit_warnings"] = [w for w in result.warnings if w.startswith(about_model)]
+    result.warnings[:] = [w for w in result.warnings if not w.startswith(about_model)]
+    looks = out["description"] or "no single effect (lag, asymmetry, drift) stands out"
+    result.warnings.append(
+        "the motor model leaves residuals the measured noise does not explain: kS, kV, kA are the gains that best "
+        "simulate the logged speed and position open loop, with standard errors from the residuals' correlation "
+        f"(Newey–West); the residuals look like: {looks}"
+    )
+    if fit.gains[0] < 0:
+        result.warnings.append(f"kS = {fit.gains[0]:.3g} V is negative: no static friction explains it; the logs "
+                               "move at voltages below what the model expects (check the voltage log's offset)")
+    result.panels[:0] = sysid_score.score_panels(fit.gains, tests, title="feedforward", length=length)
 
 
 def _gain_warnings(logs: list[_oe.Log], fit: _oe.Fit, values: np.ndarray, corr: np.ndarray) -> list[str]:

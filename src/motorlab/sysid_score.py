@@ -351,3 +351,43 @@ def describe_residuals(diag: dict[str, float]) -> str:
         parts.append(f"drift (a straight line explains {100 * diag['drift']:.0f} % of the position residual of the "
                      "quasistatic tests: slip, turning or friction changing along the run)")
     return "; ".join(parts)
+
+
+def score_panels(gains: Sequence[float], tests: Sequence[ScoreTest], *, title: str, length: str = "rad") -> list:
+    """Logged against open-loop simulated speed and position, tests end to end (score residuals beneath)."""
+    from motorlab.results import Panel, Series
+
+    sims = [simulate_gains(*gains, t) for t in tests]
+    offsets = np.cumsum([0.0] + [float(t.time[-1]) + 0.01 for t in tests[:-1]])
+    x = np.concatenate([t.time + o for t, o in zip(tests, offsets, strict=True)])
+    panels = []
+    for k, (label, y_label) in enumerate([("speed", f"v [{length}/s]"), ("position", f"x [{length}]")]):
+        data = np.concatenate([t.velocity if k == 0 else t.position for t in tests])
+        model = np.concatenate([s[k] for s in sims])
+        panels.append(Panel(title=f"{title}: logged and open-loop simulated {label} (the score)",
+                            x_label="time (tests end to end) [s]", y_label=y_label,
+                            data=Series(x, data, "logged"), model=Series(x, model, "simulated", kind="model")))
+    return panels
+
+
+def open_loop_gains(tests: Sequence[ScoreTest], starts: Sequence[Sequence[float]]) -> dict:
+    """The gains of :func:`fit_gains` with what is reported beside them.
+
+    Returns
+    -------
+    dict
+        ``fit`` (:class:`GainFit`), ``by_direction`` ({"forward"|"backward": (kS, kV, kA)} fitted to
+        that direction's tests alone, when both are present), ``diagnostics``
+        (:func:`residual_diagnostics`) and ``description`` (:func:`describe_residuals`).
+    """
+    fit = fit_gains(tests, starts)
+    by_direction: dict[str, list[float]] = {}
+    for label, d in (("forward", 1), ("backward", -1)):
+        part = [t for t in tests if test_direction(t.name) == d]
+        if part and len(part) < len(tests):
+            try:
+                by_direction[label] = fit_gains(part, [fit.gains]).gains.tolist()
+            except (FitError, OptionError):
+                continue
+    diag = residual_diagnostics(fit.gains, tests)
+    return {"fit": fit, "by_direction": by_direction, "diagnostics": diag, "description": describe_residuals(diag)}
