@@ -454,7 +454,7 @@ def _run_identify(ctx: _UnitContext) -> FitResult:
     from motorlab.identify import identify, read_runs
 
     cpr = ctx.cpr
-    runs = read_runs(ctx.files, cpr=int(cpr) if float(cpr).is_integer() else None)
+    runs = read_runs(ctx.files, cpr=cpr)
     if all(run.has("current") for run in runs):
         return identify(runs, cpr=cpr)
     # Without current the feedforward gains need R (and K to separate K from b) from elsewhere.
@@ -471,7 +471,7 @@ def _run_feedforward(ctx: _UnitContext) -> FitResult:
     cpr = ctx.cpr
     # A SysId JSON file holds angles already (no counts): the reader refuses a cpr for it.
     json_only = all(p.lower().endswith(".json") for p in ctx.files)
-    runs = read_runs(ctx.files, cpr=None if json_only or not float(cpr).is_integer() else int(cpr))
+    runs = read_runs(ctx.files, cpr=None if json_only else cpr)
     result = feedforward(runs, cpr=None if json_only else cpr)
     r, k = ctx.estimate("R"), ctx.estimate("K")
     if r is not None:

@@ -519,22 +519,94 @@ def motor_estimates(
 
 def add_arguments(parser: argparse.ArgumentParser, experiment: str) -> None:
     """Options of ``motorlab analyze feedforward``."""
-    from motorlab.cli.common import positive_int, quantity
+    from motorlab.cli.common import positive_number, quantity
+    from motorlab.io.frc_json import UNITS
 
-    parser.add_argument("--cpr", type=positive_int, help="encoder counts per revolution at the shaft")
+    parser.add_argument("--cpr", type=positive_number,
+                        help="encoder counts per revolution at the shaft (537.7 is fine); for a SysId or "
+                             "frc-characterization file, counts per rotation as the file logs rotations")
     parser.add_argument("--mechanism", choices=MECHANISMS, default="simple",
                         help="gravity term: none (simple), kG (elevator), kG·cos(θ+φ) (arm)")
     parser.add_argument("--R", dest="resistance", type=quantity("ohm", positive=True),
                         help="winding resistance, to convert the gains to K, J, b, Tf [Ω]")
     parser.add_argument("--K", dest="torque_constant", type=quantity("V*s/rad", positive=True),
                         help="torque constant, to separate K from b in kV [V·s/rad]")
+    parser.add_argument("--side", choices=("both", "left", "right"), default="both",
+                        help="drivetrain logs: fit both sides' tests (default, as SysId) or one side")
+    parser.add_argument("--units", choices=[u.title() for u in UNITS], default=None,
+                        help="unit of a frc-characterization file without a 'units' key (default: that tool's "
+                             "template units, Feet; Degrees for an arm)")
+
+
+def read_tests(paths: list[str], *, cpr: float | None, side: str = "both", units: str | None = None) -> list[Recording]:
+    """Read the files, one recording per test (and per drivetrain side), for :func:`feedforward`.
+
+    SysId and frc-characterization JSON files carry their own units: ``side`` and ``units`` go to
+    their readers, and a ``cpr`` becomes the file's position quantum, one count = one logged
+    rotation / cpr (:func:`apply_cpr`). Other formats get ``cpr`` in their reader
+    (:func:`motorlab.identify.read_runs`).
+    """
+    from motorlab import io as mio
+
+    runs: list[Recording] = []
+    for path in paths:
+        if mio.detect_format(path) in ("sysid-json", "frc-char-json"):
+            parts = mio.read_any(path, side=side, units=units).split()
+            if cpr is not None:
+                apply_cpr(parts, cpr)
+            runs.extend(parts)
+        else:
+            runs.extend(read_runs([path], cpr=cpr))
+    return runs
+
+
+def apply_cpr(recordings: Sequence[Recording], cpr: float) -> None:
+    """Set the position quantum of JSON tests from ``cpr`` [count/rotation of the logged shaft], in place.
+
+    The quantum is ``rotation_si/cpr`` (metres for a drivetrain logged in metres, radians for angles)
+    and is stored as the equivalent ``metadata["cpr"]`` = 2π/quantum the fit reads.
+
+    Raises
+    ------
+    OptionError
+        The file logs a length without ``unitsPerRotation`` (a rotation's length is unknown), or its
+        positions move by steps finer than one count (the cpr does not fit the file).
+    """
+    from motorlab.analyses._common import check_cpr
+
+    check_cpr(cpr)
+    finest, n_fine = math.inf, 0
+    for rec in recordings:
+        rotation = rec.metadata.get("rotation_si")
+        if rotation is None:
+            raise OptionError(
+                f"--cpr {cpr:g}: {rec.source} logs {rec.metadata.get('units')} without unitsPerRotation, so a count "
+                "cannot be turned into a distance; leave --cpr out (the quantum is then read from the steps)"
+            )
+        steps = np.abs(np.diff(rec.signals["position"]))
+        fine = steps[(steps > 1e-12 * rotation) & (steps < 0.5 * rotation / cpr)]
+        n_fine += fine.size
+        finest = min(finest, float(np.min(fine)) if fine.size else math.inf)
+        rec.metadata["cpr"] = 2.0 * math.pi * cpr / rotation
+        rec.metadata["cpr_given"] = cpr
+    if n_fine >= 3:  # a few: JSON rounding of a position can split one count over two rows
+        rec = recordings[0]
+        raise OptionError(
+            f"--cpr {cpr:g}: {rec.source} moves by steps as small as {finest:.3g} {rec.metadata.get('position_unit')}"
+            f" ({n_fine} steps finer than half a count): this cpr does not fit (give the counts per logged rotation, "
+            "gearing included)"
+        )
 
 
 def from_cli(experiment: str, paths: list[str], args: argparse.Namespace) -> FitResult:
     """Run ``motorlab analyze feedforward FILE...``."""
     cpr = getattr(args, "cpr", None)
-    runs = read_runs(paths, cpr=cpr)
-    result = feedforward(runs, mechanism=getattr(args, "mechanism", "simple"), cpr=cpr)
+    runs = read_tests(paths, cpr=cpr, side=getattr(args, "side", "both"), units=getattr(args, "units", None))
+    json_only = any(run.metadata.get("format") in ("sysid-json", "frc-char-json") for run in runs)
+    result = feedforward(runs, mechanism=getattr(args, "mechanism", "simple"), cpr=None if json_only else cpr)
+    if json_only and cpr is not None:
+        result.details["cpr"] = {"given": cpr, "note": "counts per logged rotation: the position quantum is "
+                                 "one rotation (unitsPerRotation) / cpr"}
     resistance = getattr(args, "resistance", None)
     if resistance is not None:
         result.parameters.update(

@@ -539,9 +539,9 @@ def _identify_without_current(
 
 def add_arguments(parser: argparse.ArgumentParser, experiment: str) -> None:
     """Options of ``motorlab analyze identify``."""
-    from motorlab.cli.common import positive_int, quantity
+    from motorlab.cli.common import positive_number, quantity
 
-    parser.add_argument("--cpr", type=positive_int, help="encoder counts per revolution at the shaft")
+    parser.add_argument("--cpr", type=positive_number, help="encoder counts per revolution at the shaft (537.7 is fine)")
     parser.add_argument("--R", dest="resistance", type=quantity("ohm", positive=True),
                         help="winding resistance, if known (needed without current) [Ω]")
     parser.add_argument("--K", dest="torque_constant", type=quantity("V*s/rad", positive=True),
@@ -550,7 +550,7 @@ def add_arguments(parser: argparse.ArgumentParser, experiment: str) -> None:
                         help="ignore a current column (fit voltage and angle only)")
 
 
-def read_runs(paths: list[str], *, cpr: int | None) -> list[Recording]:
+def read_runs(paths: list[str], *, cpr: float | None) -> list[Recording]:
     """Read every file with :func:`motorlab.io.read_any`, one recording per test segment.
 
     ``cpr`` goes to the readers that convert counts (FTC log, CSV); formats that log angles (SysId

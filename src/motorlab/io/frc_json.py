@@ -191,7 +191,7 @@ def _units(name: str, data: dict[str, Any], *, units: str | None = None, legacy:
     elif written is None and legacy:
         written = LEGACY_UNITS["arm" if str(data.get("test", "")).lower() == "arm" else "other"]
         assumed = (f"no 'units' key (an older frc-characterization file): rows read as {written}, the unit of "
-                   "that tool's robot templates; give the unit if the robot code logged another")
+                   "that tool's robot templates; if the robot code logged another, give it (--units)")
     elif isinstance(written, str) and units is not None and written.lower() != units.lower():
         raise OptionError(f"{name}: the file logs {written}; the unit given ({units}) contradicts it")
     if not isinstance(written, str) or written.lower() not in UNITS:
