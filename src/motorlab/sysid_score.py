@@ -20,6 +20,7 @@ fit, each score weighed by its own size) — see docs/real-logs.md.
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
@@ -73,6 +74,23 @@ def score_tests(recordings: Recording | Iterable[Recording]) -> list[ScoreTest]:
             tests.append(ScoreTest(str(name), part.time - part.time[0], part["voltage"], part["position"],
                                    part["velocity"]))
     return tests
+
+
+def file_tests(path: str | os.PathLike[str]) -> list[ScoreTest]:
+    """The tests of a SysId or frc-characterization JSON file in the file's own units (rows × unitsPerRotation).
+
+    Both sides of a drivetrain are read, each test and side one :class:`ScoreTest`.
+    """
+    from motorlab.io import read_any
+
+    rec = read_any(path, side="both")
+    unit = float(rec.metadata.get("si_per_unit", 1.0))
+    return [ScoreTest(t.name, t.time, t.voltage, t.position / unit, t.velocity / unit) for t in score_tests(rec)]
+
+
+def score_file(path: str | os.PathLike[str], gains: Sequence[float]) -> Score:
+    """The fair score of (kS [V], kV [V/(unit/s)], kA [V/(unit/s²)]), in the file's own units, on a JSON log."""
+    return score(gains, file_tests(path))
 
 
 def _linear_block(v0: float, dt: np.ndarray, u: np.ndarray, tau: float) -> tuple[np.ndarray, np.ndarray]:
@@ -140,7 +158,10 @@ def _stop_within_step(
     v: float, u: float, dt: float, tau: float, volts: float, ks: float, kv: float, threshold: float
 ) -> tuple[float, float]:
     """(speed at the step's end, distance) when the speed reaches zero inside a step."""
-    t0 = dt if tau <= 0 or u == 0 else min(dt, tau * math.log((v - u) / -u))
+    if tau <= 0:  # no inertia: the speed is at zero at once
+        t0 = 0.0
+    else:
+        t0 = dt if u == 0 else min(dt, tau * math.log((v - u) / -u))
     dist = 0.0 if tau <= 0 else u * t0 + (v - u) * tau * (1.0 - math.exp(-t0 / tau))
     rest = dt - t0
     if rest <= 0 or abs(volts) <= threshold:
@@ -263,7 +284,7 @@ def _hac(gains: np.ndarray, tests: Sequence[ScoreTest], sc: Score, weight: float
     r0 = weighted(gains)
     jac = np.empty((r0.size, 3))
     for k in range(3):
-        h = 1e-4 * max(abs(gains[k]), 1e-3 * abs(gains[1]) if k == 0 else 1e-12)
+        h = (1e-2 if k == 0 else 1e-3) * max(abs(gains[k]), 1e-3 * abs(gains[1]) if k == 0 else 1e-12)
         up, down = gains.copy(), gains.copy()
         up[k] += h
         down[k] -= h
