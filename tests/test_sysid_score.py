@@ -54,7 +54,8 @@ def test_static_friction_holds_and_stops():
     # below kS nothing moves; a coasting shaft whose push drops below kS stops and stays stopped
     test = ScoreTest("slow-forward", t, np.full(t.size, 0.4), np.zeros(t.size), np.zeros(t.size))
     speed, position = simulate_gains(ks, kv, ka, test)
-    assert np.all(speed == 0) and np.all(position == 0)
+    assert np.all(speed == 0)
+    assert np.all(position == 0)
     coast = ScoreTest("x", t, np.full(t.size, 0.3), np.zeros(t.size), np.full(t.size, 2.0))
     speed, position = simulate_gains(ks, kv, ka, coast)
     # decelerating as τ·v' = (0.3 − 0.5) − v: zero at t0 = τ·ln((2 + 0.2)/0.2), then at rest
@@ -139,7 +140,8 @@ def test_real_files_read_both_sides(real_dir):
     right = rec.split()[-1]
     np.testing.assert_allclose(right["velocity"], raw[:, 6] * 0.4878)
     np.testing.assert_allclose(right["voltage"], raw[:, 2])
-    assert rec.metadata["si_per_unit"] == 1.0 and rec.metadata["rotation_si"] == pytest.approx(0.4878)
+    assert rec.metadata["si_per_unit"] == 1.0
+    assert rec.metadata["rotation_si"] == pytest.approx(0.4878)
     assert len(file_tests(real_dir / "sysid" / "t581_spu_roller.json")) == 4  # not a drivetrain: one side
 
 
@@ -147,17 +149,20 @@ def test_real_logs_beat_the_teams_gains(real_scores):
     ratios = []
     for name, (ours, mine, team, _) in real_scores.items():
         speed, position = mine.ratio(team)
-        assert speed <= 1.03 and position <= 1.03, (name, ours, speed, position)
+        assert speed <= 1.03, (name, ours, speed)
+        assert position <= 1.03, (name, ours, position)
         ratios.append((speed, position))
     geo = np.exp(np.mean(np.log(ratios), axis=0))
-    assert geo[0] <= 0.85 and geo[1] <= 0.85, geo
+    assert geo[0] <= 0.85, geo
+    assert geo[1] <= 0.85, geo
 
 
 def test_real_logs_uncertainty_from_residuals(real_scores):
     for name, (_, _, _, result) in real_scores.items():
         for gain in ("kS", "kV", "kA"):
             est = result[gain]
-            assert math.isfinite(est.stderr) and est.stderr > 0, (name, gain)
+            assert math.isfinite(est.stderr), (name, gain)
+            assert est.stderr > 0, (name, gain)
         assert result.details["uncertainty"].startswith("Newey–West")
         assert any("the residuals look like" in w for w in result.warnings), name
         assert set(result.details["by_direction"]) == {"forward", "backward"}
@@ -171,7 +176,7 @@ def test_motor_model_alone_is_kept_when_it_explains_the_data():
     """No velocity column (or residuals the noise explains): the motor-model fit stands, no score fit."""
     t = np.arange(400) * 0.01
     test = ScoreTest("fast-forward", t, np.full(t.size, 6.0), np.zeros(t.size), np.zeros(t.size))
-    speed, position = simulate_gains(0.2, 0.4, 0.04, test)
+    _speed, position = simulate_gains(0.2, 0.4, 0.04, test)
     from motorlab.recording import Recording
 
     counts = np.floor(position / (2 * math.pi / 560)) * (2 * math.pi / 560)
@@ -197,8 +202,10 @@ def legacy_file(tmp_path, **extra):
 def test_frc_characterization_without_units(tmp_path):
     path = legacy_file(tmp_path)
     rec = read_frc_char_json(path)
-    assert rec.metadata["units"] == "Feet" and rec.metadata["units_assumed"]
-    assert "no 'units' key" in rec.metadata["warnings"][0] and "Feet" in rec.metadata["warnings"][0]
+    assert rec.metadata["units"] == "Feet"
+    assert rec.metadata["units_assumed"]
+    assert "no 'units' key" in rec.metadata["warnings"][0]
+    assert "Feet" in rec.metadata["warnings"][0]
     np.testing.assert_allclose(rec.split()[0]["position"][-1], 0.02 * 39**2 * 0.3048)
     metres = read_frc_char_json(path, units="Meters")
     np.testing.assert_allclose(metres.split()[0]["position"][-1], 0.02 * 39**2)

@@ -541,7 +541,7 @@ def add_arguments(parser: argparse.ArgumentParser, experiment: str) -> None:
     """Options of ``motorlab analyze identify``."""
     from motorlab.cli.common import positive_number, quantity
 
-    parser.add_argument("--cpr", type=positive_number, help="encoder counts per revolution at the shaft (537.7 is fine)")
+    parser.add_argument("--cpr", type=positive_number, help="encoder counts per revolution at the shaft (537.7 too)")
     parser.add_argument("--R", dest="resistance", type=quantity("ohm", positive=True),
                         help="winding resistance, if known (needed without current) [Ω]")
     parser.add_argument("--K", dest="torque_constant", type=quantity("V*s/rad", positive=True),

@@ -29,6 +29,9 @@ import numpy as np
 from motorlab.errors import FitError, OptionError
 from motorlab.recording import Recording
 
+#: kS [V], kV, kA as a sequence or an array.
+Gains = Sequence[float] | np.ndarray
+
 #: Largest exponent range handled in one vectorised block of the linear recursion.
 _BLOCK_EXPONENT = 400.0
 
@@ -88,7 +91,7 @@ def file_tests(path: str | os.PathLike[str]) -> list[ScoreTest]:
     return [ScoreTest(t.name, t.time, t.voltage, t.position / unit, t.velocity / unit) for t in score_tests(rec)]
 
 
-def score_file(path: str | os.PathLike[str], gains: Sequence[float]) -> Score:
+def score_file(path: str | os.PathLike[str], gains: Gains) -> Score:
     """The fair score of (kS [V], kV [V/(unit/s)], kA [V/(unit/s²)]), in the file's own units, on a JSON log."""
     return score(gains, file_tests(path))
 
@@ -174,7 +177,7 @@ def _stop_within_step(
     return u2 * (1.0 - decay), dist + u2 * rest - u2 * tau * (1.0 - decay)
 
 
-def residuals(gains: Sequence[float], tests: Sequence[ScoreTest]) -> tuple[np.ndarray, np.ndarray]:
+def residuals(gains: Gains, tests: Sequence[ScoreTest]) -> tuple[np.ndarray, np.ndarray]:
     """Simulated minus logged speed and position, all tests' rows one after the other."""
     ks, kv, ka = (float(g) for g in gains[:3])
     if not (kv > 0 and ka >= 0 and math.isfinite(ks)):
@@ -187,7 +190,7 @@ def residuals(gains: Sequence[float], tests: Sequence[ScoreTest]) -> tuple[np.nd
     return np.concatenate(rs), np.concatenate(rp)
 
 
-def score(gains: Sequence[float], tests: Sequence[ScoreTest]) -> Score:
+def score(gains: Gains, tests: Sequence[ScoreTest]) -> Score:
     """The fair score of (kS [V], kV [V·s/unit], kA [V·s²/unit]) on the tests (units as the tests')."""
     rs, rp = residuals(gains, tests)
     return Score(float(np.sqrt(np.mean(rs**2))), float(np.sqrt(np.mean(rp**2))))
@@ -218,7 +221,7 @@ def _objective(sc: Score, weight: float) -> float:
 
 def fit_gains(
     tests: Sequence[ScoreTest],
-    starts: Sequence[Sequence[float]],
+    starts: Sequence[Gains],
     *,
     position_weight: float = POSITION_WEIGHT,
     rounds: int = 6,
@@ -309,14 +312,14 @@ def test_direction(name: str) -> int:
     return int(test_kind(name)["direction"])
 
 
-def speed_lag(gains: Sequence[float], tests: Sequence[ScoreTest], *, max_rows: int = 40) -> tuple[float, float]:
+def speed_lag(gains: Gains, tests: Sequence[ScoreTest], *, max_rows: int = 40) -> tuple[float, float]:
     """(lag [s], RMSE ratio) of the logged speed behind the simulated one: the row shift that fits best.
 
     The ratio is the speed RMSE with the best shift over the RMSE without (1 when no shift helps).
     A logged speed that is the motor controller's filtered estimate (a TalonFX averages over about
     100 ms) or a stale status frame lags the shaft by tens of milliseconds.
     """
-    sims = [simulate_gains(*gains, t)[0] for t in tests]
+    sims = [simulate_gains(gains[0], gains[1], gains[2], t)[0] for t in tests]
     errors = []
     for k in range(max_rows + 1):
         num = sum(float(np.sum((t.velocity[k:] - s[:s.size - k]) ** 2)) for t, s in zip(tests, sims, strict=True))
@@ -327,7 +330,7 @@ def speed_lag(gains: Sequence[float], tests: Sequence[ScoreTest], *, max_rows: i
     return best * dt, errors[best] / errors[0] if errors[0] > 0 else 1.0
 
 
-def residual_diagnostics(gains: Sequence[float], tests: Sequence[ScoreTest]) -> dict[str, float]:
+def residual_diagnostics(gains: Gains, tests: Sequence[ScoreTest]) -> dict[str, float]:
     """What the score residuals look like: speed lag, direction asymmetry and position drift.
 
     Returns
@@ -345,7 +348,7 @@ def residual_diagnostics(gains: Sequence[float], tests: Sequence[ScoreTest]) -> 
     by_dir: dict[int, list[float]] = {1: [], -1: []}
     explained, total = 0.0, 0.0
     for test in tests:
-        speed, position = simulate_gains(*gains, test)
+        speed, position = simulate_gains(gains[0], gains[1], gains[2], test)
         d = test_direction(test.name)
         if d:
             by_dir[d].append(float(np.mean(d * (speed - test.velocity))))
@@ -374,11 +377,11 @@ def describe_residuals(diag: dict[str, float]) -> str:
     return "; ".join(parts)
 
 
-def score_panels(gains: Sequence[float], tests: Sequence[ScoreTest], *, title: str, length: str = "rad") -> list:
+def score_panels(gains: Gains, tests: Sequence[ScoreTest], *, title: str, length: str = "rad") -> list:
     """Logged against open-loop simulated speed and position, tests end to end (score residuals beneath)."""
     from motorlab.results import Panel, Series
 
-    sims = [simulate_gains(*gains, t) for t in tests]
+    sims = [simulate_gains(gains[0], gains[1], gains[2], t) for t in tests]
     offsets = np.cumsum([0.0] + [float(t.time[-1]) + 0.01 for t in tests[:-1]])
     x = np.concatenate([t.time + o for t, o in zip(tests, offsets, strict=True)])
     panels = []
@@ -391,7 +394,7 @@ def score_panels(gains: Sequence[float], tests: Sequence[ScoreTest], *, title: s
     return panels
 
 
-def open_loop_gains(tests: Sequence[ScoreTest], starts: Sequence[Sequence[float]]) -> dict:
+def open_loop_gains(tests: Sequence[ScoreTest], starts: Sequence[Gains]) -> dict:
     """The gains of :func:`fit_gains` with what is reported beside them.
 
     Returns
