@@ -130,9 +130,12 @@ def main(argv: list[str] | None = None) -> None:
         evidence.append((name, out))
         if args.plots:
             plot_file(name, out, args.plots)
+    def geo(values: list[float]) -> float:
+        return math.exp(float(np.nanmean(np.log(values))))
+
     print(f"{'pooled (geometric mean)':32s} {'':17s} " + " ".join(
-        f"{math.exp(np.nanmean(np.log([r[0] for r in v]))):6.3f} / {math.exp(np.nanmean(np.log([r[1] for r in v]))):6.3f}"
-        if v else f"{'-':>15s}" for v in ratios.values()))
+        f"{geo([r[0] for r in v]):6.3f} / {geo([r[1] for r in v]):6.3f}" if v else f"{'-':>15s}"
+        for v in ratios.values()))
     print("\ngains in the file's units (kS [V], kV [V/(u/s)], kA [V/(u/s²)]) and what the residuals show")
     for name, out in evidence:
         result = out["result"]

@@ -169,7 +169,7 @@ def test_real_logs_uncertainty_from_residuals(real_scores):
     # the shooter's TalonFX speed is a ~100 ms moving average: the residuals show the lag
     shooter = real_scores["stma7028_shooter_0309.json"][3]
     assert shooter.details["residual_diagnostics"]["lag_s"] >= 0.03
-    assert any("lag (the logged speed trails" in w for w in shooter.warnings)
+    assert any("lag (the logged motion trails" in w for w in shooter.warnings)
 
 
 def test_motor_model_alone_is_kept_when_it_explains_the_data():
@@ -260,3 +260,12 @@ def test_residuals_are_in_row_order():
     a = ScoreTest("a", t, np.ones(t.size), np.zeros(t.size), np.ones(t.size))
     rs, rp = residuals((0.0, 1.0, 0.1), [a, a])
     assert rs.size == rp.size == 40
+
+
+def test_motor_model_warning_says_what_the_residuals_look_like(real_dir):
+    """Without the open-loop fit (an elevator here), the noise warning still names the effect."""
+    rec = read_sysid_json(real_dir / "sysid" / "mbb_drivetrain.json", side="both")
+    result = feedforward(rec.split(), mechanism="elevator")
+    warning = next(w for w in result.warnings if w.startswith("the measured noise does not explain"))
+    assert "the residuals look like: drift" in warning
+    assert result.details["uncertainty"].startswith("Newey")

@@ -347,7 +347,11 @@ def feedforward(
     np.fill_diagonal(corr, 1.0)
     if not fit.success:
         warnings.append(f"the optimiser stopped early: {fit.message}")
-    warnings.extend(_oe.noise_warning(fit, rms_text=f"{fit.residual_rms['position']:.3g} {'m' if linear else 'rad'}"))
+    noise = _oe.noise_warning(fit, rms_text=f"{fit.residual_rms['position']:.3g} {'m' if linear else 'rad'}")
+    if noise:  # say what the residuals look like, so the user knows what the model misses
+        noise[0] += "; the residuals look like: " + (_residual_look(recs, logs, fit) or "no single effect (lag, "
+                                                     "asymmetry, drift) stands out")
+    warnings.extend(noise)
     warnings.extend(_gain_warnings(logs, fit, values, corr))
     details: dict[str, Any] = {
         "method": "output error (angle simulated from the voltage)",
@@ -430,6 +434,19 @@ def _report_open_loop(result: FitResult, recs: list[Recording], *, length: str) 
         result.warnings.append(f"kS = {fit.gains[0]:.3g} V is negative: no static friction explains it; the logs "
                                "move at voltages below what the model expects (check the voltage log's offset)")
     result.panels[:0] = sysid_score.score_panels(fit.gains, tests, title="feedforward", length=length)
+
+
+def _residual_look(recs: list[Recording], logs: list[_oe.Log], fit: _oe.Fit) -> str:
+    """Lag, asymmetry or drift in the angle residuals of the motor-model fit (:mod:`motorlab.sysid_score`)."""
+    from motorlab import sysid_score
+    from motorlab.io.frc_json import test_kind
+
+    runs = []
+    for rec, log, sim in zip(recs, logs, fit.simulations, strict=True):
+        name = str(rec.metadata.get("segment") or "")
+        direction = int(test_kind(name)["direction"]) if name else int(np.sign(np.mean(log.grid_voltage)))
+        runs.append((log.time, log.position - sim["position"], sim["speed"], direction))
+    return sysid_score.describe_residuals(sysid_score.position_residual_diagnostics(runs))
 
 
 def _gain_warnings(logs: list[_oe.Log], fit: _oe.Fit, values: np.ndarray, corr: np.ndarray) -> list[str]:

@@ -366,15 +366,46 @@ def describe_residuals(diag: dict[str, float]) -> str:
     """One phrase naming the effects the residuals look like (empty when none stands out)."""
     parts = []
     if diag["lag_s"] > 0 and diag["lag_rmse_ratio"] < 0.9:
-        parts.append(f"lag (the logged speed trails the simulation by {1e3 * diag['lag_s']:.0f} ms: a filtered or "
-                     "stale velocity)")
+        parts.append(f"lag (the logged motion trails the simulation by {1e3 * diag['lag_s']:.0f} ms: a filtered or "
+                     "stale reading)")
     if abs(diag["asymmetry"]) > 0.2:
         parts.append(f"asymmetry (forward and backward tests miss in opposite senses, {abs(diag['asymmetry']):.2f}× "
                      "the speed RMSE: kS or kV differ by direction)")
     if diag["drift"] > 0.5:
-        parts.append(f"drift (a straight line explains {100 * diag['drift']:.0f} % of the position residual of the "
-                     "quasistatic tests: slip, turning or friction changing along the run)")
+        parts.append(f"drift (a straight line in time explains {100 * diag['drift']:.0f} % of the position "
+                     "residual along the runs: slip, turning or friction changing along the run)")
     return "; ".join(parts)
+
+
+def position_residual_diagnostics(
+    runs: Iterable[tuple[np.ndarray, np.ndarray, np.ndarray, int]],
+) -> dict[str, float]:
+    """:func:`residual_diagnostics` of a position-only fit: runs of (time, measured − simulated, speed, direction).
+
+    A reading late by d is θ(t − d) ≈ θ(t) − ω·d, so a lag shows as a residual proportional to −ω:
+    d = −Σr·ω/Σω², and ``lag_rmse_ratio`` = √(1 − share of the residual it explains).
+    """
+    rw = ww = rr = 0.0
+    n = 0
+    by_dir: dict[int, list[float]] = {1: [], -1: []}
+    explained = total = 0.0
+    for time, res, speed, direction in runs:
+        rw += float(np.sum(res * speed))
+        ww += float(np.sum(speed * speed))
+        rr += float(np.sum(res * res))
+        n += res.size
+        if direction:
+            by_dir[direction].append(float(np.mean(direction * res)))
+        if time.size > 2:
+            trend = np.polyval(np.polyfit(time, res, 1), time)
+            explained += float(np.sum((trend - res.mean()) ** 2))
+            total += float(np.sum((res - res.mean()) ** 2))
+    lag = -rw / ww if ww > 0 else 0.0
+    share = rw * rw / (ww * rr) if ww > 0 and rr > 0 else 0.0
+    rms = math.sqrt(rr / max(n, 1)) or 1.0
+    asym = (np.mean(by_dir[1]) - np.mean(by_dir[-1])) / rms if by_dir[1] and by_dir[-1] else 0.0
+    return {"lag_s": max(lag, 0.0), "lag_rmse_ratio": math.sqrt(max(1.0 - share, 0.0)), "asymmetry": float(asym),
+            "drift": explained / total if total > 0 else 0.0}
 
 
 def score_panels(gains: Gains, tests: Sequence[ScoreTest], *, title: str, length: str = "rad") -> list:
