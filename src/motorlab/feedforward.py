@@ -392,10 +392,12 @@ def _report_open_loop(result: FitResult, recs: list[Recording], *, length: str) 
     names = ("kS", "kV", "kA")
     starts = [[max(result.value(n), 1e-6) if n == "kA" else result.value(n) for n in names]]
     ols = result.details.get("sysid_ols")
+    reference = None
     if ols and ols["kV"] > 0 and ols["kA"] > 0:
         starts.append([max(ols["kS"], 0.0), ols["kV"], ols["kA"]])
+        reference = sysid_score.score([ols["kS"], ols["kV"], ols["kA"]], tests)
     try:
-        out = sysid_score.open_loop_gains(tests, starts)
+        out = sysid_score.open_loop_gains(tests, starts, reference=reference)
     except (FitError, OptionError) as exc:
         result.warnings.append(f"the open-loop fit of the three gains failed ({exc}); the motor-model fit is reported")
         return
@@ -413,7 +415,8 @@ def _report_open_loop(result: FitResult, recs: list[Recording], *, length: str) 
     result.correlation, result.correlation_names = corr, list(names)
     result.details.update({
         "method": "open-loop output error: kS, kV, kA minimise log RMSE(speed) + "
-                  f"{sysid_score.POSITION_WEIGHT:g}·log RMSE(position) of the simulation from the logged voltage",
+                  f"{out['position_weight']:g}·log RMSE(position) of the simulation from the logged voltage",
+        "position_weight": out["position_weight"],
         "uncertainty": f"Newey–West from the residuals' correlation (bandwidth {fit.bandwidth:.1f} rows)",
         "open_loop_score": {"speed": fit.score.speed, "position": fit.score.position,
                             "units": {"speed": f"{length}/s", "position": length}},

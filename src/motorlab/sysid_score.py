@@ -425,24 +425,59 @@ def score_panels(gains: Gains, tests: Sequence[ScoreTest], *, title: str, length
     return panels
 
 
-def open_loop_gains(tests: Sequence[ScoreTest], starts: Sequence[Gains]) -> dict:
+#: Weights tried, in order, when the fit is worse than the reference on one score (see :func:`open_loop_gains`).
+LOWER_WEIGHTS = (0.1, 0.03, 0.0)
+HIGHER_WEIGHTS = (0.5, 1.0, 2.0, 4.0)
+#: How much worse than the reference either score may be before the weight moves.
+REFERENCE_TOLERANCE = 0.01
+
+
+def open_loop_gains(
+    tests: Sequence[ScoreTest], starts: Sequence[Gains], *, reference: Score | None = None
+) -> dict:
     """The gains of :func:`fit_gains` with what is reported beside them.
+
+    ``reference``: the score of SysId's own regression (what teams paste). With w = 1/4 the fit can
+    trade one score for the other; when it ends worse than the reference on one score by more than
+    :data:`REFERENCE_TOLERANCE` while better on the other, the weight moves towards the score that
+    lost (w from :data:`LOWER_WEIGHTS` or :data:`HIGHER_WEIGHTS`, each fit started from the last)
+    until both are at least as good — the gains then dominate the published method. If no weight
+    achieves that, the one whose worse ratio is smallest is kept.
 
     Returns
     -------
     dict
-        ``fit`` (:class:`GainFit`), ``by_direction`` ({"forward"|"backward": (kS, kV, kA)} fitted to
-        that direction's tests alone, when both are present), ``diagnostics``
-        (:func:`residual_diagnostics`) and ``description`` (:func:`describe_residuals`).
+        ``fit`` (:class:`GainFit`), ``position_weight``, ``by_direction`` ({"forward"|"backward":
+        (kS, kV, kA)} fitted to that direction's tests alone, when both are present),
+        ``diagnostics`` (:func:`residual_diagnostics`) and ``description`` (:func:`describe_residuals`).
     """
-    fit = fit_gains(tests, starts)
+    weight = POSITION_WEIGHT
+    fit = fit_gains(tests, starts, position_weight=weight)
+    if reference is not None and math.isfinite(reference.speed * reference.position):
+        limit = 1.0 + REFERENCE_TOLERANCE
+
+        def worst(f: GainFit) -> float:
+            return max(f.score.speed / reference.speed, f.score.position / reference.position)
+
+        speed_lost = fit.score.speed > limit * reference.speed
+        position_lost = fit.score.position > limit * reference.position
+        if speed_lost != position_lost:
+            best = (worst(fit), weight, fit)
+            for w in LOWER_WEIGHTS if speed_lost else HIGHER_WEIGHTS:
+                trial = fit_gains(tests, [best[2].gains], position_weight=w)
+                if worst(trial) < best[0]:
+                    best = (worst(trial), w, trial)
+                if worst(trial) <= limit:
+                    break
+            _, weight, fit = best
     by_direction: dict[str, list[float]] = {}
     for label, d in (("forward", 1), ("backward", -1)):
         part = [t for t in tests if test_direction(t.name) == d]
         if part and len(part) < len(tests):
             try:
-                by_direction[label] = fit_gains(part, [fit.gains]).gains.tolist()
+                by_direction[label] = fit_gains(part, [fit.gains], position_weight=weight).gains.tolist()
             except (FitError, OptionError):
                 continue
     diag = residual_diagnostics(fit.gains, tests)
-    return {"fit": fit, "by_direction": by_direction, "diagnostics": diag, "description": describe_residuals(diag)}
+    return {"fit": fit, "position_weight": weight, "by_direction": by_direction, "diagnostics": diag,
+            "description": describe_residuals(diag)}
