@@ -269,3 +269,18 @@ def test_motor_model_warning_says_what_the_residuals_look_like(real_dir):
     warning = next(w for w in result.warnings if w.startswith("the measured noise does not explain"))
     assert "the residuals look like: drift" in warning
     assert result.details["uncertainty"].startswith("Newey")
+
+
+def test_never_behind_sysid_regression_on_the_real_flywheel(real_dir):
+    """No published gains for this log: motorlab's gains are at least as good as SysId's OLS on both scores."""
+    from motorlab.feedforward import sysid_ols
+
+    rec = read_sysid_json(real_dir / "sysid-flywheel.json")
+    result = feedforward(rec.split())
+    tests = file_tests(real_dir / "sysid-flywheel.json")
+    ols = sysid_ols(rec.split())
+    ratio = score([result.value(k) for k in ("kS", "kV", "kA")], tests).ratio(
+        score([ols["kS"], ols["kV"], ols["kA"]], tests))
+    assert ratio[0] <= 1.01, ratio
+    assert ratio[1] <= 1.01, ratio
+    assert result.details["position_weight"] != 0.25  # the weight moved to keep the position

@@ -465,13 +465,13 @@ def _run_identify(ctx: _UnitContext) -> FitResult:
 
 
 def _run_feedforward(ctx: _UnitContext) -> FitResult:
-    from motorlab.feedforward import feedforward, motor_estimates
-    from motorlab.identify import read_runs
+    from motorlab.feedforward import feedforward, motor_estimates, read_tests
 
     cpr = ctx.cpr
-    # A SysId JSON file holds angles already (no counts): the reader refuses a cpr for it.
+    # A SysId JSON file holds angles already (no counts; its rotations need not be the motor's):
+    # the session's cpr is not applied to it. Both sides of a drivetrain are fitted.
     json_only = all(p.lower().endswith(".json") for p in ctx.files)
-    runs = read_runs(ctx.files, cpr=None if json_only else cpr)
+    runs = read_tests(list(ctx.files), cpr=None if json_only else cpr)
     result = feedforward(runs, cpr=None if json_only else cpr)
     r, k = ctx.estimate("R"), ctx.estimate("K")
     if r is not None:
