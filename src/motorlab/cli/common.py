@@ -82,17 +82,6 @@ def positive_number(text: str) -> float:
     return value
 
 
-def open_fraction(text: str) -> float:
-    """An argparse ``type`` for a number strictly between 0 and 1 (a duty cycle, a fraction of free speed)."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if not (0.0 < value < 1.0):
-        raise argparse.ArgumentTypeError(f"{text!r} must be between 0 and 1")
-    return value
-
-
 def check_figure_path(path: str, *, option: str = "--plot") -> None:
     """Refuse a figure file name before any work: an unknown extension or a folder that is not there.
 

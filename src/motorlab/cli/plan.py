@@ -7,7 +7,7 @@ import math
 from typing import Any
 
 from motorlab.catalog import Motor
-from motorlab.cli.common import open_fraction, print_json, quantity
+from motorlab.cli.common import print_json, quantity
 from motorlab.plan import MATERIALS, plan_rig
 from motorlab.units import format_unit
 
@@ -32,8 +32,7 @@ def register(subparsers: Any) -> None:
     )
     parser.add_argument("--motor", required=True, help="catalogue key or name (see `motorlab motors`)")
     parser.add_argument("--current", type=quantity("A", positive=True), help="drive current (default: stall/2)")
-    parser.add_argument("--fraction", type=open_fraction, default=0.5,
-                        help="fraction of free speed to reach (default 0.5)")
+    parser.add_argument("--fraction", type=float, default=0.5, help="fraction of free speed to reach (default 0.5)")
     parser.add_argument("--time", type=quantity("s", positive=True), default=5.0, help="time to reach it (default 5 s)")
     parser.add_argument("--material", choices=sorted(MATERIALS), default="steel", help="disc material")
     parser.add_argument("--radius", type=quantity("m", positive=True), default=0.075, help="disc radius (0.075 m)")

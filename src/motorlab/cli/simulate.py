@@ -12,7 +12,7 @@ import argparse
 from collections.abc import Callable
 from typing import Any
 
-from motorlab.cli.common import nonnegative_int, open_fraction, positive_int, quantity
+from motorlab.cli.common import nonnegative_int, positive_int, quantity
 from motorlab.errors import OptionError
 
 #: Sub-command help per experiment (seed section it reproduces).
@@ -113,7 +113,7 @@ def register(subparsers: Any) -> None:
     p = a["pulse"]
     p.add_argument("--amplitude", type=quantity("V", positive=True), default=1.0, help="high level [V] (1)")
     p.add_argument("--period", type=quantity("s", positive=True), default=2.0, help="period [s] (2)")
-    p.add_argument("--duty", type=open_fraction, default=0.12, help="duty cycle (0.12)")
+    p.add_argument("--duty", type=float, default=0.12, help="duty cycle (0.12)")
     p.add_argument("--periods", type=positive_int, default=1, help="periods recorded (1)")
     p.add_argument("--sample-interval", type=quantity("s", positive=True), default=1e-3,
                    help="scope sample interval [s] (1 ms)")
