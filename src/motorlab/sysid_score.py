@@ -258,10 +258,10 @@ def fit_gains(
                 return np.concatenate([ws * rs, wp * rp]) / math.sqrt(ns)
 
             sol = least_squares(fun, x, x_scale=np.array([max(abs(x[0]), 0.05), 0.1, 0.3]), diff_step=1e-4,
-                                max_nfev=60)
+                                max_nfev=60, ftol=1e-6, xtol=1e-6)
             nfev += int(sol.nfev)
             new = score(_gains(sol.x), tests)
-            if not _objective(new, position_weight) < _objective(current, position_weight) - 1e-7:
+            if not _objective(new, position_weight) < _objective(current, position_weight) - 1e-5:
                 break
             x, current = sol.x, new
         value = _objective(current, position_weight)
