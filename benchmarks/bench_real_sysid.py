@@ -66,6 +66,19 @@ def evaluate(path: Path, team: tuple[float, float, float], *, limits: bool) -> d
     return out
 
 
+def turning(path: Path) -> dict[str, float]:
+    """Gyro angle change over each drivetrain test (column 8 of SysId drivetrain rows) [rad]; {} otherwise."""
+    import json
+
+    data = json.loads(path.read_text())
+    out = {}
+    for key in ("slow-forward", "slow-backward", "fast-forward", "fast-backward"):
+        rows = np.asarray(data.get(key, []), dtype=float)
+        if rows.ndim == 2 and rows.shape[1] == 9 and rows.shape[0] > 1:
+            out[key] = float(rows[-1, 7] - rows[0, 7])
+    return out
+
+
 def plot_file(name: str, out: dict, folder: Path) -> Path:
     """Logged against open-loop simulated speed and position per test, team and motorlab, residuals beneath."""
     import matplotlib
@@ -148,6 +161,9 @@ def main(argv: list[str] | None = None) -> None:
         for direction, g in result.details.get("by_direction", {}).items():
             u = out["unit"]
             print(f"    {direction + ' tests':16s} kS {g['kS']:9.5f}  kV {g['kV'] * u:9.5f}  kA {g['kA'] * u:9.6f}")
+        turns = turning(args.dir / name)
+        if turns:
+            print("    gyro angle change per test [rad]: " + ", ".join(f"{k} {v:+.2f}" for k, v in turns.items()))
         if diag:
             print(f"    residuals: speed lag {1e3 * diag['lag_s']:.0f} ms (RMSE × {diag['lag_rmse_ratio']:.2f} when "
                   f"shifted), asymmetry {diag['asymmetry']:+.2f}, quasistatic drift {100 * diag['drift']:.0f} %")
