@@ -421,6 +421,8 @@ def _report_open_loop(result: FitResult, recs: list[Recording], *, length: str) 
         "open_loop_score": {"speed": fit.score.speed, "position": fit.score.position,
                             "units": {"speed": f"{length}/s", "position": length}},
         "by_direction": {d: dict(zip(names, g, strict=True)) for d, g in out["by_direction"].items()},
+        "by_side": {d: dict(zip(names, g, strict=True)) for d, g in out["by_side"].items()},
+        "gains_by_tests": _gain_rows(fit.gains, out, result.details["physics_fit"], length),
         "residual_diagnostics": out["diagnostics"],
     })
     about_model = ("the measured noise does not explain", "the optimiser stopped early", "kS and kV are",
@@ -436,7 +438,22 @@ def _report_open_loop(result: FitResult, recs: list[Recording], *, length: str) 
     if fit.gains[0] < 0:
         result.warnings.append(f"kS = {fit.gains[0]:.3g} V is negative: no static friction explains it; the logs "
                                "move at voltages below what the model expects (check the voltage log's offset)")
+    _, rp = sysid_score.residuals(fit.gains, tests)
+    position = np.concatenate([t.position for t in tests])
+    sst = float(np.sum((position - position.mean()) ** 2))
+    result.rmse, result.r2 = fit.score.position, 1.0 - float(np.sum(rp**2)) / sst if sst > 0 else math.nan
     result.panels[:0] = sysid_score.score_panels(fit.gains, tests, title="feedforward", length=length)
+
+
+def _gain_rows(gains: np.ndarray, out: dict[str, Any], physics: dict[str, Any], length: str) -> list[dict[str, Any]]:
+    """One row per gain set for the human output: pooled (reported), per direction, per side, motor model."""
+    units = ("kS [V]", f"kV [V·s/{length}]", f"kA [V·s²/{length}]")
+    rows = [{"tests": "all (reported)", **dict(zip(units, gains.tolist(), strict=True))}]
+    for label, g in {**out["by_direction"], **out["by_side"]}.items():
+        rows.append({"tests": f"{label} only", **dict(zip(units, g, strict=True))})
+    rows.append({"tests": "motor model (angle only)",
+                 **{u: physics[n]["value"] for u, n in zip(units, ("kS", "kV", "kA"), strict=True)}})
+    return rows
 
 
 def _residual_look(recs: list[Recording], logs: list[_oe.Log], fit: _oe.Fit) -> str:

@@ -368,9 +368,15 @@ def describe_residuals(diag: dict[str, float]) -> str:
     if diag["lag_s"] > 0 and diag["lag_rmse_ratio"] < 0.9:
         parts.append(f"lag (the logged motion trails the simulation by {1e3 * diag['lag_s']:.0f} ms: a filtered or "
                      "stale reading)")
+    ks_f, ks_b = diag.get("kS_forward", math.nan), diag.get("kS_backward", math.nan)
+    kv_f, kv_b = diag.get("kV_forward", math.nan), diag.get("kV_backward", math.nan)
+    split = abs(ks_f - ks_b) > max(0.5 * abs(diag.get("kS", 0.0)), 0.02) or abs(kv_f / kv_b - 1) > 0.03
     if abs(diag["asymmetry"]) > 0.2:
         parts.append(f"asymmetry (forward and backward tests miss in opposite senses, {abs(diag['asymmetry']):.2f}× "
                      "the speed RMSE: kS or kV differ by direction)")
+    elif split:  # NaN compares False: no per-direction gains, no claim
+        parts.append(f"asymmetry (the forward tests alone give kS {ks_f:.3g} V, kV {kv_f:.4g}; the backward ones kS "
+                     f"{ks_b:.3g} V, kV {kv_b:.4g}: friction differs by direction)")
     if diag["drift"] > 0.5:
         parts.append(f"drift (a straight line in time explains {100 * diag['drift']:.0f} % of the position "
                      "residual along the runs: slip, turning or friction changing along the run)")
@@ -448,7 +454,8 @@ def open_loop_gains(
     -------
     dict
         ``fit`` (:class:`GainFit`), ``position_weight``, ``by_direction`` ({"forward"|"backward":
-        (kS, kV, kA)} fitted to that direction's tests alone, when both are present),
+        (kS, kV, kA)} fitted to that direction's tests alone, when both are present), ``by_side``
+        ({"left side"|"right side": ...} for a drivetrain read with both sides),
         ``diagnostics`` (:func:`residual_diagnostics`) and ``description`` (:func:`describe_residuals`).
     """
     weight = POSITION_WEIGHT
@@ -470,14 +477,29 @@ def open_loop_gains(
                 if worst(trial) <= limit:
                     break
             _, weight, fit = best
-    by_direction: dict[str, list[float]] = {}
-    for label, d in (("forward", 1), ("backward", -1)):
-        part = [t for t in tests if test_direction(t.name) == d]
+    by_direction = _subset_gains(tests, fit.gains, weight, {"forward": lambda t: test_direction(t.name) == 1,
+                                                            "backward": lambda t: test_direction(t.name) == -1})
+    by_side = _subset_gains(tests, fit.gains, weight, {"left side": lambda t: t.name.endswith("#left"),
+                                                       "right side": lambda t: t.name.endswith("#right")})
+    diag = residual_diagnostics(fit.gains, tests)
+    diag["kS"] = float(fit.gains[0])
+    if len(by_direction) == 2:
+        diag.update(kS_forward=by_direction["forward"][0], kS_backward=by_direction["backward"][0],
+                    kV_forward=by_direction["forward"][1], kV_backward=by_direction["backward"][1])
+    return {"fit": fit, "position_weight": weight, "by_direction": by_direction, "by_side": by_side,
+            "diagnostics": diag, "description": describe_residuals(diag)}
+
+
+def _subset_gains(
+    tests: Sequence[ScoreTest], start: np.ndarray, weight: float, subsets: dict
+) -> dict[str, list[float]]:
+    """Gains fitted to each subset of the tests (a proper, non-empty one), from the pooled gains."""
+    out: dict[str, list[float]] = {}
+    for label, keep in subsets.items():
+        part = [t for t in tests if keep(t)]
         if part and len(part) < len(tests):
             try:
-                by_direction[label] = fit_gains(part, [fit.gains], position_weight=weight).gains.tolist()
+                out[label] = fit_gains(part, [start], position_weight=weight, rounds=3).gains.tolist()
             except (FitError, OptionError):
                 continue
-    diag = residual_diagnostics(fit.gains, tests)
-    return {"fit": fit, "position_weight": weight, "by_direction": by_direction, "diagnostics": diag,
-            "description": describe_residuals(diag)}
+    return out
