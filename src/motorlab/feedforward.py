@@ -556,10 +556,10 @@ def motor_estimates(
 
 def add_arguments(parser: argparse.ArgumentParser, experiment: str) -> None:
     """Options of ``motorlab analyze feedforward``."""
-    from motorlab.cli.common import positive_number, quantity
+    from motorlab.cli.common import quantity
     from motorlab.io.frc_json import UNITS
 
-    parser.add_argument("--cpr", type=positive_number,
+    parser.add_argument("--cpr", type=quantity("count", positive=True),
                         help="encoder counts per revolution at the shaft (537.7 is fine); for a SysId or "
                              "frc-characterization file, counts per rotation as the file logs rotations")
     parser.add_argument("--mechanism", choices=MECHANISMS, default="simple",

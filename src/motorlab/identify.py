@@ -539,9 +539,10 @@ def _identify_without_current(
 
 def add_arguments(parser: argparse.ArgumentParser, experiment: str) -> None:
     """Options of ``motorlab analyze identify``."""
-    from motorlab.cli.common import positive_number, quantity
+    from motorlab.cli.common import quantity
 
-    parser.add_argument("--cpr", type=positive_number, help="encoder counts per revolution at the shaft (537.7 too)")
+    parser.add_argument("--cpr", type=quantity("count", positive=True),
+                        help="encoder counts per revolution at the shaft (537.7 too)")
     parser.add_argument("--R", dest="resistance", type=quantity("ohm", positive=True),
                         help="winding resistance, if known (needed without current) [Ω]")
     parser.add_argument("--K", dest="torque_constant", type=quantity("V*s/rad", positive=True),
@@ -570,7 +571,10 @@ def read_runs(paths: list[str], *, cpr: float | None) -> list[Recording]:
 
 def from_cli(experiment: str, paths: list[str], args: argparse.Namespace) -> FitResult:
     """Run ``motorlab analyze identify FILE...``."""
+    from motorlab.analyses._common import check_cpr
+
     cpr = getattr(args, "cpr", None)
+    check_cpr(cpr)  # any positive number of counts (537.7), within physical bounds
     runs = read_runs(paths, cpr=cpr)
     return identify(runs, resistance=getattr(args, "resistance", None),
                     torque_constant=getattr(args, "torque_constant", None), cpr=cpr,
