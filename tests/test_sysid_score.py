@@ -284,3 +284,13 @@ def test_never_behind_sysid_regression_on_the_real_flywheel(real_dir):
     assert ratio[0] <= 1.01, ratio
     assert ratio[1] <= 1.01, ratio
     assert result.details["position_weight"] != 0.25  # the weight moved to keep the position
+
+
+def test_identify_applies_cpr_to_a_json_file_too(real_dir):
+    from motorlab import identify
+
+    parser = argparse.ArgumentParser()
+    identify.add_arguments(parser, "identify")
+    roller = str(real_dir / "sysid" / "t581_spu_roller.json")
+    with pytest.raises(OptionError, match="finer than half a count"):
+        identify.from_cli("identify", [roller], parser.parse_args(["--cpr", "2048"]))

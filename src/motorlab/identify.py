@@ -576,6 +576,12 @@ def from_cli(experiment: str, paths: list[str], args: argparse.Namespace) -> Fit
     cpr = getattr(args, "cpr", None)
     check_cpr(cpr)  # any positive number of counts (537.7), within physical bounds
     runs = read_runs(paths, cpr=cpr)
+    json_runs = [r for r in runs if r.metadata.get("format") in ("sysid-json", "frc-char-json")]
+    if json_runs and cpr is not None:  # a JSON file logs its own units: cpr counts per logged rotation
+        from motorlab.feedforward import apply_cpr
+
+        apply_cpr(json_runs, cpr)
+        cpr = None  # the readers of counts logs keep theirs in metadata["cpr"]
     return identify(runs, resistance=getattr(args, "resistance", None),
                     torque_constant=getattr(args, "torque_constant", None), cpr=cpr,
                     use_current=getattr(args, "use_current", True))
