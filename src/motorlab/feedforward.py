@@ -442,6 +442,8 @@ def _report_open_loop(result: FitResult, recs: list[Recording], *, length: str) 
     position = np.concatenate([t.position for t in tests])
     sst = float(np.sum((position - position.mean()) ** 2))
     result.rmse, result.r2 = fit.score.position, 1.0 - float(np.sum(rp**2)) / sst if sst > 0 else math.nan
+    for panel in result.panels:  # what follows the score's panels is the motor-model fit's
+        panel.title = panel.title.replace("feedforward:", "motor-model fit (angle only):", 1)
     result.panels[:0] = sysid_score.score_panels(fit.gains, tests, title="feedforward", length=length)
 
 
