@@ -347,11 +347,7 @@ def feedforward(
     np.fill_diagonal(corr, 1.0)
     if not fit.success:
         warnings.append(f"the optimiser stopped early: {fit.message}")
-    noise = _oe.noise_warning(fit, rms_text=f"{fit.residual_rms['position']:.3g} {'m' if linear else 'rad'}")
-    if noise:  # say what the residuals look like, so the user knows what the model misses
-        noise[0] += "; the residuals look like: " + (_residual_look(recs, logs, fit) or "no single effect (lag, "
-                                                     "asymmetry, drift) stands out")
-    warnings.extend(noise)
+    warnings.extend(_noise_warning(recs, logs, fit, length="m" if linear else "rad"))
     warnings.extend(_gain_warnings(logs, fit, values, corr))
     details: dict[str, Any] = {
         "method": "output error (angle simulated from the voltage)",
@@ -372,7 +368,7 @@ def feedforward(
         details["sysid_ols"] = None
     result = _result("feedforward", params, corr, names, logs, fit, warnings, details, length="m" if linear else "rad")
     if mechanism == "simple" and fit.noise_model.startswith("Newey") and all("velocity" in rec for rec in recs):
-        _report_open_loop(result, recs, length="m" if linear else "rad")
+        _report_open_loop(result, recs, length=result.rmse_unit)  # real logs: docs/real-logs.md
     return result
 
 
@@ -456,6 +452,15 @@ def _gain_rows(gains: np.ndarray, out: dict[str, Any], physics: dict[str, Any], 
     rows.append({"tests": "motor model (angle only)",
                  **{u: physics[n]["value"] for u, n in zip(units, ("kS", "kV", "kA"), strict=True)}})
     return rows
+
+
+def _noise_warning(recs: list[Recording], logs: list[_oe.Log], fit: _oe.Fit, *, length: str) -> list[str]:
+    """The motor-model fit's noise warning (if any), saying what the residuals look like."""
+    noise = _oe.noise_warning(fit, rms_text=f"{fit.residual_rms['position']:.3g} {length}")
+    if noise:
+        look = _residual_look(recs, logs, fit) or "no single effect (lag, asymmetry, drift) stands out"
+        noise[0] += f"; the residuals look like: {look}"
+    return noise
 
 
 def _residual_look(recs: list[Recording], logs: list[_oe.Log], fit: _oe.Fit) -> str:
