@@ -283,7 +283,10 @@ def read_sysid_json(path: PathArg, *, side: str = "left", units: str | None = No
     path
         The JSON file.
     side
-        For drivetrain tests (rows of 9 values), which side to take: ``"left"`` or ``"right"``.
+        For drivetrain tests (rows of 9 values), which side to take: ``"left"``, ``"right"`` or
+        ``"both"`` (each test twice, segments ``<test>#left`` and ``<test>#right``).
+    units
+        The file's unit (``"Meters"`` …) when it has no ``units`` key; it must agree with one it has.
 
     Returns
     -------
@@ -292,8 +295,9 @@ def read_sysid_json(path: PathArg, *, side: str = "left", units: str | None = No
         as SysId logs it), ``position`` and ``velocity`` = row value × ``unitsPerRotation`` converted to
         SI: [rad], [rad/s] for angular units, [m], [m/s] for linear ones. ``metadata``: ``format``
         ``"sysid-json"``, ``test`` (``Simple``, ``Arm``, ``Elevator``, ``Drivetrain`` …), ``units`` as
-        written, ``unitsPerRotation``, ``position_unit``/``velocity_unit`` (SI), ``side`` (drivetrain),
-        ``segment_kinds``, ``repeated_fraction`` (share of rows whose position and velocity repeat
+        written, ``unitsPerRotation``, ``position_unit``/``velocity_unit`` (SI), ``si_per_unit`` (one
+        file unit in SI), ``rotation_si`` (one logged rotation in SI), ``units_assumed``, ``side``
+        (drivetrain), ``segment_kinds``, ``repeated_fraction`` (share of rows whose position and velocity repeat
         the previous row's: the controller's status frame is slower than the logging loop) and
         ``repeated_fraction_by_test``.
 
@@ -364,7 +368,11 @@ def read_frc_char_json(path: PathArg, *, side: str = "left", units: str | None =
     path
         The JSON file.
     side
-        For drivetrain data (rows of 10 values), which side to take: ``"left"`` or ``"right"``.
+        For drivetrain data (rows of 10 values, or 9 without the gyro in older files), which side to
+        take: ``"left"``, ``"right"`` or ``"both"`` (segments ``<test>#left``, ``<test>#right``).
+    units
+        The unit of a file without a ``units`` key (older tool versions); by default the tool's
+        template unit is assumed (:data:`LEGACY_UNITS`) and a warning says so.
 
     Returns
     -------
@@ -372,8 +380,9 @@ def read_frc_char_json(path: PathArg, *, side: str = "left", units: str | None =
         The four tests one after the other, ``segments`` per test. Signals: ``voltage`` [V] signed to
         match the motion (negative in the backward tests), ``battery`` [V], ``position``,
         ``velocity`` (row × ``unitsPerRotation`` in SI: [m], [m/s] or [rad], [rad/s]).
-        ``metadata``: ``format`` ``"frc-char-json"``, ``test``, ``units`` as written,
-        ``unitsPerRotation``, ``position_unit``/``velocity_unit``, ``side`` (drivetrain),
+        ``metadata``: ``format`` ``"frc-char-json"``, ``test``, ``units`` as written (or assumed),
+        ``unitsPerRotation``, ``position_unit``/``velocity_unit``, ``si_per_unit``, ``rotation_si``,
+        ``units_assumed``, ``side`` (drivetrain),
         ``segment_kinds``, ``stale_rows_dropped`` ({test: rows}), ``other_keys`` (e.g.
         ``track-width``, not read) and ``warnings``.
 
