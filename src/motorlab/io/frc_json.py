@@ -325,6 +325,8 @@ def read_sysid_json(path: PathArg, *, side: str = "left", units: str | None = No
         )
     unit = _units(name, data, units=units)
     tests, warnings = _tests(name, data, text, (4, 9))
+    if unit.assumed:
+        warnings.insert(0, unit.assumed)
     drivetrain = tests[0].rows.shape[1] == 9
     parts = []
     repeated: dict[str, float] = {}
