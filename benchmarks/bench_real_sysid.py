@@ -121,7 +121,7 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--dir", type=Path, default=DEFAULT_DIR)
     parser.add_argument("--plots", type=Path, default=None)
     parser.add_argument("--limits", action="store_true")
-    args = parser.parse_args(argv)
+    args, _ = parser.parse_known_args(argv)  # benchmarks/run.py passes its own arguments through
     teams = team_table(args.dir)
     labels = ["motorlab", "ols", "motor model"] + (["best speed", "best position"] if args.limits else [])
     print("RMSE ratio to the team's gains (speed / position); team RMSE in the file's units")
