@@ -488,7 +488,7 @@ def _run_identify(ctx: _UnitContext) -> FitResult:
     from motorlab.identify import identify, read_runs
 
     cpr = ctx.cpr
-    runs = read_runs(ctx.files, cpr=int(cpr) if float(cpr).is_integer() else None)
+    runs = read_runs(ctx.files, cpr=cpr)
     if all(run.has("current") for run in runs):
         return identify(runs, cpr=cpr)
     # Without current the feedforward gains need R (and K to separate K from b) from elsewhere.
@@ -499,13 +499,13 @@ def _run_identify(ctx: _UnitContext) -> FitResult:
 
 
 def _run_feedforward(ctx: _UnitContext) -> FitResult:
-    from motorlab.feedforward import feedforward, motor_estimates
-    from motorlab.identify import read_runs
+    from motorlab.feedforward import feedforward, motor_estimates, read_tests
 
     cpr = ctx.cpr
-    # A SysId JSON file holds angles already (no counts): the reader refuses a cpr for it.
+    # A SysId JSON file holds angles already (no counts; its rotations need not be the motor's):
+    # the session's cpr is not applied to it. Both sides of a drivetrain are fitted.
     json_only = all(p.lower().endswith(".json") for p in ctx.files)
-    runs = read_runs(ctx.files, cpr=None if json_only or not float(cpr).is_integer() else int(cpr))
+    runs = read_tests(list(ctx.files), cpr=None if json_only else cpr)
     result = feedforward(runs, cpr=None if json_only else cpr)
     r, k = ctx.estimate("R"), ctx.estimate("K")
     if r is not None:

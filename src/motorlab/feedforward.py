@@ -347,7 +347,7 @@ def feedforward(
     np.fill_diagonal(corr, 1.0)
     if not fit.success:
         warnings.append(f"the optimiser stopped early: {fit.message}")
-    warnings.extend(_oe.noise_warning(fit, rms_text=f"{fit.residual_rms['position']:.3g} {'m' if linear else 'rad'}"))
+    warnings.extend(_noise_warning(recs, logs, fit, length="m" if linear else "rad"))
     warnings.extend(_gain_warnings(logs, fit, values, corr))
     details: dict[str, Any] = {
         "method": "output error (angle simulated from the voltage)",
@@ -366,7 +366,114 @@ def feedforward(
         details["sysid_ols"] = sysid_ols(recs, mechanism=mechanism)
     except (FitError, np.linalg.LinAlgError, ZeroDivisionError):
         details["sysid_ols"] = None
-    return _result("feedforward", params, corr, names, logs, fit, warnings, details, length="m" if linear else "rad")
+    result = _result("feedforward", params, corr, names, logs, fit, warnings, details, length="m" if linear else "rad")
+    if mechanism == "simple" and fit.noise_model.startswith("Newey") and all("velocity" in rec for rec in recs):
+        _report_open_loop(result, recs, length=result.rmse_unit)  # real logs: docs/real-logs.md
+    return result
+
+
+def _report_open_loop(result: FitResult, recs: list[Recording], *, length: str) -> None:
+    """Replace kS, kV, kA by the gains that best simulate the logs open loop (real logs; docs/real-logs.md).
+
+    Called when the motor model leaves residuals the measured noise does not explain (real robots:
+    commanded, not applied, voltage; filtered and stale speeds; slip, backlash, direction-dependent
+    friction). The three gains a user pastes into a feedforward are then those that minimise the
+    open-loop simulation error of the logged speed and position (:func:`motorlab.sysid_score.fit_gains`),
+    with Newey–West standard errors from the residuals' correlation; the motor-model fit, the gains
+    of each direction and what the residuals look like are reported besides.
+    """
+    from motorlab import sysid_score
+
+    tests = sysid_score.score_tests(recs)
+    names = ("kS", "kV", "kA")
+    starts = [[max(result.value(n), 1e-6) if n == "kA" else result.value(n) for n in names]]
+    ols = result.details.get("sysid_ols")
+    reference = None
+    if ols and ols["kV"] > 0 and ols["kA"] > 0:
+        starts.append([max(ols["kS"], 0.0), ols["kV"], ols["kA"]])
+        reference = sysid_score.score([ols["kS"], ols["kV"], ols["kA"]], tests)
+    try:
+        out = sysid_score.open_loop_gains(tests, starts, reference=reference)
+    except (FitError, OptionError) as exc:
+        result.warnings.append(f"the open-loop fit of the three gains failed ({exc}); the motor-model fit is reported")
+        return
+    fit = out["fit"]
+    stderr = np.sqrt(np.clip(np.diag(fit.covariance), 0.0, None))
+    result.details["physics_fit"] = {n: {"value": result.value(n), "stderr": result[n].stderr} for n in names}
+    for k, name in enumerate(names):
+        old = result.parameters[name]
+        ok = bool(np.isfinite(stderr[k]) and stderr[k] <= MAX_RELATIVE_STDERR * abs(fit.gains[k]))
+        result.parameters[name] = Estimate(name, float(fit.gains[k]), float(stderr[k]), old.unit, ok,
+                                           "" if ok else "the data carry (almost) no information on it")
+    with np.errstate(invalid="ignore", divide="ignore"):
+        corr = fit.covariance / np.outer(stderr, stderr)
+    np.fill_diagonal(corr, 1.0)
+    result.correlation, result.correlation_names = corr, list(names)
+    result.details.update({
+        "method": "open-loop output error: kS, kV, kA minimise log RMSE(speed) + "
+                  f"{out['position_weight']:g}·log RMSE(position) of the simulation from the logged voltage",
+        "position_weight": out["position_weight"],
+        "uncertainty": f"Newey–West from the residuals' correlation (bandwidth {fit.bandwidth:.1f} rows)",
+        "open_loop_score": {"speed": fit.score.speed, "position": fit.score.position,
+                            "units": {"speed": f"{length}/s", "position": length}},
+        "by_direction": {d: dict(zip(names, g, strict=True)) for d, g in out["by_direction"].items()},
+        "by_side": {d: dict(zip(names, g, strict=True)) for d, g in out["by_side"].items()},
+        "gains_by_tests": _gain_rows(fit.gains, out, result.details["physics_fit"], length),
+        "residual_diagnostics": out["diagnostics"],
+    })
+    about_model = ("the measured noise does not explain", "the optimiser stopped early", "kS and kV are",
+                   "no acceleration event")
+    result.details["physics_fit_warnings"] = [w for w in result.warnings if w.startswith(about_model)]
+    result.warnings[:] = [w for w in result.warnings if not w.startswith(about_model)]
+    looks = out["description"] or "no single effect (lag, asymmetry, drift) stands out"
+    result.warnings.append(
+        "the motor model leaves residuals the measured noise does not explain: kS, kV, kA are the gains that best "
+        "simulate the logged speed and position open loop, with standard errors from the residuals' correlation "
+        f"(Newey–West); the residuals look like: {looks}"
+    )
+    if fit.gains[0] < 0:
+        result.warnings.append(f"kS = {fit.gains[0]:.3g} V is negative: no static friction explains it; the logs "
+                               "move at voltages below what the model expects (check the voltage log's offset)")
+    _, rp = sysid_score.residuals(fit.gains, tests)
+    position = np.concatenate([t.position for t in tests])
+    sst = float(np.sum((position - position.mean()) ** 2))
+    result.rmse, result.r2 = fit.score.position, 1.0 - float(np.sum(rp**2)) / sst if sst > 0 else math.nan
+    for panel in result.panels:  # what follows the score's panels is the motor-model fit's
+        panel.title = panel.title.replace("feedforward:", "motor-model fit (angle only):", 1)
+    result.panels[:0] = sysid_score.score_panels(fit.gains, tests, title="feedforward", length=length)
+
+
+def _gain_rows(gains: np.ndarray, out: dict[str, Any], physics: dict[str, Any], length: str) -> list[dict[str, Any]]:
+    """One row per gain set for the human output: pooled (reported), per direction, per side, motor model."""
+    units = ("kS [V]", f"kV [V·s/{length}]", f"kA [V·s²/{length}]")
+    rows = [{"tests": "all (reported)", **dict(zip(units, gains.tolist(), strict=True))}]
+    for label, g in {**out["by_direction"], **out["by_side"]}.items():
+        rows.append({"tests": f"{label} only", **dict(zip(units, g, strict=True))})
+    rows.append({"tests": "motor model (angle only)",
+                 **{u: physics[n]["value"] for u, n in zip(units, ("kS", "kV", "kA"), strict=True)}})
+    return rows
+
+
+def _noise_warning(recs: list[Recording], logs: list[_oe.Log], fit: _oe.Fit, *, length: str) -> list[str]:
+    """The motor-model fit's noise warning (if any), saying what the residuals look like."""
+    noise = _oe.noise_warning(fit, rms_text=f"{fit.residual_rms['position']:.3g} {length}")
+    if noise:
+        look = _residual_look(recs, logs, fit) or "no single effect (lag, asymmetry, drift) stands out"
+        noise[0] += f"; the residuals look like: {look}"
+    return noise
+
+
+def _residual_look(recs: list[Recording], logs: list[_oe.Log], fit: _oe.Fit) -> str:
+    """Lag, asymmetry or drift in the angle residuals of the motor-model fit (:mod:`motorlab.sysid_score`)."""
+    from motorlab import sysid_score
+    from motorlab.io.frc_json import test_kind
+
+    runs = []
+    for rec, log, sim in zip(recs, logs, fit.simulations, strict=True):
+        name = str(rec.metadata.get("segment") or "")
+        direction = int(test_kind(name)["direction"]) if name else int(np.sign(np.mean(log.grid_voltage)))
+        runs.append((log.time, log.position - sim["position"], sim["speed"], direction))
+    return sysid_score.describe_residuals(sysid_score.position_residual_diagnostics(runs))
 
 
 def _gain_warnings(logs: list[_oe.Log], fit: _oe.Fit, values: np.ndarray, corr: np.ndarray) -> list[str]:
@@ -456,27 +563,99 @@ def motor_estimates(
 
 def add_arguments(parser: argparse.ArgumentParser, experiment: str) -> None:
     """Options of ``motorlab analyze feedforward``."""
-    from motorlab.cli.common import positive_int, quantity
+    from motorlab.cli.common import quantity
+    from motorlab.io.frc_json import UNITS
 
-    parser.add_argument("--cpr", type=positive_int, help="encoder counts per revolution at the shaft")
+    parser.add_argument("--cpr", type=quantity("count", positive=True),
+                        help="encoder counts per revolution at the shaft (537.7 is fine); for a SysId or "
+                             "frc-characterization file, counts per rotation as the file logs rotations")
     parser.add_argument("--mechanism", choices=MECHANISMS, default="simple",
                         help="gravity term: none (simple), kG (elevator), kG·cos(θ+φ) (arm)")
     parser.add_argument("--R", dest="resistance", type=quantity("ohm", positive=True),
                         help="winding resistance, to convert the gains to K, J, b, Tf [Ω]")
     parser.add_argument("--K", dest="torque_constant", type=quantity("V*s/rad", positive=True),
                         help="torque constant, to separate K from b in kV [V·s/rad]")
+    parser.add_argument("--side", choices=("both", "left", "right"), default="both",
+                        help="drivetrain logs: fit both sides' tests (default, as SysId) or one side")
+    parser.add_argument("--units", choices=[u.title() for u in UNITS], default=None,
+                        help="unit of a frc-characterization file without a 'units' key (default: that tool's "
+                             "template units, Feet; Degrees for an arm)")
+
+
+def read_tests(paths: list[str], *, cpr: float | None, side: str = "both", units: str | None = None) -> list[Recording]:
+    """Read the files, one recording per test (and per drivetrain side), for :func:`feedforward`.
+
+    SysId and frc-characterization JSON files carry their own units: ``side`` and ``units`` go to
+    their readers, and a ``cpr`` becomes the file's position quantum, one count = one logged
+    rotation / cpr (:func:`apply_cpr`). Other formats get ``cpr`` in their reader
+    (:func:`motorlab.identify.read_runs`).
+    """
+    from motorlab import io as mio
+
+    runs: list[Recording] = []
+    for path in paths:
+        if mio.detect_format(path) in ("sysid-json", "frc-char-json"):
+            parts = mio.read_any(path, side=side, units=units).split()
+            if cpr is not None:
+                apply_cpr(parts, cpr)
+            runs.extend(parts)
+        else:
+            runs.extend(read_runs([path], cpr=cpr))
+    return runs
+
+
+def apply_cpr(recordings: Sequence[Recording], cpr: float) -> None:
+    """Set the position quantum of JSON tests from ``cpr`` [count/rotation of the logged shaft], in place.
+
+    The quantum is ``rotation_si/cpr`` (metres for a drivetrain logged in metres, radians for angles)
+    and is stored as the equivalent ``metadata["cpr"]`` = 2π/quantum the fit reads.
+
+    Raises
+    ------
+    OptionError
+        The file logs a length without ``unitsPerRotation`` (a rotation's length is unknown), or its
+        positions move by steps finer than one count (the cpr does not fit the file).
+    """
+    from motorlab.analyses._common import check_cpr
+
+    check_cpr(cpr)
+    finest, n_fine = math.inf, 0
+    for rec in recordings:
+        rotation = rec.metadata.get("rotation_si")
+        if rotation is None:
+            raise OptionError(
+                f"--cpr {cpr:g}: {rec.source} logs {rec.metadata.get('units')} without unitsPerRotation, so a count "
+                "cannot be turned into a distance; leave --cpr out (the quantum is then read from the steps)"
+            )
+        steps = np.abs(np.diff(rec.signals["position"]))
+        fine = steps[(steps > 1e-12 * rotation) & (steps < 0.5 * rotation / cpr)]
+        n_fine += fine.size
+        finest = min(finest, float(np.min(fine)) if fine.size else math.inf)
+        rec.metadata["cpr"] = 2.0 * math.pi * cpr / rotation
+        rec.metadata["cpr_given"] = cpr
+    if n_fine >= 3:  # a few: JSON rounding of a position can split one count over two rows
+        rec = recordings[0]
+        raise OptionError(
+            f"--cpr {cpr:g}: {rec.source} moves by steps as small as {finest:.3g} {rec.metadata.get('position_unit')}"
+            f" ({n_fine} steps finer than half a count): this cpr does not fit (give the counts per logged rotation, "
+            "gearing included)"
+        )
 
 
 def from_cli(experiment: str, paths: list[str], args: argparse.Namespace) -> FitResult:
     """Run ``motorlab analyze feedforward FILE...``."""
     cpr = getattr(args, "cpr", None)
-    runs = read_runs(paths, cpr=cpr)
+    runs = read_tests(paths, cpr=cpr, side=getattr(args, "side", "both"), units=getattr(args, "units", None))
+    json_only = any(run.metadata.get("format") in ("sysid-json", "frc-char-json") for run in runs)
     if any(r.metadata.get("ramp") in ("lateral", "angular") for r in runs):  # Road Runner's other ramps
         from motorlab.analyses.roadrunner import from_runs
 
         result = from_runs(runs, cpr=cpr, mechanism=getattr(args, "mechanism", "simple"))
     else:
-        result = feedforward(runs, mechanism=getattr(args, "mechanism", "simple"), cpr=cpr)
+        result = feedforward(runs, mechanism=getattr(args, "mechanism", "simple"), cpr=None if json_only else cpr)
+    if json_only and cpr is not None:
+        result.details["cpr"] = {"given": cpr, "note": "counts per logged rotation: the position quantum is "
+                                 "one rotation (unitsPerRotation) / cpr"}
     resistance = getattr(args, "resistance", None)
     if resistance is not None:
         result.parameters.update(

@@ -539,9 +539,10 @@ def _identify_without_current(
 
 def add_arguments(parser: argparse.ArgumentParser, experiment: str) -> None:
     """Options of ``motorlab analyze identify``."""
-    from motorlab.cli.common import positive_int, quantity
+    from motorlab.cli.common import quantity
 
-    parser.add_argument("--cpr", type=positive_int, help="encoder counts per revolution at the shaft")
+    parser.add_argument("--cpr", type=quantity("count", positive=True),
+                        help="encoder counts per revolution at the shaft (537.7 too)")
     parser.add_argument("--R", dest="resistance", type=quantity("ohm", positive=True),
                         help="winding resistance, if known (needed without current) [Ω]")
     parser.add_argument("--K", dest="torque_constant", type=quantity("V*s/rad", positive=True),
@@ -550,7 +551,7 @@ def add_arguments(parser: argparse.ArgumentParser, experiment: str) -> None:
                         help="ignore a current column (fit voltage and angle only)")
 
 
-def read_runs(paths: list[str], *, cpr: int | None) -> list[Recording]:
+def read_runs(paths: list[str], *, cpr: float | None) -> list[Recording]:
     """Read every file with :func:`motorlab.io.read_any`, one recording per test segment.
 
     ``cpr`` goes to the readers that convert counts (FTC log, CSV); formats that log angles (SysId
@@ -570,8 +571,17 @@ def read_runs(paths: list[str], *, cpr: int | None) -> list[Recording]:
 
 def from_cli(experiment: str, paths: list[str], args: argparse.Namespace) -> FitResult:
     """Run ``motorlab analyze identify FILE...``."""
+    from motorlab.analyses._common import check_cpr
+
     cpr = getattr(args, "cpr", None)
+    check_cpr(cpr)  # any positive number of counts (537.7), within physical bounds
     runs = read_runs(paths, cpr=cpr)
+    json_runs = [r for r in runs if r.metadata.get("format") in ("sysid-json", "frc-char-json")]
+    if json_runs and cpr is not None:  # a JSON file logs its own units: cpr counts per logged rotation
+        from motorlab.feedforward import apply_cpr
+
+        apply_cpr(json_runs, cpr)
+        cpr = None  # the readers of counts logs keep theirs in metadata["cpr"]
     return identify(runs, resistance=getattr(args, "resistance", None),
                     torque_constant=getattr(args, "torque_constant", None), cpr=cpr,
                     use_current=getattr(args, "use_current", True))

@@ -35,6 +35,8 @@ UNITS: dict[str, tuple[str, str]] = {
 }
 
 _SIDES = ("left", "right")
+#: ``side="both"``: every drivetrain test twice, as ``<test>#left`` and ``<test>#right``.
+BOTH = "both"
 
 
 def test_kind(name: str) -> dict[str, Any]:
@@ -154,23 +156,74 @@ def _tests(name: str, data: dict[str, Any], text: str, columns: tuple[int, ...])
     return tests, warnings
 
 
-def _units(name: str, data: dict[str, Any]) -> tuple[str, float, str, float]:
-    """(units as written, unitsPerRotation, SI unit of position, factor rotations -> SI)."""
-    units = data.get("units")
+@dataclass
+class _Units:
+    units: str  # as written (or assumed)
+    upr: float  # unitsPerRotation (1 when the file has none: rows are in ``units`` already)
+    si_unit: str  # "m" or "rad"
+    factor: float  # row value -> SI
+    si_per_unit: float  # one ``units`` in SI
+    rotation_si: float | None  # one logged rotation of the encoder shaft in SI (None: unknown)
+    assumed: str | None  # what was assumed, for the warnings
+
+
+#: Units of the pre-2020 frc-characterization robot templates, whose files carry no ``units`` key:
+#: drivetrains and elevators logged feet ("getDistance and getRate should return ft and ft/s"), arms
+#: degrees (``robot-java/src/main/java/dc/Robot.java``, ``arm-characterization/robot-python/robot.py``).
+LEGACY_UNITS = {"arm": "Degrees", "other": "Feet"}
+
+
+def _units(name: str, data: dict[str, Any], *, units: str | None = None, legacy: bool = False) -> _Units:
+    """The file's units; ``units`` (the user's) fills in or must agree with the file's ``units`` key.
+
+    ``legacy``: a frc-characterization file may lack ``units`` and ``unitsPerRotation`` (older tool
+    versions): the templates' units are assumed (:data:`LEGACY_UNITS`) and said so.
+    """
+    written = data.get("units")
     upr = data.get("unitsPerRotation")
-    if not isinstance(units, str) or units.lower() not in UNITS:
-        known = ", ".join(u.title() for u in UNITS)
-        raise LogFormatError(f"units {units!r} unknown; expected one of {known}", path=name)
+    known = ", ".join(u.title() for u in UNITS)
+    if units is not None and units.lower() not in UNITS:
+        raise OptionError(f"units {units!r} unknown; expected one of {known}")
+    assumed = None
+    if written is None and units is not None:
+        written = units.title()
+        assumed = f"no 'units' key: rows read as {written} (as given)"
+    elif written is None and legacy:
+        written = LEGACY_UNITS["arm" if str(data.get("test", "")).lower() == "arm" else "other"]
+        assumed = (f"no 'units' key (an older frc-characterization file): rows read as {written}, the unit of "
+                   "that tool's robot templates; if the robot code logged another, give it (--units)")
+    elif isinstance(written, str) and units is not None and written.lower() != units.lower():
+        raise OptionError(f"{name}: the file logs {written}; the unit given ({units}) contradicts it")
+    if not isinstance(written, str) or written.lower() not in UNITS:
+        raise LogFormatError(f"units {written!r} unknown; expected one of {known}", path=name)
+    if upr is None and assumed is not None:
+        upr = 1.0
     if isinstance(upr, bool) or not isinstance(upr, int | float) or not math.isfinite(upr) or upr <= 0:
         raise LogFormatError(f"unitsPerRotation {upr!r} is not a positive number", path=name)
-    pint_unit, si_unit = UNITS[units.lower()]
-    return units, float(upr), si_unit, float(upr) * unit_factor(pint_unit, si_unit)
+    pint_unit, si_unit = UNITS[written.lower()]
+    si_per_unit = unit_factor(pint_unit, si_unit)
+    if "unitsPerRotation" in data:
+        rotation_si: float | None = float(upr) * si_per_unit
+    else:  # rows in the unit itself: a rotation is known only for angles
+        rotation_si = 2.0 * math.pi if si_unit == "rad" else None
+    return _Units(written, float(upr), si_unit, float(upr) * si_per_unit, si_per_unit, rotation_si, assumed)
 
 
-def _check_side(side: str) -> int:
+def _check_side(side: str) -> tuple[int, ...]:
+    if side == BOTH:
+        return (0, 1)
     if side not in _SIDES:
-        raise OptionError(f"side must be 'left' or 'right', got {side!r}")
-    return _SIDES.index(side)
+        raise OptionError(f"side must be 'left', 'right' or 'both', got {side!r}")
+    return (_SIDES.index(side),)
+
+
+def _side_names(drivetrain: bool, sides: tuple[int, ...], key: str) -> list[tuple[int, str]]:
+    """(side index, segment name) of each part a test gives: one per side asked for a drivetrain."""
+    if not drivetrain:
+        return [(0, key)]
+    if len(sides) == 1:
+        return [(sides[0], key)]
+    return [(i, f"{key}#{_SIDES[i]}") for i in sides]
 
 
 def _assemble(
@@ -199,6 +252,18 @@ def _assemble(
     )
 
 
+def _unit_metadata(unit: _Units) -> dict[str, Any]:
+    return {
+        "units": unit.units,
+        "unitsPerRotation": unit.upr,
+        "position_unit": unit.si_unit,
+        "velocity_unit": f"{unit.si_unit}/s",
+        "si_per_unit": unit.si_per_unit,
+        "rotation_si": unit.rotation_si,
+        "units_assumed": unit.assumed is not None,
+    }
+
+
 def _direction_warnings(key: str, voltage: np.ndarray, velocity: np.ndarray) -> list[str]:
     """A warning when the motion of a test mostly opposes its applied voltage (inverted sensor?)."""
     moving = (np.abs(velocity) > 0) & (voltage != 0)
@@ -210,7 +275,7 @@ def _direction_warnings(key: str, voltage: np.ndarray, velocity: np.ndarray) -> 
     return []
 
 
-def read_sysid_json(path: PathArg, *, side: str = "left") -> Recording:
+def read_sysid_json(path: PathArg, *, side: str = "left", units: str | None = None) -> Recording:
     """Read a WPILib SysId JSON log (``"sysid": true``; the format before data logs).
 
     Parameters
@@ -218,7 +283,10 @@ def read_sysid_json(path: PathArg, *, side: str = "left") -> Recording:
     path
         The JSON file.
     side
-        For drivetrain tests (rows of 9 values), which side to take: ``"left"`` or ``"right"``.
+        For drivetrain tests (rows of 9 values), which side to take: ``"left"``, ``"right"`` or
+        ``"both"`` (each test twice, segments ``<test>#left`` and ``<test>#right``).
+    units
+        The file's unit (``"Meters"`` …) when it has no ``units`` key; it must agree with one it has.
 
     Returns
     -------
@@ -227,8 +295,9 @@ def read_sysid_json(path: PathArg, *, side: str = "left") -> Recording:
         as SysId logs it), ``position`` and ``velocity`` = row value × ``unitsPerRotation`` converted to
         SI: [rad], [rad/s] for angular units, [m], [m/s] for linear ones. ``metadata``: ``format``
         ``"sysid-json"``, ``test`` (``Simple``, ``Arm``, ``Elevator``, ``Drivetrain`` …), ``units`` as
-        written, ``unitsPerRotation``, ``position_unit``/``velocity_unit`` (SI), ``side`` (drivetrain),
-        ``segment_kinds``, ``repeated_fraction`` (share of rows whose position and velocity repeat
+        written, ``unitsPerRotation``, ``position_unit``/``velocity_unit`` (SI), ``si_per_unit`` (one
+        file unit in SI), ``rotation_si`` (one logged rotation in SI), ``units_assumed``, ``side``
+        (drivetrain), ``segment_kinds``, ``repeated_fraction`` (share of rows whose position and velocity repeat
         the previous row's: the controller's status frame is slower than the logging loop) and
         ``repeated_fraction_by_test``.
 
@@ -247,20 +316,18 @@ def read_sysid_json(path: PathArg, *, side: str = "left") -> Recording:
     velocities are in rotations of the encoder shaft, and SysId's loader multiplies them by
     ``unitsPerRotation``. Repeated rows are kept as recorded: dropping them would bias the sampling.
     """
-    side_index = _check_side(side)
+    sides = _check_side(side)
     name, data, text = _load(path)
     if not data.get("sysid"):
         raise LogFormatError(
             'not a SysId JSON file (no "sysid": true); frc-characterization files are read by read_frc_char_json',
             path=name,
         )
-    units, upr, si_unit, factor = _units(name, data)
+    unit = _units(name, data, units=units)
     tests, warnings = _tests(name, data, text, (4, 9))
+    if unit.assumed:
+        warnings.insert(0, unit.assumed)
     drivetrain = tests[0].rows.shape[1] == 9
-    if drivetrain:
-        cols = {"voltage": 1 + side_index, "position": 3 + side_index, "velocity": 5 + side_index}
-    else:
-        cols = {"voltage": 1, "position": 2, "velocity": 3}
     parts = []
     repeated: dict[str, float] = {}
     n_repeated = 0
@@ -268,25 +335,24 @@ def read_sysid_json(path: PathArg, *, side: str = "left") -> Recording:
         if test.rows.shape[1] != tests[0].rows.shape[1]:
             raise LogFormatError(f"test {test.name!r} has rows of another length than {tests[0].name!r}", path=name)
         rows = test.rows
-        signals = {
-            "time": rows[:, 0],
-            "voltage": rows[:, cols["voltage"]],
-            "position": rows[:, cols["position"]] * factor,
-            "velocity": rows[:, cols["velocity"]] * factor,
-        }
-        same = np.all(np.diff(rows[:, [cols["position"], cols["velocity"]]], axis=0) == 0, axis=1)
-        repeated[test.name] = float(same.mean()) if same.size else 0.0
-        n_repeated += int(same.sum())
-        warnings += _direction_warnings(test.name, signals["voltage"], signals["velocity"])
-        parts.append((test.name, signals, test.lines))
-    total = sum(max(t.rows.shape[0] - 1, 0) for t in tests)
+        for index, key in _side_names(drivetrain, sides, test.name):
+            cols = (1 + index, 3 + index, 5 + index) if drivetrain else (1, 2, 3)
+            signals = {
+                "time": rows[:, 0],
+                "voltage": rows[:, cols[0]],
+                "position": rows[:, cols[1]] * unit.factor,
+                "velocity": rows[:, cols[2]] * unit.factor,
+            }
+            same = np.all(np.diff(rows[:, list(cols[1:])], axis=0) == 0, axis=1)
+            repeated[key] = float(same.mean()) if same.size else 0.0
+            n_repeated += int(same.sum())
+            warnings += _direction_warnings(key, signals["voltage"], signals["velocity"])
+            parts.append((key, signals, test.lines))
+    total = sum(max(s["time"].size - 1, 0) for _, s, _ in parts)
     metadata = {
         "format": "sysid-json",
         "test": data.get("test"),
-        "units": units,
-        "unitsPerRotation": upr,
-        "position_unit": si_unit,
-        "velocity_unit": f"{si_unit}/s",
+        **_unit_metadata(unit),
         "side": side if drivetrain else None,
         "repeated_fraction": n_repeated / total if total else 0.0,
         "repeated_fraction_by_test": repeated,
@@ -296,7 +362,7 @@ def read_sysid_json(path: PathArg, *, side: str = "left") -> Recording:
     return _assemble(name, parts, metadata)
 
 
-def read_frc_char_json(path: PathArg, *, side: str = "left") -> Recording:
+def read_frc_char_json(path: PathArg, *, side: str = "left", units: str | None = None) -> Recording:
     """Read a frc-characterization JSON log (WPILib's Python-era tool, before SysId).
 
     Parameters
@@ -304,7 +370,11 @@ def read_frc_char_json(path: PathArg, *, side: str = "left") -> Recording:
     path
         The JSON file.
     side
-        For drivetrain data (rows of 10 values), which side to take: ``"left"`` or ``"right"``.
+        For drivetrain data (rows of 10 values, or 9 without the gyro in older files), which side to
+        take: ``"left"``, ``"right"`` or ``"both"`` (segments ``<test>#left``, ``<test>#right``).
+    units
+        The unit of a file without a ``units`` key (older tool versions); by default the tool's
+        template unit is assumed (:data:`LEGACY_UNITS`) and a warning says so.
 
     Returns
     -------
@@ -312,8 +382,9 @@ def read_frc_char_json(path: PathArg, *, side: str = "left") -> Recording:
         The four tests one after the other, ``segments`` per test. Signals: ``voltage`` [V] signed to
         match the motion (negative in the backward tests), ``battery`` [V], ``position``,
         ``velocity`` (row × ``unitsPerRotation`` in SI: [m], [m/s] or [rad], [rad/s]).
-        ``metadata``: ``format`` ``"frc-char-json"``, ``test``, ``units`` as written,
-        ``unitsPerRotation``, ``position_unit``/``velocity_unit``, ``side`` (drivetrain),
+        ``metadata``: ``format`` ``"frc-char-json"``, ``test``, ``units`` as written (or assumed),
+        ``unitsPerRotation``, ``position_unit``/``velocity_unit``, ``si_per_unit``, ``rotation_si``,
+        ``units_assumed``, ``side`` (drivetrain),
         ``segment_kinds``, ``stale_rows_dropped`` ({test: rows}), ``other_keys`` (e.g.
         ``track-width``, not read) and ``warnings``.
 
@@ -335,44 +406,40 @@ def read_frc_char_json(path: PathArg, *, side: str = "left") -> Recording:
     * the first row of a test can carry a stale voltage from the previous test (``autospeed`` is 0
       but the voltage is not): such a row is dropped and counted in ``stale_rows_dropped``.
     """
-    side_index = _check_side(side)
+    sides = _check_side(side)
     name, data, text = _load(path)
     if data.get("sysid"):
         raise LogFormatError('this is a SysId JSON file ("sysid": true): use read_sysid_json', path=name)
-    units, upr, si_unit, factor = _units(name, data)
-    tests, warnings = _tests(name, data, text, (6, 10))
-    drivetrain = tests[0].rows.shape[1] == 10
-    if drivetrain:
-        cols = {"voltage": 3 + side_index, "position": 5 + side_index, "velocity": 7 + side_index}
-    else:
-        cols = {"voltage": 3, "position": 4, "velocity": 5}
+    unit = _units(name, data, units=units, legacy=True)
+    tests, warnings = _tests(name, data, text, (6, 9, 10))
+    if unit.assumed:
+        warnings.insert(0, unit.assumed)
+    drivetrain = tests[0].rows.shape[1] in (9, 10)
     parts = []
     stale: dict[str, int] = {}
     for test in tests:
         if test.rows.shape[1] != tests[0].rows.shape[1]:
             raise LogFormatError(f"test {test.name!r} has rows of another length than {tests[0].name!r}", path=name)
-        rows, lines = test.rows, test.lines
-        first = rows[0]
-        if rows.shape[0] > 1 and first[2] == 0 and first[cols["voltage"]] != 0:
-            rows, lines = rows[1:], lines[1:]
-            stale[test.name] = 1
         direction = test_kind(test.name)["direction"]
-        signals = {
-            "time": rows[:, 0],
-            "voltage": direction * np.abs(rows[:, cols["voltage"]]) + 0.0,  # + 0.0: no -0.0
-            "battery": rows[:, 1],
-            "position": rows[:, cols["position"]] * factor,
-            "velocity": rows[:, cols["velocity"]] * factor,
-        }
-        warnings += _direction_warnings(test.name, signals["voltage"], signals["velocity"])
-        parts.append((test.name, signals, lines))
+        for index, key in _side_names(drivetrain, sides, test.name):
+            cols = (3 + index, 5 + index, 7 + index) if drivetrain else (3, 4, 5)
+            rows, lines = test.rows, test.lines
+            if rows.shape[0] > 1 and rows[0, 2] == 0 and rows[0, cols[0]] != 0:
+                rows, lines = rows[1:], lines[1:]
+                stale[key] = 1
+            signals = {
+                "time": rows[:, 0],
+                "voltage": direction * np.abs(rows[:, cols[0]]) + 0.0,  # + 0.0: no -0.0
+                "battery": rows[:, 1],
+                "position": rows[:, cols[1]] * unit.factor,
+                "velocity": rows[:, cols[2]] * unit.factor,
+            }
+            warnings += _direction_warnings(key, signals["voltage"], signals["velocity"])
+            parts.append((key, signals, lines))
     metadata = {
         "format": "frc-char-json",
         "test": data.get("test"),
-        "units": units,
-        "unitsPerRotation": upr,
-        "position_unit": si_unit,
-        "velocity_unit": f"{si_unit}/s",
+        **_unit_metadata(unit),
         "side": side if drivetrain else None,
         "stale_rows_dropped": stale,
         "other_keys": [k for k in data if isinstance(data[k], list) and k not in TESTS],

@@ -1,0 +1,505 @@
+"""The fair score of a feedforward gain set on a SysId log: open-loop simulation from the logged voltage.
+
+Each test (both sides of a drivetrain count as tests of their own) is simulated from the voltage it
+logged, held per row, starting from the logged speed at the test's first row:
+
+    kA·dv/dt = V − kS·sgn(v) − kV·v,      dx/dt = v,      x(t₀) = logged first position,
+
+and the score is the RMSE, over every row of every test, of (a) the simulated speed against the
+logged speed and (b) the simulated position against the logged position
+(``shared/data/real/sysid/README.md``). The simulation is exact for a voltage held between rows: the
+speed relaxes exponentially towards (V − kS·s)/kV with τ = kA/kV between sign events, and a shaft
+that reaches zero speed stays at rest while |V| ≤ kS (static friction), so no step size enters the
+score. A negative kS (as some teams' own fits give) simply pushes away from rest.
+
+The score sees only (kS, kV, kA): it is what a three-gain feedforward pasted into robot code does
+with the logged commands. :func:`fit_gains` finds the three gains that minimise it (an output-error
+fit, each score weighed by its own size) — see docs/real-logs.md.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from motorlab.errors import FitError, OptionError
+from motorlab.recording import Recording
+
+#: kS [V], kV, kA as a sequence or an array.
+Gains = Sequence[float] | np.ndarray
+
+#: Largest exponent range handled in one vectorised block of the linear recursion.
+_BLOCK_EXPONENT = 400.0
+
+
+@dataclass(frozen=True)
+class ScoreTest:
+    """One test of one side: time [s], held voltage [V], logged position and speed (SI: rad or m)."""
+
+    name: str
+    time: np.ndarray
+    voltage: np.ndarray
+    position: np.ndarray
+    velocity: np.ndarray
+
+
+@dataclass(frozen=True)
+class Score:
+    """RMSE of the open-loop simulation against the logged speed [unit/s] and position [unit]."""
+
+    speed: float
+    position: float
+
+    def ratio(self, other: Score) -> tuple[float, float]:
+        """(speed, position) RMSE of this score over ``other``'s."""
+        return self.speed / other.speed, self.position / other.position
+
+
+def score_tests(recordings: Recording | Iterable[Recording]) -> list[ScoreTest]:
+    """The tests of SysId recordings (one per ``Recording.split()`` part) as :class:`ScoreTest`.
+
+    Raises
+    ------
+    OptionError
+        A part without ``voltage``, ``position`` and ``velocity`` or with fewer than 3 rows.
+    """
+    recs = [recordings] if isinstance(recordings, Recording) else list(recordings)
+    tests = []
+    for rec in recs:
+        for part in rec.split():
+            if not part.has("voltage", "position", "velocity") or len(part) < 3:
+                raise OptionError(f"{part.source or 'recording'}: the score needs voltage, position and velocity rows")
+            name = part.metadata.get("segment") or part.source
+            tests.append(ScoreTest(str(name), part.time - part.time[0], part["voltage"], part["position"],
+                                   part["velocity"]))
+    return tests
+
+
+def file_tests(path: str | os.PathLike[str]) -> list[ScoreTest]:
+    """The tests of a SysId or frc-characterization JSON file in the file's own units (rows × unitsPerRotation).
+
+    Both sides of a drivetrain are read, each test and side one :class:`ScoreTest`.
+    """
+    from motorlab.io import read_any
+
+    rec = read_any(path, side="both")
+    unit = float(rec.metadata.get("si_per_unit", 1.0))
+    return [ScoreTest(t.name, t.time, t.voltage, t.position / unit, t.velocity / unit) for t in score_tests(rec)]
+
+
+def score_file(path: str | os.PathLike[str], gains: Gains) -> Score:
+    """The fair score of (kS [V], kV [V/(unit/s)], kA [V/(unit/s²)]), in the file's own units, on a JSON log."""
+    return score(gains, file_tests(path))
+
+
+def _linear_block(v0: float, dt: np.ndarray, u: np.ndarray, tau: float) -> tuple[np.ndarray, np.ndarray]:
+    """Speeds after each step and the distance of each step of τ·v' = u − v from v0 (no sign event)."""
+    if tau <= 0.0:
+        v = u.copy()
+        return v, u * dt
+    a = np.exp(-dt / tau)
+    if dt.size == 1:  # one step (possibly of many time constants): directly
+        v_end = a * v0 + (1.0 - a) * u
+        return v_end, u * dt + (v0 - u) * tau * (1.0 - a)
+    c = np.concatenate([[0.0], np.cumsum(dt / tau)])
+    # v_i = e^(−c_i)·(v0 + Σ_{j<i} (e^(c_{j+1}) − e^(c_j))·u_j): the recursion v_{j+1} = a_j·v_j + (1 − a_j)·u_j
+    e = np.exp(c)
+    acc = v0 + np.cumsum((e[1:] - e[:-1]) * u)
+    v = acc / e[1:]
+    v_start = np.concatenate([[v0], v[:-1]])
+    return v, u * dt + (v_start - u) * tau * (1.0 - a)
+
+
+def simulate_gains(ks: float, kv: float, ka: float, test: ScoreTest) -> tuple[np.ndarray, np.ndarray]:
+    """Simulated speed and position at the test's rows (see the module notes)."""
+    t, volts = test.time, test.voltage
+    n = t.size
+    dt = np.diff(t)
+    tau = ka / kv
+    speed = np.zeros(n)
+    step_dist = np.zeros(max(n - 1, 0))
+    speed[0] = test.velocity[0]
+    threshold = max(ks, 0.0)
+    k = 0
+    while k < n - 1:
+        v = speed[k]
+        if v == 0.0:
+            free = np.flatnonzero(np.abs(volts[k:n - 1]) > threshold)
+            if free.size == 0:
+                break  # at rest to the end
+            k += int(free[0])  # speed and distance stay 0 until then
+            s = math.copysign(1.0, volts[k])
+        else:
+            s = math.copysign(1.0, v)
+        stop = n - 1
+        if tau > 0:  # one block at a time: the exponentials stay within range
+            span = np.searchsorted(np.cumsum(dt[k:] / tau), _BLOCK_EXPONENT)
+            stop = min(n - 1, k + max(int(span), 1))
+        u = (volts[k:stop] - ks * s) / kv
+        v_new, dist = _linear_block(v, dt[k:stop], u, tau)
+        cross = np.flatnonzero(s * v_new <= 0.0)
+        if cross.size == 0:
+            speed[k + 1:stop + 1] = v_new
+            step_dist[k:stop] = dist
+            k = stop
+            continue
+        j = int(cross[0])
+        speed[k + 1:k + j + 1] = v_new[:j]
+        step_dist[k:k + j] = dist[:j]
+        k += j
+        speed[k + 1], step_dist[k] = _stop_within_step(speed[k], u[j], dt[k], tau, volts[k], ks, kv, threshold)
+        k += 1
+    position = test.position[0] + np.concatenate([[0.0], np.cumsum(step_dist)])
+    return speed, position
+
+
+def _stop_within_step(
+    v: float, u: float, dt: float, tau: float, volts: float, ks: float, kv: float, threshold: float
+) -> tuple[float, float]:
+    """(speed at the step's end, distance) when the speed reaches zero inside a step."""
+    if tau <= 0:  # no inertia: the speed is at zero at once
+        t0 = 0.0
+    else:
+        t0 = dt if u == 0 else min(dt, tau * math.log((v - u) / -u))
+    dist = 0.0 if tau <= 0 else u * t0 + (v - u) * tau * (1.0 - math.exp(-t0 / tau))
+    rest = dt - t0
+    if rest <= 0 or abs(volts) <= threshold:
+        return 0.0, dist
+    s = math.copysign(1.0, volts)  # static friction overcome: off in the voltage's direction
+    u2 = (volts - ks * s) / kv
+    if tau <= 0:
+        return u2, dist + u2 * rest
+    decay = math.exp(-rest / tau)
+    return u2 * (1.0 - decay), dist + u2 * rest - u2 * tau * (1.0 - decay)
+
+
+def residuals(gains: Gains, tests: Sequence[ScoreTest]) -> tuple[np.ndarray, np.ndarray]:
+    """Simulated minus logged speed and position, all tests' rows one after the other."""
+    ks, kv, ka = (float(g) for g in gains[:3])
+    if not (kv > 0 and ka >= 0 and math.isfinite(ks)):
+        raise OptionError(f"the score needs kV > 0 and kA ≥ 0, got kS={ks:g}, kV={kv:g}, kA={ka:g}")
+    rs, rp = [], []
+    for test in tests:
+        speed, position = simulate_gains(ks, kv, ka, test)
+        rs.append(speed - test.velocity)
+        rp.append(position - test.position)
+    return np.concatenate(rs), np.concatenate(rp)
+
+
+def score(gains: Gains, tests: Sequence[ScoreTest]) -> Score:
+    """The fair score of (kS [V], kV [V·s/unit], kA [V·s²/unit]) on the tests (units as the tests')."""
+    rs, rp = residuals(gains, tests)
+    return Score(float(np.sqrt(np.mean(rs**2))), float(np.sqrt(np.mean(rp**2))))
+
+
+#: Weight of the position score against the speed score in :func:`fit_gains` (on the log scale).
+#: The feedforward is a speed model (kV·v + kA·a): a position error is the time integral of the speed
+#: errors, dominated by the long quasistatic tests where small kS/kV offsets accumulate, so it
+#: re-counts the speed residuals; it is given a quarter of the speed's weight. Chosen on the five
+#: shared logs (0.1 to 0.4 all beat the teams' gains on both scores there), see docs/real-logs.md.
+POSITION_WEIGHT = 0.25
+
+
+@dataclass
+class GainFit:
+    """Outcome of :func:`fit_gains`: gains (kS [V], kV [V·s/unit], kA [V·s²/unit]) and their HAC covariance."""
+
+    gains: np.ndarray
+    covariance: np.ndarray
+    score: Score
+    bandwidth: float
+    nfev: int
+
+
+def _objective(sc: Score, weight: float) -> float:
+    return math.log(sc.speed) + weight * math.log(sc.position)
+
+
+def fit_gains(
+    tests: Sequence[ScoreTest],
+    starts: Sequence[Gains],
+    *,
+    position_weight: float = POSITION_WEIGHT,
+    rounds: int = 6,
+) -> GainFit:
+    """The (kS, kV, kA) that minimise log RMSE_speed + w·log RMSE_position of the score.
+
+    Output error: every test is simulated from its logged voltage and first row, and the residuals
+    are those of the score. Each round weighs the speed and position residuals by the inverse of
+    their RMSE at the previous round's gains (iteratively reweighted least squares, whose fixed
+    point minimises the criterion: each score counts by its relative change, independent of units).
+    Every start is tried and the best end kept. The covariance is the Newey–West sandwich of the
+    weighted residuals at the optimum (:func:`motorlab.fitting.hac_covariance`, runs of one test and
+    one signal taken as uncorrelated): the residuals of real logs are dominated by unmodelled,
+    serially correlated effects, not by measurement noise.
+
+    Raises
+    ------
+    FitError
+        When no gains with kV > 0 and kA ≥ 0 simulate the tests.
+    """
+    from scipy.optimize import least_squares
+
+    best: tuple[float, np.ndarray, Score] | None = None
+    nfev = 0
+    ns = sum(t.time.size for t in tests)
+    for start in starts:
+        x = np.array([float(start[0]), math.log(max(start[1], 1e-9)), math.log(max(start[2], 1e-9))])
+        current = score(_gains(x), tests)
+        for _ in range(rounds):
+            ws, wp = 1.0 / max(current.speed, 1e-300), math.sqrt(position_weight) / max(current.position, 1e-300)
+
+            def fun(p: np.ndarray, ws: float = ws, wp: float = wp) -> np.ndarray:
+                rs, rp = residuals(_gains(p), tests)
+                return np.concatenate([ws * rs, wp * rp]) / math.sqrt(ns)
+
+            sol = least_squares(fun, x, x_scale=np.array([max(abs(x[0]), 0.05), 0.1, 0.3]), diff_step=1e-4,
+                                max_nfev=60, ftol=1e-6, xtol=1e-6)
+            nfev += int(sol.nfev)
+            new = score(_gains(sol.x), tests)
+            if not _objective(new, position_weight) < _objective(current, position_weight) - 1e-5:
+                break
+            x, current = sol.x, new
+        value = _objective(current, position_weight)
+        if math.isfinite(value) and (best is None or value < best[0]):
+            best = (value, x, current)
+    if best is None:
+        raise FitError("no three gains simulate these tests")
+    gains = _gains(best[1])
+    cov, bandwidth = _hac(gains, tests, best[2], position_weight)
+    return GainFit(gains, cov, best[2], bandwidth, nfev)
+
+
+def _hac(gains: np.ndarray, tests: Sequence[ScoreTest], sc: Score, weight: float) -> tuple[np.ndarray, float]:
+    """Newey–West covariance of the gains from the weighted score residuals (central differences)."""
+    from motorlab.fitting import hac_covariance
+
+    ws, wp = 1.0 / sc.speed, math.sqrt(weight) / sc.position
+
+    def weighted(g: np.ndarray) -> np.ndarray:
+        rs, rp = residuals(g, tests)
+        return np.concatenate([ws * rs, wp * rp])
+
+    r0 = weighted(gains)
+    jac = np.empty((r0.size, 3))
+    for k in range(3):
+        h = (1e-2 if k == 0 else 1e-3) * max(abs(gains[k]), 1e-3 * abs(gains[1]) if k == 0 else 1e-12)
+        up, down = gains.copy(), gains.copy()
+        up[k] += h
+        down[k] -= h
+        if k > 0:
+            down[k] = max(down[k], 0.0)
+        jac[:, k] = (weighted(up) - weighted(down)) / (up[k] - down[k])
+    sizes = [t.time.size for t in tests]
+    labels = np.concatenate([np.full(n, i) for i, n in enumerate(sizes)] +
+                            [np.full(n, len(sizes) + i) for i, n in enumerate(sizes)])
+    bread = np.linalg.pinv(jac.T @ jac)
+    return hac_covariance(jac, r0, bread, groups=labels)
+
+
+def _gains(p: np.ndarray) -> np.ndarray:
+    return np.array([p[0], math.exp(p[1]), math.exp(p[2])])
+
+
+def test_direction(name: str) -> int:
+    """+1 for a forward test, −1 for a backward one, 0 when the name does not say."""
+    from motorlab.io.frc_json import test_kind
+
+    return int(test_kind(name)["direction"])
+
+
+def speed_lag(gains: Gains, tests: Sequence[ScoreTest], *, max_rows: int = 40) -> tuple[float, float]:
+    """(lag [s], RMSE ratio) of the logged speed behind the simulated one: the row shift that fits best.
+
+    The ratio is the speed RMSE with the best shift over the RMSE without (1 when no shift helps).
+    A logged speed that is the motor controller's filtered estimate (a TalonFX averages over about
+    100 ms) or a stale status frame lags the shaft by tens of milliseconds.
+    """
+    sims = [simulate_gains(gains[0], gains[1], gains[2], t)[0] for t in tests]
+    errors = []
+    for k in range(max_rows + 1):
+        num = sum(float(np.sum((t.velocity[k:] - s[:s.size - k]) ** 2)) for t, s in zip(tests, sims, strict=True))
+        den = sum(max(t.time.size - k, 0) for t in tests)
+        errors.append(math.sqrt(num / max(den, 1)))
+    best = int(np.argmin(errors))
+    dt = float(np.median(np.concatenate([np.diff(t.time) for t in tests])))
+    return best * dt, errors[best] / errors[0] if errors[0] > 0 else 1.0
+
+
+def residual_diagnostics(gains: Gains, tests: Sequence[ScoreTest]) -> dict[str, float]:
+    """What the score residuals look like: speed lag, direction asymmetry and position drift.
+
+    Returns
+    -------
+    dict
+        ``lag_s`` and ``lag_rmse_ratio`` (:func:`speed_lag`); ``asymmetry``: mean speed residual of
+        the forward tests minus the backward tests' (signed by direction), over the speed RMSE
+        (a kS or kV that differs by direction shows as a persistent offset of opposite sign);
+        ``drift``: share of the position residual's variance in the quasistatic tests explained by a
+        straight line in time (slip, turning, friction changing along the run).
+    """
+    lag, ratio = speed_lag(gains, tests)
+    rs_all, _ = residuals(gains, tests)
+    rms = float(np.sqrt(np.mean(rs_all**2))) or 1.0
+    by_dir: dict[int, list[float]] = {1: [], -1: []}
+    explained, total = 0.0, 0.0
+    for test in tests:
+        speed, position = simulate_gains(gains[0], gains[1], gains[2], test)
+        d = test_direction(test.name)
+        if d:
+            by_dir[d].append(float(np.mean(d * (speed - test.velocity))))
+        if test.name.startswith(("slow", "quasistatic")):
+            rp = position - test.position
+            trend = np.polyval(np.polyfit(test.time, rp, 1), test.time)
+            explained += float(np.sum((trend - rp.mean()) ** 2))
+            total += float(np.sum((rp - rp.mean()) ** 2))
+    asym = (np.mean(by_dir[1]) - np.mean(by_dir[-1])) / rms if by_dir[1] and by_dir[-1] else 0.0
+    return {"lag_s": lag, "lag_rmse_ratio": ratio, "asymmetry": float(asym),
+            "drift": explained / total if total > 0 else 0.0}
+
+
+def describe_residuals(diag: dict[str, float]) -> str:
+    """One phrase naming the effects the residuals look like (empty when none stands out)."""
+    parts = []
+    if diag["lag_s"] > 0 and diag["lag_rmse_ratio"] < 0.9:
+        parts.append(f"lag (the logged motion trails the simulation by {1e3 * diag['lag_s']:.0f} ms: a filtered or "
+                     "stale reading)")
+    ks_f, ks_b = diag.get("kS_forward", math.nan), diag.get("kS_backward", math.nan)
+    kv_f, kv_b = diag.get("kV_forward", math.nan), diag.get("kV_backward", math.nan)
+    split = abs(ks_f - ks_b) > max(0.5 * abs(diag.get("kS", 0.0)), 0.02) or abs(kv_f / kv_b - 1) > 0.03
+    if abs(diag["asymmetry"]) > 0.2:
+        parts.append(f"asymmetry (forward and backward tests miss in opposite senses, {abs(diag['asymmetry']):.2f}× "
+                     "the speed RMSE: kS or kV differ by direction)")
+    elif split:  # NaN compares False: no per-direction gains, no claim
+        parts.append(f"asymmetry (the forward tests alone give kS {ks_f:.3g} V, kV {kv_f:.4g}; the backward ones kS "
+                     f"{ks_b:.3g} V, kV {kv_b:.4g}: friction differs by direction)")
+    if diag["drift"] > 0.5:
+        parts.append(f"drift (a straight line in time explains {100 * diag['drift']:.0f} % of the position "
+                     "residual along the runs: slip, turning or friction changing along the run)")
+    return "; ".join(parts)
+
+
+def position_residual_diagnostics(
+    runs: Iterable[tuple[np.ndarray, np.ndarray, np.ndarray, int]],
+) -> dict[str, float]:
+    """:func:`residual_diagnostics` of a position-only fit: runs of (time, measured − simulated, speed, direction).
+
+    A reading late by d is θ(t − d) ≈ θ(t) − ω·d, so a lag shows as a residual proportional to −ω:
+    d = −Σr·ω/Σω², and ``lag_rmse_ratio`` = √(1 − share of the residual it explains).
+    """
+    rw = ww = rr = 0.0
+    n = 0
+    by_dir: dict[int, list[float]] = {1: [], -1: []}
+    explained = total = 0.0
+    for time, res, speed, direction in runs:
+        rw += float(np.sum(res * speed))
+        ww += float(np.sum(speed * speed))
+        rr += float(np.sum(res * res))
+        n += res.size
+        if direction:
+            by_dir[direction].append(float(np.mean(direction * res)))
+        if time.size > 2:
+            trend = np.polyval(np.polyfit(time, res, 1), time)
+            explained += float(np.sum((trend - res.mean()) ** 2))
+            total += float(np.sum((res - res.mean()) ** 2))
+    lag = -rw / ww if ww > 0 else 0.0
+    share = rw * rw / (ww * rr) if ww > 0 and rr > 0 else 0.0
+    rms = math.sqrt(rr / max(n, 1)) or 1.0
+    asym = (np.mean(by_dir[1]) - np.mean(by_dir[-1])) / rms if by_dir[1] and by_dir[-1] else 0.0
+    return {"lag_s": max(lag, 0.0), "lag_rmse_ratio": math.sqrt(max(1.0 - share, 0.0)), "asymmetry": float(asym),
+            "drift": explained / total if total > 0 else 0.0}
+
+
+def score_panels(gains: Gains, tests: Sequence[ScoreTest], *, title: str, length: str = "rad") -> list:
+    """Logged against open-loop simulated speed and position, tests end to end (score residuals beneath)."""
+    from motorlab.results import Panel, Series
+
+    sims = [simulate_gains(gains[0], gains[1], gains[2], t) for t in tests]
+    offsets = np.cumsum([0.0] + [float(t.time[-1]) + 0.01 for t in tests[:-1]])
+    x = np.concatenate([t.time + o for t, o in zip(tests, offsets, strict=True)])
+    panels = []
+    for k, (label, y_label) in enumerate([("speed", f"v [{length}/s]"), ("position", f"x [{length}]")]):
+        data = np.concatenate([t.velocity if k == 0 else t.position for t in tests])
+        model = np.concatenate([s[k] for s in sims])
+        panels.append(Panel(title=f"{title}: logged and open-loop simulated {label} (the score)",
+                            x_label="time (tests end to end) [s]", y_label=y_label,
+                            data=Series(x, data, "logged"), model=Series(x, model, "simulated", kind="model")))
+    return panels
+
+
+#: Weights tried, in order, when the fit is worse than the reference on one score (see :func:`open_loop_gains`).
+LOWER_WEIGHTS = (0.1, 0.03, 0.0)
+HIGHER_WEIGHTS = (0.5, 1.0, 2.0, 4.0)
+#: How much worse than the reference either score may be before the weight moves.
+REFERENCE_TOLERANCE = 0.01
+
+
+def open_loop_gains(
+    tests: Sequence[ScoreTest], starts: Sequence[Gains], *, reference: Score | None = None
+) -> dict:
+    """The gains of :func:`fit_gains` with what is reported beside them.
+
+    ``reference``: the score of SysId's own regression (what teams paste). With w = 1/4 the fit can
+    trade one score for the other; when it ends worse than the reference on one score by more than
+    :data:`REFERENCE_TOLERANCE` while better on the other, the weight moves towards the score that
+    lost (w from :data:`LOWER_WEIGHTS` or :data:`HIGHER_WEIGHTS`, each fit started from the last)
+    until both are at least as good — the gains then dominate the published method. If no weight
+    achieves that, the one whose worse ratio is smallest is kept.
+
+    Returns
+    -------
+    dict
+        ``fit`` (:class:`GainFit`), ``position_weight``, ``by_direction`` ({"forward"|"backward":
+        (kS, kV, kA)} fitted to that direction's tests alone, when both are present), ``by_side``
+        ({"left side"|"right side": ...} for a drivetrain read with both sides),
+        ``diagnostics`` (:func:`residual_diagnostics`) and ``description`` (:func:`describe_residuals`).
+    """
+    weight = POSITION_WEIGHT
+    fit = fit_gains(tests, starts, position_weight=weight)
+    if reference is not None and math.isfinite(reference.speed * reference.position):
+        limit = 1.0 + REFERENCE_TOLERANCE
+
+        def worst(f: GainFit) -> float:
+            return max(f.score.speed / reference.speed, f.score.position / reference.position)
+
+        speed_lost = fit.score.speed > limit * reference.speed
+        position_lost = fit.score.position > limit * reference.position
+        if speed_lost != position_lost:
+            best = (worst(fit), weight, fit)
+            for w in LOWER_WEIGHTS if speed_lost else HIGHER_WEIGHTS:
+                trial = fit_gains(tests, [best[2].gains], position_weight=w)
+                if worst(trial) < best[0]:
+                    best = (worst(trial), w, trial)
+                if worst(trial) <= limit:
+                    break
+            _, weight, fit = best
+    by_direction = _subset_gains(tests, fit.gains, weight, {"forward": lambda t: test_direction(t.name) == 1,
+                                                            "backward": lambda t: test_direction(t.name) == -1})
+    by_side = _subset_gains(tests, fit.gains, weight, {"left side": lambda t: t.name.endswith("#left"),
+                                                       "right side": lambda t: t.name.endswith("#right")})
+    diag = residual_diagnostics(fit.gains, tests)
+    diag["kS"] = float(fit.gains[0])
+    if len(by_direction) == 2:
+        diag.update(kS_forward=by_direction["forward"][0], kS_backward=by_direction["backward"][0],
+                    kV_forward=by_direction["forward"][1], kV_backward=by_direction["backward"][1])
+    return {"fit": fit, "position_weight": weight, "by_direction": by_direction, "by_side": by_side,
+            "diagnostics": diag, "description": describe_residuals(diag)}
+
+
+def _subset_gains(
+    tests: Sequence[ScoreTest], start: np.ndarray, weight: float, subsets: dict
+) -> dict[str, list[float]]:
+    """Gains fitted to each subset of the tests (a proper, non-empty one), from the pooled gains."""
+    out: dict[str, list[float]] = {}
+    for label, keep in subsets.items():
+        part = [t for t in tests if keep(t)]
+        if part and len(part) < len(tests):
+            try:
+                out[label] = fit_gains(part, [start], position_weight=weight, rounds=3).gains.tolist()
+            except (FitError, OptionError):
+                continue
+    return out
