@@ -563,8 +563,8 @@ def motor_estimates(
 
 def add_arguments(parser: argparse.ArgumentParser, experiment: str) -> None:
     """Options of ``motorlab analyze feedforward``."""
-    from motorlab.cli.common import quantity
     from motorlab.io.frc_json import UNITS
+    from motorlab.options import quantity
 
     parser.add_argument("--cpr", type=quantity("count", positive=True),
                         help="encoder counts per revolution at the shaft (537.7 is fine); for a SysId or "
@@ -662,3 +662,10 @@ def from_cli(experiment: str, paths: list[str], args: argparse.Namespace) -> Fit
             motor_estimates(result, resistance=resistance, torque_constant=getattr(args, "torque_constant", None))
         )
     return result
+
+
+import sys as _sys  # noqa: E402
+
+from motorlab import CallableModule as _CallableModule  # noqa: E402
+
+_sys.modules[__name__].__class__ = _CallableModule  # ml.feedforward(...) is the notebook function

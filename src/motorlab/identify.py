@@ -539,7 +539,7 @@ def _identify_without_current(
 
 def add_arguments(parser: argparse.ArgumentParser, experiment: str) -> None:
     """Options of ``motorlab analyze identify``."""
-    from motorlab.cli.common import quantity
+    from motorlab.options import quantity
 
     parser.add_argument("--cpr", type=quantity("count", positive=True),
                         help="encoder counts per revolution at the shaft (537.7 too)")
@@ -585,3 +585,10 @@ def from_cli(experiment: str, paths: list[str], args: argparse.Namespace) -> Fit
     return identify(runs, resistance=getattr(args, "resistance", None),
                     torque_constant=getattr(args, "torque_constant", None), cpr=cpr,
                     use_current=getattr(args, "use_current", True))
+
+
+import sys as _sys  # noqa: E402
+
+from motorlab import CallableModule as _CallableModule  # noqa: E402
+
+_sys.modules[__name__].__class__ = _CallableModule  # ml.identify(...) is the notebook function

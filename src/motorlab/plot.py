@@ -46,6 +46,23 @@ def _draw_series(ax: Axes, series: Series, *, main: bool) -> None:
         ax.plot(x, y, linestyle="-" if main else "--", linewidth=2.0 if main else 1.4, label=series.label)
 
 
+def plot_panel(panel: Panel, ax: Axes) -> Axes:
+    """Draw one panel's data, model and extra curves into ``ax`` (no residual axis); returns ``ax``."""
+    if panel.data is not None:
+        _draw_series(ax, panel.data, main=True)
+    if panel.model is not None:
+        _draw_series(ax, panel.model, main=True)
+    for series in panel.extra:
+        _draw_series(ax, series, main=False)
+    ax.set_title(panel.title, fontsize=10)
+    ax.set_xlabel(panel.x_label)
+    ax.set_ylabel(panel.y_label)
+    ax.grid(True, alpha=0.3)
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(fontsize=8, loc="best")
+    return ax
+
+
 def _draw_panel(fig: Figure, spec: Any, panel: Panel) -> list[Axes]:
     """Draw one panel (and its residuals) in the gridspec cell ``spec``; returns its axes."""
     residuals = _shares_x(panel)

@@ -56,6 +56,12 @@ class Recording:
     lines: np.ndarray | None = None
     segments: dict[str, tuple[int, int]] = field(default_factory=dict)
 
+    def __repr__(self) -> str:
+        """A short summary (the arrays are not printed)."""
+        span = f"{self.time[0]:.6g}..{self.time[-1]:.6g} s" if len(self.time) else "empty"
+        source = f", source={self.source!r}" if self.source else ""
+        return f"Recording({len(self.time)} rows, {span}, signals={sorted(self.signals)}{source})"
+
     def __post_init__(self) -> None:
         self.time = np.asarray(self.time, dtype=float)
         for name, values in self.signals.items():

@@ -190,6 +190,89 @@ class FitResult:
             lines.extend(f"    - {w}" for w in self.warnings)
         return "\n".join(lines)
 
+    def __repr__(self) -> str:
+        """One line per parameter (the arrays behind the plots are not printed)."""
+        head = f"FitResult({self.experiment!r}, n_points={self.n_points}"
+        if math.isfinite(self.r2):
+            head += f", r2={self.r2:.6f}"
+        if self.warnings:
+            head += f", {len(self.warnings)} warning(s)"
+        return "\n".join([head + ")", *(f"    {est}" for est in self.parameters.values())])
+
+    def _repr_html_(self) -> str:
+        """A table of value ± stderr and unit (Jupyter), with the shaft, fit statistics and warnings."""
+        from html import escape
+
+        title = escape(self.experiment)
+        if self.sources:
+            title += ": " + escape(", ".join(self.sources))
+        rows = "".join(
+            "<tr>" + "".join(f"<td>{escape(str(cell))}</td>" for cell in _html_row(est)) + "</tr>"
+            for est in self.parameters.values()
+        )
+        head = "".join(f"<th>{h}</th>" for h in ("parameter", "value", "± stderr", "unit", "rel. error", "note"))
+        parts = [f"<b>{title}</b>", f"<table><thead><tr>{head}</tr></thead><tbody>{rows}</tbody></table>"]
+        stats = [f"data points {self.n_points}"]
+        if math.isfinite(self.rmse):
+            stats.append(f"residual RMS {self.rmse:.4g} {escape(format_unit(self.rmse_unit))}")
+        if math.isfinite(self.r2):
+            stats.append(f"R² {self.r2:.6f}")
+        parts.append("<p>fit: " + ", ".join(stats) + "</p>")
+        if "shaft" in self.details:
+            parts.append(f"<p>shaft: {escape(str(self.details['shaft']))}</p>")
+        if self.warnings:
+            parts.append("<ul>" + "".join(f"<li>{escape(w)}</li>" for w in self.warnings) + "</ul>")
+        return "<div>" + "".join(parts) + "</div>"
+
+    def plot(self, ax: Any = None) -> Any:
+        """Draw the data against the model (:func:`motorlab.plot.plot_fit`).
+
+        Parameters
+        ----------
+        ax
+            A matplotlib ``Axes`` to draw the first panel into (without residuals), or None for a
+            new ``Figure`` with every panel and its residuals.
+
+        Returns
+        -------
+        The ``Figure`` (``ax=None``) or ``ax``.
+        """
+        from motorlab.plot import plot_fit, plot_panel
+
+        if ax is None:
+            return plot_fit(self)
+        if not self.panels:
+            raise ValueError(f"{self.experiment}: this result has no data to plot")
+        plot_panel(self.panels[0], ax)
+        return ax
+
+    def to_rows(self) -> list[dict[str, Any]]:
+        """The parameter table, one dict per parameter: name, value, stderr, unit, determined, note (SI)."""
+        shaft = self.details.get("shaft", "")
+        return [
+            {"experiment": self.experiment, "parameter": est.name,
+             "value": est.value if est.determined else math.nan, "stderr": est.stderr, "unit": est.unit,
+             "determined": est.determined, "shaft": shaft, "note": est.note}
+            for est in self.parameters.values()
+        ]
+
+    def to_csv(self, path: Any = None) -> str:
+        """The rows of :meth:`to_rows` as CSV text (empty cells for NaN); written to ``path`` if given."""
+        import csv
+        import io
+
+        buffer = io.StringIO()
+        columns = ["experiment", "parameter", "value", "stderr", "unit", "determined", "shaft", "note"]
+        writer = csv.DictWriter(buffer, fieldnames=columns, lineterminator="\n")
+        writer.writeheader()
+        for row in self.to_rows():
+            writer.writerow({k: ("" if isinstance(v, float) and not math.isfinite(v) else v) for k, v in row.items()})
+        text = buffer.getvalue()
+        if path is not None:
+            with open(path, "w", encoding="utf-8", newline="") as handle:
+                handle.write(text)
+        return text
+
     def to_dict(self) -> dict[str, Any]:
         """The JSON object of ``motorlab analyze --json`` (SI units)."""
         fit: dict[str, Any] = {
@@ -214,6 +297,15 @@ class FitResult:
         if self.sources:
             out["sources"] = list(self.sources)
         return out
+
+
+def _html_row(est: Estimate) -> tuple[str, ...]:
+    unit = format_unit(est.unit)
+    if not est.determined:
+        return est.name, "not determined", "", unit, "", est.note
+    rel = est.relative_error
+    stderr = f"± {est.stderr:.2g}" if math.isfinite(est.stderr) else "± ?"
+    return est.name, f"{est.value:.6g}", stderr, unit, f"{100 * rel:.2f} %" if math.isfinite(rel) else "?", est.note
 
 
 def _json_float(x: float) -> float | None:

@@ -368,7 +368,7 @@ def disc_inertia(radius: float, thickness: float, *, density: float, ratio: floa
 # ---- command line -------------------------------------------------------------------------------
 def add_cpr_argument(parser: argparse.ArgumentParser, *, required: bool = False) -> None:
     """``--cpr``: encoder counts per revolution of the counted shaft."""
-    from motorlab.cli.common import quantity
+    from motorlab.options import quantity
 
     parser.add_argument(
         "--cpr", type=quantity("count", positive=True), required=required,
@@ -378,7 +378,7 @@ def add_cpr_argument(parser: argparse.ArgumentParser, *, required: bool = False)
 
 def add_inertia_arguments(parser: argparse.ArgumentParser) -> None:
     """``--inertia``/``--inertia-stderr`` or a flywheel description (disc radius, thickness, material, ratio)."""
-    from motorlab.cli.common import quantity
+    from motorlab.options import quantity
 
     group = parser.add_argument_group("inertia at the encoder shaft (give --inertia or a disc)")
     group.add_argument("--inertia", type=quantity("kg*m^2", positive=True),

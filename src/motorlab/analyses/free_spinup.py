@@ -228,7 +228,7 @@ def free_spinup(
 # ---- command line ---------------------------------------------------------------------------------
 def add_arguments(parser: argparse.ArgumentParser, experiment: str) -> None:
     """Options of ``motorlab analyze free-spinup``."""
-    from motorlab.cli.common import quantity
+    from motorlab.options import quantity
 
     common.add_cpr_argument(parser)
     parser.add_argument("--edges-per-rev", type=quantity("", positive=True),

@@ -236,7 +236,7 @@ def _as_list(recordings: Recording | Sequence[Recording]) -> list[Recording]:
 
 def add_arguments(parser: argparse.ArgumentParser, experiment: str) -> None:
     """Options of ``motorlab analyze amplifier|tachometer``."""
-    from motorlab.cli.common import quantity
+    from motorlab.options import quantity
 
     unit = SI_UNITS[_SPECS[experiment].name]
     example = "'2 A/V' (seed 2)" if experiment == "amplifier" else "'0.03 V*s/rad' or '3.1 V/(1000*rpm)'"

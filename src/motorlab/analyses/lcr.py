@@ -411,7 +411,7 @@ def _freq_text(f: np.ndarray) -> str:
 
 def add_arguments(parser: argparse.ArgumentParser, experiment: str) -> None:
     """Options of ``motorlab analyze lcr``."""
-    from motorlab.cli.common import quantity
+    from motorlab.options import quantity
 
     parser.add_argument(
         "--frequency", type=quantity("Hz", positive=True), default=None, metavar="F",

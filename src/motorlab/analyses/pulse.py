@@ -721,7 +721,7 @@ def _panels(
 
 def add_arguments(parser: argparse.ArgumentParser, experiment: str) -> None:
     """Options of ``motorlab analyze pulse``."""
-    from motorlab.cli.common import quantity
+    from motorlab.options import quantity
 
     parser.add_argument(
         "--Ka", dest="amplifier_gain", type=quantity("A/V", positive=True), default=None, metavar="GAIN",

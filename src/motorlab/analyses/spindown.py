@@ -488,7 +488,7 @@ def add_arguments(parser: argparse.ArgumentParser, experiment: str) -> None:
     common.add_cpr_argument(parser)
     common.add_current_unit_argument(parser)
     common.add_inertia_arguments(parser)
-    from motorlab.cli.common import quantity
+    from motorlab.options import quantity
 
     parser.add_argument("--cutoff", type=quantity("s"), help="instant the relay opened [s] (default: from the current)")
     parser.add_argument(

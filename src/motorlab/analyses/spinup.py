@@ -308,7 +308,7 @@ def _spindown_prior(result: FitResult) -> tuple[np.ndarray, np.ndarray]:
 # ---- command line ---------------------------------------------------------------------------------
 def add_arguments(parser: argparse.ArgumentParser, experiment: str) -> None:
     """Options of ``motorlab analyze spinup``."""
-    from motorlab.cli.common import quantity
+    from motorlab.options import quantity
 
     common.add_cpr_argument(parser)
     common.add_current_unit_argument(parser)

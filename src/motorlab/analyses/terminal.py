@@ -286,7 +286,7 @@ def _one_operating_point(
 # ---- command line ---------------------------------------------------------------------------------
 def add_arguments(parser: argparse.ArgumentParser, experiment: str) -> None:
     """Options of ``motorlab analyze terminal``."""
-    from motorlab.cli.common import quantity
+    from motorlab.options import quantity
 
     common.add_cpr_argument(parser)
     parser.add_argument("--K", type=quantity("V*s/rad", positive=True), required=True,

@@ -332,7 +332,7 @@ def approach_direction(current: np.ndarray) -> np.ndarray:
 
 def add_arguments(parser: argparse.ArgumentParser, experiment: str) -> None:
     """Options of ``motorlab analyze torque``."""
-    from motorlab.cli.common import quantity
+    from motorlab.options import quantity
 
     parser.add_argument(
         "--arm", type=quantity("m", positive=True), default=None, metavar="LENGTH",

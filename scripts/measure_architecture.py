@@ -1,0 +1,122 @@
+"""The figures of issue 15: long functions, long modules, library imports of the CLI, import circles.
+
+    python scripts/measure_architecture.py [--max-function 100] [--max-module 800]
+
+Reads ``src/motorlab`` with ``ast`` (nothing is imported) and prints what exceeds the limits.
+"""
+
+from __future__ import annotations
+
+import argparse
+import ast
+from pathlib import Path
+
+SRC = Path(__file__).resolve().parents[1] / "src"
+
+
+def module_name(path: Path) -> str:
+    parts = list(path.relative_to(SRC).with_suffix("").parts)
+    if parts[-1] == "__init__":
+        parts.pop()
+    return ".".join(parts)
+
+
+def imports(tree: ast.AST, name: str, is_package: bool) -> set[str]:
+    """Modules imported at module level or inside functions (motorlab ones only)."""
+    out: set[str] = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            out.update(a.name for a in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                pkg = name.split(".") if is_package else name.split(".")[:-1]
+                pkg = pkg[: len(pkg) - (node.level - 1)]
+                base = ".".join([*pkg, base]) if base else ".".join(pkg)
+            out.add(base)
+            out.update(f"{base}.{a.name}" for a in node.names)
+    return {m for m in out if m.startswith("motorlab")}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--max-function", type=int, default=100)
+    ap.add_argument("--max-module", type=int, default=800)
+    args = ap.parse_args()
+    files = sorted((SRC / "motorlab").rglob("*.py"))
+    modules = {module_name(p): p for p in files}
+    long_functions, long_modules, cli_imports = [], [], []
+    graph: dict[str, set[str]] = {}
+    for name, path in modules.items():
+        text = path.read_text()
+        tree = ast.parse(text)
+        n_lines = len(text.splitlines())
+        if n_lines > args.max_module:
+            long_modules.append((n_lines, name))
+        for node in ast.walk(tree):
+            if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef):
+                length = (node.end_lineno or node.lineno) - node.lineno + 1
+                if length > args.max_function:
+                    long_functions.append((length, f"{name}.{node.name}"))
+        deps = set(imports(tree, name, path.name == "__init__.py"))
+        deps = {m if m in modules else m.rsplit(".", 1)[0] for m in deps}
+        graph[name] = {m for m in deps if m in modules and m != name}
+        library = not name.startswith(("motorlab.cli", "motorlab.__main__"))
+        if library and any(m.startswith("motorlab.cli") for m in graph[name]):
+            cli_imports.append(name)
+    cycles = find_cycles(graph)
+    print(f"functions over {args.max_function} lines: {len(long_functions)}")
+    for n, f in sorted(long_functions, reverse=True):
+        print(f"    {n:5d}  {f}")
+    print(f"modules over {args.max_module} lines: {len(long_modules)}")
+    for n, m in sorted(long_modules, reverse=True):
+        print(f"    {n:5d}  {m}")
+    print(f"library modules importing motorlab.cli: {len(cli_imports)}")
+    for m in cli_imports:
+        print(f"    {m}")
+    print(f"import circles (strongly connected groups, packages' __init__ excluded): {len(cycles)}")
+    for c in cycles:
+        print("    " + " <-> ".join(sorted(c)))
+
+
+def find_cycles(graph: dict[str, set[str]]) -> list[set[str]]:
+    """Strongly connected components of more than one module (Tarjan), ignoring edges to packages."""
+    packages = {m for m in graph if any(o.startswith(m + ".") for o in graph)}
+    g = {m: {d for d in deps if d not in packages} for m, deps in graph.items() if m not in packages}
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on: set[str] = set()
+    out: list[set[str]] = []
+    counter = [0]
+
+    def visit(v: str) -> None:
+        index[v] = low[v] = counter[0]
+        counter[0] += 1
+        stack.append(v)
+        on.add(v)
+        for w in g.get(v, ()):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = set()
+            while True:
+                w = stack.pop()
+                on.discard(w)
+                comp.add(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                out.append(comp)
+
+    for v in g:
+        if v not in index:
+            visit(v)
+    return out
+
+
+if __name__ == "__main__":
+    main()
