@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import ast
 from pathlib import Path
+from typing import NamedTuple
 
 SRC = Path(__file__).resolve().parents[1] / "src"
 
@@ -22,9 +23,12 @@ def module_name(path: Path) -> str:
 
 
 def imports(tree: ast.AST, name: str, is_package: bool) -> set[str]:
-    """Modules imported at module level or inside functions (motorlab ones only)."""
+    """Modules imported at module level or inside functions (motorlab ones only; not type-checking-only ones)."""
     out: set[str] = set()
+    skip = {id(n) for node in ast.walk(tree) if _is_type_checking(node) for n in ast.walk(node)}
     for node in ast.walk(tree):
+        if id(node) in skip:
+            continue
         if isinstance(node, ast.Import):
             out.update(a.name for a in node.names)
         elif isinstance(node, ast.ImportFrom):
@@ -35,7 +39,49 @@ def imports(tree: ast.AST, name: str, is_package: bool) -> set[str]:
                 base = ".".join([*pkg, base]) if base else ".".join(pkg)
             out.add(base)
             out.update(f"{base}.{a.name}" for a in node.names)
-    return {m for m in out if m.startswith("motorlab")}
+    return {m for m in out if m.startswith(("motorlab", "control.")) or m == "control"}
+
+
+def _is_type_checking(node: ast.AST) -> bool:
+    """``if TYPE_CHECKING:`` blocks: imports for annotations only, never run."""
+    return isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test)
+
+
+def measure(max_function: int = 100, max_module: int = 800) -> Measures:
+    """What exceeds the limits in ``src/motorlab``."""
+    files = sorted((SRC / "motorlab").rglob("*.py"))
+    modules = {module_name(p): p for p in files}
+    long_functions, long_modules, cli_imports, control_imports = [], [], [], []
+    graph: dict[str, set[str]] = {}
+    for name, path in modules.items():
+        text = path.read_text()
+        tree = ast.parse(text)
+        n_lines = len(text.splitlines())
+        if n_lines > max_module:
+            long_modules.append((n_lines, name))
+        for node in ast.walk(tree):
+            if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef):
+                length = (node.end_lineno or node.lineno) - node.lineno + 1
+                if length > max_function:
+                    long_functions.append((length, f"{name}.{node.name}"))
+        deps = set(imports(tree, name, path.name == "__init__.py"))
+        deps = {m if m in modules else m.rsplit(".", 1)[0] for m in deps}
+        if any(m == "control" or m.startswith("control.") for m in deps):
+            control_imports.append(name)
+        graph[name] = {m for m in deps if m in modules and m != name}
+        library = not name.startswith(("motorlab.cli", "motorlab.__main__"))
+        if library and any(m.startswith("motorlab.cli") for m in graph[name]):
+            cli_imports.append(name)
+    cycles = find_cycles(graph)
+    return Measures(long_functions, long_modules, cli_imports, control_imports, cycles)
+
+
+class Measures(NamedTuple):
+    long_functions: list[tuple[int, str]]
+    long_modules: list[tuple[int, str]]
+    cli_imports: list[str]
+    control_imports: list[str]
+    cycles: list[set[str]]
 
 
 def main() -> None:
@@ -43,28 +89,7 @@ def main() -> None:
     ap.add_argument("--max-function", type=int, default=100)
     ap.add_argument("--max-module", type=int, default=800)
     args = ap.parse_args()
-    files = sorted((SRC / "motorlab").rglob("*.py"))
-    modules = {module_name(p): p for p in files}
-    long_functions, long_modules, cli_imports = [], [], []
-    graph: dict[str, set[str]] = {}
-    for name, path in modules.items():
-        text = path.read_text()
-        tree = ast.parse(text)
-        n_lines = len(text.splitlines())
-        if n_lines > args.max_module:
-            long_modules.append((n_lines, name))
-        for node in ast.walk(tree):
-            if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef):
-                length = (node.end_lineno or node.lineno) - node.lineno + 1
-                if length > args.max_function:
-                    long_functions.append((length, f"{name}.{node.name}"))
-        deps = set(imports(tree, name, path.name == "__init__.py"))
-        deps = {m if m in modules else m.rsplit(".", 1)[0] for m in deps}
-        graph[name] = {m for m in deps if m in modules and m != name}
-        library = not name.startswith(("motorlab.cli", "motorlab.__main__"))
-        if library and any(m.startswith("motorlab.cli") for m in graph[name]):
-            cli_imports.append(name)
-    cycles = find_cycles(graph)
+    long_functions, long_modules, cli_imports, control_imports, cycles = measure(args.max_function, args.max_module)
     print(f"functions over {args.max_function} lines: {len(long_functions)}")
     for n, f in sorted(long_functions, reverse=True):
         print(f"    {n:5d}  {f}")
@@ -73,6 +98,9 @@ def main() -> None:
         print(f"    {n:5d}  {m}")
     print(f"library modules importing motorlab.cli: {len(cli_imports)}")
     for m in cli_imports:
+        print(f"    {m}")
+    print(f"library modules importing python-control: {len(control_imports)}")
+    for m in control_imports:
         print(f"    {m}")
     print(f"import circles (strongly connected groups, packages' __init__ excluded): {len(cycles)}")
     for c in cycles:

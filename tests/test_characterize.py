@@ -11,7 +11,8 @@ from pathlib import Path
 
 import pytest
 
-from motorlab.characterize import PARAMETERS, characterize, combine, write_outputs
+from motorlab.characterize import PARAMETERS, characterize, combine
+from motorlab.report import write_outputs
 from motorlab.results import Estimate
 from motorlab.rig.units import UnitSpread
 from motorlab.session import load_session, write_simulated_session

@@ -7,7 +7,8 @@ import json
 
 import pytest
 
-from motorlab.characterize import characterize, write_outputs
+from motorlab.characterize import characterize
+from motorlab.report import write_outputs
 from motorlab.session import load_session, write_simulated_session
 
 

@@ -3,7 +3,7 @@
 :func:`characterize` takes a validated :class:`~motorlab.session.Session` and returns a
 :class:`Characterization`: per unit the fit of each experiment (or why it failed), the combined
 motor parameters (J, b, Tf, K, R, L) with the source each one comes from, the disagreements
-between sources, and the fleet statistics. :func:`write_outputs` writes ``results.json``,
+between sources, and the fleet statistics. :func:`motorlab.report.write_outputs` writes ``results.json``,
 ``results.csv`` (seed 1's "Final Calculated Parameters" table, one row per unit) and
 ``report.html``.
 
@@ -32,7 +32,6 @@ Combination
 from __future__ import annotations
 
 import csv
-import json
 import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -725,26 +724,6 @@ def write_csv(result: Characterization, path: str | Path) -> Path:
             cells += [row["fleet"], row["status"]]
             writer.writerow(cells)
     return path
-
-
-def write_outputs(result: Characterization, out_dir: str | Path, *, report: bool = True) -> dict[str, Path]:
-    """Write ``results.json``, ``results.csv`` and (by default) ``report.html`` into ``out_dir``.
-
-    Returns
-    -------
-    dict
-        ``{"json": path, "csv": path, "html": path}``.
-    """
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    paths = {"json": out / "results.json", "csv": out / "results.csv"}
-    paths["json"].write_text(json.dumps(result.to_dict(), indent=2, allow_nan=False) + "\n", encoding="utf-8")
-    write_csv(result, paths["csv"])
-    if report:
-        from motorlab.report import write_report
-
-        paths["html"] = write_report(result, out / "report.html")
-    return paths
 
 
 def _csv_float(x: float) -> str:

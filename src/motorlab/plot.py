@@ -12,14 +12,16 @@ from __future__ import annotations
 import math
 import os
 import textwrap
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from motorlab.errors import OptionError
-from motorlab.results import FitResult, Panel, Series
+
+if TYPE_CHECKING:  # results.FitResult.plot draws with this module: no runtime import back
+    from motorlab.results import FitResult, Panel, Series
 
 #: File types :func:`save_figure` writes.
 FIGURE_FORMATS = (".png", ".pdf", ".svg")
@@ -125,7 +127,7 @@ def plot_fit(result: FitResult, *, fig: Figure | None = None) -> Figure:
     The seed's "Actual Position vs. Fitted Position" chart (seed 1, "Data Analysis" step 4i) is
     this figure for a spin-down: the residual axis makes a misfit visible that the overlay hides.
     """
-    panels = result.panels or [Panel(title="(no curves to plot)", x_label="", y_label="")]
+    panels = result.panels or [type(result).EMPTY_PANEL]
     n = len(panels)
     heights = [4.0 if _shares_x(p) else 3.0 for p in panels]
     notes = _footnote(result)

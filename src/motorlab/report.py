@@ -22,6 +22,7 @@ from __future__ import annotations
 import base64
 import html
 import io
+import json
 import math
 from collections.abc import Iterable
 from pathlib import Path
@@ -207,6 +208,26 @@ def write_report(result: Characterization, path: str | Path, *, figures: bool = 
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(render_report(result, figures=figures), encoding="utf-8")
     return path
+
+
+def write_outputs(result: Characterization, out_dir: str | Path, *, report: bool = True) -> dict[str, Path]:
+    """Write ``results.json``, ``results.csv`` and (by default) ``report.html`` into ``out_dir``.
+
+    Returns
+    -------
+    dict
+        ``{"json": path, "csv": path, "html": path}``.
+    """
+    from motorlab.characterize import write_csv
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    paths = {"json": out / "results.json", "csv": out / "results.csv"}
+    paths["json"].write_text(json.dumps(result.to_dict(), indent=2, allow_nan=False) + "\n", encoding="utf-8")
+    write_csv(result, paths["csv"])
+    if report:
+        paths["html"] = write_report(result, out / "report.html")
+    return paths
 
 
 def _session_line(result: Characterization) -> str:

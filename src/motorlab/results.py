@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -144,6 +144,9 @@ class FitResult:
     warnings: list[str] = field(default_factory=list)
     details: dict[str, Any] = field(default_factory=dict)
     sources: list[str] = field(default_factory=list)
+
+    #: What :func:`motorlab.plot.plot_fit` draws for a result without curves.
+    EMPTY_PANEL: ClassVar[Panel] = Panel(title="(no curves to plot)", x_label="", y_label="")
 
     def __getitem__(self, name: str) -> Estimate:
         return self.parameters[name]

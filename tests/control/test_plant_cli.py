@@ -127,7 +127,8 @@ def test_results_json_of_characterize_uses_one_units_motor_parameters(tmp_path, 
     design for a plant hundreds of times heavier than the motor simulated.
     """
 
-    from motorlab.characterize import characterize, write_outputs
+    from motorlab.characterize import characterize
+    from motorlab.report import write_outputs
     from motorlab.session import load_session, write_simulated_session
 
     toml = write_simulated_session(

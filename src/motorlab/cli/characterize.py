@@ -39,7 +39,7 @@ def register(subparsers: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Load, characterise, write, print the table."""
-    from motorlab.characterize import write_outputs
+    from motorlab.report import write_outputs
     from motorlab.session import load_session
 
     session = load_session(args.session)  # every validation error happens here, before any analysis

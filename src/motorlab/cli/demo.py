@@ -158,8 +158,8 @@ def run(args: argparse.Namespace) -> int:
     """Simulate, characterise, write, print."""
     from rich.console import Console
 
-    from motorlab.characterize import write_outputs
     from motorlab.cli.characterize import print_table, report_failures, run_with_progress
+    from motorlab.report import write_outputs
     from motorlab.session import load_session, write_simulated_session
 
     check_option(args.units <= 26, f"--units must be at most 26, got {args.units}")

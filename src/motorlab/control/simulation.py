@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from motorlab.control.design import Feedforward, Gains
+from motorlab.control.loop import Feedforward, Gains
 from motorlab.errors import OptionError
 from motorlab.model import MotorParams, feedforward_from_params
 

@@ -1,0 +1,31 @@
+"""The layering of issue 15, measured on the source (scripts/measure_architecture.py)."""
+
+from __future__ import annotations
+
+import importlib.util
+import sys
+from pathlib import Path
+from types import ModuleType
+
+import pytest
+
+SCRIPT = Path(__file__).resolve().parents[1] / "scripts" / "measure_architecture.py"
+
+
+@pytest.fixture(scope="module")
+def measures() -> tuple:
+    spec = importlib.util.spec_from_file_location("measure_architecture", SCRIPT)
+    assert spec is not None
+    assert spec.loader is not None
+    module: ModuleType = importlib.util.module_from_spec(spec)
+    sys.modules["measure_architecture"] = module
+    spec.loader.exec_module(module)
+    return module.measure()
+
+
+def test_no_library_module_imports_the_cli(measures: tuple) -> None:
+    assert measures.cli_imports == []
+
+
+def test_python_control_is_for_tests_only(measures: tuple) -> None:
+    assert measures.control_imports == []
