@@ -8,11 +8,10 @@ import math
 import numpy as np
 import pytest
 
+from motorlab.cli.analyze import add_arguments, from_cli
 from motorlab.errors import OptionError
 from motorlab.feedforward import (
-    add_arguments,
     feedforward,
-    from_cli,
     gains_from_params,
     motor_estimates,
     params_from_gains,

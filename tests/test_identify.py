@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 
 from motorlab import _oe
+from motorlab.cli.analyze import add_arguments, from_cli
 from motorlab.errors import LogFormatError, OptionError
-from motorlab.identify import add_arguments, from_cli, identify
+from motorlab.identify import identify
 from motorlab.model import MotorParams, feedforward_from_params
 from motorlab.recording import Recording
 from motorlab.simulate import VoltageDrive, simulate

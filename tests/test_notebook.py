@@ -73,7 +73,7 @@ def test_options_are_checked(unit: Path) -> None:
         ml.pulse(unit / "lcr.csv")
     with pytest.raises(OptionError, match="unknown experiment"):
         ml.analyze("nosuch", unit / "lcr.csv")
-    names = {o["name"] for o in ml.describe("spindown")}
+    names = {o["keyword"] for o in ml.describe("spindown")}
     assert {"cpr", "inertia", "inertia_stderr", "cutoff", "guard"} <= names
 
 

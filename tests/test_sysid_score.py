@@ -14,8 +14,9 @@ import math
 import numpy as np
 import pytest
 
+from motorlab.cli.analyze import add_arguments, from_cli
 from motorlab.errors import LogFormatError, OptionError
-from motorlab.feedforward import add_arguments, feedforward, from_cli
+from motorlab.feedforward import feedforward
 from motorlab.io import read_frc_char_json, read_sysid_json
 from motorlab.sysid_score import (
     ScoreTest,
@@ -287,7 +288,7 @@ def test_never_behind_sysid_regression_on_the_real_flywheel(real_dir):
 
 
 def test_identify_applies_cpr_to_a_json_file_too(real_dir):
-    from motorlab import identify
+    from motorlab.cli import analyze as identify
 
     parser = argparse.ArgumentParser()
     identify.add_arguments(parser, "identify")

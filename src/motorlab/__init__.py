@@ -24,17 +24,14 @@ from typing import Any
 
 __version__ = "0.1.0"
 
-#: Names :mod:`motorlab.notebook` provides at the top level (imported on first use).
-_NOTEBOOK = (
-    "analyze", "read", "describe", "spindown", "spinup", "free_spinup", "terminal", "lcr", "torque", "amplifier",
-    "tachometer", "pulse", "identify", "feedforward",
-)
-
-
 def __getattr__(name: str) -> Any:
-    if name in _NOTEBOOK:
+    """``analyze``, ``read``, ``describe`` and one function per experiment, from :mod:`motorlab.notebook`."""
+    if name.startswith("__"):
+        raise AttributeError(f"module 'motorlab' has no attribute {name!r}")
+    try:
         return getattr(importlib.import_module("motorlab.notebook"), name)
-    raise AttributeError(f"module 'motorlab' has no attribute {name!r}")
+    except AttributeError:
+        raise AttributeError(f"module 'motorlab' has no attribute {name!r}") from None
 
 
 class CallableModule(types.ModuleType):

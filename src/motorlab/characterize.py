@@ -38,11 +38,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from motorlab.efficiency import (  # noqa: F401 - re-exported: the session's gearbox figures and shafts
+from motorlab.efficiency import (  # noqa: F401 - re-exported: the session's gearbox figures
     BACK_EMF_SOURCES,
     EFFICIENCY_HEALTHY_SPREAD,
     GEARBOX_PARAMETERS,
-    SHAFTS,
     TORQUE_SOURCES,
     gearbox_estimates,
     motoring_friction,
@@ -50,6 +49,8 @@ from motorlab.efficiency import (  # noqa: F401 - re-exported: the session's gea
     spinup_warning,
 )
 from motorlab.errors import MotorlabError, OptionError
+from motorlab.experiments import all_experiments
+from motorlab.experiments import stderr_or_none as _stderr
 from motorlab.fleet import DEFAULT_THRESHOLD, FleetSummary, fleet_summary
 from motorlab.results import Estimate, FitResult
 from motorlab.session import LOADED_EXPERIMENTS, ExperimentSpec, Session, UnitSpec, read_truth
@@ -58,36 +59,15 @@ from motorlab.units import SI_UNITS
 #: The motor parameters of the final table, in seed 1's column order (plus Tf).
 PARAMETERS = ("J", "b", "Tf", "K", "R", "L")
 
-#: Experiments in the order they run: sources of K first, then the analyses that take K.
-ORDER = (
-    "lcr",
-    "spindown",
-    "torque",
-    "amplifier",
-    "tachometer",
-    "pulse",
-    "identify",
-    "feedforward",
-    "spinup",
-    "terminal",
-    "free-spinup",
-)
+#: Experiments in the order they run: sources of K first, then the analyses that take K
+#: (the descriptions' ``order``, :mod:`motorlab.experiments`).
+ORDER = tuple(all_experiments())
 
 #: Result parameter -> motor parameter, per experiment (what each may contribute to the table).
-CONTRIBUTIONS: dict[str, dict[str, str]] = {
-    "spindown": {"K": "K"},
-    "spinup": {"K": "K"},
-    "torque": {"K": "K"},
-    "lcr": {"R_dc": "R", "L": "L"},
-    "free-spinup": {"J": "J"},
-    "terminal": {"b": "b", "Tf": "Tf"},
-    "pulse": {"J": "J", "b": "b", "Tf": "Tf"},
-    "identify": {name: name for name in PARAMETERS},
-    # A SysId log is usually taken on a mechanism: its J, b, Tf are reported, not the motor's.
-    "feedforward": {},
-    "amplifier": {},
-    "tachometer": {},
-}
+CONTRIBUTIONS: dict[str, dict[str, str]] = {name: dict(exp.contributes) for name, exp in all_experiments().items()}
+
+#: Which shaft, load and torque units each experiment's figures refer to (short, for tables).
+SHAFTS: dict[str, str] = {name: exp.shaft for name, exp in all_experiments().items() if exp.shaft}
 
 #: Two estimates disagree when they differ by more than this many combined standard errors.
 DISAGREEMENT_SIGMAS = 3.0
@@ -308,235 +288,36 @@ class _UnitContext:
             raise OptionError(f"needs {name} ({why}); add an experiment that measures it")
         return est
 
+    def loaded_inertia(self) -> tuple[float | None, float | None]:
+        """Total inertia at the encoder shaft with the flywheel on, and its standard error [kg·m²].
 
-def _run_spindown(ctx: _UnitContext) -> FitResult:
-    from motorlab.analyses import _common as common
-    from motorlab.analyses.spindown import spindown
+        The flywheel reflected through its gear ratio (J·N², taken as exact: the session gives it) plus the
+        gearmotor's own J: the unit's estimate when one is known already, otherwise the catalogue's nominal
+        J with a 100 % standard error (a guess that only has to be small next to the flywheel's J·N²).
+        """
+        flywheel = self.session.rig.flywheel
+        if flywheel is None:
+            return None, None
+        own = self.estimate("J")
+        if own is not None:
+            return flywheel.reflected_inertia + own.value, _stderr(own) or 0.0
+        j_guess = 0.0
+        if self.session.motor.catalog:
+            from motorlab.catalog import Motor
 
-    recording = common.read_position_log(ctx.files, cpr=ctx.cpr)
-    inertia, inertia_se = _loaded_inertia(ctx)
-    return spindown(
-        recording, cpr=ctx.cpr, inertia=inertia, inertia_stderr=inertia_se, cutoff=ctx.setting("cutoff")
-    )
+            j_guess = Motor.from_catalog(self.session.motor.catalog).nominal_params().J
+        return flywheel.reflected_inertia + j_guess, j_guess
 
-
-def _loaded_inertia(ctx: _UnitContext) -> tuple[float | None, float | None]:
-    """Total inertia at the encoder shaft with the flywheel on, and its standard error [kg·m²].
-
-    The flywheel reflected through its gear ratio (J·N², taken as exact: the session gives it) plus the
-    gearmotor's own J: the unit's estimate when one is known already, otherwise the catalogue's nominal
-    J with a 100 % standard error (a guess that only has to be small next to the flywheel's J·N²).
-    """
-    flywheel = ctx.session.rig.flywheel
-    if flywheel is None:
-        return None, None
-    own = ctx.estimate("J")
-    if own is not None:
-        return flywheel.reflected_inertia + own.value, _stderr(own) or 0.0
-    j_guess = 0.0
-    if ctx.session.motor.catalog:
-        from motorlab.catalog import Motor
-
-        j_guess = Motor.from_catalog(ctx.session.motor.catalog).nominal_params().J
-    return flywheel.reflected_inertia + j_guess, j_guess
+    def motoring_friction(self) -> tuple[float, float, float, float, float] | None:
+        """:func:`motorlab.efficiency.motoring_friction` with what the unit has measured so far."""
+        return motoring_friction(self.fits.get("spindown"), gearbox_estimates(self.fits, self.known.get("K")),
+                                 self.estimate("b"), self.estimate("Tf"))
 
 
-def _run_lcr(ctx: _UnitContext) -> FitResult:
-    from motorlab.analyses._common import read_tables
-    from motorlab.analyses.lcr import lcr
-
-    return lcr(read_tables(ctx.files), frequency=ctx.setting("frequency"))
-
-
-def _run_torque(ctx: _UnitContext) -> FitResult:
-    from motorlab.analyses._common import read_tables
-    from motorlab.analyses.torque import torque
-
-    return torque(read_tables(ctx.files), arm=ctx.session.rig.lever_arm)
-
-
-def _run_spinup(ctx: _UnitContext) -> FitResult:
-    from motorlab.analyses import _common as common
-    from motorlab.analyses.spinup import spinup
-
-    flywheel = ctx.session.rig.flywheel
-    if flywheel is None:  # the session validation refuses this; kept for library callers
-        raise OptionError("the spin-up needs the flywheel's inertia: add [rig.flywheel]")
-    recording = common.read_position_log(ctx.files, cpr=ctx.cpr)
-    inertia, inertia_se = _loaded_inertia(ctx)
-    assert inertia is not None  # a flywheel was checked above
-    friction = _motoring_friction(ctx)
-    if friction is not None:
-        b, b_se, tf, tf_se, eta = friction
-        fit = spinup(recording, inertia=inertia, inertia_stderr=inertia_se, cpr=ctx.cpr, viscous_friction=b,
-                     viscous_friction_stderr=b_se, coulomb_friction=tf, coulomb_friction_stderr=tf_se,
-                     start=ctx.setting("start"), end=ctx.setting("end"))
-        fit.warnings.append(
-            f"friction from the spin-down corrected for the gearbox (η = {eta:.3g}, back-driving efficiency taken "
-            "equal): the coasting flywheel back-drives the gearbox and sees the motor's friction ÷ η, the motor "
-            "driving it passes only η of it; this K is the output's Kt = η·Ke (docs/gearbox.md)"
-        )
-        return fit
-    return spinup(
-        recording,
-        inertia=inertia,
-        inertia_stderr=inertia_se,
-        cpr=ctx.cpr,
-        spindown_result=ctx.fits.get("spindown"),
-        start=ctx.setting("start"),
-        end=ctx.setting("end"),
-    )
-
-
-def _motoring_friction(ctx: _UnitContext) -> tuple[float, float, float, float, float] | None:
-    """:func:`motorlab.efficiency.motoring_friction` with what the unit has measured so far."""
-    return motoring_friction(ctx.fits.get("spindown"), gearbox_estimates(ctx.fits, ctx.known.get("K")),
-                             ctx.estimate("b"), ctx.estimate("Tf"))
-
-
-def _run_terminal(ctx: _UnitContext) -> FitResult:
-    from motorlab.analyses.terminal import _concatenate, terminal
-    from motorlab.io.csv_table import read_csv
-
-    k = ctx.require("K", "b = (K·I − Tf)/ω")
-    recordings = [read_csv(p, cpr=ctx.cpr) for p in ctx.files]
-    recording = recordings[0] if len(recordings) == 1 else _concatenate(recordings)
-    return terminal(
-        recording,
-        torque_constant=k.value,
-        torque_constant_stderr=_stderr(k),
-        cpr=ctx.cpr,
-        current_stderr=ctx.setting("current_stderr"),
-    )
-
-
-def _run_free_spinup(ctx: _UnitContext) -> FitResult:
-    from motorlab.analyses.free_spinup import free_spinup, read_edges
-
-    if len(ctx.files) != 1:
-        raise OptionError(f"free-spinup analyses one file of edge times, got {len(ctx.files)}")
-    k = ctx.require("K", "the torque is K·I")
-    current = ctx.setting("current")
-    if current is None:  # the session validation requires it; kept for library callers
-        raise OptionError("free-spinup needs its current setting")
-    b, tf = ctx.estimate("b"), ctx.estimate("Tf")
-    return free_spinup(
-        read_edges(ctx.files[0]),
-        torque_constant=k.value,
-        torque_constant_stderr=_stderr(k),
-        current=current,
-        current_stderr=ctx.setting("current_stderr"),
-        cpr=ctx.cpr,
-        edges_per_revolution=ctx.setting("edges_per_revolution"),
-        viscous_friction=None if b is None else max(b.value, 0.0),
-        viscous_friction_stderr=None if b is None else _stderr(b),
-        coulomb_friction=None if tf is None else max(tf.value, 0.0),
-        coulomb_friction_stderr=None if tf is None else _stderr(tf),
-    )
-
-
-def _run_amplifier(ctx: _UnitContext) -> FitResult:
-    from motorlab.analyses._common import read_tables
-    from motorlab.analyses.gains import amplifier
-
-    return amplifier(read_tables(ctx.files), nominal=ctx.setting("nominal"))
-
-
-def _run_tachometer(ctx: _UnitContext) -> FitResult:
-    from motorlab.analyses._common import read_tables
-    from motorlab.analyses.gains import tachometer
-
-    return tachometer(read_tables(ctx.files), nominal=ctx.setting("nominal"))
-
-
-def _run_pulse(ctx: _UnitContext) -> FitResult:
-    from motorlab.analyses._common import read_tables
-    from motorlab.analyses.pulse import pulse
-
-    k = ctx.require("K", "the torque is Ka·K·V")
-    gain, gain_se, offset, offset_se, rho = ctx.setting("amplifier_gain"), 0.0, 0.0, 0.0, 0.0
-    if gain is None:
-        fit = ctx.fits.get("amplifier")
-        if fit is None or "Ka" not in fit:
-            raise OptionError("needs the amplifier gain: run the amplifier experiment or set amplifier_gain")
-        gain, gain_se = fit["Ka"].value, _stderr(fit["Ka"]) or 0.0
-        # The amplifier's zero offset I0 (its fit's intercept) drives the motor too: Tf is biased without it.
-        if "I0" in fit:
-            offset, offset_se = fit["I0"].value, _stderr(fit["I0"]) or 0.0
-            names = fit.correlation_names
-            if fit.correlation is not None and "Ka" in names and "I0" in names:
-                rho = float(fit.correlation[names.index("Ka"), names.index("I0")])
-                rho = rho if math.isfinite(rho) else 0.0
-    tach = ctx.setting("tach_gain")
-    if tach is None and "tachometer" in ctx.fits and "Kt_tach" in ctx.fits["tachometer"]:
-        tach = ctx.fits["tachometer"]["Kt_tach"].value
-    return pulse(
-        read_tables(ctx.files),
-        amplifier_gain=gain,
-        amplifier_gain_stderr=gain_se,
-        amplifier_offset=offset,
-        amplifier_offset_stderr=offset_se,
-        gain_offset_correlation=rho,
-        torque_constant=k.value,
-        torque_constant_stderr=_stderr(k) or 0.0,
-        tach_gain=tach,
-    )
-
-
-def _run_identify(ctx: _UnitContext) -> FitResult:
-    from motorlab.identify import identify, read_runs
-
-    cpr = ctx.cpr
-    runs = read_runs(ctx.files, cpr=cpr)
-    if all(run.has("current") for run in runs):
-        return identify(runs, cpr=cpr)
-    # Without current the feedforward gains need R (and K to separate K from b) from elsewhere.
-    r, k = ctx.estimate("R"), ctx.estimate("K")
-    return identify(
-        runs, cpr=cpr, resistance=None if r is None else r.value, torque_constant=None if k is None else k.value
-    )
-
-
-def _run_feedforward(ctx: _UnitContext) -> FitResult:
-    from motorlab.feedforward import feedforward, motor_estimates, read_tests
-
-    cpr = ctx.cpr
-    # A SysId JSON file holds angles already (no counts; its rotations need not be the motor's):
-    # the session's cpr is not applied to it. Both sides of a drivetrain are fitted.
-    json_only = all(p.lower().endswith(".json") for p in ctx.files)
-    runs = read_tests(list(ctx.files), cpr=None if json_only else cpr)
-    result = feedforward(runs, cpr=None if json_only else cpr)
-    r, k = ctx.estimate("R"), ctx.estimate("K")
-    if r is not None:
-        result.parameters.update(
-            motor_estimates(
-                result,
-                resistance=r.value,
-                resistance_stderr=_stderr(r) or 0.0,
-                torque_constant=None if k is None else k.value,
-                torque_constant_stderr=0.0 if k is None else _stderr(k) or 0.0,
-            )
-        )
-    return result
-
-
-def _stderr(est: Estimate) -> float | None:
-    return est.stderr if math.isfinite(est.stderr) and est.stderr >= 0 else None
-
-
-#: Experiment name -> adapter calling the analysis' library function with the session's settings.
+#: Experiment name -> adapter calling the analysis' library function with the session's settings
+#: (the descriptions' ``characterize``).
 ADAPTERS: dict[str, Callable[[_UnitContext], FitResult]] = {
-    "spindown": _run_spindown,
-    "spinup": _run_spinup,
-    "lcr": _run_lcr,
-    "torque": _run_torque,
-    "terminal": _run_terminal,
-    "free-spinup": _run_free_spinup,
-    "amplifier": _run_amplifier,
-    "tachometer": _run_tachometer,
-    "pulse": _run_pulse,
-    "identify": _run_identify,
-    "feedforward": _run_feedforward,
+    name: exp.characterize for name, exp in all_experiments().items() if exp.characterize is not None
 }
 
 

@@ -1,4 +1,5 @@
-"""The gearbox efficiency of a characterised unit, and which shaft each experiment's figures are at.
+"""The gearbox efficiency of a characterised unit (which shaft each experiment's figures are at:
+:mod:`motorlab.experiments`).
 
 A session measures K twice in different ways: a back-EMF experiment (spin-down, identification) gives
 Ke, which does not see the gearbox; a lever at the output (torque test) and a torque balance through
@@ -26,22 +27,6 @@ BACK_EMF_SOURCES = frozenset({"spindown", "identify"})
 TORQUE_SOURCES = frozenset({"torque", "spinup"})
 #: Healthy unit-to-unit spread of the gearbox efficiency (σ of ln η), for the fleet test.
 EFFICIENCY_HEALTHY_SPREAD = 0.03
-
-#: Which shaft, load and torque units each experiment's figures refer to (short, for tables).
-SHAFTS: dict[str, str] = {
-    "lcr": "electrical (motor terminals)",
-    "amplifier": "electrical",
-    "tachometer": "electrical",
-    "spindown": "output + flywheel, coasting: gearbox back-driven, physical torques",
-    "spinup": "output + flywheel, motor driving: K = Kt through the gearbox",
-    "torque": "output (lever), physical torque, K = Kt = η·Ke",
-    "terminal": "output, bare gearmotor, per unit of K·i",
-    "free-spinup": "output, bare gearmotor, per unit of K·i",
-    "pulse": "output, bare gearmotor, per unit of K·i",
-    "identify": "output, what the log drove, per unit of K·i",
-    "feedforward": "output + the SysId mechanism, per unit of K·i",
-}
-
 
 def sources_of(name: str, candidates: dict[str, Estimate]) -> dict[str, Estimate]:
     """K's candidates: the torque constants through the gearbox only when no back-EMF K is there."""

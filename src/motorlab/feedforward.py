@@ -25,7 +25,6 @@ WPILib SysId documentation, "Introduction to System Identification" and "Analyzi
 
 from __future__ import annotations
 
-import argparse
 import math
 from collections.abc import Sequence
 from typing import Any
@@ -561,27 +560,6 @@ def motor_estimates(
 # --------------------------------------------------------------------------------------------------
 
 
-def add_arguments(parser: argparse.ArgumentParser, experiment: str) -> None:
-    """Options of ``motorlab analyze feedforward``."""
-    from motorlab.io.frc_json import UNITS
-    from motorlab.options import quantity
-
-    parser.add_argument("--cpr", type=quantity("count", positive=True),
-                        help="encoder counts per revolution at the shaft (537.7 is fine); for a SysId or "
-                             "frc-characterization file, counts per rotation as the file logs rotations")
-    parser.add_argument("--mechanism", choices=MECHANISMS, default="simple",
-                        help="gravity term: none (simple), kG (elevator), kG·cos(θ+φ) (arm)")
-    parser.add_argument("--R", dest="resistance", type=quantity("ohm", positive=True),
-                        help="winding resistance, to convert the gains to K, J, b, Tf [Ω]")
-    parser.add_argument("--K", dest="torque_constant", type=quantity("V*s/rad", positive=True),
-                        help="torque constant, to separate K from b in kV [V·s/rad]")
-    parser.add_argument("--side", choices=("both", "left", "right"), default="both",
-                        help="drivetrain logs: fit both sides' tests (default, as SysId) or one side")
-    parser.add_argument("--units", choices=[u.title() for u in UNITS], default=None,
-                        help="unit of a frc-characterization file without a 'units' key (default: that tool's "
-                             "template units, Feet; Degrees for an arm)")
-
-
 def read_tests(paths: list[str], *, cpr: float | None, side: str = "both", units: str | None = None) -> list[Recording]:
     """Read the files, one recording per test (and per drivetrain side), for :func:`feedforward`.
 
@@ -640,28 +618,6 @@ def apply_cpr(recordings: Sequence[Recording], cpr: float) -> None:
             f" ({n_fine} steps finer than half a count): this cpr does not fit (give the counts per logged rotation, "
             "gearing included)"
         )
-
-
-def from_cli(experiment: str, paths: list[str], args: argparse.Namespace) -> FitResult:
-    """Run ``motorlab analyze feedforward FILE...``."""
-    cpr = getattr(args, "cpr", None)
-    runs = read_tests(paths, cpr=cpr, side=getattr(args, "side", "both"), units=getattr(args, "units", None))
-    json_only = any(run.metadata.get("format") in ("sysid-json", "frc-char-json") for run in runs)
-    if any(r.metadata.get("ramp") in ("lateral", "angular") for r in runs):  # Road Runner's other ramps
-        from motorlab.analyses.roadrunner import from_runs
-
-        result = from_runs(runs, cpr=cpr, mechanism=getattr(args, "mechanism", "simple"))
-    else:
-        result = feedforward(runs, mechanism=getattr(args, "mechanism", "simple"), cpr=None if json_only else cpr)
-    if json_only and cpr is not None:
-        result.details["cpr"] = {"given": cpr, "note": "counts per logged rotation: the position quantum is "
-                                 "one rotation (unitsPerRotation) / cpr"}
-    resistance = getattr(args, "resistance", None)
-    if resistance is not None:
-        result.parameters.update(
-            motor_estimates(result, resistance=resistance, torque_constant=getattr(args, "torque_constant", None))
-        )
-    return result
 
 
 import sys as _sys  # noqa: E402

@@ -27,7 +27,6 @@ ch. 7 (output-error / prediction-error methods).
 
 from __future__ import annotations
 
-import argparse
 import math
 from collections.abc import Sequence
 from typing import Any
@@ -537,20 +536,6 @@ def _identify_without_current(
 # --------------------------------------------------------------------------------------------------
 
 
-def add_arguments(parser: argparse.ArgumentParser, experiment: str) -> None:
-    """Options of ``motorlab analyze identify``."""
-    from motorlab.options import quantity
-
-    parser.add_argument("--cpr", type=quantity("count", positive=True),
-                        help="encoder counts per revolution at the shaft (537.7 too)")
-    parser.add_argument("--R", dest="resistance", type=quantity("ohm", positive=True),
-                        help="winding resistance, if known (needed without current) [Ω]")
-    parser.add_argument("--K", dest="torque_constant", type=quantity("V*s/rad", positive=True),
-                        help="torque constant, if known (separates K from b without current) [V·s/rad]")
-    parser.add_argument("--no-current", dest="use_current", action="store_false",
-                        help="ignore a current column (fit voltage and angle only)")
-
-
 def read_runs(paths: list[str], *, cpr: float | None) -> list[Recording]:
     """Read every file with :func:`motorlab.io.read_any`, one recording per test segment.
 
@@ -567,24 +552,6 @@ def read_runs(paths: list[str], *, cpr: float | None) -> list[Recording]:
         rec = mio.read_any(path, cpr=cpr if takes_cpr else None)
         runs.extend(rec.split())
     return runs
-
-
-def from_cli(experiment: str, paths: list[str], args: argparse.Namespace) -> FitResult:
-    """Run ``motorlab analyze identify FILE...``."""
-    from motorlab.analyses._common import check_cpr
-
-    cpr = getattr(args, "cpr", None)
-    check_cpr(cpr)  # any positive number of counts (537.7), within physical bounds
-    runs = read_runs(paths, cpr=cpr)
-    json_runs = [r for r in runs if r.metadata.get("format") in ("sysid-json", "frc-char-json")]
-    if json_runs and cpr is not None:  # a JSON file logs its own units: cpr counts per logged rotation
-        from motorlab.feedforward import apply_cpr
-
-        apply_cpr(json_runs, cpr)
-        cpr = None  # the readers of counts logs keep theirs in metadata["cpr"]
-    return identify(runs, resistance=getattr(args, "resistance", None),
-                    torque_constant=getattr(args, "torque_constant", None), cpr=cpr,
-                    use_current=getattr(args, "use_current", True))
 
 
 import sys as _sys  # noqa: E402

@@ -18,106 +18,22 @@ refer to in ``details["shaft"]``.
 
 from __future__ import annotations
 
-import argparse
 import os
 from collections.abc import Sequence
 from typing import Any
 
 from motorlab.errors import OptionError
+from motorlab.experiments import get
 from motorlab.recording import Recording
 from motorlab.results import FitResult
 
 PathLike = str | os.PathLike[str]
 
 
-class _OptionParser(argparse.ArgumentParser):
-    """Collects an experiment's option descriptions; never parses a command line."""
-
-    def error(self, message: str) -> Any:  # pragma: no cover - never called: no parse_args here
-        raise OptionError(message)
-
-
 def describe(experiment: str) -> list[dict[str, Any]]:
-    """The options of ``experiment``: name, other names, unit, default, choices, required, help.
-
-    Names are those :func:`analyze` accepts (the first is the CLI's long option, ``_`` for ``-``).
-    """
-    return [_describe(action) for action in _actions(experiment)]
-
-
-def _actions(experiment: str) -> list[argparse.Action]:
-    from motorlab import analyses
-
-    if experiment not in analyses.EXPERIMENTS:
-        known = ", ".join(analyses.EXPERIMENTS)
-        raise OptionError(f"unknown experiment {experiment!r}; known: {known}")
-    parser = _OptionParser(prog=f"motorlab.{experiment}", add_help=False)
-    analyses.load(experiment).add_arguments(parser, experiment)
-    return [a for a in parser._actions if a.option_strings]
-
-
-def _names(action: argparse.Action) -> list[str]:
-    names = [s.lstrip("-").replace("-", "_") for s in action.option_strings if s.startswith("--")]
-    if action.dest not in names:
-        names.append(action.dest)
-    return names
-
-
-def _describe(action: argparse.Action) -> dict[str, Any]:
-    names = _names(action)
-    flag = action.nargs == 0
-    return {
-        "name": names[0],
-        "aliases": names[1:],
-        "dest": action.dest,
-        "unit": getattr(action.type, "unit", None),
-        "type": "flag" if flag else ("quantity" if hasattr(action.type, "unit") else
-                                     getattr(action.type, "__name__", "str") if action.type else "str"),
-        "default": action.default,
-        "choices": list(action.choices) if action.choices is not None else None,
-        "required": bool(action.required),
-        "help": action.help or "",
-    }
-
-
-def _convert(action: argparse.Action, name: str, value: Any) -> Any:
-    if action.nargs == 0:  # a flag (store_true / store_false)
-        if not isinstance(value, bool):
-            raise OptionError(f"{name}: expected True or False, got {value!r}")
-        return value if action.const is True or action.const is None else not value
-    if value is None:
-        return None
-    convert: Any = action.type
-    if convert is not None:
-        text = value if isinstance(value, str) else repr(value)
-        try:
-            value = convert(text)
-        except (argparse.ArgumentTypeError, ValueError) as exc:
-            raise OptionError(f"{name}: {exc}") from None
-    if action.choices is not None and value not in action.choices:
-        raise OptionError(f"{name}: {value!r} is not one of {', '.join(map(str, action.choices))}")
-    return value
-
-
-def _namespace(experiment: str, given: dict[str, Any]) -> argparse.Namespace:
-    actions = _actions(experiment)
-    by_name = {n: a for a in actions for n in _names(a)}
-    unknown = [k for k in given if k not in by_name]
-    if unknown:
-        known = ", ".join(_names(a)[0] for a in actions)
-        raise OptionError(f"{experiment}: unknown option(s) {', '.join(unknown)}; known: {known}")
-    values = {a.dest: a.default for a in actions}
-    seen: dict[str, str] = {}
-    for key, value in given.items():
-        action = by_name[key]
-        if action.dest in seen:
-            raise OptionError(f"{experiment}: {key} and {seen[action.dest]} are the same option")
-        seen[action.dest] = key
-        values[action.dest] = _convert(action, key, value)
-    missing = [_names(a)[0] for a in actions if a.required and values[a.dest] is None]
-    if missing:
-        raise OptionError(f"{experiment}: give {', '.join(missing)}")
-    return argparse.Namespace(**values)
+    """The options of ``experiment`` (:meth:`motorlab.experiments.Option.schema`): name, keyword, unit,
+    default, choices, required, help."""
+    return [opt.schema() for opt in get(experiment).options]
 
 
 def _paths(files: Sequence[Any]) -> list[str]:
@@ -142,15 +58,8 @@ def analyze(experiment: str, *files: PathLike | Sequence[PathLike], **opts: Any)
     LogFormatError, FitError
         As the analysis.
     """
-    from motorlab import analyses
-    from motorlab.efficiency import SHAFTS
-
-    args = _namespace(experiment, opts)
-    args.experiment = experiment
-    result: FitResult = analyses.load(experiment).from_cli(experiment, _paths(files), args)
-    if experiment in SHAFTS:
-        result.details.setdefault("shaft", SHAFTS[experiment])
-    return result
+    exp = get(experiment)
+    return exp.analyze(_paths(files), exp.values(opts))
 
 
 def read(path: PathLike | Sequence[PathLike], *, cpr: float | str | None = None, **opts: Any) -> Recording:
@@ -176,21 +85,12 @@ def _make(experiment: str) -> Any:
     return run
 
 
-spindown = _make("spindown")
-spinup = _make("spinup")
-free_spinup = _make("free-spinup")
-terminal = _make("terminal")
-lcr = _make("lcr")
-torque = _make("torque")
-amplifier = _make("amplifier")
-tachometer = _make("tachometer")
-pulse = _make("pulse")
-identify = _make("identify")
-feedforward = _make("feedforward")
+def __getattr__(name: str) -> Any:
+    """``spindown``, ``free_spinup`` ...: the function of every described experiment (one per module of
+    :mod:`motorlab.experiments`, so a new experiment module gives a new function)."""
+    from motorlab.experiments import all_experiments
 
-#: The experiment functions by CLI name.
-FUNCTIONS = {
-    "spindown": spindown, "spinup": spinup, "free-spinup": free_spinup, "terminal": terminal, "lcr": lcr,
-    "torque": torque, "amplifier": amplifier, "tachometer": tachometer, "pulse": pulse, "identify": identify,
-    "feedforward": feedforward,
-}
+    experiment = name.replace("_", "-")
+    if experiment in all_experiments():
+        return _make(experiment)
+    raise AttributeError(f"module 'motorlab.notebook' has no attribute {name!r}")

@@ -51,6 +51,7 @@ from pathlib import Path
 from typing import Any
 
 from motorlab.errors import MotorlabError, OptionError, SessionError
+from motorlab.experiments import all_experiments
 from motorlab.plan import MATERIALS, disc_inertia
 from motorlab.units import format_unit, parse_quantity
 
@@ -59,46 +60,20 @@ MATERIAL_DENSITY = MATERIALS
 
 #: Settings each experiment accepts besides ``files``: name -> (SI unit or type name, description).
 #: A unit string means a quantity parsed with pint; "int" / "str" / "bool" are plain TOML values.
+#: Generated from the experiments' descriptions (:mod:`motorlab.experiments`).
 EXPERIMENT_SETTINGS: dict[str, dict[str, tuple[str, str]]] = {
-    "spindown": {
-        "cutoff": ("s", "instant the relay opened (default: found from the current dropping to zero)"),
-    },
-    "spinup": {
-        "start": ("s", "start of the constant-current phase (default: found from the current)"),
-        "end": ("s", "end of the constant-current phase (default: found from the current)"),
-        "current": ("A", "supply current limit during the spin-up (checked against the supply)"),
-    },
-    "free-spinup": {
-        "current": ("A", "constant current driving the free motor (required)"),
-        "current_stderr": ("A", "standard error of that current"),
-        "edges_per_revolution": ("float", "rising edges per revolution (default cpr/4: one channel)"),
-    },
-    "terminal": {
-        "current_stderr": ("A", "standard error of one current reading"),
-    },
-    "lcr": {
-        "frequency": ("Hz", "test frequency of the L/Q readings (default: file, else 1 kHz)"),
-    },
-    "torque": {},
-    "amplifier": {
-        "nominal": ("A/V", "nominal amplifier gain to compare with"),
-    },
-    "tachometer": {
-        "nominal": ("V*s/rad", "nominal tachometer gain to compare with"),
-    },
-    "pulse": {
-        "amplifier_gain": ("A/V", "amplifier gain Ka (default: from the amplifier experiment)"),
-        "tach_gain": ("V*s/rad", "tachometer gain (default: from the tachometer experiment)"),
-    },
-    "identify": {},
-    "feedforward": {},
+    name: {s.name: (s.kind, s.help) for s in exp.settings} for name, exp in all_experiments().items()
 }
 
 #: Settings an experiment cannot do without.
-REQUIRED_SETTINGS: dict[str, tuple[str, ...]] = {"free-spinup": ("current",)}
+REQUIRED_SETTINGS: dict[str, tuple[str, ...]] = {
+    name: tuple(s.name for s in exp.settings if s.required)
+    for name, exp in all_experiments().items()
+    if any(s.required for s in exp.settings)
+}
 
 #: Experiments run with the flywheel attached (their J, b, Tf include the flywheel and gearbox).
-LOADED_EXPERIMENTS = frozenset({"spindown", "spinup", "torque"})
+LOADED_EXPERIMENTS = frozenset(name for name, exp in all_experiments().items() if exp.loaded)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -746,21 +721,12 @@ def read_truth(path: str | Path) -> dict[str, float]:
     return out
 
 
-#: Experiments of a simulated session: session key -> (rig experiment, file name, rig settings).
-SIMULATED_EXPERIMENTS: tuple[tuple[str, str, str, dict[str, Any]], ...] = (
-    ("lcr", "lcr", "lcr.csv", {}),
-    ("spindown", "spindown", "spindown.txt", {"voltage": 12.0, "current_limit": 4.0}),
-    ("torque", "torque", "torque.csv", {}),
-    ("terminal", "terminal", "terminal.csv", {}),
-    ("free-spinup", "free-spinup", "free_spinup.csv", {"current": 0.5}),
-    ("spinup", "spinup", "spinup.txt", {}),
-    ("amplifier", "amplifier", "amplifier.csv", {}),
-    ("tachometer", "tachometer", "tachometer.csv", {}),
-    ("pulse", "pulse", "pulse.csv", {}),
-    ("identify", "transient", "transient.csv", {}),
-    # Long enough for the flywheel's mechanical time constant (≈ 37 s through a NeveRest 40's lossy
-    # gearbox): SysId's dynamic test must approach steady state or kV and kA are confounded.
-    ("feedforward", "sysid", "sysid.json", {"quasistatic_duration": 60.0, "dynamic_duration": 40.0}),
+#: Experiments of a simulated session: session key -> (rig experiment, file name, rig settings), in
+#: the order the rig runs them (from the descriptions' :class:`~motorlab.experiments.RigRun`).
+SIMULATED_EXPERIMENTS: tuple[tuple[str, str, str, dict[str, Any]], ...] = tuple(
+    (name, exp.rig.experiment, exp.rig.file, dict(exp.rig.settings))
+    for name, exp in sorted(all_experiments().items(), key=lambda item: item[1].rig.order if item[1].rig else 0)
+    if exp.rig is not None
 )
 
 

@@ -8,7 +8,8 @@ import math
 import numpy as np
 import pytest
 
-from motorlab.analyses.free_spinup import add_arguments, free_spinup, from_cli
+from motorlab.analyses.free_spinup import free_spinup
+from motorlab.cli.analyze import add_arguments, from_cli
 from motorlab.errors import FitError, OptionError
 from motorlab.model import MotorParams
 from motorlab.recording import Recording

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from motorlab.analyses import _common as common
-from motorlab.analyses.spindown import add_arguments, from_cli, spindown
+from motorlab.analyses.spindown import spindown
+from motorlab.cli.analyze import add_arguments, from_cli
 from motorlab.errors import FitError, LogFormatError, OptionError
 from motorlab.model import MotorParams
 from motorlab.recording import Recording

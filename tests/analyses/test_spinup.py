@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from motorlab.analyses.spindown import spindown
-from motorlab.analyses.spinup import add_arguments, from_cli, spinup
+from motorlab.analyses.spinup import spinup
+from motorlab.cli.analyze import add_arguments, from_cli
 from motorlab.errors import FitError, OptionError
 from motorlab.model import MotorParams
 from motorlab.recording import Recording

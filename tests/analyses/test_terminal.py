@@ -8,7 +8,8 @@ import math
 import numpy as np
 import pytest
 
-from motorlab.analyses.terminal import add_arguments, from_cli, terminal
+from motorlab.analyses.terminal import terminal
+from motorlab.cli.analyze import add_arguments, from_cli
 from motorlab.errors import FitError, LogFormatError, OptionError
 from motorlab.recording import Recording
 

@@ -31,14 +31,14 @@ def test_demo_writes_report_and_prints_table(tmp_path: Path, capsys: pytest.Capt
 def test_demo_table_shows_every_analysis_against_the_truth(tmp_path: Path) -> None:
     import re
 
-    from motorlab.analyses import EXPERIMENTS
     from motorlab.characterize import characterize
     from motorlab.cli.demo import experiment_rows
+    from motorlab.experiments import all_experiments
     from motorlab.session import load_session, write_simulated_session
 
     toml = write_simulated_session("neverest40", out_dir=tmp_path / "s", units=1, seed=3)
     rows = experiment_rows(characterize(load_session(toml), control=False, figures=False))
-    assert {exp for exp, *_ in rows} == set(EXPERIMENTS)  # every analysis of the seeds is in the demo
+    assert {exp for exp, *_ in rows} == set(all_experiments())  # every analysis of the seeds is in the demo
     distances = [float(m.group(1)) for *_, cells in rows for c in cells if (m := re.search(r"\(([+-][\d.]+)σ\)", c))]
     assert len(distances) >= 25
     # Honest error bars: the truth within 3 standard errors for (nearly) every compared estimate.

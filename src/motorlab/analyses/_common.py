@@ -23,7 +23,6 @@ Small on purpose; every analysis module may use it.
 
 from __future__ import annotations
 
-import argparse
 import math
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
@@ -363,56 +362,6 @@ def disc_inertia(radius: float, thickness: float, *, density: float, ratio: floa
                         (ratio, "gear ratio")):
         check_positive(value, name, allow_none=False)
     return plan_disc_inertia(radius, thickness, density) * ratio**2
-
-
-# ---- command line -------------------------------------------------------------------------------
-def add_cpr_argument(parser: argparse.ArgumentParser, *, required: bool = False) -> None:
-    """``--cpr``: encoder counts per revolution of the counted shaft."""
-    from motorlab.options import quantity
-
-    parser.add_argument(
-        "--cpr", type=quantity("count", positive=True), required=required,
-        help="encoder counts per revolution of the counted shaft (e.g. 560 for a NeveRest 20)",
-    )
-
-
-def add_inertia_arguments(parser: argparse.ArgumentParser) -> None:
-    """``--inertia``/``--inertia-stderr`` or a flywheel description (disc radius, thickness, material, ratio)."""
-    from motorlab.options import quantity
-
-    group = parser.add_argument_group("inertia at the encoder shaft (give --inertia or a disc)")
-    group.add_argument("--inertia", type=quantity("kg*m^2", positive=True),
-                       help='total inertia at the encoder shaft, e.g. "0.0124 kg*m^2"')
-    group.add_argument("--inertia-stderr", type=quantity("kg*m^2", nonnegative=True),
-                       help="standard error of the inertia [kg·m²] (default: exact)")
-    group.add_argument("--disc-radius", type=quantity("m", positive=True), help='flywheel disc radius, e.g. "75 mm"')
-    group.add_argument("--disc-thickness", type=quantity("m", positive=True), help="flywheel disc thickness [m]")
-    group.add_argument("--material", choices=sorted(MATERIAL_DENSITY), default="steel",
-                       help="flywheel material (default steel, 7850 kg/m³)")
-    group.add_argument("--ratio", type=quantity("", positive=True), default=1.0,
-                       help="flywheel speed / encoder-shaft speed (25 for the seed's step-up gearbox)")
-
-
-def inertia_from_args(args: argparse.Namespace) -> tuple[float | None, float | None]:
-    """The inertia [kg·m²] and its standard error from ``--inertia`` or the disc options (or None)."""
-    disc = args.disc_radius is not None or args.disc_thickness is not None
-    if args.inertia is not None and disc:
-        raise OptionError("give either --inertia or the flywheel disc (--disc-radius, --disc-thickness), not both")
-    if disc:
-        if args.disc_radius is None or args.disc_thickness is None:
-            raise OptionError("a flywheel disc needs both --disc-radius and --disc-thickness")
-        inertia = disc_inertia(args.disc_radius, args.disc_thickness,
-                               density=MATERIAL_DENSITY[args.material], ratio=args.ratio)
-        return inertia, args.inertia_stderr
-    return args.inertia, args.inertia_stderr
-
-
-def add_current_unit_argument(parser: argparse.ArgumentParser) -> None:
-    """``--current-unit A|mA``: the unit of the shunt-current column of FTC logs without a header."""
-    parser.add_argument(
-        "--current-unit", choices=("A", "mA"), default=None,
-        help="unit of the current column of an FTC log (default: from its header, else A)",
-    )
 
 
 def read_position_log(paths: list[str], *, cpr: float | None, current_unit: str | None = None) -> Recording:

@@ -7,7 +7,6 @@ edges of one encoder channel (one edge every fourth count). With K known, J = (K
 
 from __future__ import annotations
 
-import argparse
 import math
 from typing import Any
 
@@ -225,27 +224,7 @@ def free_spinup(
     )
 
 
-# ---- command line ---------------------------------------------------------------------------------
-def add_arguments(parser: argparse.ArgumentParser, experiment: str) -> None:
-    """Options of ``motorlab analyze free-spinup``."""
-    from motorlab.options import quantity
-
-    common.add_cpr_argument(parser)
-    parser.add_argument("--edges-per-rev", type=quantity("", positive=True),
-                        help="rising edges per revolution (default cpr/4: one channel, every fourth count)")
-    parser.add_argument("--K", type=quantity("V*s/rad", positive=True), required=True,
-                        help="torque constant K [V·s/rad] = [N·m/A]")
-    parser.add_argument("--K-stderr", type=quantity("V*s/rad", nonnegative=True), help="standard error of K")
-    parser.add_argument("--current", type=quantity("A", positive=True), required=True,
-                        help='the constant current, e.g. "0.5 A"')
-    parser.add_argument("--current-stderr", type=quantity("A", nonnegative=True),
-                        help="standard error of the current")
-    parser.add_argument("--b", type=quantity("N*m*s/rad", nonnegative=True), help="viscous friction b [N·m·s/rad]")
-    parser.add_argument("--b-stderr", type=quantity("N*m*s/rad", nonnegative=True), help="standard error of b")
-    parser.add_argument("--Tf", type=quantity("N*m", nonnegative=True), help="Coulomb friction Tf [N·m]")
-    parser.add_argument("--Tf-stderr", type=quantity("N*m", nonnegative=True), help="standard error of Tf")
-
-
+# ---- reading the files -------------------------------------------------------------------------
 def read_edges(path: str) -> Recording:
     """Edge times from a scope waveform export or a cursor-times CSV.
 
@@ -264,15 +243,3 @@ def read_edges(path: str) -> Recording:
     if detect_format(path) == "scope-waveform":
         return read_scope_waveform(path)
     return read_scope_times(path)
-
-
-def from_cli(experiment: str, paths: list[str], args: argparse.Namespace) -> FitResult:
-    """Read the edge times (one file) and fit J."""
-    if len(paths) != 1:
-        raise OptionError(f"free-spinup analyses one file of edge times, got {len(paths)}")
-    return free_spinup(
-        read_edges(paths[0]), torque_constant=args.K, current=args.current, cpr=args.cpr,
-        edges_per_revolution=args.edges_per_rev, torque_constant_stderr=args.K_stderr,
-        current_stderr=args.current_stderr, viscous_friction=args.b, viscous_friction_stderr=args.b_stderr,
-        coulomb_friction=args.Tf, coulomb_friction_stderr=args.Tf_stderr,
-    )

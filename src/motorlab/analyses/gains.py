@@ -12,7 +12,6 @@ for callers that imported them from this module.
 
 from __future__ import annotations
 
-import argparse
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -30,7 +29,6 @@ from motorlab.analyses._common import (
     reader_warnings,
     sources_of,
 )
-from motorlab.errors import OptionError
 from motorlab.recording import Recording
 from motorlab.results import Estimate, FitResult, Panel, Series
 from motorlab.units import SI_UNITS, format_unit
@@ -45,10 +43,6 @@ __all__ = [
 NOMINAL_TOLERANCE = 0.10
 
 #: One-line help per experiment this module serves (the CLI lists them).
-SUMMARIES = {
-    "amplifier": 'Servo-amplifier gain Ka from command voltage and output current (seed 2, "Amplifier Gain")',
-    "tachometer": 'Tachometer gain Kt_tach from speed and tachometer voltage (seed 2, "Tachometer Gain Constant")',
-}
 
 # ---- the gains --------------------------------------------------------------------------------------
 
@@ -229,29 +223,3 @@ def tachometer(
 
 def _as_list(recordings: Recording | Sequence[Recording]) -> list[Recording]:
     return [recordings] if isinstance(recordings, Recording) else list(recordings)
-
-
-# ---- command line -------------------------------------------------------------------------------------
-
-
-def add_arguments(parser: argparse.ArgumentParser, experiment: str) -> None:
-    """Options of ``motorlab analyze amplifier|tachometer``."""
-    from motorlab.options import quantity
-
-    unit = SI_UNITS[_SPECS[experiment].name]
-    example = "'2 A/V' (seed 2)" if experiment == "amplifier" else "'0.03 V*s/rad' or '3.1 V/(1000*rpm)'"
-    parser.add_argument(
-        "--nominal", type=quantity(unit, positive=True), default=None, metavar="GAIN",
-        help=f"nominal gain to compare with [{unit}], e.g. {example}",
-    )
-
-
-def from_cli(experiment: str, paths: list[str], args: argparse.Namespace) -> FitResult:
-    """Run the analysis for ``motorlab analyze amplifier|tachometer FILE...``."""
-    recs = read_tables(paths)
-    nominal = getattr(args, "nominal", None)
-    if experiment == "amplifier":
-        return amplifier(recs, nominal=nominal)
-    if experiment == "tachometer":
-        return tachometer(recs, nominal=nominal)
-    raise OptionError(f"unknown experiment {experiment!r} for the gains analysis")

@@ -9,13 +9,12 @@ by a robust test (median and median absolute deviation).
 
 from __future__ import annotations
 
-import argparse
 import math
 from collections.abc import Sequence
 
 import numpy as np
 
-from motorlab.analyses._common import finite_rows, metadata_quantity, read_tables, reader_warnings, sources_of
+from motorlab.analyses._common import finite_rows, metadata_quantity, reader_warnings, sources_of
 from motorlab.errors import LogFormatError, OptionError
 from motorlab.recording import Recording
 from motorlab.results import Estimate, FitResult, Panel, Series
@@ -407,27 +406,3 @@ def _freq_text(f: np.ndarray) -> str:
     f0 = float(f[0])
     text = f"{f0 / 1000:g} kHz" if f0 >= 1000 else f"{f0:g} Hz"
     return text if np.ptp(f) == 0 else "the row frequencies"
-
-
-def add_arguments(parser: argparse.ArgumentParser, experiment: str) -> None:
-    """Options of ``motorlab analyze lcr``."""
-    from motorlab.options import quantity
-
-    parser.add_argument(
-        "--frequency", type=quantity("Hz", positive=True), default=None, metavar="F",
-        help="test frequency of the L/Q readings [Hz], e.g. 1000 or '1 kHz' "
-        "(default: frequency_Hz column or '# frequency_Hz:' metadata, else 1 kHz)",
-    )
-    parser.add_argument(
-        "--circuit", choices=("series", "parallel"), default=None,
-        help="equivalent circuit the meter displayed (default: '# circuit:' metadata, else series)",
-    )
-    parser.add_argument(
-        "--outlier-z", type=quantity("1", positive=True), default=OUTLIER_Z, metavar="Z",
-        help=f"modified z-score above which a reading is an outlier (default {OUTLIER_Z})",
-    )
-
-
-def from_cli(experiment: str, paths: list[str], args: argparse.Namespace) -> FitResult:
-    """Run ``motorlab analyze lcr FILE...``."""
-    return lcr(read_tables(paths), frequency=args.frequency, circuit=args.circuit, threshold=args.outlier_z)

@@ -10,7 +10,6 @@ coast-downs with information criteria (AIC, BIC).
 
 from __future__ import annotations
 
-import argparse
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -22,9 +21,7 @@ from motorlab.analyses._common import (
     check_range,
     check_stderr_limit,
     check_torque_constant,
-    metadata_quantity,
     ramp_speed,
-    read_tables,
     reader_warnings,
     sources_of,
 )
@@ -714,75 +711,3 @@ def _panels(
         )
     )
     return panels
-
-
-# ---- command line -------------------------------------------------------------------------------------
-
-
-def add_arguments(parser: argparse.ArgumentParser, experiment: str) -> None:
-    """Options of ``motorlab analyze pulse``."""
-    from motorlab.options import quantity
-
-    parser.add_argument(
-        "--Ka", dest="amplifier_gain", type=quantity("A/V", positive=True), default=None, metavar="GAIN",
-        help="servo-amplifier gain [A/V] (measure with 'analyze amplifier'; seed 2's nominal is 2; "
-        "default: '# Ka_A_per_V:' in the file)",
-    )
-    parser.add_argument(
-        "--I0", dest="amplifier_offset", type=quantity("A"), default=0.0, metavar="CURRENT",
-        help="amplifier output current at zero command [A] (the intercept I0 of 'analyze amplifier'; default 0)",
-    )
-    parser.add_argument(
-        "--Km", "--K", dest="torque_constant", type=quantity("N*m/A", positive=True), required=True,
-        metavar="K", help="motor torque constant Km = K [N·m/A] ('analyze torque')",
-    )
-    parser.add_argument(
-        "--Ka-stderr", dest="amplifier_gain_stderr", type=quantity("A/V", nonnegative=True), default=0.0,
-        metavar="GAIN", help="standard error of Ka [A/V], propagated into J, b, Tf (default: exact)",
-    )
-    parser.add_argument(
-        "--I0-stderr", dest="amplifier_offset_stderr", type=quantity("A", nonnegative=True), default=0.0,
-        metavar="CURRENT", help="standard error of I0 [A], propagated into Tf (default: exact)",
-    )
-    parser.add_argument(
-        "--Km-stderr", "--K-stderr", dest="torque_constant_stderr", type=quantity("N*m/A", nonnegative=True),
-        default=0.0, metavar="K", help="standard error of Km [N·m/A], propagated (default: exact)",
-    )
-    parser.add_argument(
-        "--skip", type=quantity("s", nonnegative=True), default=DEFAULT_SKIP, metavar="TIME",
-        help=f"time left out after each command edge [s] (default {DEFAULT_SKIP * 1000:g} ms)",
-    )
-    parser.add_argument(
-        "--tach-gain", type=quantity("V*s/rad", positive=True), default=None, metavar="GAIN",
-        help="tachometer gain [V·s/rad], when the file holds tach_voltage_V instead of a speed",
-    )
-    parser.add_argument(
-        "--friction", choices=("auto", *FRICTION_MODELS), default="auto",
-        help="friction model of the final fit (default auto: the best by BIC on the coast-downs)",
-    )
-
-
-def from_cli(experiment: str, paths: list[str], args: argparse.Namespace) -> FitResult:
-    """Run ``motorlab analyze pulse FILE...``."""
-    recs = read_tables(paths)
-    ka = args.amplifier_gain
-    if ka is None:
-        ka = metadata_quantity(recs[0], ["Ka_A_per_V", "Ka"], "A/V")
-        if ka is None:
-            raise OptionError("give the amplifier gain --Ka [A/V] (measure it with 'motorlab analyze amplifier')")
-        try:
-            check_range(ka, "the amplifier gain", *LIMITS["Ka"][:2], "A/V", why="no servo amplifier is outside this")
-        except OptionError as exc:
-            raise LogFormatError(f"the '# Ka_A_per_V:' line: {exc.message}", path=recs[0].source or None) from None
-    return pulse(
-        recs,
-        amplifier_gain=ka,
-        torque_constant=args.torque_constant,
-        amplifier_offset=args.amplifier_offset,
-        skip=args.skip,
-        tach_gain=args.tach_gain,
-        friction=args.friction,
-        amplifier_gain_stderr=getattr(args, "amplifier_gain_stderr", 0.0),
-        amplifier_offset_stderr=getattr(args, "amplifier_offset_stderr", 0.0),
-        torque_constant_stderr=getattr(args, "torque_constant_stderr", 0.0),
-    )

@@ -15,7 +15,6 @@ that neither quantisation nor the voltage noise biases K.
 
 from __future__ import annotations
 
-import argparse
 import math
 from typing import Any
 
@@ -480,27 +479,3 @@ def _friction_from_inertia(fit: LeastSquares, inertia: float, inertia_se: float)
         "b": Estimate("b", gamma * inertia, b_se, SI_UNITS["b"], bool(fit.determined[k_g])),
         "Tf": Estimate("Tf", decel * inertia, tf_se, SI_UNITS["Tf"], bool(fit.determined[k_a])),
     }
-
-
-# ---- command line ---------------------------------------------------------------------------------
-def add_arguments(parser: argparse.ArgumentParser, experiment: str) -> None:
-    """Options of ``motorlab analyze spindown``."""
-    common.add_cpr_argument(parser)
-    common.add_current_unit_argument(parser)
-    common.add_inertia_arguments(parser)
-    from motorlab.options import quantity
-
-    parser.add_argument("--cutoff", type=quantity("s"), help="instant the relay opened [s] (default: from the current)")
-    parser.add_argument(
-        "--guard", type=quantity("s", nonnegative=True), default=0.1,
-        help="leave out samples this long after the cut-off [s] (default 0.1)",
-    )
-
-
-def from_cli(experiment: str, paths: list[str], args: argparse.Namespace) -> FitResult:
-    """Read the log(s) (one run, possibly split over several files) and fit the spin-down."""
-    recording = common.read_position_log(paths, cpr=args.cpr, current_unit=args.current_unit)
-    inertia, inertia_se = common.inertia_from_args(args)
-    return spindown(
-        recording, cpr=args.cpr, inertia=inertia, inertia_stderr=inertia_se, cutoff=args.cutoff, guard=args.guard
-    )

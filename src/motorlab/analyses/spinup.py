@@ -13,7 +13,6 @@ and Tf are propagated into K.
 
 from __future__ import annotations
 
-import argparse
 import math
 from typing import Any
 
@@ -303,43 +302,3 @@ def _spindown_prior(result: FitResult) -> tuple[np.ndarray, np.ndarray]:
     se = np.where(np.isfinite(se), se, 0.0)
     cov = np.array([[se[0] ** 2, rho * se[0] * se[1]], [rho * se[0] * se[1], se[1] ** 2]])
     return np.array([g.value, a.value]), cov
-
-
-# ---- command line ---------------------------------------------------------------------------------
-def add_arguments(parser: argparse.ArgumentParser, experiment: str) -> None:
-    """Options of ``motorlab analyze spinup``."""
-    from motorlab.options import quantity
-
-    common.add_cpr_argument(parser)
-    common.add_current_unit_argument(parser)
-    common.add_inertia_arguments(parser)
-    parser.add_argument("--b", type=quantity("N*m*s/rad", nonnegative=True), help="viscous friction b [N·m·s/rad]")
-    parser.add_argument("--b-stderr", type=quantity("N*m*s/rad", nonnegative=True), help="standard error of b")
-    parser.add_argument("--Tf", type=quantity("N*m", nonnegative=True), help="Coulomb friction Tf [N·m]")
-    parser.add_argument("--Tf-stderr", type=quantity("N*m", nonnegative=True), help="standard error of Tf")
-    parser.add_argument("--spindown", metavar="FILE", action="append",
-                        help="spin-down log of the same rig, to take the friction from (repeat for a split run)")
-    parser.add_argument("--start", type=quantity("s"), help="start of the constant-current phase [s]")
-    parser.add_argument("--end", type=quantity("s"), help="end of the constant-current phase [s]")
-
-
-def from_cli(experiment: str, paths: list[str], args: argparse.Namespace) -> FitResult:
-    """Read the spin-up log (and the spin-down log, if given) and fit K."""
-    inertia, inertia_se = common.inertia_from_args(args)
-    if inertia is None:
-        raise OptionError("the spin-up needs the inertia: give --inertia or the flywheel disc")
-    recording = common.read_position_log(paths, cpr=args.cpr, current_unit=args.current_unit)
-    spindown_result = None
-    if args.spindown:
-        if args.b is not None or args.Tf is not None:
-            raise OptionError("give the friction either with --spindown or with --b/--Tf, not both")
-        from motorlab.analyses.spindown import spindown
-
-        coast = common.read_position_log(args.spindown, cpr=args.cpr, current_unit=args.current_unit)
-        spindown_result = spindown(coast, cpr=args.cpr)
-    return spinup(
-        recording, inertia=inertia, inertia_stderr=inertia_se, cpr=args.cpr,
-        viscous_friction=args.b, viscous_friction_stderr=args.b_stderr,
-        coulomb_friction=args.Tf, coulomb_friction_stderr=args.Tf_stderr,
-        spindown_result=spindown_result, start=args.start, end=args.end,
-    )

@@ -9,7 +9,6 @@ the supply's display the current I. At steady state the torque K·I balances the
 
 from __future__ import annotations
 
-import argparse
 import math
 from typing import Any
 
@@ -283,40 +282,7 @@ def _one_operating_point(
     return b, math.sqrt(reading_var + common_var)
 
 
-# ---- command line ---------------------------------------------------------------------------------
-def add_arguments(parser: argparse.ArgumentParser, experiment: str) -> None:
-    """Options of ``motorlab analyze terminal``."""
-    from motorlab.options import quantity
-
-    common.add_cpr_argument(parser)
-    parser.add_argument("--K", type=quantity("V*s/rad", positive=True), required=True,
-                        help="torque constant K [V·s/rad] = [N·m/A]")
-    parser.add_argument("--K-stderr", type=quantity("V*s/rad", nonnegative=True), help="standard error of K")
-    parser.add_argument("--Tf", type=quantity("N*m", nonnegative=True), help="known Coulomb friction Tf [N·m]")
-    parser.add_argument("--Tf-stderr", type=quantity("N*m", nonnegative=True), help="standard error of Tf")
-    parser.add_argument("--current-stderr", type=quantity("A", nonnegative=True),
-                        help="standard error of one current reading (used when the rows show no scatter, "
-                        "e.g. a single row)")
-    parser.add_argument("--frequency-stderr", type=quantity("Hz", nonnegative=True),
-                        help="standard error of one frequency reading (the counter's resolution), "
-                        "used with --current-stderr")
-
-
-def from_cli(experiment: str, paths: list[str], args: argparse.Namespace) -> FitResult:
-    """Read the rows (CSV files, concatenated) and fit b (and Tf)."""
-    from motorlab.io.csv_table import read_csv
-
-    if not paths:
-        raise OptionError("give the CSV file(s) of steady currents and frequencies")
-    recordings = [read_csv(p, cpr=args.cpr) for p in paths]
-    recording = recordings[0] if len(recordings) == 1 else _concatenate(recordings)
-    return terminal(
-        recording, torque_constant=args.K, cpr=args.cpr, torque_constant_stderr=args.K_stderr,
-        coulomb_friction=args.Tf, coulomb_friction_stderr=args.Tf_stderr, current_stderr=args.current_stderr,
-        frequency_stderr=args.frequency_stderr,
-    )
-
-
+# ---- reading the files -------------------------------------------------------------------------
 def _concatenate(recordings: list[Recording]) -> Recording:
     """Rows of several tables with the same columns, one after the other."""
     names = set(recordings[0].signals)

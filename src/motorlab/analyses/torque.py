@@ -12,7 +12,6 @@ and the intercept the loss torque τ0, both at the OUTPUT shaft.
 
 from __future__ import annotations
 
-import argparse
 import math
 from collections.abc import Sequence
 from dataclasses import replace
@@ -26,7 +25,6 @@ from motorlab.analyses._common import (
     concatenate,
     fit_straight_line,
     metadata_quantity,
-    read_tables,
     reader_warnings,
     sources_of,
 )
@@ -328,37 +326,3 @@ def approach_direction(current: np.ndarray) -> np.ndarray:
             out[k] = out[k - 1]
         previous = float(value)
     return out
-
-
-def add_arguments(parser: argparse.ArgumentParser, experiment: str) -> None:
-    """Options of ``motorlab analyze torque``."""
-    from motorlab.options import quantity
-
-    parser.add_argument(
-        "--arm", type=quantity("m", positive=True), default=None, metavar="LENGTH",
-        help="lever arm from the shaft axis to the scale contact [m], e.g. 0.1 or '4 in' "
-        "(default: '# arm_m:' in the file)",
-    )
-    parser.add_argument(
-        "--arm-stderr", type=quantity("m", nonnegative=True), default=0.0, metavar="LENGTH",
-        help="standard uncertainty of the arm length [m], added to K's standard error",
-    )
-    parser.add_argument(
-        "--ratio", type=quantity("", positive=True), default=1.0, metavar="N",
-        help="gear ratio between the motor shaft and the lever's shaft (default 1)",
-    )
-    parser.add_argument(
-        "--K", dest="motor_constant", type=quantity("V*s/rad", positive=True), default=None, metavar="K_MOTOR",
-        help="the motor's back-EMF constant at the MOTOR shaft [V·s/rad] (e.g. from spindown, ÷ N if measured "
-        "at the output): reports the gearbox efficiency and loss torque",
-    )
-    parser.add_argument(
-        "--K-stderr", dest="motor_constant_stderr", type=quantity("V*s/rad", nonnegative=True), default=0.0,
-        metavar="S", help="standard error of --K [V·s/rad], propagated into the efficiency's",
-    )
-
-
-def from_cli(experiment: str, paths: list[str], args: argparse.Namespace) -> FitResult:
-    """Run ``motorlab analyze torque FILE...``."""
-    return torque(read_tables(paths), arm=args.arm, arm_stderr=args.arm_stderr, ratio=args.ratio,
-                  motor_constant=args.motor_constant, motor_constant_stderr=args.motor_constant_stderr)

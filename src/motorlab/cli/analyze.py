@@ -1,21 +1,22 @@
 """``motorlab analyze EXPERIMENT FILE... [options] [--json] [--plot FILE.png] [--each]``.
 
-One sub-parser per entry of :data:`motorlab.analyses.EXPERIMENTS`. Each analysis module adds its own
-options (``add_arguments(parser, experiment)``) and runs from them (``from_cli(experiment, paths,
-args) -> FitResult``); this module owns the shared options and the output: a table for people, one
-JSON object (or a list with ``--each``) for programs, and a figure with ``--plot``.
+One sub-parser per experiment description (:mod:`motorlab.experiments`), its options generated from
+the description's :class:`~motorlab.experiments.Option` list (:func:`add_arguments`); the run hands
+the parsed values to the description (:func:`from_cli`). This module owns the shared options and
+the output: a table for people, one JSON object (or a list with ``--each``) for programs, and a
+figure with ``--plot``.
 """
 
 from __future__ import annotations
 
 import argparse
-import importlib
 import math
 import os
 from collections.abc import Sequence
 from typing import Any
 
-from motorlab.cli.common import Parser, check_figure_path, print_json
+from motorlab.cli.common import Parser, check_figure_path, positive_int, print_json, quantity
+from motorlab.experiments import Option, all_experiments, get
 from motorlab.results import Estimate, FitResult
 from motorlab.units import format_unit
 
@@ -25,8 +26,6 @@ MIN_CORRELATION = 0.5
 
 def register(subparsers: Any) -> None:
     """Add ``analyze`` and one sub-command per experiment."""
-    from motorlab.analyses import EXPERIMENTS
-
     parser = subparsers.add_parser(
         "analyze",
         help="fit one experiment's measurements (spindown, lcr, torque, pulse ...)",
@@ -34,10 +33,8 @@ def register(subparsers: Any) -> None:
     )
     sub = parser.add_subparsers(dest="experiment", metavar="EXPERIMENT", parser_class=Parser)
     sub.required = True
-    for name, module_name in EXPERIMENTS.items():
-        module = importlib.import_module(module_name)
-        summary = getattr(module, "SUMMARIES", {}).get(name) or _summary(module)
-        sp = sub.add_parser(name, help=summary, description=summary)
+    for name, exp in all_experiments().items():
+        sp = sub.add_parser(name, help=exp.summary, description=exp.summary)
         sp.add_argument("files", nargs="+", metavar="FILE", help="measurement file(s)")
         sp.add_argument("--json", action="store_true", help="print one JSON object (SI units) instead of a table")
         sp.add_argument("--plot", metavar="FILE.png", default=None, help="save data against the fitted model")
@@ -45,28 +42,61 @@ def register(subparsers: Any) -> None:
             "--each", action="store_true",
             help="analyse every file on its own (a list of JSON objects, or one table per file)",
         )
-        module.add_arguments(sp, name)
-        sp.set_defaults(func=run, analysis_module=module_name)
+        add_arguments(sp, name)
+        sp.set_defaults(func=run)
 
 
-def _summary(module: Any) -> str:
-    doc = (module.__doc__ or "").strip()
-    return doc.splitlines()[0].rstrip(".") if doc else ""
+def add_arguments(parser: argparse.ArgumentParser, experiment: str) -> None:
+    """The options of ``experiment``'s description as argparse options of ``parser``."""
+    groups: dict[str, Any] = {}
+    for opt in get(experiment).options:
+        target: Any = parser
+        if opt.group:
+            target = groups.get(opt.group) or groups.setdefault(opt.group, parser.add_argument_group(opt.group))
+        target.add_argument(*flags(opt), **_argparse_keywords(opt))
+
+
+def flags(opt: Option) -> list[str]:
+    """The CLI spellings of ``opt`` (``--Km``, ``--K``)."""
+    return [f"--{name}" for name in (opt.name, *opt.aliases)]
+
+
+def _argparse_keywords(opt: Option) -> dict[str, Any]:
+    out: dict[str, Any] = {"dest": opt.key, "help": opt.help, "default": opt.default}
+    if opt.kind == "flag":
+        out["action"] = "store_false" if opt.default is True else "store_true"
+        out["default"] = bool(opt.default)
+        return out
+    if opt.metavar:
+        out["metavar"] = opt.metavar
+    if opt.required:
+        out["required"] = True
+    if opt.kind == "choice":
+        out["choices"] = opt.choices
+    elif opt.kind == "files":
+        out["action"] = "append"
+    elif opt.kind == "int":
+        out["type"] = positive_int
+    else:
+        assert opt.unit is not None
+        out["type"] = quantity(opt.unit, positive=opt.positive, nonnegative=opt.nonnegative)
+    return out
+
+
+def from_cli(experiment: str, paths: list[str], args: argparse.Namespace) -> FitResult:
+    """Run ``experiment`` on ``paths`` with the options parsed into ``args``."""
+    exp = get(experiment)
+    values = {opt.key: getattr(args, opt.key, opt.default) for opt in exp.options}
+    return exp.analyze(paths, values)
 
 
 def run(args: argparse.Namespace) -> int:
     """Run the analysis the parsed ``args`` ask for and print the result."""
-    module = importlib.import_module(args.analysis_module)
     plot_path = args.plot
     if plot_path is not None:
         check_figure_path(plot_path)
     groups = [[path] for path in args.files] if args.each else [list(args.files)]
-    results = [module.from_cli(args.experiment, paths, args) for paths in groups]
-    from motorlab.efficiency import SHAFTS
-
-    for result in results:  # which shaft, load and torque units the figures refer to (docs/gearbox.md)
-        if args.experiment in SHAFTS:
-            result.details.setdefault("shaft", SHAFTS[args.experiment])
+    results = [from_cli(args.experiment, paths, args) for paths in groups]
     if plot_path is not None:
         _save_plots(results, plot_path, each=args.each)
     if args.json:

@@ -1,0 +1,343 @@
+"""One declarative description per experiment: what it reads, its options, what it reports.
+
+Every module of this package (``motorlab/experiments/<name>.py``) defines ``EXPERIMENT``, an
+:class:`Experiment`; adding an experiment is adding one module. From these descriptions come:
+
+* the ``motorlab analyze`` sub-commands and their options (:mod:`motorlab.cli.analyze`),
+* the notebook functions ``ml.<name>(files, **options)`` (:mod:`motorlab.notebook`),
+* the session file's experiment tables and their settings (:mod:`motorlab.session`),
+* ``characterize``'s run order, adapters and what each experiment contributes to the final table
+  (:mod:`motorlab.characterize`), and the experiments a simulated session runs on the virtual rig,
+* the option tables of docs/analyze.md (checked by ``tests/test_experiments.py``).
+
+:meth:`Experiment.schema` is the JSON-able form (for the browser app's forms, issue 19).
+Values are SI; a quantity option takes a number (SI) or a string with a unit (parsed by pint).
+"""
+
+from __future__ import annotations
+
+import importlib
+import math
+import pkgutil
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+from motorlab.errors import OptionError
+from motorlab.units import format_unit, parse_quantity
+
+if TYPE_CHECKING:
+    from motorlab.results import Estimate, FitResult
+
+#: Kinds of option value.
+KINDS = ("quantity", "choice", "flag", "files", "int")
+
+
+@dataclass(frozen=True)
+class Option:
+    """One option of an experiment (a ``--name`` of ``motorlab analyze``, a keyword of ``ml.<name>``).
+
+    Parameters
+    ----------
+    name
+        The CLI's long option without dashes (``inertia-stderr``); the notebook keyword is the same
+        with ``_`` for ``-``.
+    unit
+        SI unit of a quantity (``"kg*m^2"``, ``""`` for a pure number) [-].
+    default
+        Value when the option is not given (SI), or None.
+    help
+        One line for ``--help``, the docs' tables and the browser's forms.
+    kind
+        ``"quantity"`` (a number with a unit), ``"choice"``, ``"flag"`` (true/false), ``"files"``
+        (one or more paths) or ``"int"``.
+    dest
+        Name of the value handed to the experiment's ``run`` (default: ``name`` with ``_``). A flag
+        whose default is True is switched off by ``--name`` (``--no-current`` sets ``use_current``
+        False).
+    aliases
+        Other CLI spellings (``("K",)`` for ``Km``).
+    """
+
+    name: str
+    unit: str | None = None
+    default: Any = None
+    help: str = ""
+    kind: str = "quantity"
+    choices: tuple[str, ...] | None = None
+    positive: bool = False
+    nonnegative: bool = False
+    required: bool = False
+    dest: str | None = None
+    aliases: tuple[str, ...] = ()
+    metavar: str | None = None
+    group: str | None = None
+
+    def __post_init__(self) -> None:
+        if self.kind not in KINDS:
+            raise ValueError(f"option {self.name}: unknown kind {self.kind!r}")
+        if self.kind == "quantity" and self.unit is None:
+            raise ValueError(f"option {self.name}: a quantity needs a unit ('' for a pure number)")
+
+    @property
+    def key(self) -> str:
+        """The value's name in ``run``'s mapping."""
+        return self.dest or self.name.replace("-", "_")
+
+    @property
+    def keywords(self) -> tuple[str, ...]:
+        """Every keyword the notebook accepts for this option."""
+        names = [n.replace("-", "_") for n in (self.name, *self.aliases)]
+        return tuple(dict.fromkeys([*names, self.key]))
+
+    def convert(self, value: Any, *, label: str | None = None) -> Any:
+        """``value`` (SI number, string with a unit, name of a choice ...) as this option's SI value.
+
+        Raises
+        ------
+        OptionError
+            Naming ``label`` (default: the option's name) and what is wrong.
+        """
+        label = label or self.name
+        if value is None:
+            return None
+        if self.kind == "flag":
+            if not isinstance(value, bool):
+                raise OptionError(f"{label}: expected True or False, got {value!r}")
+            return value
+        if self.kind == "choice":
+            assert self.choices is not None
+            if value not in self.choices:
+                raise OptionError(f"{label}: {value!r} is not one of {', '.join(self.choices)}")
+            return value
+        if self.kind == "files":
+            items = [value] if isinstance(value, str) or hasattr(value, "__fspath__") else list(value)
+            return [str(item) for item in items]
+        if self.kind == "int":
+            try:
+                number = int(value)
+            except (TypeError, ValueError):
+                raise OptionError(f"{label}: {value!r} is not a whole number") from None
+            if number != value and not isinstance(value, str):
+                raise OptionError(f"{label}: {value!r} is not a whole number")
+            return self._check_sign(number, value, label)
+        assert self.unit is not None
+        return self._check_sign(parse_quantity(value, self.unit, name=label), value, label)
+
+    def _check_sign(self, number: float, given: Any, label: str) -> Any:
+        if self.positive and not number > 0:
+            raise OptionError(f"{label}: {given!r} must be positive")
+        if self.nonnegative and not number >= 0:
+            raise OptionError(f"{label}: {given!r} must not be negative")
+        return number
+
+    def schema(self) -> dict[str, Any]:
+        """JSON-able description."""
+        default = self.default
+        if isinstance(default, float) and not math.isfinite(default):
+            default = None
+        return {
+            "name": self.name, "keyword": self.key, "aliases": list(self.aliases), "kind": self.kind,
+            "unit": self.unit, "unit_display": format_unit(self.unit) if self.unit else self.unit,
+            "default": default, "choices": list(self.choices) if self.choices else None,
+            "positive": self.positive, "nonnegative": self.nonnegative, "required": self.required,
+            "help": self.help, "group": self.group,
+        }
+
+
+@dataclass(frozen=True)
+class Setting:
+    """A key of the experiment's table in a session file (besides ``files``).
+
+    ``kind`` is an SI unit (a quantity read with pint) or ``"int"``, ``"float"``, ``"str"``.
+    """
+
+    name: str
+    kind: str
+    help: str
+    required: bool = False
+
+
+@dataclass(frozen=True)
+class RigRun:
+    """How the virtual dynamometer produces the experiment's file for a simulated session.
+
+    ``experiment`` is the rig's name for it (:mod:`motorlab.rig`), ``file`` the file name written,
+    ``settings`` the rig's settings, ``order`` its place in a simulated session (the rig's noise is
+    drawn in this order, so a session's files depend on it).
+    """
+
+    experiment: str
+    file: str
+    settings: Mapping[str, Any] = field(default_factory=dict)
+    order: int = 100
+
+
+@dataclass(frozen=True)
+class Experiment:
+    """The description of one experiment.
+
+    Parameters
+    ----------
+    name
+        The CLI name (``motorlab analyze NAME``, the session table ``[units.A.NAME]``).
+    summary
+        One line (the sub-command's help).
+    analysis
+        The library function, ``"module:function"``.
+    inputs
+        What the files are (format and columns with units).
+    run
+        ``run(paths, values) -> FitResult``: reads the files and calls the analysis with the
+        options' values (by :attr:`Option.key`, SI, defaults filled in).
+    options
+        The options, in the order of ``--help``.
+    reports
+        Symbols of the parameters the result holds (when the data determine them).
+    shaft
+        Which shaft, load and torque units the figures refer to (docs/gearbox.md).
+    order
+        Position in ``characterize``'s run order (sources of K first).
+    settings
+        Keys of the session file's table.
+    contributes
+        Result parameter -> motor parameter of the final table.
+    loaded
+        Run with the flywheel attached (its J, b, Tf include the flywheel and gearbox).
+    characterize
+        ``adapter(ctx) -> FitResult`` for a session (:mod:`motorlab.characterize`).
+    rig
+        How the virtual rig produces the experiment's file, or None.
+    """
+
+    name: str
+    summary: str
+    analysis: str
+    inputs: str
+    run: Callable[[list[str], dict[str, Any]], FitResult]
+    options: tuple[Option, ...] = ()
+    reports: tuple[str, ...] = ()
+    shaft: str = ""
+    order: int = 100
+    settings: tuple[Setting, ...] = ()
+    contributes: Mapping[str, str] = field(default_factory=dict)
+    loaded: bool = False
+    characterize: Callable[[Any], FitResult] | None = None
+    rig: RigRun | None = None
+
+    def option(self, keyword: str) -> Option:
+        """The option a notebook keyword or CLI name stands for."""
+        for opt in self.options:
+            if keyword in opt.keywords or keyword == opt.name:
+                return opt
+        known = ", ".join(opt.key for opt in self.options)
+        raise OptionError(f"{self.name}: unknown option {keyword!r}; known: {known}")
+
+    def values(self, given: Mapping[str, Any]) -> dict[str, Any]:
+        """Every option's value (SI) from keywords (converted and checked) and the defaults."""
+        values = {opt.key: opt.default for opt in self.options}
+        seen: dict[str, str] = {}
+        for keyword, value in given.items():
+            opt = self.option(keyword)
+            if opt.key in seen:
+                raise OptionError(f"{self.name}: {keyword} and {seen[opt.key]} are the same option")
+            seen[opt.key] = keyword
+            values[opt.key] = opt.convert(value, label=keyword)
+            if opt.kind == "flag" and opt.default is True and keyword != opt.key:
+                values[opt.key] = not values[opt.key]  # no_current=True is use_current=False
+        missing = [opt.name.replace("-", "_") for opt in self.options if opt.required and values[opt.key] is None]
+        if missing:
+            raise OptionError(f"{self.name}: give {', '.join(missing)}")
+        return values
+
+    def analyze(self, paths: Sequence[str], values: Mapping[str, Any]) -> FitResult:
+        """Run the analysis on ``paths`` with option ``values`` (as :meth:`values` returns them)."""
+        result = self.run([str(p) for p in paths], dict(values))
+        if self.shaft:
+            result.details.setdefault("shaft", self.shaft)
+        return result
+
+    def schema(self) -> dict[str, Any]:
+        """JSON-able description (for forms and documentation)."""
+        return {
+            "name": self.name, "summary": self.summary, "analysis": self.analysis, "inputs": self.inputs,
+            "options": [opt.schema() for opt in self.options], "reports": list(self.reports), "shaft": self.shaft,
+            "session": {
+                "order": self.order, "loaded": self.loaded, "contributes": dict(self.contributes),
+                "settings": [{"name": s.name, "kind": s.kind, "help": s.help, "required": s.required}
+                             for s in self.settings],
+            },
+            "rig": None if self.rig is None else {"experiment": self.rig.experiment, "file": self.rig.file,
+                                                  "settings": dict(self.rig.settings), "order": self.rig.order},
+        }
+
+
+_REGISTRY: dict[str, Experiment] = {}
+
+
+def all_experiments() -> dict[str, Experiment]:
+    """Every experiment, by name, in ``characterize``'s run order (each module of this package)."""
+    if not _REGISTRY:
+        found: list[Experiment] = []
+        for info in pkgutil.iter_modules(__path__):
+            if info.name.startswith("_"):
+                continue
+            module = importlib.import_module(f"{__name__}.{info.name}")
+            found.extend(getattr(module, "EXPERIMENTS", (module.EXPERIMENT,)))
+        for exp in sorted(found, key=lambda e: (e.order, e.name)):
+            _REGISTRY[exp.name] = exp
+    return dict(_REGISTRY)
+
+
+def get(name: str) -> Experiment:
+    """The experiment called ``name``.
+
+    Raises
+    ------
+    OptionError
+        An unknown name (the known ones listed).
+    """
+    experiments = all_experiments()
+    if name not in experiments:
+        raise OptionError(f"unknown experiment {name!r}; known: {', '.join(experiments)}")
+    return experiments[name]
+
+
+def schema() -> dict[str, Any]:
+    """Every experiment's :meth:`Experiment.schema`, by name (JSON-able)."""
+    return {name: exp.schema() for name, exp in all_experiments().items()}
+
+
+def stderr_or_none(est: Estimate) -> float | None:
+    """A usable standard error (finite, ≥ 0) or None."""
+    return est.stderr if math.isfinite(est.stderr) and est.stderr >= 0 else None
+
+
+#: Markers around the generated option tables in docs/analyze.md.
+DOCS_BEGIN = "<!-- experiment options: generated by scripts/experiment_docs.py, do not edit -->"
+DOCS_END = "<!-- end of the generated experiment options -->"
+
+
+def options_markdown() -> str:
+    """The option tables of every experiment, as docs/analyze.md shows them (Markdown)."""
+    parts = []
+    for name, exp in all_experiments().items():
+        parts.append(f"### `{name}`\n\n{exp.summary}. Input: {exp.inputs}. Reports: "
+                     + ", ".join(f"`{p}`" for p in exp.reports) + f" ({exp.shaft}).\n")
+        if not exp.options:
+            parts.append("No options.\n")
+            continue
+        rows = ["| option | unit | default | description |", "|---|---|---|---|"]
+        for opt in exp.options:
+            flag = ", ".join(f"`--{n}`" for n in (opt.name, *opt.aliases))
+            if opt.required:
+                flag += " (required)"
+            unit = format_unit(opt.unit) if opt.unit else ("one of " + ", ".join(opt.choices) if opt.choices else "")
+            default = "" if opt.default is None else f"{opt.default:g}" if isinstance(opt.default, float) else (
+                str(opt.default))
+            if opt.kind == "flag":
+                default = ""
+            text = opt.help.replace("|", "\\|")
+            rows.append(f"| {flag} | {unit} | {default} | {text} |")
+        parts.append("\n".join(rows) + "\n")
+    return "\n".join(parts)

@@ -1,0 +1,90 @@
+"""SysId-style feedforward gains kS, kV, kA (+ gravity) by simulation (docs/feedforward.md)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from motorlab.experiments import Experiment, Option, RigRun, stderr_or_none
+
+MECHANISMS = ("simple", "elevator", "arm")  # as motorlab.feedforward.MECHANISMS (tests/test_experiments.py)
+#: frc-characterization units (motorlab.io.frc_json.UNITS), as its --units choices.
+UNIT_CHOICES = ("Meters", "Feet", "Inches", "Radians", "Rotations", "Degrees")
+
+
+def run(paths: list[str], v: dict[str, Any]) -> Any:
+    """Run ``motorlab analyze feedforward FILE...`` (Road Runner's lateral/angular ramps too)."""
+    from motorlab.feedforward import feedforward, motor_estimates, read_tests
+
+    cpr = v["cpr"]
+    runs = read_tests(paths, cpr=cpr, side=v["side"], units=v["units"])
+    json_only = any(run.metadata.get("format") in ("sysid-json", "frc-char-json") for run in runs)
+    if any(r.metadata.get("ramp") in ("lateral", "angular") for r in runs):  # Road Runner's other ramps
+        from motorlab.analyses.roadrunner import from_runs
+
+        result = from_runs(runs, cpr=cpr, mechanism=v["mechanism"])
+    else:
+        result = feedforward(runs, mechanism=v["mechanism"], cpr=None if json_only else cpr)
+    if json_only and cpr is not None:
+        result.details["cpr"] = {"given": cpr, "note": "counts per logged rotation: the position quantum is "
+                                 "one rotation (unitsPerRotation) / cpr"}
+    if v["resistance"] is not None:
+        result.parameters.update(
+            motor_estimates(result, resistance=v["resistance"], torque_constant=v["torque_constant"])
+        )
+    return result
+
+
+def characterize(ctx: Any) -> Any:
+    """The session's SysId log; R and K from the unit turn the gains into motor parameters."""
+    from motorlab.feedforward import feedforward, motor_estimates, read_tests
+
+    cpr = ctx.cpr
+    # A SysId JSON file holds angles already (no counts; its rotations need not be the motor's):
+    # the session's cpr is not applied to it. Both sides of a drivetrain are fitted.
+    json_only = all(p.lower().endswith(".json") for p in ctx.files)
+    runs = read_tests(list(ctx.files), cpr=None if json_only else cpr)
+    result = feedforward(runs, cpr=None if json_only else cpr)
+    r, k = ctx.estimate("R"), ctx.estimate("K")
+    if r is not None:
+        result.parameters.update(
+            motor_estimates(
+                result, resistance=r.value, resistance_stderr=stderr_or_none(r) or 0.0,
+                torque_constant=None if k is None else k.value,
+                torque_constant_stderr=0.0 if k is None else stderr_or_none(k) or 0.0,
+            )
+        )
+    return result
+
+
+EXPERIMENT = Experiment(
+    name="feedforward",
+    summary="SysId-style feedforward gains by simulation: ``V = kS·sgn(ω) + kV·ω + kA·α`` (+ gravity)",
+    analysis="motorlab.feedforward:feedforward",
+    inputs="WPILib SysId JSON or .wpilog, frc-characterization JSON, Road Runner ramps, FTC logs, CSV",
+    run=run,
+    options=(
+        Option("cpr", "count", positive=True,
+               help="encoder counts per revolution at the shaft (537.7 is fine); for a SysId or "
+                    "frc-characterization file, counts per rotation as the file logs rotations"),
+        Option("mechanism", kind="choice", choices=MECHANISMS, default="simple",
+               help="gravity term: none (simple), kG (elevator), kG·cos(θ+φ) (arm)"),
+        Option("R", "ohm", positive=True, dest="resistance",
+               help="winding resistance, to convert the gains to K, J, b, Tf [Ω]"),
+        Option("K", "V*s/rad", positive=True, dest="torque_constant",
+               help="torque constant, to separate K from b in kV [V·s/rad]"),
+        Option("side", kind="choice", choices=("both", "left", "right"), default="both",
+               help="drivetrain logs: fit both sides' tests (default, as SysId) or one side"),
+        Option("units", kind="choice", choices=UNIT_CHOICES,
+               help="unit of a frc-characterization file without a 'units' key (default: that tool's "
+                    "template units, Feet; Degrees for an arm)"),
+    ),
+    reports=("kS", "kV", "kA", "kG"),
+    shaft="output + the SysId mechanism, per unit of K·i",
+    order=80,
+    # A SysId log is usually taken on a mechanism: its J, b, Tf are reported, not the motor's.
+    contributes={},
+    characterize=characterize,
+    # Long enough for the flywheel's mechanical time constant (≈ 37 s through a NeveRest 40's lossy
+    # gearbox): SysId's dynamic test must approach steady state or kV and kA are confounded.
+    rig=RigRun("sysid", "sysid.json", {"quasistatic_duration": 60.0, "dynamic_duration": 40.0}, order=110),
+)

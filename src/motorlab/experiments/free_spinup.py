@@ -1,0 +1,78 @@
+"""Free spin-up at constant current timed by a scope (seed 1): the bare gearmotor's J."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from motorlab.errors import OptionError
+from motorlab.experiments import Experiment, Option, RigRun, Setting, stderr_or_none
+from motorlab.experiments._shared import CPR
+
+
+def run(paths: list[str], v: dict[str, Any]) -> Any:
+    """Read the edge times (one file) and fit J."""
+    from motorlab.analyses.free_spinup import free_spinup, read_edges
+
+    if len(paths) != 1:
+        raise OptionError(f"free-spinup analyses one file of edge times, got {len(paths)}")
+    return free_spinup(
+        read_edges(paths[0]), torque_constant=v["K"], current=v["current"], cpr=v["cpr"],
+        edges_per_revolution=v["edges_per_rev"], torque_constant_stderr=v["K_stderr"],
+        current_stderr=v["current_stderr"], viscous_friction=v["b"], viscous_friction_stderr=v["b_stderr"],
+        coulomb_friction=v["Tf"], coulomb_friction_stderr=v["Tf_stderr"],
+    )
+
+
+def characterize(ctx: Any) -> Any:
+    """The session's free spin-up with the unit's K, b and Tf known so far."""
+    from motorlab.analyses.free_spinup import free_spinup, read_edges
+
+    if len(ctx.files) != 1:
+        raise OptionError(f"free-spinup analyses one file of edge times, got {len(ctx.files)}")
+    k = ctx.require("K", "the torque is K·I")
+    current = ctx.setting("current")
+    if current is None:  # the session validation requires it; kept for library callers
+        raise OptionError("free-spinup needs its current setting")
+    b, tf = ctx.estimate("b"), ctx.estimate("Tf")
+    return free_spinup(
+        read_edges(ctx.files[0]), torque_constant=k.value, torque_constant_stderr=stderr_or_none(k),
+        current=current, current_stderr=ctx.setting("current_stderr"), cpr=ctx.cpr,
+        edges_per_revolution=ctx.setting("edges_per_revolution"),
+        viscous_friction=None if b is None else max(b.value, 0.0),
+        viscous_friction_stderr=None if b is None else stderr_or_none(b),
+        coulomb_friction=None if tf is None else max(tf.value, 0.0),
+        coulomb_friction_stderr=None if tf is None else stderr_or_none(tf),
+    )
+
+
+EXPERIMENT = Experiment(
+    name="free-spinup",
+    summary="Free spin-up of the bare motor at constant current: the armature inertia J from encoder edge times",
+    analysis="motorlab.analyses.free_spinup:free_spinup",
+    inputs="scope cursor times (time_ms or time_s, one rising edge per row) or a Rigol waveform export",
+    run=run,
+    options=(
+        CPR,
+        Option("edges-per-rev", "", positive=True,
+               help="rising edges per revolution (default cpr/4: one channel, every fourth count)"),
+        Option("K", "V*s/rad", positive=True, required=True, help="torque constant K [V·s/rad] = [N·m/A]"),
+        Option("K-stderr", "V*s/rad", nonnegative=True, help="standard error of K"),
+        Option("current", "A", positive=True, required=True, help='the constant current, e.g. "0.5 A"'),
+        Option("current-stderr", "A", nonnegative=True, help="standard error of the current"),
+        Option("b", "N*m*s/rad", nonnegative=True, help="viscous friction b [N·m·s/rad]"),
+        Option("b-stderr", "N*m*s/rad", nonnegative=True, help="standard error of b"),
+        Option("Tf", "N*m", nonnegative=True, help="Coulomb friction Tf [N·m]"),
+        Option("Tf-stderr", "N*m", nonnegative=True, help="standard error of Tf"),
+    ),
+    reports=("J", "alpha"),
+    shaft="output, bare gearmotor, per unit of K·i",
+    order=110,
+    settings=(
+        Setting("current", "A", "constant current driving the free motor (required)", required=True),
+        Setting("current_stderr", "A", "standard error of that current"),
+        Setting("edges_per_revolution", "float", "rising edges per revolution (default cpr/4: one channel)"),
+    ),
+    contributes={"J": "J"},
+    characterize=characterize,
+    rig=RigRun("free-spinup", "free_spinup.csv", {"current": 0.5}, order=50),
+)

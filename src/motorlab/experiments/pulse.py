@@ -1,0 +1,105 @@
+"""Square-wave pulse responses (seed 2, "Motor Mechanical Properties"): J, b and Tf."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from motorlab.errors import LogFormatError, OptionError
+from motorlab.experiments import Experiment, Option, RigRun, Setting, stderr_or_none
+
+DEFAULT_SKIP = 0.002  # as motorlab.analyses.pulse.DEFAULT_SKIP (checked by tests/test_experiments.py)
+FRICTION_MODELS = ("viscous", "coulomb", "both")  # as motorlab.analyses.pulse.FRICTION_MODELS
+
+
+def run(paths: list[str], v: dict[str, Any]) -> Any:
+    """Run ``motorlab analyze pulse FILE...``: Ka from the option or the file's ``# Ka_A_per_V:`` line."""
+    from motorlab.analyses._common import LIMITS, check_range, metadata_quantity, read_tables
+    from motorlab.analyses.pulse import pulse
+
+    recs = read_tables(paths)
+    ka = v["amplifier_gain"]
+    if ka is None:
+        ka = metadata_quantity(recs[0], ["Ka_A_per_V", "Ka"], "A/V")
+        if ka is None:
+            raise OptionError("give the amplifier gain --Ka [A/V] (measure it with 'motorlab analyze amplifier')")
+        try:
+            check_range(ka, "the amplifier gain", *LIMITS["Ka"][:2], "A/V", why="no servo amplifier is outside this")
+        except OptionError as exc:
+            raise LogFormatError(f"the '# Ka_A_per_V:' line: {exc.message}", path=recs[0].source or None) from None
+    return pulse(
+        recs, amplifier_gain=ka, torque_constant=v["torque_constant"], amplifier_offset=v["amplifier_offset"],
+        skip=v["skip"], tach_gain=v["tach_gain"], friction=v["friction"],
+        amplifier_gain_stderr=v["amplifier_gain_stderr"], amplifier_offset_stderr=v["amplifier_offset_stderr"],
+        torque_constant_stderr=v["torque_constant_stderr"],
+    )
+
+
+def characterize(ctx: Any) -> Any:
+    """The session's pulse responses with the unit's K and the amplifier's and tachometer's fits."""
+    from motorlab.analyses._common import read_tables
+    from motorlab.analyses.pulse import pulse
+
+    k = ctx.require("K", "the torque is Ka·K·V")
+    gain, gain_se, offset, offset_se, rho = ctx.setting("amplifier_gain"), 0.0, 0.0, 0.0, 0.0
+    if gain is None:
+        fit = ctx.fits.get("amplifier")
+        if fit is None or "Ka" not in fit:
+            raise OptionError("needs the amplifier gain: run the amplifier experiment or set amplifier_gain")
+        gain, gain_se = fit["Ka"].value, stderr_or_none(fit["Ka"]) or 0.0
+        # The amplifier's zero offset I0 (its fit's intercept) drives the motor too: Tf is biased without it.
+        if "I0" in fit:
+            offset, offset_se = fit["I0"].value, stderr_or_none(fit["I0"]) or 0.0
+            names = fit.correlation_names
+            if fit.correlation is not None and "Ka" in names and "I0" in names:
+                rho = float(fit.correlation[names.index("Ka"), names.index("I0")])
+                rho = rho if math.isfinite(rho) else 0.0
+    tach = ctx.setting("tach_gain")
+    if tach is None and "tachometer" in ctx.fits and "Kt_tach" in ctx.fits["tachometer"]:
+        tach = ctx.fits["tachometer"]["Kt_tach"].value
+    return pulse(
+        read_tables(ctx.files), amplifier_gain=gain, amplifier_gain_stderr=gain_se, amplifier_offset=offset,
+        amplifier_offset_stderr=offset_se, gain_offset_correlation=rho, torque_constant=k.value,
+        torque_constant_stderr=stderr_or_none(k) or 0.0, tach_gain=tach,
+    )
+
+
+EXPERIMENT = Experiment(
+    name="pulse",
+    summary='Inertia J and friction from a square-wave-driven speed trace (seed 2, "Motor Mechanical Properties")',
+    analysis="motorlab.analyses.pulse:pulse",
+    inputs="CSV of time_s, command_V and speed (speed_rad_per_s, speed_rpm or tach_voltage_V)",
+    run=run,
+    options=(
+        Option("Ka", "A/V", positive=True, dest="amplifier_gain", metavar="GAIN",
+               help="servo-amplifier gain [A/V] (measure with 'analyze amplifier'; seed 2's nominal is 2; "
+                    "default: '# Ka_A_per_V:' in the file)"),
+        Option("I0", "A", default=0.0, dest="amplifier_offset", metavar="CURRENT",
+               help="amplifier output current at zero command [A] (the intercept I0 of 'analyze amplifier'; "
+                    "default 0)"),
+        Option("Km", "N*m/A", positive=True, required=True, dest="torque_constant", aliases=("K",), metavar="K",
+               help="motor torque constant Km = K [N·m/A] ('analyze torque')"),
+        Option("Ka-stderr", "A/V", nonnegative=True, default=0.0, dest="amplifier_gain_stderr", metavar="GAIN",
+               help="standard error of Ka [A/V], propagated into J, b, Tf (default: exact)"),
+        Option("I0-stderr", "A", nonnegative=True, default=0.0, dest="amplifier_offset_stderr", metavar="CURRENT",
+               help="standard error of I0 [A], propagated into Tf (default: exact)"),
+        Option("Km-stderr", "N*m/A", nonnegative=True, default=0.0, dest="torque_constant_stderr",
+               aliases=("K-stderr",), metavar="K", help="standard error of Km [N·m/A], propagated (default: exact)"),
+        Option("skip", "s", nonnegative=True, default=DEFAULT_SKIP, metavar="TIME",
+               help=f"time left out after each command edge [s] (default {DEFAULT_SKIP * 1000:g} ms)"),
+        Option("tach-gain", "V*s/rad", positive=True, metavar="GAIN",
+               help="tachometer gain [V·s/rad], when the file holds tach_voltage_V instead of a speed"),
+        Option("friction", kind="choice", choices=("auto", *FRICTION_MODELS), default="auto",
+               help="friction model of the final fit (default auto: the best by BIC on the coast-downs)"),
+    ),
+    reports=("J", "Tf", "b", "gamma"),
+    shaft="output, bare gearmotor, per unit of K·i",
+    order=60,
+    settings=(
+        Setting("amplifier_gain", "A/V", "amplifier gain Ka (default: from the amplifier experiment)"),
+        Setting("tach_gain", "V*s/rad", "tachometer gain (default: from the tachometer experiment)"),
+    ),
+    contributes={"J": "J", "b": "b", "Tf": "Tf"},
+    characterize=characterize,
+    rig=RigRun("pulse", "pulse.csv", order=90),
+)

@@ -1,0 +1,53 @@
+"""Spin-down of a flywheel (seed 1, "First Experiment"): K from the generated voltage, b and Tf."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from motorlab.experiments import Experiment, Option, RigRun, Setting
+from motorlab.experiments._shared import CPR, CURRENT_UNIT, INERTIA, inertia_of
+
+
+def run(paths: list[str], v: dict[str, Any]) -> Any:
+    """Read the log(s) (one run, possibly split over several files) and fit the spin-down."""
+    from motorlab.analyses import _common as common
+    from motorlab.analyses.spindown import spindown
+
+    recording = common.read_position_log(paths, cpr=v["cpr"], current_unit=v["current_unit"])
+    inertia, inertia_se = inertia_of(v)
+    return spindown(recording, cpr=v["cpr"], inertia=inertia, inertia_stderr=inertia_se, cutoff=v["cutoff"],
+                    guard=v["guard"])
+
+
+def characterize(ctx: Any) -> Any:
+    """The session's spin-down: the flywheel's inertia from the rig, the cut-off if given."""
+    from motorlab.analyses import _common as common
+    from motorlab.analyses.spindown import spindown
+
+    recording = common.read_position_log(ctx.files, cpr=ctx.cpr)
+    inertia, inertia_se = ctx.loaded_inertia()
+    return spindown(recording, cpr=ctx.cpr, inertia=inertia, inertia_stderr=inertia_se, cutoff=ctx.setting("cutoff"))
+
+
+EXPERIMENT = Experiment(
+    name="spindown",
+    summary="Spin-down of a flywheel: K from the coasting back-EMF, viscous and Coulomb friction from the coast",
+    analysis="motorlab.analyses.spindown:spindown",
+    inputs="FTC OpMode log(s) of one run (time, encoder counts, bus voltage, shunt current) or a CSV "
+           "(time_s, position, voltage_V, current_A)",
+    run=run,
+    options=(
+        CPR, CURRENT_UNIT, *INERTIA,
+        Option("cutoff", "s", help="instant the relay opened [s] (default: from the current)"),
+        Option("guard", "s", nonnegative=True, default=0.1,
+               help="leave out samples this long after the cut-off [s] (default 0.1)"),
+    ),
+    reports=("K", "gamma", "Tf_over_J", "J", "b", "Tf"),
+    shaft="output + flywheel, coasting: gearbox back-driven, physical torques",
+    order=20,
+    settings=(Setting("cutoff", "s", "instant the relay opened (default: found from the current dropping to zero)"),),
+    contributes={"K": "K"},
+    loaded=True,
+    characterize=characterize,
+    rig=RigRun("spindown", "spindown.txt", {"voltage": 12.0, "current_limit": 4.0}, order=20),
+)

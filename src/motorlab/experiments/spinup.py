@@ -1,0 +1,92 @@
+"""Spin-up of a flywheel at constant current (seed 1, "First Experiment"): K = J·α/i."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from motorlab.errors import OptionError
+from motorlab.experiments import Experiment, Option, RigRun, Setting
+from motorlab.experiments._shared import CPR, CURRENT_UNIT, INERTIA, inertia_of
+
+
+def run(paths: list[str], v: dict[str, Any]) -> Any:
+    """Read the spin-up log (and the spin-down log, if given) and fit K."""
+    from motorlab.analyses import _common as common
+    from motorlab.analyses.spinup import spinup
+
+    inertia, inertia_se = inertia_of(v)
+    if inertia is None:
+        raise OptionError("the spin-up needs the inertia: give --inertia or the flywheel disc")
+    recording = common.read_position_log(paths, cpr=v["cpr"], current_unit=v["current_unit"])
+    spindown_result = None
+    if v["spindown"]:
+        if v["b"] is not None or v["Tf"] is not None:
+            raise OptionError("give the friction either with --spindown or with --b/--Tf, not both")
+        from motorlab.analyses.spindown import spindown
+
+        coast = common.read_position_log(v["spindown"], cpr=v["cpr"], current_unit=v["current_unit"])
+        spindown_result = spindown(coast, cpr=v["cpr"])
+    return spinup(
+        recording, inertia=inertia, inertia_stderr=inertia_se, cpr=v["cpr"],
+        viscous_friction=v["b"], viscous_friction_stderr=v["b_stderr"],
+        coulomb_friction=v["Tf"], coulomb_friction_stderr=v["Tf_stderr"],
+        spindown_result=spindown_result, start=v["start"], end=v["end"],
+    )
+
+
+def characterize(ctx: Any) -> Any:
+    """The session's spin-up: the friction of its spin-down, corrected for the gearbox when it can be."""
+    from motorlab.analyses import _common as common
+    from motorlab.analyses.spinup import spinup
+
+    if ctx.session.rig.flywheel is None:  # the session validation refuses this; kept for library callers
+        raise OptionError("the spin-up needs the flywheel's inertia: add [rig.flywheel]")
+    recording = common.read_position_log(ctx.files, cpr=ctx.cpr)
+    inertia, inertia_se = ctx.loaded_inertia()
+    assert inertia is not None  # a flywheel was checked above
+    friction = ctx.motoring_friction()
+    if friction is not None:
+        b, b_se, tf, tf_se, eta = friction
+        fit = spinup(recording, inertia=inertia, inertia_stderr=inertia_se, cpr=ctx.cpr, viscous_friction=b,
+                     viscous_friction_stderr=b_se, coulomb_friction=tf, coulomb_friction_stderr=tf_se,
+                     start=ctx.setting("start"), end=ctx.setting("end"))
+        fit.warnings.append(
+            f"friction from the spin-down corrected for the gearbox (η = {eta:.3g}, back-driving efficiency taken "
+            "equal): the coasting flywheel back-drives the gearbox and sees the motor's friction ÷ η, the motor "
+            "driving it passes only η of it; this K is the output's Kt = η·Ke (docs/gearbox.md)"
+        )
+        return fit
+    return spinup(recording, inertia=inertia, inertia_stderr=inertia_se, cpr=ctx.cpr,
+                  spindown_result=ctx.fits.get("spindown"), start=ctx.setting("start"), end=ctx.setting("end"))
+
+
+EXPERIMENT = Experiment(
+    name="spinup",
+    summary="Spin-up of a known flywheel at constant current: K = J·α/i, corrected for friction",
+    analysis="motorlab.analyses.spinup:spinup",
+    inputs="FTC OpMode log(s) of one run (time, encoder counts, bus voltage, shunt current) or a CSV",
+    run=run,
+    options=(
+        CPR, CURRENT_UNIT, *INERTIA,
+        Option("b", "N*m*s/rad", nonnegative=True, help="viscous friction b [N·m·s/rad]"),
+        Option("b-stderr", "N*m*s/rad", nonnegative=True, help="standard error of b"),
+        Option("Tf", "N*m", nonnegative=True, help="Coulomb friction Tf [N·m]"),
+        Option("Tf-stderr", "N*m", nonnegative=True, help="standard error of Tf"),
+        Option("spindown", kind="files", metavar="FILE",
+               help="spin-down log of the same rig, to take the friction from (repeat for a split run)"),
+        Option("start", "s", help="start of the constant-current phase [s]"),
+        Option("end", "s", help="end of the constant-current phase [s]"),
+    ),
+    reports=("K", "alpha", "i"),
+    shaft="output + flywheel, motor driving: K = Kt through the gearbox",
+    order=90,
+    settings=(
+        Setting("start", "s", "start of the constant-current phase (default: found from the current)"),
+        Setting("end", "s", "end of the constant-current phase (default: found from the current)"),
+        Setting("current", "A", "supply current limit during the spin-up (checked against the supply)"),
+    ),
+    contributes={"K": "K"},
+    loaded=True,
+    characterize=characterize,
+    rig=RigRun("spinup", "spinup.txt", order=60),
+)

@@ -1,0 +1,66 @@
+"""Steady free running at several currents (seed 1): b and Tf from K·I = b·ω + Tf."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from motorlab.errors import OptionError
+from motorlab.experiments import Experiment, Option, RigRun, Setting, stderr_or_none
+from motorlab.experiments._shared import CPR
+
+
+def _read(paths: list[str], cpr: float | None) -> Any:
+    from motorlab.analyses.terminal import _concatenate
+    from motorlab.io.csv_table import read_csv
+
+    recordings = [read_csv(p, cpr=cpr) for p in paths]
+    return recordings[0] if len(recordings) == 1 else _concatenate(recordings)
+
+
+def run(paths: list[str], v: dict[str, Any]) -> Any:
+    """Read the rows (CSV files, concatenated) and fit b (and Tf)."""
+    from motorlab.analyses.terminal import terminal
+
+    if not paths:
+        raise OptionError("give the CSV file(s) of steady currents and frequencies")
+    return terminal(
+        _read(paths, v["cpr"]), torque_constant=v["K"], cpr=v["cpr"], torque_constant_stderr=v["K_stderr"],
+        coulomb_friction=v["Tf"], coulomb_friction_stderr=v["Tf_stderr"], current_stderr=v["current_stderr"],
+        frequency_stderr=v["frequency_stderr"],
+    )
+
+
+def characterize(ctx: Any) -> Any:
+    """The session's terminal rows with the unit's K."""
+    from motorlab.analyses.terminal import terminal
+
+    k = ctx.require("K", "b = (K·I − Tf)/ω")
+    return terminal(_read(ctx.files, ctx.cpr), torque_constant=k.value, torque_constant_stderr=stderr_or_none(k),
+                    cpr=ctx.cpr, current_stderr=ctx.setting("current_stderr"))
+
+
+EXPERIMENT = Experiment(
+    name="terminal",
+    summary="Terminal (steady) speed at constant current: viscous friction b and Coulomb friction Tf",
+    analysis="motorlab.analyses.terminal:terminal",
+    inputs="CSV rows of steady current and speed (current_A with speed_rpm, velocity or frequency_Hz)",
+    run=run,
+    options=(
+        CPR,
+        Option("K", "V*s/rad", positive=True, required=True, help="torque constant K [V·s/rad] = [N·m/A]"),
+        Option("K-stderr", "V*s/rad", nonnegative=True, help="standard error of K"),
+        Option("Tf", "N*m", nonnegative=True, help="known Coulomb friction Tf [N·m]"),
+        Option("Tf-stderr", "N*m", nonnegative=True, help="standard error of Tf"),
+        Option("current-stderr", "A", nonnegative=True,
+               help="standard error of one current reading (used when the rows show no scatter, e.g. a single row)"),
+        Option("frequency-stderr", "Hz", nonnegative=True,
+               help="standard error of one frequency reading (the counter's resolution), used with --current-stderr"),
+    ),
+    reports=("b", "Tf"),
+    shaft="output, bare gearmotor, per unit of K·i",
+    order=100,
+    settings=(Setting("current_stderr", "A", "standard error of one current reading"),),
+    contributes={"b": "b", "Tf": "Tf"},
+    characterize=characterize,
+    rig=RigRun("terminal", "terminal.csv", order=40),
+)
