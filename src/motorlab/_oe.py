@@ -606,6 +606,14 @@ class OEModel:
         """Weighted residuals appended after the signals' (e.g. logged voltage samples against held levels)."""
         return np.zeros(0)
 
+    def local_start(self, j: int) -> tuple[int, int] | None:
+        """(run, first grid step) of the only stretch parameter j affects, or None (it affects everything).
+
+        Its Jacobian column is then simulated from that step on, restarted from the state the
+        current simulation has there (full-model state (i, ω) on a uniform grid only).
+        """
+        return None
+
     def plant(self, p: np.ndarray) -> Plant:  # pragma: no cover - abstract
         raise NotImplementedError
 
@@ -701,16 +709,39 @@ def fit_output_error(
         parts.append(model.extra_residuals(p))
         return np.concatenate(parts), sims
 
-    last: dict[str, np.ndarray] = {}
+    last: dict[str, Any] = {}
 
     def fun(z: np.ndarray) -> np.ndarray:
         # least_squares asks for the Jacobian at the point it has just evaluated: keep that residual
         if "z" in last and np.array_equal(last["z"], z):
             return last["r"]
         p, offsets, speeds = unpack(z)
-        r = residual_parts(p, offsets, speeds)[0]
+        r, sims = residual_parts(p, offsets, speeds)
         last["z"] = z.copy()
         last["r"] = r
+        last["sims"] = sims  # type: ignore[assignment]
+        return r
+
+    row_starts = np.cumsum([0] + [log.time.size * len(signals) for log in logs])
+
+    def local_column(zj: np.ndarray, k: int, k0: int, r0: np.ndarray) -> np.ndarray:
+        """Residuals with log k re-simulated from grid step k0 (the parameter changed acts from there)."""
+        p, offsets, _ = unpack(zj)
+        log = logs[k]
+        sim0 = last["sims"][k]  # type: ignore[index]
+        sw = model.switches(p, log)
+        if sw is not None:
+            keep = sw[0] >= k0
+            sw = (sw[0][keep] - k0, sw[1][keep], sw[2][keep])
+        x0 = np.array([sim0["current"][k0], sim0["speed"][k0]])
+        states, theta = simulate(model.plant(p), model.drive(p, log)[k0:], log.dt, x0=x0,
+                                 theta0=float(sim0["position"][k0] - offsets[k]), switches=sw)
+        r = r0.copy()
+        rs, m = int(row_starts[k]), log.time.size
+        assert log.current is not None
+        r[rs + k0 : rs + m] = (theta + offsets[k] - log.position[k0:]) * factors[k][k0:]
+        r[rs + m + k0 : rs + 2 * m] = (states[:, 0] - log.current[k0:]) / sigma["current"]
+        r[int(row_starts[-1]) :] = model.extra_residuals(p)
         return r
 
     def jac(z: np.ndarray) -> np.ndarray:
@@ -724,6 +755,10 @@ def fit_output_error(
                 h = -h
             zj = z.copy()
             zj[j] += h
+            loc = model.local_start(j) if j < n_model else None
+            if loc is not None and logs[loc[0]].uniform and model.uses_current and not model.lag:
+                cols[:, j] = (local_column(zj, loc[0], loc[1], r0) - r0) / h
+                continue
             p, offsets, speeds = unpack(zj)
             cols[:, j] = (residual_parts(p, offsets, speeds)[0] - r0) / h
         # angle offsets: residual of log k's angle rises 1/σ per unit offset

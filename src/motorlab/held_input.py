@@ -119,6 +119,14 @@ class HeldMotorModel(_oe.OEModel):
         self.steps = [np.searchsorted(h.first, np.arange(1, logs[k].n_grid + 1), side="right") - 1
                       for k, h in enumerate(held)]
 
+    def local_start(self, j: int) -> tuple[int, int] | None:
+        for k, (lev, sw) in enumerate(self.slices):
+            for part in (lev, sw):
+                if part.start <= j < part.stop:
+                    seg = j - part.start + (1 if part is sw else 0)
+                    return k, max(int(self.held[k].first[seg]) - 1, 0)
+        return None
+
     def plant(self, p: np.ndarray) -> _oe.Plant:
         return _oe.motor_plant(*(float(v) for v in p[:6]))
 
@@ -190,40 +198,23 @@ def on_sample_instants(summary: dict[str, float]) -> bool | None:
     return bool(summary["between_samples"] <= max(1.0, 0.1 * n))
 
 
-def cramer_rao(fit: _oe.Fit, logs: list[_oe.Log], n_model: int, *, sigma_position: float,
-               current_factor: float = 1.0) -> np.ndarray:
+def cramer_rao(fit: _oe.Fit, logs: list[_oe.Log], n_model: int, *, current_factor: float = 1.0) -> np.ndarray:
     """Cramér–Rao lower bound of the first ``n_model`` parameters' standard errors, nuisance parameters included.
 
-    Information of this log about every fitted parameter at the fitted model, inverted whole (so the
-    model parameters pay for what the held levels, switch instants, angle offsets and initial speeds
-    take): the current samples, white with their measured noise (``current_factor`` undoes a weight
-    that included more than it); the logged voltage samples of each held level, white with their
-    noise; the encoder angle, whose counting errors are not white (a quantiser of unknown phase
-    repeats one error at rest), through the information its own weighted fit captures,
-    H·S⁻¹·H with H = JᵀJ of the angle rows and S the exact covariance of their score
-    (:func:`motorlab._oe._counting_score`).
+    Fisher information JᵀJ of this log's weighted residuals at the fitted model, inverted whole (so
+    the model parameters pay for what the held levels, switch instants, angle offsets and initial
+    speeds take): the current samples white with their measured noise (``current_factor`` undoes a
+    weight that included more than it), the logged voltage samples of each held level white with
+    their noise, and the encoder angle in the usual Gaussian approximation of its counting error,
+    q²/12 per distinct reading (a run of m identical readings counted once). That approximation is
+    not exact for a quantiser (its errors repeat at rest and are bounded), so a fit's standard error
+    can come out slightly below this bound for the friction parameters.
     """
-    jac = fit.jacobian
-    p = jac.shape[1]
-    info = np.zeros((p, p))
-    h_pos = np.zeros((p, p))
-    s_pos = np.zeros((p, p))
+    jac = np.array(fit.jacobian, copy=True)
     start = 0
-    for log, sim in zip(logs, fit.simulations, strict=True):
+    for log in logs:
         m = log.time.size
-        j_pos = jac[start : start + m]
-        h_pos += j_pos.T @ j_pos
-        s_pos += _oe._counting_score(j_pos * log.position_factor(sigma_position)[:, None], log, sim["position"],
-                                     sigma_position)
-        j_cur = jac[start + m : start + 2 * m] * current_factor
-        info += j_cur.T @ j_cur
+        jac[start + m : start + 2 * m] *= current_factor
         start += 2 * m
-    extra = jac[start:]
-    info += extra.T @ extra
-    d = np.sqrt(np.clip(np.diag(h_pos), 1e-300, None))
-    s_scaled = s_pos / np.outer(d, d)
-    h_scaled = h_pos / np.outer(d, d)
-    info += (h_scaled @ np.linalg.pinv(s_scaled, rcond=1e-12, hermitian=True) @ h_scaled) * np.outer(d, d)
-    col = np.sqrt(np.clip(np.diag(info), 1e-300, None))
-    inv = np.linalg.pinv(info / np.outer(col, col), rcond=1e-12, hermitian=True) / np.outer(col, col)
-    return np.sqrt(np.clip(np.diag(inv)[:n_model], 0.0, None))
+    h_inv, _ = _oe.scaled_gram_inverse(jac)
+    return np.sqrt(np.clip(np.diag(h_inv)[:n_model], 0.0, None))

@@ -530,8 +530,7 @@ def _input_model(
 def _bound_details(fit: _oe.Fit, logs: list[_oe.Log], params: dict[str, Estimate], details: dict[str, Any], *,
                    weight_current: float, current_noise: float) -> None:
     """The Cramér–Rao bound of this log and model in ``details`` and each determined estimate's note."""
-    bound = held_input.cramer_rao(fit, logs, 6, sigma_position=details["noise_weights"]["position"],
-                                  current_factor=weight_current / current_noise)
+    bound = held_input.cramer_rao(fit, logs, 6, current_factor=weight_current / current_noise)
     nuisance = details["input_model"]["model"] != "sample-held"
     details["cramer_rao_bound"] = {
         "includes": ("held levels, switch instants" if nuisance else "known input (the logged voltage taken as exact)")
@@ -544,8 +543,9 @@ def _bound_details(fit: _oe.Fit, logs: list[_oe.Log], params: dict[str, Estimate
         ratio = est.stderr / bound[k] if bound[k] > 0 else math.inf
         details["cramer_rao_bound"]["stderr_over_bound"][name] = ratio
         if est.determined and math.isfinite(ratio) and not est.note:
-            params[name] = _estimate(name, est.value, est.stderr,
-                                     note=f"within {ratio:.2g}× of the best any method could do on this log")
+            text = (f"within {ratio:.2g}× of the best any method could do on this log" if ratio >= 1.0 else
+                    f"at the best any method could do on this log (stderr {ratio:.2g}× the Gaussian bound)")
+            params[name] = _estimate(name, est.value, est.stderr, note=text)
 
 
 def _result(
