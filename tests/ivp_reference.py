@@ -83,7 +83,7 @@ def simulate_ivp(p: dict[str, float], drive: Drive, duration: float, dt: float) 
     t_samples = dt * np.arange(n)
     out = np.zeros((n, 3))
     y = np.zeros(3)
-    bounds = list(drive.switches) + [t_samples[-1] + 0.5 * dt]
+    bounds = [*drive.switches.tolist(), t_samples[-1] + 0.5 * dt]
     for j, v in enumerate(drive.levels):
         t, t_end = float(bounds[j]), float(bounds[j + 1])
         force = 0.0  # direction forced by a break-away event (its located |K·i| may round below Tf)

@@ -230,7 +230,8 @@ def _reference():
 
     if "ivp_reference" not in sys.modules:
         spec = importlib.util.spec_from_file_location("ivp_reference", Path(__file__).with_name("ivp_reference.py"))
-        assert spec is not None and spec.loader is not None
+        assert spec is not None
+        assert spec.loader is not None
         module = importlib.util.module_from_spec(spec)
         sys.modules["ivp_reference"] = module
         spec.loader.exec_module(module)
@@ -263,15 +264,19 @@ def test_held_levels_are_detected_and_ripple_or_ramps_are_not():
     rng = np.random.default_rng(3)
     levels = np.repeat([-10.0, 5.0, -3.0, 8.0, 0.0, 11.0, -6.0, 2.0], 500)
     held, why = detect_held(levels + 0.02 * rng.standard_normal(levels.size), None)
-    assert held is not None and held.n_segments == 8 and held.sigma == pytest.approx(0.02, rel=0.05), why
+    assert held is not None, why
+    assert held.n_segments == 8
+    assert held.sigma == pytest.approx(0.02, rel=0.05)
     exact, _ = detect_held(levels, None)
-    assert exact is not None and exact.sigma == 0.0
+    assert exact is not None
+    assert exact.sigma == 0.0
     assert detect_held(np.linspace(0, 12, 4000) + 0.02 * rng.standard_normal(4000), None)[0] is None
     # scatter the current follows is ripple the motor saw: used as logged
     ripple = 0.2 * rng.standard_normal(levels.size)
     current = np.concatenate([[0.0], np.cumsum(0.1 * ripple[:-1])]) + 0.01 * rng.standard_normal(levels.size)
     held, why = detect_held(levels + ripple, current)
-    assert held is None and "ripple" in why
+    assert held is None
+    assert "ripple" in why
 
 
 @pytest.mark.parametrize("on_samples", [False, True])

@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import argparse
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
@@ -388,7 +388,13 @@ def identify(
 
     Notes
     -----
-    The logged voltage's noise reaches the simulated current (errors in the input variable): the
+    Input model (:mod:`motorlab.held_input`, ``details["input_model"]``): a drive that holds levels
+    is fitted with each level estimated from all its samples jointly with the model and each switch
+    instant located inside its sample interval (nuisance parameters); switches found on the sample
+    instants are fixed there. ``details["cramer_rao_bound"]``: the Cramér–Rao bound of this log
+    with those nuisance parameters, and each standard error over it (also in each estimate's note).
+
+    Otherwise the logged voltage's noise reaches the simulated current (errors in the input variable): the
     current is weighted by its measured noise plus that, and the first-order bias it causes (mostly
     in L and R) is removed (:func:`motorlab._oe.input_noise_bias`). Standard errors propagate the
     measured noises — voltage through the plant, current, and counting errors correlated as a
@@ -425,10 +431,13 @@ def identify(
     gain = float(_oe.input_noise_gain(MotorModel().plant(np.clip(p0, lower, upper)), dt)[0, 0])
     voltage_noise = max(_oe.voltage_noise(log) for log in logs)
     sigma["current"] = math.sqrt(current_noise**2 + voltage_noise**2 * gain)
-    fit = _oe.fit_output_error(MotorModel(), logs, np.clip(p0, lower, upper), lower=lower, upper=upper,
-                               scale=scale, sigma=sigma, current_noise=current_noise)
-    fit, input_details = _input_model(recs, logs, fit, lower=lower, upper=upper, scale=scale,
-                                      sigma_position=sigma["position"], current_noise=current_noise)
+
+    def sample_held(start: np.ndarray) -> _oe.Fit:
+        return _oe.fit_output_error(MotorModel(), logs, np.clip(start, lower, upper), lower=lower, upper=upper,
+                                    scale=scale, sigma=sigma, current_noise=current_noise)
+
+    fit, input_details = _input_model(recs, logs, sample_held, np.clip(p0, lower, upper), lower=lower, upper=upper,
+                                      scale=scale, sigma_position=sigma["position"], current_noise=current_noise)
     if input_details["model"] != "sample-held":
         sigma["current"] = current_noise
     values = fit.values[:6]
@@ -482,15 +491,16 @@ def identify(
 
 
 def _input_model(
-    recs: list[Recording], logs: list[_oe.Log], fit: _oe.Fit, *, lower: np.ndarray, upper: np.ndarray,
-    scale: np.ndarray, sigma_position: float, current_noise: float,
+    recs: list[Recording], logs: list[_oe.Log], sample_held: Callable[[np.ndarray], _oe.Fit], p0: np.ndarray, *,
+    lower: np.ndarray, upper: np.ndarray, scale: np.ndarray, sigma_position: float, current_noise: float,
 ) -> tuple[_oe.Fit, dict[str, Any]]:
     """Refit with held levels and switch instants as nuisance parameters when the drive holds levels.
 
     The voltage of every run is tested for held levels (:func:`motorlab.held_input.detect_held`);
     then the model is fitted with each switch instant free inside its sample interval. When every
     located switch sits on its sample instant (within 3σ) the switch instants are fixed there: with
-    exact levels that is the sample-held fit already made; with noisy levels the levels stay free.
+    exact levels that is the sample-held fit (``sample_held(start)``, also used when the drive does not
+    hold levels); with noisy levels the levels stay free.
     Returns the fit to report and ``details["input_model"]``.
     """
     checks = [held_input.detect_held(rec.signals["voltage"], log.current) if log.uniform
@@ -498,12 +508,12 @@ def _input_model(
     held = [h for h, _ in checks]
     if any(h is None for h in held):
         reason = next(why for h, why in checks if h is None)
-        return fit, {"model": "sample-held", "text": f"voltage held over each sample as logged ({reason})"}
+        return sample_held(p0), {"model": "sample-held", "text": f"voltage held over each sample as logged ({reason})"}
     helds = [h for h in held if h is not None]
     exact = all(h.sigma == 0 for h in helds)
     sigma = {"position": sigma_position, "current": current_noise}
     model = held_input.HeldMotorModel(logs, helds, free_switch=True)
-    z0, lo, hi, sc = model.start_and_bounds(fit.values[:6], lower, upper, scale)
+    z0, lo, hi, sc = model.start_and_bounds(p0, lower, upper, scale)
     free = _oe.fit_output_error(model, logs, z0, lower=lo, upper=hi, scale=sc, sigma=sigma,
                                 current_noise=current_noise)
     summary = held_input.switch_summary(model, free)
@@ -512,7 +522,7 @@ def _input_model(
     info: dict[str, Any] = {"segments": sum(h.n_segments for h in helds), **summary,
                             "voltage_noise": max(h.sigma for h in helds)}
     if on is True and exact:
-        return fit, {"model": "sample-held", **info,
+        return sample_held(free.values[:6]), {"model": "sample-held", **info,
                      "text": "held levels switching on sample instants, exact voltage: held over each sample as logged"}
     if on is True:
         fixed = held_input.HeldMotorModel(logs, helds, free_switch=False)
