@@ -33,6 +33,7 @@ from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from motorlab import _oe, held_input
 from motorlab.analyses._common import reader_warnings
@@ -342,6 +343,7 @@ def fit_panels(logs: list[_oe.Log], fit: _oe.Fit, *, title: str, length: str = "
     return panels
 
 
+@threadpool_limits.wrap(limits=1, user_api="blas")  # tall-skinny products: threads only contend (15× on a busy box)
 def identify(
     recordings: Recording | Sequence[Recording],
     *,

@@ -24,6 +24,8 @@ import math
 from dataclasses import dataclass, replace
 from typing import Any
 
+from threadpoolctl import threadpool_limits
+
 from motorlab.catalog import Motor
 from motorlab.errors import OptionError
 from motorlab.model import MotorParams
@@ -625,6 +627,7 @@ def identification_bound(params: MotorParams, *, rate: float, hold: tuple[float,
     return {name: float(b / v) for name, b, v in zip(("K", "R", "L", "J", "b", "Tf"), bound, p, strict=True)}
 
 
+@threadpool_limits.wrap(limits=1, user_api="blas")
 def plan_identification_log(params: MotorParams, *, target: float = 0.01, **options: Any) -> dict[str, Any]:
     """Recommend sample rate, excitation and length of an identification log from its Cramér–Rao bound.
 
