@@ -267,6 +267,11 @@ def test_held_levels_are_detected_and_ripple_or_ramps_are_not():
     assert held is not None, why
     assert held.n_segments == 8
     assert held.sigma == pytest.approx(0.02, rel=0.05)
+    # a jump of 0.05 V (2.5σ between two samples) is found by binary segmentation
+    small = np.repeat([-10.0, 5.0, 5.05, 8.0], 1000)
+    held, why = detect_held(small + 0.02 * rng.standard_normal(small.size), None)
+    assert held is not None, why
+    assert held.first.tolist() == [0, 1000, 2000, 3000]
     exact, _ = detect_held(levels, None)
     assert exact is not None
     assert exact.sigma == 0.0

@@ -36,6 +36,34 @@ JUMP_SIGMAS = 8.0
 #: Correlation (in standard errors) between the voltage's scatter about its levels and the current's
 #: next step above which the scatter is real input the motor saw (ripple), not measurement noise.
 RIPPLE_Z = 5.0
+#: A segment splits in two where the difference of the two means is this many standard errors
+#: (binary segmentation, for jumps too small to stand out between two samples).
+SPLIT_SIGMAS = 6.0
+
+
+def _split_small_jumps(v: np.ndarray, first: np.ndarray, sigma: float) -> np.ndarray:
+    """Binary segmentation: split each segment where its two halves' means differ by > SPLIT_SIGMAS σ.
+
+    For a split after k of n samples the statistic is |c_k|·√(n/(k·(n − k)))/σ, c_k the cumulative
+    sum of the segment's deviations from its mean (CUSUM); the largest is tested.
+    """
+    bounds = [*first.tolist(), v.size]
+    stack = list(zip(bounds[:-1], bounds[1:], strict=True))
+    found = set(first.tolist())
+    while stack and len(found) <= v.size / 20:
+        lo, hi = stack.pop()
+        n = hi - lo
+        if n < 4:
+            continue
+        c = np.cumsum(v[lo:hi] - np.mean(v[lo:hi]))[:-1]
+        k = np.arange(1, n)
+        stat = np.abs(c) * np.sqrt(n / (k * (n - k))) / sigma
+        best = int(np.argmax(stat))
+        if stat[best] > SPLIT_SIGMAS:
+            cut = lo + best + 1
+            found.add(cut)
+            stack += [(lo, cut), (cut, hi)]
+    return np.array(sorted(found), dtype=np.int64)
 
 
 @dataclass(frozen=True)
@@ -56,8 +84,8 @@ def detect_held(voltage: np.ndarray, current: np.ndarray | None) -> tuple[HeldIn
     """Whether the logged voltage is held levels plus white measurement noise, and the levels.
 
     Returns (the levels or None, the reason). A log is held when its jumps (> :data:`JUMP_SIGMAS`
-    standard deviations of the sample-to-sample difference) split it into segments of 20 samples or
-    more on average, within which the voltage scatters as white noise of the size its differences
+    standard deviations of the sample-to-sample difference, and a few smaller ones found by binary
+    segmentation) split it into segments of 20 samples or more on average, within which the voltage scatters as white noise of the size its differences
     show, and (with current) that scatter does not drive the current (then it is ripple the motor saw).
     """
     v = np.asarray(voltage, dtype=float)
@@ -67,6 +95,11 @@ def detect_held(voltage: np.ndarray, current: np.ndarray | None) -> tuple[HeldIn
     exact = mad <= 1e-12 * scale
     jumps = np.flatnonzero(np.abs(d) > (1e-9 * scale if exact else JUMP_SIGMAS * mad))
     first = np.concatenate([[0], jumps + 1]).astype(np.int64)
+    if not exact and first.size <= v.size / 20:
+        split = _split_small_jumps(v, first, mad / math.sqrt(2.0))
+        if split.size - first.size > max(2.0, 0.25 * first.size):  # mostly gradual change: a ramp, not levels
+            return None, "the voltage changes gradually (many small steps): not held levels"
+        first = split
     if first.size > v.size / 20:
         return None, "the voltage is not held between switches (ramp, PWM average or fast changes)"
     seg = np.repeat(np.arange(first.size), np.diff(np.concatenate([first, [v.size]])))
