@@ -236,3 +236,10 @@ def test_identification_log_plan_from_the_cramer_rao_bound():
     assert "10000 Hz" in plan["recommendation"]
     with pytest.raises(OptionError):
         plan_identification_log(motor, target=2.0)
+
+
+def test_cli_plan_identification_log(run_cli, capsys):
+    assert run_cli(["plan", "--motor", "neverest40", "--identification-log", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert "Hz" in data["identification_log"]["recommendation"]
+    assert len(data["identification_log"]["designs"]) == 3

@@ -23,6 +23,7 @@ parameters estimated too (the information matrix of the weighted outputs, invert
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass
 
@@ -48,7 +49,7 @@ def _split_small_jumps(v: np.ndarray, first: np.ndarray, sigma: float) -> np.nda
     sum of the segment's deviations from its mean (CUSUM); the largest is tested.
     """
     bounds = [*first.tolist(), v.size]
-    stack = list(zip(bounds[:-1], bounds[1:], strict=True))
+    stack = list(itertools.pairwise(bounds))
     found = set(first.tolist())
     while stack and len(found) <= v.size / 20:
         lo, hi = stack.pop()
@@ -85,8 +86,8 @@ def detect_held(voltage: np.ndarray, current: np.ndarray | None) -> tuple[HeldIn
 
     Returns (the levels or None, the reason). A log is held when its jumps (> :data:`JUMP_SIGMAS`
     standard deviations of the sample-to-sample difference, and a few smaller ones found by binary
-    segmentation) split it into segments of 20 samples or more on average, within which the voltage scatters as white noise of the size its differences
-    show, and (with current) that scatter does not drive the current (then it is ripple the motor saw).
+    segmentation) split it into segments of 20 samples or more on average, within which the voltage
+    scatters as white noise of the size its differences show, and (with current) that scatter does not drive the current (then it is ripple the motor saw).
     """
     v = np.asarray(voltage, dtype=float)
     d = np.diff(v)
