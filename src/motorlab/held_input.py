@@ -87,7 +87,8 @@ def detect_held(voltage: np.ndarray, current: np.ndarray | None) -> tuple[HeldIn
     Returns (the levels or None, the reason). A log is held when its jumps (> :data:`JUMP_SIGMAS`
     standard deviations of the sample-to-sample difference, and a few smaller ones found by binary
     segmentation) split it into segments of 20 samples or more on average, within which the voltage
-    scatters as white noise of the size its differences show, and (with current) that scatter does not drive the current (then it is ripple the motor saw).
+    scatters as white noise of the size its differences show, and (with current) that scatter does
+    not drive the current (then it is ripple the motor saw).
     """
     v = np.asarray(voltage, dtype=float)
     d = np.diff(v)
