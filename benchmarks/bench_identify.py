@@ -85,8 +85,9 @@ def bound_tables(n_seeds: int = 4, *, duration: float = 3.0, dt: float = 1e-4) -
 
     names = ("K", "R", "L", "J", "b", "Tf")
     truth = MOTOR.to_dict()
-    for on_samples, noise in ((False, 0.02), (True, 0.0)):
-        kind = "on sample instants, exact voltage" if on_samples else "between samples, 0.02 V voltage noise"
+    for on_samples, noise in ((False, 0.02), (True, 0.0), (True, 0.02)):
+        kind = ("on sample instants" if on_samples else "between samples") + (
+            f", {noise:g} V voltage noise" if noise else ", exact voltage")
         print(f"identify, {duration:g} s at {1 / dt:g} Hz, drive switching {kind}")
         err, se, z, times = [], [], [], []
         for seed in range(n_seeds):

@@ -983,10 +983,14 @@ def levenberg_marquardt(
         h = j.T @ j
         diag = np.diag(h).copy()
         diag = np.where(diag > 0, diag, 1.0)
+        # Parameters held at a bound by the gradient stay there (active set): a step computed for all
+        # and then clipped would crawl along the bound (a switch on its sample instant, f = 1).
+        free = ~(((x <= lower) & (g > 0)) | ((x >= upper) & (g < 0)))
         accepted = False
         for _ in range(12):
+            step = np.zeros_like(x)
             try:
-                step = -np.linalg.solve(h + mu * np.diag(diag), g)
+                step[free] = -np.linalg.solve((h + mu * np.diag(diag))[np.ix_(free, free)], g[free])
             except np.linalg.LinAlgError:
                 mu *= 10.0
                 continue
