@@ -471,7 +471,8 @@ def identify(
     motor = MotorParams(*(float(v) for v in np.maximum(values, [1e-12, 1e-12, 0, 1e-12, 0, 0])))
     details: dict[str, Any] = {
         "method": "output error (angle and current simulated from the voltage)"
-        + (", errors-in-variables bias removed" if np.any(fit.bias_correction) else ""),
+        + (", errors-in-variables bias removed" if np.any(fit.bias_correction) else "")
+        + f"; input: {input_details['text']}",
         "residual_rms": {**fit.residual_rms},
         "residual_rms_units": {"position": "rad", "current": "A"},
         "noise_weights": sigma,
