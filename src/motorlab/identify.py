@@ -556,7 +556,7 @@ def _bound_details(fit: _oe.Fit, logs: list[_oe.Log], params: dict[str, Estimate
         ratio = est.stderr / bound[k] if bound[k] > 0 else math.inf
         details["cramer_rao_bound"]["stderr_over_bound"][name] = ratio
         if est.determined and math.isfinite(ratio) and not est.note:
-            text = (f"within {ratio:.2g}× of the best any method could do on this log" if ratio >= 1.0 else
+            text = (f"within {max(ratio, 1.0):.2g}× of the best any method could do on this log" if ratio >= 0.95 else
                     f"at the best any method could do on this log (stderr {ratio:.2g}× the Gaussian bound)")
             params[name] = _estimate(name, est.value, est.stderr, note=text)
 
