@@ -519,6 +519,9 @@ def _input_model(
     z0, lo, hi, sc = model.start_and_bounds(p0, lower, upper, scale)
     free = _oe.fit_output_error(model, logs, z0, lower=lo, upper=hi, scale=sc, sigma=sigma,
                                 current_noise=current_noise)
+    if not (free.success and np.all(np.isfinite(np.diag(free.covariance)))):
+        return sample_held(p0), {"model": "sample-held", "text": "voltage held over each sample as logged (the "
+                                 f"held-level fit did not converge: {free.message})"}
     summary = held_input.switch_summary(model, free)
     on = held_input.on_sample_instants(summary)
     levels = "exact levels as logged" if exact else "levels estimated from all their samples with the model"
