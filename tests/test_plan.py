@@ -221,3 +221,25 @@ def test_cli_plan_library_errors_exit_2(run_cli, capsys, argv):
     assert run_cli(["plan", *argv]) == 2
     err = capsys.readouterr().err
     assert err.startswith("motorlab: error: ")
+
+
+def test_identification_log_plan_from_the_cramer_rao_bound():
+    from motorlab.plan import plan_identification_log
+
+    motor = MotorParams(K=0.35, R=2.5, L=7e-4, J=8e-4, b=2e-3, Tf=0.03)
+    plan = plan_identification_log(motor, target=0.01)
+    slow, fast, long_holds = plan["designs"]
+    # τe = L/R = 0.28 ms: a 1 kHz log barely sees the current rise, 10 kHz does
+    assert slow["relative_bound_1s"]["L"] > 5 * fast["relative_bound_1s"]["L"]
+    # long holds leave few switches and speeds: friction is told far less well
+    assert long_holds["relative_bound_1s"]["Tf"] > 3 * fast["relative_bound_1s"]["Tf"]
+    assert "10000 Hz" in plan["recommendation"]
+    with pytest.raises(OptionError):
+        plan_identification_log(motor, target=2.0)
+
+
+def test_cli_plan_identification_log(run_cli, capsys):
+    assert run_cli(["plan", "--motor", "neverest40", "--identification-log", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert "Hz" in data["identification_log"]["recommendation"]
+    assert len(data["identification_log"]["designs"]) == 3

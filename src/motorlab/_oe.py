@@ -27,6 +27,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from scipy import linalg, signal
@@ -231,7 +232,13 @@ def _locate(fun: Callable[[float], float], f0: float, f1: float, *, iterations: 
 
 
 def simulate(
-    plant: Plant, voltage: np.ndarray, dt: float, *, x0: np.ndarray | None = None, theta0: float = 0.0
+    plant: Plant,
+    voltage: np.ndarray,
+    dt: float,
+    *,
+    x0: np.ndarray | None = None,
+    theta0: float = 0.0,
+    switches: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Simulate the plant on a uniform grid.
 
@@ -247,6 +254,10 @@ def simulate(
         Initial state (default: at rest).
     theta0
         Initial angle [rad].
+    switches
+        Drive switches inside steps: (step indices k, increasing; fractions f in [0, 1]; voltage
+        before). Step k holds the voltage before for f·dt, then ``voltage[k]`` (a drive switching
+        between the logger's samples); each such step is propagated exactly in two parts.
 
     Returns
     -------
@@ -289,8 +300,23 @@ def simulate(
     th = float(theta0)
     mode = int(np.sign(x[w])) if x[w] != 0 else (new_mode(x, voltage[0]) if n_steps else 0)
     chunk = _MIN_CHUNK
+    sw_steps, sw_frac, sw_before = switches if switches is not None else (np.zeros(0, int), (), ())
+    sw = 0
     while k < n_steps:
-        stop = min(n_steps, k + chunk)
+        while sw < len(sw_steps) and sw_steps[sw] < k:
+            sw += 1
+        if sw < len(sw_steps) and sw_steps[sw] == k:
+            frac_sw = float(sw_frac[sw])
+            x, dth1, mode = _advance(x, mode, float(sw_before[sw]), frac_sw * dt, mdl, drive, new_mode, f_level, w)
+            x, dth2, mode = _advance(x, mode, float(voltage[k]), (1.0 - frac_sw) * dt, mdl, drive, new_mode,
+                                     f_level, w)
+            th += dth1 + dth2
+            k += 1
+            states[k] = x
+            theta[k] = th
+            chunk = _MIN_CHUNK
+            continue
+        stop = min(n_steps, k + chunk, int(sw_steps[sw]) if sw < len(sw_steps) else n_steps)
         v = voltage[k:stop]
         d = disc(mode)
         xs, dth = _propagate(d, x, v)
@@ -354,6 +380,43 @@ def simulate(
         mode = nxt
         chunk = _MIN_CHUNK
     return states, theta
+
+
+def _advance(x: np.ndarray, mode: int, v: float, tau: float, mdl: Callable[[int], _Modal],
+             drive: Callable[..., Any], new_mode: Callable[[np.ndarray, float], int], f_level: float,
+             w: int) -> tuple[np.ndarray, float, int]:
+    """Propagate a part of a step (length τ, voltage v held) exactly, with at most one friction event."""
+    if tau <= 0.0:
+        return x, 0.0, mode
+    if mode == 0 and abs(float(drive(x, v))) > f_level:  # break-away at once (the drive just changed)
+        mode = 1 if float(drive(x, v)) > 0 else -1
+    x1, d1 = _flow(mdl(mode).discrete(tau), x, v)
+    if mode != 0:
+        if mode * x1[w] > 0:
+            return x1, d1, mode
+        f0, f1 = float(x[w]), float(x1[w])
+    else:
+        f1 = abs(float(drive(x1, v))) - f_level
+        if f1 <= 0:
+            return x1, d1, 0
+        f0 = abs(float(drive(x, v))) - f_level
+
+    def event_value(frac: float) -> float:
+        xm, _ = _flow(mdl(mode).discrete(frac * tau), x, v)
+        return float(xm[w]) if mode != 0 else abs(float(drive(xm, v))) - f_level
+
+    frac = _locate(event_value, f0, f1)
+    x_mid, d_mid = _flow(mdl(mode).discrete(frac * tau), x, v) if frac > 0 else (x, 0.0)
+    if mode != 0:
+        x_mid = x_mid.copy()
+        x_mid[w] = 0.0
+        nxt = new_mode(x_mid, v)
+    else:
+        nxt = 1 if float(drive(x_mid, v)) > 0 else -1
+    x_end, d_end = _flow(mdl(nxt).discrete((1.0 - frac) * tau), x_mid, v) if frac < 1 else (x_mid, 0.0)
+    if nxt != 0 and nxt * x_end[w] < 0:  # numerically impossible reversal: hold at rest
+        return x_mid, d_mid, 0
+    return np.asarray(x_end, dtype=float), d_mid + d_end, nxt
 
 
 # --------------------------------------------------------------------------------------------------
@@ -523,6 +586,7 @@ class Fit:
     nfev: int
     success: bool
     message: str
+    jacobian: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))  # of the weighted residuals (SI)
 
 
 class OEModel:
@@ -533,6 +597,26 @@ class OEModel:
     #: Lag τ [s] of the logged angle behind the simulated one (stale status frames, see
     #: :func:`stale_frame_period`): the angle compared is θ(t) − τ·ω(t).
     lag: float = 0.0
+    #: The simulation is driven by the logged voltage sample by sample, so it carries that voltage's
+    #: noise (errors in the input variable). False for an input model with its own parameters
+    #: (held levels estimated from all their samples, :mod:`motorlab.held_input`).
+    input_noise: bool = True
+
+    def switches(self, p: np.ndarray, log: Log) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+        """Drive switches inside grid steps (see :func:`simulate`), or None."""
+        return None
+
+    def extra_residuals(self, p: np.ndarray) -> np.ndarray:
+        """Weighted residuals appended after the signals' (e.g. logged voltage samples against held levels)."""
+        return np.zeros(0)
+
+    def local_start(self, j: int) -> tuple[int, int] | None:
+        """(run, first grid step) of the only stretch parameter j affects, or None (it affects everything).
+
+        Its Jacobian column is then simulated from that step on, restarted from the state the
+        current simulation has there (full-model state (i, ω) on a uniform grid only).
+        """
+        return None
 
     def plant(self, p: np.ndarray) -> Plant:  # pragma: no cover - abstract
         raise NotImplementedError
@@ -547,7 +631,8 @@ class OEModel:
 
 def _simulate_log(model: OEModel, p: np.ndarray, log: Log, speed0: float, offset: float) -> dict[str, np.ndarray]:
     plant = model.plant(p)
-    states, theta = simulate(plant, model.drive(p, log), log.dt, x0=model.initial(p, log, speed0), theta0=0.0)
+    states, theta = simulate(plant, model.drive(p, log), log.dt, x0=model.initial(p, log, speed0), theta0=0.0,
+                             switches=model.switches(p, log))
     out = {
         "position": log.at_samples(theta) + offset,
         "speed": log.at_samples(states[:, plant.w]),
@@ -625,18 +710,42 @@ def fit_output_error(
             if model.uses_current:
                 assert log.current is not None
                 parts.append((sim["current"] - log.current) / sigma["current"])
+        parts.append(model.extra_residuals(p))
         return np.concatenate(parts), sims
 
-    last: dict[str, np.ndarray] = {}
+    last: dict[str, Any] = {}
 
     def fun(z: np.ndarray) -> np.ndarray:
         # least_squares asks for the Jacobian at the point it has just evaluated: keep that residual
         if "z" in last and np.array_equal(last["z"], z):
             return last["r"]
         p, offsets, speeds = unpack(z)
-        r = residual_parts(p, offsets, speeds)[0]
+        r, sims = residual_parts(p, offsets, speeds)
         last["z"] = z.copy()
         last["r"] = r
+        last["sims"] = sims  # type: ignore[assignment]
+        return r
+
+    row_starts = np.cumsum([0] + [log.time.size * len(signals) for log in logs])
+
+    def local_column(zj: np.ndarray, k: int, k0: int, r0: np.ndarray) -> np.ndarray:
+        """Residuals with log k re-simulated from grid step k0 (the parameter changed acts from there)."""
+        p, offsets, _ = unpack(zj)
+        log = logs[k]
+        sim0 = last["sims"][k]  # type: ignore[index]
+        sw = model.switches(p, log)
+        if sw is not None:
+            keep = sw[0] >= k0
+            sw = (sw[0][keep] - k0, sw[1][keep], sw[2][keep])
+        x0 = np.array([sim0["current"][k0], sim0["speed"][k0]])
+        states, theta = simulate(model.plant(p), model.drive(p, log)[k0:], log.dt, x0=x0,
+                                 theta0=float(sim0["position"][k0] - offsets[k]), switches=sw)
+        r = r0.copy()
+        rs, m = int(row_starts[k]), log.time.size
+        assert log.current is not None
+        r[rs + k0 : rs + m] = (theta + offsets[k] - log.position[k0:]) * factors[k][k0:]
+        r[rs + m + k0 : rs + 2 * m] = (states[:, 0] - log.current[k0:]) / sigma["current"]
+        r[int(row_starts[-1]) :] = model.extra_residuals(p)
         return r
 
     def jac(z: np.ndarray) -> np.ndarray:
@@ -650,6 +759,10 @@ def fit_output_error(
                 h = -h
             zj = z.copy()
             zj[j] += h
+            loc = model.local_start(j) if j < n_model else None
+            if loc is not None and logs[loc[0]].uniform and model.uses_current and not model.lag:
+                cols[:, j] = (local_column(zj, loc[0], loc[1], r0) - r0) / h
+                continue
             p, offsets, speeds = unpack(zj)
             cols[:, j] = (residual_parts(p, offsets, speeds)[0] - r0) / h
         # angle offsets: residual of log k's angle rises 1/σ per unit offset
@@ -695,7 +808,7 @@ def fit_output_error(
     ratio = actual / predicted if predicted > 0 else math.inf
     explained = ratio <= 2.0
     bias = np.zeros(values.size)
-    if model.uses_current and 0.5 <= ratio <= 2.0:
+    if model.uses_current and model.input_noise and 0.5 <= ratio <= 2.0:
         # The logged voltage's noise reaches the simulated current (errors in the input variable) and
         # biases L and R: remove the first-order bias (see input_noise_bias). Only when the residuals
         # look like that noise: real ripple on the voltage is input the motor saw, and biases nothing.
@@ -731,6 +844,7 @@ def fit_output_error(
         bandwidth=bandwidth,
         noise_model=noise_model,
         bias_correction=bias[:n_model],
+        jacobian=jx,
         nfev=int(sol.nfev),
         success=bool(sol.success),
         message=str(sol.message),
@@ -873,10 +987,14 @@ def levenberg_marquardt(
         h = j.T @ j
         diag = np.diag(h).copy()
         diag = np.where(diag > 0, diag, 1.0)
+        # Parameters held at a bound by the gradient stay there (active set): a step computed for all
+        # and then clipped would crawl along the bound (a switch on its sample instant, f = 1).
+        free = ~(((x <= lower) & (g > 0)) | ((x >= upper) & (g < 0)))
         accepted = False
         for _ in range(12):
+            step = np.zeros_like(x)
             try:
-                step = -np.linalg.solve(h + mu * np.diag(diag), g)
+                step[free] = -np.linalg.solve((h + mu * np.diag(diag))[np.ix_(free, free)], g[free])
             except np.linalg.LinAlgError:
                 mu *= 10.0
                 continue
@@ -1038,7 +1156,7 @@ def noise_propagation_covariance(
             ratio = current_noise / sigma["current"]
             score += ratio**2 * (j_cur.T @ j_cur)
             expected_square += m * ratio**2
-        sig_v = voltage_noise(log)
+        sig_v = voltage_noise(log) if model.input_noise else 0.0
         if sig_v <= 0:
             continue
         d = _Modal(plant, 1).discrete(log.dt)
@@ -1058,6 +1176,10 @@ def noise_propagation_covariance(
             p00 = float(linalg.solve_discrete_lyapunov(d.ad, np.outer(d.bv, d.bv))[0, 0])
             expected_square += m * sig_v**2 * p00 / sigma["current"] ** 2
         score += sig_v**2 * (a.T @ a)
+    end = blocks[-1][0] + blocks[-1][1] * (2 if model.uses_current else 1) if blocks else 0
+    extra = jac[end:]  # rows of unit-variance white residuals (logged voltage samples against held levels)
+    score += extra.T @ extra
+    expected_square += extra.shape[0]
     h_inv, _ = scaled_gram_inverse(jac)
     return h_inv @ score @ h_inv, expected_square / max(n, 1)
 

@@ -28,22 +28,23 @@ ch. 7 (output-error / prediction-error methods).
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
-from motorlab import _oe
+from motorlab import _oe, held_input
 from motorlab.analyses._common import reader_warnings
 from motorlab.errors import FitError, LogFormatError, OptionError
 from motorlab.fitting import MAX_RELATIVE_STDERR
-from motorlab.model import MotorParams, feedforward_from_params
+from motorlab.model import PARAMETER_NAMES, MotorParams, feedforward_from_params
 from motorlab.recording import Recording
 from motorlab.results import Estimate, FitResult, Panel, Series
 from motorlab.units import SI_UNITS
 
 #: Parameters of the full model, in the order of the fit.
-MOTOR_NAMES = ("K", "R", "L", "J", "b", "Tf")
+MOTOR_NAMES = PARAMETER_NAMES  # ("K", "R", "L", "J", "b", "Tf")
 #: Fewest samples a log must have to be fitted.
 MIN_SAMPLES = 20
 
@@ -341,6 +342,7 @@ def fit_panels(logs: list[_oe.Log], fit: _oe.Fit, *, title: str, length: str = "
     return panels
 
 
+@threadpool_limits.wrap(limits=1, user_api="blas")  # tall-skinny products: threads only contend (15× on a busy box)
 def identify(
     recordings: Recording | Sequence[Recording],
     *,
@@ -387,7 +389,13 @@ def identify(
 
     Notes
     -----
-    The logged voltage's noise reaches the simulated current (errors in the input variable): the
+    Input model (:mod:`motorlab.held_input`, ``details["input_model"]``): a drive that holds levels
+    is fitted with each level estimated from all its samples jointly with the model and each switch
+    instant located inside its sample interval (nuisance parameters); switches found on the sample
+    instants are fixed there. ``details["cramer_rao_bound"]``: the Cramér–Rao bound of this log
+    with those nuisance parameters, and each standard error over it (also in each estimate's note).
+
+    Otherwise the logged voltage's noise reaches the simulated current (errors in the input variable): the
     current is weighted by its measured noise plus that, and the first-order bias it causes (mostly
     in L and R) is removed (:func:`motorlab._oe.input_noise_bias`). Standard errors propagate the
     measured noises — voltage through the plant, current, and counting errors correlated as a
@@ -424,8 +432,15 @@ def identify(
     gain = float(_oe.input_noise_gain(MotorModel().plant(np.clip(p0, lower, upper)), dt)[0, 0])
     voltage_noise = max(_oe.voltage_noise(log) for log in logs)
     sigma["current"] = math.sqrt(current_noise**2 + voltage_noise**2 * gain)
-    fit = _oe.fit_output_error(MotorModel(), logs, np.clip(p0, lower, upper), lower=lower, upper=upper,
-                               scale=scale, sigma=sigma, current_noise=current_noise)
+
+    def sample_held(start: np.ndarray) -> _oe.Fit:
+        return _oe.fit_output_error(MotorModel(), logs, np.clip(start, lower, upper), lower=lower, upper=upper,
+                                    scale=scale, sigma=sigma, current_noise=current_noise)
+
+    fit, input_details = _input_model(recs, logs, sample_held, np.clip(p0, lower, upper), lower=lower, upper=upper,
+                                      scale=scale, sigma_position=sigma["position"], current_noise=current_noise)
+    if input_details["model"] != "sample-held":
+        sigma["current"] = current_noise
     values = fit.values[:6]
     cov = fit.covariance[:6, :6]
     stderr = np.sqrt(np.clip(np.diag(cov), 0.0, None))
@@ -455,13 +470,14 @@ def identify(
     motor = MotorParams(*(float(v) for v in np.maximum(values, [1e-12, 1e-12, 0, 1e-12, 0, 0])))
     details: dict[str, Any] = {
         "method": "output error (angle and current simulated from the voltage)"
-        + (", errors-in-variables bias removed" if np.any(fit.bias_correction) else ""),
+        + (", errors-in-variables bias removed" if np.any(fit.bias_correction) else "")
+        + f"; input: {input_details['text']}",
         "residual_rms": {**fit.residual_rms},
         "residual_rms_units": {"position": "rad", "current": "A"},
         "noise_weights": sigma,
         "measured_noise": {"current": current_noise, "voltage": voltage_noise},
         "uncertainty": fit.noise_model,
-        "input_noise_bias_removed": dict(zip(MOTOR_NAMES, fit.bias_correction.tolist(), strict=True)),
+        "input_noise_bias_removed": dict(zip(MOTOR_NAMES, fit.bias_correction[:6].tolist(), strict=True)),
         "start": dict(zip(MOTOR_NAMES, p0.tolist(), strict=True)),
         "feedforward": feedforward_from_params(motor),
         "hac_bandwidth_samples": fit.bandwidth,
@@ -470,8 +486,81 @@ def identify(
         "stderr_newey_west": dict(zip(MOTOR_NAMES, np.sqrt(np.diag(fit.covariance_residuals)[:6]).tolist(),
                                       strict=True)),
         "function_evaluations": fit.nfev,
+        "input_model": input_details,
     }
+    _bound_details(fit, logs, params, details, weight_current=sigma["current"], current_noise=current_noise)
     return _result("identify", params, corr, list(MOTOR_NAMES), logs, fit, warnings, details)
+
+
+def _input_model(
+    recs: list[Recording], logs: list[_oe.Log], sample_held: Callable[[np.ndarray], _oe.Fit], p0: np.ndarray, *,
+    lower: np.ndarray, upper: np.ndarray, scale: np.ndarray, sigma_position: float, current_noise: float,
+) -> tuple[_oe.Fit, dict[str, Any]]:
+    """Refit with held levels and switch instants as nuisance parameters when the drive holds levels.
+
+    The voltage of every run is tested for held levels (:func:`motorlab.held_input.detect_held`);
+    then the model is fitted with each switch instant free inside its sample interval. When every
+    located switch sits on its sample instant (within 3σ) the switch instants are fixed there: with
+    exact levels that is the sample-held fit (``sample_held(start)``, also used when the drive does not
+    hold levels); with noisy levels the levels stay free.
+    Returns the fit to report and ``details["input_model"]``.
+    """
+    checks = [held_input.detect_held(rec.signals["voltage"], log.current) if log.uniform
+              else (None, "non-uniform sample times") for rec, log in zip(recs, logs, strict=True)]
+    held = [h for h, _ in checks]
+    if any(h is None for h in held):
+        reason = next(why for h, why in checks if h is None)
+        return sample_held(p0), {"model": "sample-held", "text": f"voltage held over each sample as logged ({reason})"}
+    helds = [h for h in held if h is not None]
+    exact = all(h.sigma == 0 for h in helds)
+    sigma = {"position": sigma_position, "current": current_noise}
+    model = held_input.HeldMotorModel(logs, helds, free_switch=True)
+    z0, lo, hi, sc = model.start_and_bounds(p0, lower, upper, scale)
+    free = _oe.fit_output_error(model, logs, z0, lower=lo, upper=hi, scale=sc, sigma=sigma,
+                                current_noise=current_noise)
+    if not (free.success and np.all(np.isfinite(np.diag(free.covariance)))):
+        return sample_held(p0), {"model": "sample-held", "text": "voltage held over each sample as logged (the "
+                                 f"held-level fit did not converge: {free.message})"}
+    summary = held_input.switch_summary(model, free)
+    on = held_input.on_sample_instants(summary)
+    levels = "exact levels as logged" if exact else "levels estimated from all their samples with the model"
+    info: dict[str, Any] = {"segments": sum(h.n_segments for h in helds), **summary,
+                            "voltage_noise": max(h.sigma for h in helds)}
+    if on is True and exact:
+        return sample_held(free.values[:6]), {"model": "sample-held", **info,
+                     "text": "held levels switching on sample instants, exact voltage: held over each sample as logged"}
+    if on is True:
+        fixed = held_input.HeldMotorModel(logs, helds, free_switch=False)
+        z1, lo1, hi1, sc1 = fixed.start_and_bounds(free.values[:6], lower, upper, scale)
+        z1[6:] = [v for name, v in zip(free.names, free.values, strict=False) if name.startswith("level")]
+        refit = _oe.fit_output_error(fixed, logs, z1, lower=lo1, upper=hi1, scale=sc1, sigma=sigma,
+                                     current_noise=current_noise)
+        return refit, {"model": "held levels, switches on sample instants", **info,
+                       "text": f"held levels switching on sample instants; {levels}"}
+    where = ("switch instants located inside their sample intervals from the current transients" if on is False
+             else "switch instants not resolved by the data: estimated within their sample intervals (marginalised)")
+    return free, {"model": "held levels, switches between samples", **info, "text": f"{where}; {levels}"}
+
+
+def _bound_details(fit: _oe.Fit, logs: list[_oe.Log], params: dict[str, Estimate], details: dict[str, Any], *,
+                   weight_current: float, current_noise: float) -> None:
+    """The Cramér–Rao bound of this log and model in ``details`` and each determined estimate's note."""
+    bound = held_input.cramer_rao(fit, logs, 6, current_factor=weight_current / current_noise)
+    nuisance = details["input_model"]["model"] != "sample-held"
+    details["cramer_rao_bound"] = {
+        "includes": ("held levels, switch instants" if nuisance else "known input (the logged voltage taken as exact)")
+        + ", angle offsets and initial speeds as nuisance parameters",
+        "bound": dict(zip(MOTOR_NAMES, bound.tolist(), strict=True)),
+        "stderr_over_bound": {},
+    }
+    for k, name in enumerate(MOTOR_NAMES):
+        est = params[name]
+        ratio = est.stderr / bound[k] if bound[k] > 0 else math.inf
+        details["cramer_rao_bound"]["stderr_over_bound"][name] = ratio
+        if est.determined and math.isfinite(ratio) and not est.note:
+            text = (f"within {max(ratio, 1.0):.2g}× of the best any method could do on this log" if ratio >= 0.95 else
+                    f"at the best any method could do on this log (stderr {ratio:.2g}× the Gaussian bound)")
+            params[name] = _estimate(name, est.value, est.stderr, note=text)
 
 
 def _result(

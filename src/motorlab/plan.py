@@ -24,6 +24,8 @@ import math
 from dataclasses import dataclass, replace
 from typing import Any
 
+from threadpoolctl import threadpool_limits
+
 from motorlab.catalog import Motor
 from motorlab.errors import OptionError
 from motorlab.model import MotorParams
@@ -571,3 +573,85 @@ def plan_rig(
         "sensors": sensors,
     }
     return RigPlan(motor=motor.key, figures=figures, warnings=tuple(warnings))
+
+
+# ---- identification logs: what a log could tell (Cramér–Rao bound) -----------------------------
+#: Candidate designs of an identification log: (sample rate [Hz], hold range of the levels [s]).
+LOG_DESIGNS = ((1000.0, (0.05, 0.3)), (10000.0, (0.05, 0.3)), (10000.0, (0.3, 1.0)))
+
+
+def identification_bound(params: MotorParams, *, rate: float, hold: tuple[float, float], duration: float = 1.0,
+                         voltage: float = 12.0, cpr: float = 560.0, current_noise: float = 0.02,
+                         voltage_noise: float = 0.02, seed: int = 0) -> dict[str, float]:
+    """Cramér–Rao bound of (K, R, L, J, b, Tf) for a log of random held levels switching between samples.
+
+    Levels uniform in ±``voltage`` held uniform(``hold``) seconds, switching mid-interval, sampled at
+    ``rate`` for ``duration``; current noise [A], logged voltage noise [V], a ``cpr``-count encoder.
+    The bound counts the held levels and switch instants as nuisance parameters
+    (:func:`motorlab.held_input.cramer_rao`), at the model ``params``. Returns the relative bound
+    σ/value per parameter.
+    """
+    import numpy as np
+
+    from motorlab import _oe, held_input
+
+    rng = np.random.default_rng(seed)
+    dt = 1.0 / rate
+    n = round(duration / dt) + 1
+    first = [0]
+    while True:
+        nxt = first[-1] + max(2, round(rng.uniform(*hold) / dt))
+        if nxt >= n - 2:
+            break
+        first.append(nxt)
+    first_arr = np.array(first)
+    levels = rng.uniform(-voltage, voltage, first_arr.size)
+    count = np.diff(np.concatenate([first_arr, [n]]))
+    seg = np.repeat(np.arange(first_arr.size), count)
+    p = np.array([params.K, params.R, params.L, params.J, params.b, params.Tf])
+    held = held_input.HeldInput(first_arr, levels, count, voltage_noise)
+    log = _oe.prepare_log(dt * np.arange(n), levels[seg], np.zeros(n), np.zeros(n), resolution=2 * math.pi / cpr)
+    model = held_input.HeldMotorModel([log], [held], free_switch=True)
+    fractions = [np.full(first_arr.size - 1, 0.5)]
+    states, theta = _oe.simulate(model.plant(p), model.drive(np.concatenate([p, levels]), log), dt,
+                                 switches=(first_arr[1:] - 1, fractions[0], levels[:-1]))
+    q = 2 * math.pi / cpr
+    log = _oe.prepare_log(log.time, levels[seg], np.floor(theta / q + 0.5) * q, states[:, 0], resolution=q)
+    model = held_input.HeldMotorModel([log], [held], free_switch=True)
+    scale = np.maximum(np.abs(p), 1e-12)
+    z0, lo, hi, sc = model.start_and_bounds(p, 1e-3 * scale, 1e3 * scale, scale, fractions)
+    fit = _oe.fit_output_error(model, [log], z0, lower=lo, upper=hi, scale=sc,
+                               sigma={"position": q / math.sqrt(12.0), "current": current_noise},
+                               current_noise=current_noise, max_nfev=0)
+    bound = held_input.cramer_rao(fit, [log], 6)
+    return {name: float(b / v) for name, b, v in zip(("K", "R", "L", "J", "b", "Tf"), bound, p, strict=True)}
+
+
+@threadpool_limits.wrap(limits=1, user_api="blas")
+def plan_identification_log(params: MotorParams, *, target: float = 0.01, **options: Any) -> dict[str, Any]:
+    """Recommend sample rate, excitation and length of an identification log from its Cramér–Rao bound.
+
+    Each design of :data:`LOG_DESIGNS` is scored by the bound of a 1 s log; the bound shrinks as
+    1/√length, so the length that brings every parameter's relative bound to ``target`` is
+    (worst relative bound / target)² seconds. The design needing the shortest log is recommended.
+    ``options`` go to :func:`identification_bound` (voltage, cpr, noises).
+
+    Returns
+    -------
+    dict
+        ``designs`` (rate, hold, relative bound per parameter, length needed [s]) and
+        ``recommendation`` (a sentence).
+    """
+    if not (math.isfinite(target) and 0 < target < 1):
+        raise OptionError(f"target must lie strictly between 0 and 1, got {target}")
+    designs: list[dict[str, Any]] = []
+    for rate, hold in LOG_DESIGNS:
+        rel = identification_bound(params, rate=rate, hold=hold, **options)
+        worst = max(rel, key=lambda k: rel[k])
+        designs.append({"rate_hz": rate, "hold_s": list(hold), "relative_bound_1s": rel,
+                        "limiting": worst, "length_s": (rel[worst] / target) ** 2})
+    best = min(designs, key=lambda d: d["length_s"])
+    text = (f"log at {best['rate_hz']:g} Hz with levels held {best['hold_s'][0]:g}–{best['hold_s'][1]:g} s for "
+            f"{max(best['length_s'], 1.0):.3g} s: every parameter to {100 * target:g} % (1σ, Cramér–Rao; "
+            f"{best['limiting']} limits)")
+    return {"designs": designs, "recommendation": text}

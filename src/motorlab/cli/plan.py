@@ -57,6 +57,9 @@ def register(subparsers: Any) -> None:
     parser.add_argument(
         "--shunt", type=quantity("ohm", positive=True), default=0.1, help="INA219 shunt (default 0.1 ohm)"
     )
+    parser.add_argument("--identification-log", action="store_true",
+                        help="also recommend the rate, excitation and length of a log for `analyze identify` "
+                        "(Cramér–Rao bound at the nominal model)")
     parser.add_argument("--json", action="store_true", help="machine-readable output")
     parser.set_defaults(func=run)
 
@@ -81,8 +84,14 @@ def run(args: argparse.Namespace) -> int:
         scale_capacity=args.scale_max,
         shunt_resistance=args.shunt,
     )
+    ident = None
+    if getattr(args, "identification_log", False):
+        from motorlab.plan import plan_identification_log
+
+        ident = plan_identification_log(motor.nominal_params(), voltage=args.voltage or motor.nominal_voltage,
+                                        cpr=motor.cpr)
     if args.json:
-        print_json(plan.to_dict())
+        print_json({**plan.to_dict(), **({"identification_log": ident} if ident else {})})
         return 0
     from rich.console import Console
     from rich.markup import escape
@@ -100,6 +109,8 @@ def run(args: argparse.Namespace) -> int:
         console.print(table)
     for warning in plan.warnings:
         console.print(f"[yellow]warning:[/yellow] {escape(warning)}")
+    if ident:
+        console.print(f"identification log: {escape(ident['recommendation'])}")
     return 0
 
 
