@@ -29,3 +29,7 @@ def test_no_library_module_imports_the_cli(measures: tuple) -> None:
 
 def test_python_control_is_for_tests_only(measures: tuple) -> None:
     assert measures.control_imports == []
+
+
+def test_no_import_circles(measures: tuple) -> None:
+    assert measures.cycles == []

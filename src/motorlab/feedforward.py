@@ -34,7 +34,8 @@ import numpy as np
 from motorlab import _oe
 from motorlab.errors import FitError, OptionError
 from motorlab.fitting import MAX_RELATIVE_STDERR
-from motorlab.identify import (
+from motorlab.model import MotorParams, feedforward_from_params, params_from_feedforward
+from motorlab.oe_runs import (
     _prepare,
     _result,
     excitation_warnings,
@@ -43,7 +44,6 @@ from motorlab.identify import (
     read_runs,
     window_integrals,
 )
-from motorlab.model import MotorParams, feedforward_from_params, params_from_feedforward
 from motorlab.recording import Recording
 from motorlab.results import Estimate, FitResult
 from motorlab.units import SI_UNITS
@@ -566,7 +566,7 @@ def read_tests(paths: list[str], *, cpr: float | None, side: str = "both", units
     SysId and frc-characterization JSON files carry their own units: ``side`` and ``units`` go to
     their readers, and a ``cpr`` becomes the file's position quantum, one count = one logged
     rotation / cpr (:func:`apply_cpr`). Other formats get ``cpr`` in their reader
-    (:func:`motorlab.identify.read_runs`).
+    (:func:`motorlab.oe_runs.read_runs`).
     """
     from motorlab import io as mio
 
