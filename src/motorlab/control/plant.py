@@ -6,15 +6,14 @@ rotations, degrees, encoder ticks, or metres of a wheel of given radius.
 
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass
 from os import PathLike
-from pathlib import Path
 from typing import Any
 
 from motorlab.control.design import Feedforward
 from motorlab.errors import InputError, LogFormatError, OptionError
+from motorlab.io._text import load_json, read_bytes
 from motorlab.model import PARAMETER_NAMES, MotorParams, feedforward_from_params
 
 UNIT_NAMES = ("rad", "rotations", "degrees", "ticks", "m")
@@ -185,16 +184,11 @@ def load_plant(paths: list[str | PathLike[str]], *, unit: str | None = None) -> 
     merged: dict[str, float] = {}
     names = (*PARAMETER_NAMES, "kS", "kV", "kA")
     for path in paths:
-        try:
-            raw = Path(path).read_bytes()
-        except OSError as exc:  # missing, a directory, unreadable: the user's file, named in one line
-            raise LogFormatError(f"cannot read the file ({exc.strerror})", path=path) from None
+        _name, raw = read_bytes(path)  # missing, a directory, a FIFO, too large: named in one line
         if not raw.strip():
             raise LogFormatError("the file is empty (expected motorlab analyze --json output)", path=path)
         try:
-            doc = json.loads(raw.decode("utf-8-sig"))
-        except json.JSONDecodeError as exc:
-            raise LogFormatError(f"not valid JSON ({exc.msg})", path=path, line=exc.lineno) from None
+            doc = load_json(raw.decode("utf-8-sig"), str(path))
         except UnicodeDecodeError:
             raise LogFormatError("not a text (JSON) file", path=path) from None
         found: list[dict[str, Any]] = []

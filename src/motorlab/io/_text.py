@@ -6,10 +6,15 @@ so that the command line prints one clear line instead of a traceback.
 
 from __future__ import annotations
 
+import json
 import math
 import os
+import re
+import stat
+from collections.abc import Sequence
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cached_property, lru_cache
+from typing import Any
 
 from motorlab.errors import LogFormatError, OptionError
 from motorlab.units import registry
@@ -17,27 +22,56 @@ from motorlab.units import registry
 PathArg = str | os.PathLike[str]
 
 
+#: Largest input file read without being asked [bytes] (512 MiB: about 6 million rows of an FTC
+#: log, far beyond any real run); ``MOTORLAB_MAX_INPUT_SIZE`` (bytes, or "2 GB") lifts it.
+MAX_INPUT_SIZE = 512 * 2**20
+MAX_SIZE_ENV = "MOTORLAB_MAX_INPUT_SIZE"
+
+
 @dataclass(frozen=True)
 class TextFile:
-    """The lines of a text file, with what the readers need to know about its ending.
+    """The text of a log file, with what the readers need to know about its ending.
 
     Attributes
     ----------
     path
         The path as given (a string).
-    lines
-        The lines without their line terminators (``\\n``, ``\\r\\n`` and ``\\r`` are all accepted).
-    ends_with_newline
-        False when the last line has no terminator: a log whose writer stopped mid-line.
+    text
+        The decoded text (UTF-8 with or without BOM, else Latin-1: see ``encoding``).
+    encoding
+        ``"utf-8"`` or ``"latin-1"`` (a file that is not UTF-8, e.g. a Windows editor's "µH").
     """
 
     path: str
-    lines: list[str]
-    ends_with_newline: bool
+    text: str
+    encoding: str = "utf-8"
+
+    @cached_property
+    def lines(self) -> list[str]:
+        """The lines without their terminators (``\\n``, ``\\r\\n`` and ``\\r`` are all accepted)."""
+        return self.text.splitlines()
+
+    @property
+    def ends_with_newline(self) -> bool:
+        """False when the last line has no terminator: a log whose writer stopped mid-line."""
+        return self.text.endswith(("\n", "\r"))
 
     def numbered(self) -> list[tuple[int, str]]:
         """``(line_number, stripped_text)`` of the lines that are not blank (1-based numbers)."""
         return [(n, text.strip()) for n, text in enumerate(self.lines, start=1) if text.strip()]
+
+    def head(self, count: int) -> list[tuple[int, str]]:
+        """The first ``count`` non-blank lines as :meth:`numbered` gives them, without splitting the whole file."""
+        size = 1 << 16
+        while True:
+            complete = size >= len(self.text)
+            lines = self.text[:size].splitlines()
+            if not complete:
+                lines = lines[:-1]  # the last one may be cut by the prefix
+            out = [(n, line.strip()) for n, line in enumerate(lines, start=1) if line.strip()][:count]
+            if len(out) >= count or complete:
+                return out
+            size *= 4
 
     def is_last(self, line: int) -> bool:
         """True when ``line`` is the last line of the file."""
@@ -48,44 +82,160 @@ class TextFile:
         return self.is_last(line) and not self.ends_with_newline
 
 
-def read_bytes(path: PathArg) -> tuple[str, bytes]:
-    """The raw content of ``path`` (never modified), or a :class:`LogFormatError` if it cannot be read."""
+def max_input_size() -> int:
+    """The size limit of an input file [bytes]: :data:`MAX_INPUT_SIZE` or ``$MOTORLAB_MAX_INPUT_SIZE``."""
+    text = os.environ.get(MAX_SIZE_ENV, "").strip()
+    if not text:
+        return MAX_INPUT_SIZE
+    try:
+        value = float(text) if _PLAIN_NUMBER.match(text) else registry().Quantity(text).to("byte").magnitude
+    except Exception:  # pint raises several types for text that is no size
+        raise OptionError(f"{MAX_SIZE_ENV}={text!r}: expected a size in bytes, or e.g. '2 GB'") from None
+    if not math.isfinite(value) or value <= 0:
+        raise OptionError(f"{MAX_SIZE_ENV}={text!r}: the size limit must be positive")
+    return int(min(value, 2**62))
+
+
+_PLAIN_NUMBER = re.compile(r"^[0-9]+(\.[0-9]*)?([eE][+-]?[0-9]+)?$")
+
+
+def _megabytes(size: int) -> str:
+    return f"{size / 2**20:.0f} MiB" if size >= 2**20 else f"{size} bytes"
+
+
+def check_input_file(path: PathArg) -> tuple[str, int]:
+    """The name and size of an input file, refusing at once what cannot be a log.
+
+    Only regular files are read: a directory, a FIFO (which would wait for a writer for ever), a
+    device such as ``/dev/zero`` (which never ends) or a socket is refused before it is opened;
+    so is a file larger than :func:`max_input_size`.
+
+    Raises
+    ------
+    LogFormatError
+        Naming the file and what it is.
+    """
     name = os.fspath(path)
     if not isinstance(name, str):  # bytes paths: decode for messages
         name = os.fsdecode(name)
     if not name.strip():
         raise LogFormatError("the file name is empty")
     try:
-        with open(name, "rb") as handle:
-            return name, handle.read()
+        info = os.stat(name)
     except FileNotFoundError:
         raise LogFormatError("no such file", path=name) from None
-    except IsADirectoryError:
-        raise LogFormatError("is a directory, not a log file", path=name) from None
     except OSError as exc:
         raise LogFormatError(f"cannot read the file ({exc.strerror})", path=name) from None
+    mode = info.st_mode
+    if stat.S_ISDIR(mode):
+        raise LogFormatError("is a directory, not a log file", path=name)
+    if not stat.S_ISREG(mode):
+        kind = (
+            "a FIFO (named pipe)" if stat.S_ISFIFO(mode)
+            else "a device" if stat.S_ISCHR(mode) or stat.S_ISBLK(mode)
+            else "a socket" if stat.S_ISSOCK(mode)
+            else "not a regular file"
+        )
+        raise LogFormatError(f"is {kind}, not a log file: only regular files are read", path=name)
+    limit = max_input_size()
+    if info.st_size > limit:
+        raise LogFormatError(
+            f"is {_megabytes(info.st_size)}, above the {_megabytes(limit)} limit for an input file; "
+            f"set {MAX_SIZE_ENV} (e.g. {MAX_SIZE_ENV}='2 GB') to read it anyway",
+            path=name,
+        )
+    return name, limit
 
 
-def read_text(path: PathArg) -> TextFile:
-    """Read a text log: UTF-8 (with or without BOM), any line endings.
+def check_distinct(paths: Sequence[PathArg]) -> None:
+    """Refuse a file given twice (also under two names): one run's data would be counted twice.
 
     Raises
     ------
     LogFormatError
-        If the file is missing, binary (NUL bytes or invalid UTF-8: "not a text file") or empty.
+        Naming the file given again.
+    """
+    seen: dict[tuple[int, int] | str, str] = {}
+    for path in paths:
+        name = os.fsdecode(os.fspath(path))
+        try:
+            info = os.stat(name)
+            key: tuple[int, int] | str = (info.st_dev, info.st_ino)
+        except OSError:
+            key = os.path.abspath(name)  # missing: the reader names it
+        if key in seen:
+            same = "" if seen[key] == name else f" (the same file as {seen[key]})"
+            raise LogFormatError(f"given twice{same}: each file of a run is read once", path=name)
+        seen[key] = name
+
+
+def read_bytes(path: PathArg) -> tuple[str, bytes]:
+    """The raw content of ``path`` (never modified), or a :class:`LogFormatError` if it cannot be read.
+
+    Every reader comes through here: :func:`check_input_file` refuses special files and files above
+    the size limit before anything is read, and at most the limit is ever read.
+    """
+    name, limit = check_input_file(path)
+    try:
+        with open(name, "rb") as handle:
+            raw = handle.read(limit + 1)
+    except IsADirectoryError:
+        raise LogFormatError("is a directory, not a log file", path=name) from None
+    except OSError as exc:
+        raise LogFormatError(f"cannot read the file ({exc.strerror})", path=name) from None
+    if len(raw) > limit:  # grew while being read
+        raise LogFormatError(f"is larger than the {_megabytes(limit)} limit; set {MAX_SIZE_ENV} to lift it", path=name)
+    return name, raw
+
+
+def decode_text(raw: bytes) -> tuple[str, str]:
+    """``(text, encoding)``: UTF-8 (a BOM is dropped), else Latin-1, which every byte sequence is."""
+    try:
+        return raw.decode("utf-8-sig"), "utf-8"
+    except UnicodeDecodeError:
+        return raw.decode("latin-1"), "latin-1"
+
+
+_CONTROL = re.compile(rb"[\x00-\x08\x0e-\x1f\x7f]")
+
+
+def is_binary(raw: bytes) -> bool:
+    """True for bytes no text log holds: a NUL, or control characters in a file that is not UTF-8."""
+    if b"\0" in raw:
+        return True
+    try:
+        raw.decode("utf-8-sig")
+    except UnicodeDecodeError:
+        return _CONTROL.search(raw) is not None
+    return False
+
+
+def load_json(text: str, name: str) -> Any:
+    """``json.loads(text)``, with every failure (syntax, nesting too deep) a :class:`LogFormatError`."""
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise LogFormatError(f"not valid JSON ({exc.msg})", path=name, line=exc.lineno) from None
+    except RecursionError:
+        raise LogFormatError("not a data file: JSON nested too deeply", path=name) from None
+
+
+def read_text(path: PathArg) -> TextFile:
+    """Read a text log: UTF-8 (with or without BOM) or Latin-1, any line endings.
+
+    Raises
+    ------
+    LogFormatError
+        If the file is missing, not a regular file, too large, binary (NUL bytes: "not a text
+        file") or empty.
     """
     name, raw = read_bytes(path)
     if not raw.strip():
         raise LogFormatError("the file is empty", path=name)
-    if b"\0" in raw:
+    if is_binary(raw):
         raise LogFormatError("not a text file (it contains binary data)", path=name)
-    try:
-        text = raw.decode("utf-8-sig")
-    except UnicodeDecodeError as exc:
-        line = raw[: exc.start].count(b"\n") + 1
-        raise LogFormatError("not a text file (invalid UTF-8)", path=name, line=line) from None
-    ends = text.endswith(("\n", "\r"))
-    return TextFile(path=name, lines=text.splitlines(), ends_with_newline=ends)
+    text, encoding = decode_text(raw)
+    return TextFile(path=name, text=text, encoding=encoding)
 
 
 def parse_number(token: str, *, path: str, line: int, column: str) -> float:

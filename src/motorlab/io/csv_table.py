@@ -16,6 +16,7 @@ import numpy as np
 
 from motorlab.errors import LogFormatError, OptionError
 from motorlab.io._text import PathArg, TextFile, check_cpr, is_number, parse_number, read_text, unit_factor
+from motorlab.io.glitches import screen_glitches
 from motorlab.recording import SIGNALS, Recording
 
 #: Known column names -> (canonical signal, unit as written). ``"time"`` is the time axis [s].
@@ -223,7 +224,7 @@ def read_csv(path: PathArg, *, cpr: float | None = None) -> Recording:
             "warnings": warnings,
         }
     )
-    return Recording(time=time, signals=signals, metadata=metadata, source=name, lines=line_arr)
+    return screen_glitches(Recording(time=time, signals=signals, metadata=metadata, source=name, lines=line_arr))
 
 
 def _resolve_header(header: list[str], *, path: str, line: int) -> list[tuple[str, str] | None]:

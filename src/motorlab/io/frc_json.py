@@ -9,7 +9,6 @@ back separately. See ``docs/formats.md`` and ``shared/data/real/README.md``.
 
 from __future__ import annotations
 
-import json
 import math
 import re
 from dataclasses import dataclass
@@ -18,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from motorlab.errors import LogFormatError, OptionError
-from motorlab.io._text import PathArg, read_bytes, unit_factor
+from motorlab.io._text import PathArg, load_json, read_bytes, unit_factor
 from motorlab.recording import Recording
 
 #: The four tests, in the order the tools run them (segments keep this order).
@@ -60,14 +59,13 @@ def _load(path: PathArg) -> tuple[str, dict[str, Any], str]:
     name, raw = read_bytes(path)
     if not raw.strip():
         raise LogFormatError("the file is empty", path=name)
+    if b"\0" in raw:
+        raise LogFormatError("not a text file (it contains binary data)", path=name)
     try:
-        text = raw.decode("utf-8-sig")
+        text = raw.decode("utf-8-sig")  # JSON is UTF-8 by definition (RFC 8259)
     except UnicodeDecodeError:
         raise LogFormatError("not a text file (invalid UTF-8)", path=name) from None
-    try:
-        data = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise LogFormatError(f"not valid JSON ({exc.msg})", path=name, line=exc.lineno) from None
+    data = load_json(text, name)
     if not isinstance(data, dict):
         raise LogFormatError("expected a JSON object with test names as keys", path=name, line=1)
     return name, data, text

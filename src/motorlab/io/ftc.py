@@ -21,7 +21,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from motorlab.errors import LogFormatError, OptionError
-from motorlab.io._text import PathArg, check_cpr, is_number, parse_number, read_text, unit_factor
+from motorlab.io._text import PathArg, check_cpr, check_distinct, is_number, parse_number, read_text, unit_factor
+from motorlab.io.glitches import screen_glitches
 from motorlab.recording import Recording
 
 #: Column names of the four-column and two-column variants, in file order.
@@ -106,6 +107,7 @@ def read_ftc_log(
         path_list = list(paths)
     if not path_list:
         raise OptionError("read_ftc_log needs at least one file")
+    check_distinct(path_list)
     parts = [_read_part(p) for p in path_list]
     ncol = parts[0].rows.shape[1]
     for part in parts[1:]:
@@ -154,13 +156,14 @@ def read_ftc_log(
         "placeholder_rows_dropped": sum(p.placeholders for p in parts),
         "warnings": [w for p in parts for w in p.warnings],
     }
-    return Recording(
+    recording = Recording(
         time=times,
         signals=signals,
         metadata=metadata,
         source=" + ".join(p.path for p in parts),
         lines=np.concatenate([p.lines for p in parts]),
     )
+    return screen_glitches(recording)
 
 
 def _read_part(path: PathArg) -> _Part:
