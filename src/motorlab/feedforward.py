@@ -477,4 +477,5 @@ def from_cli(experiment: str, paths: list[str], args: argparse.Namespace) -> Fit
         result.parameters.update(
             motor_estimates(result, resistance=resistance, torque_constant=getattr(args, "torque_constant", None))
         )
+        result.check_physics()
     return result

@@ -145,6 +145,26 @@ class FitResult:
     details: dict[str, Any] = field(default_factory=dict)
     sources: list[str] = field(default_factory=list)
 
+    def __post_init__(self) -> None:
+        self.check_physics()
+
+    def check_physics(self) -> None:
+        """Warn of parameters fitted negative that must be positive; refuse when given options force them.
+
+        Runs when the result is made; run it again after adding parameters (see
+        :mod:`motorlab.plausibility`).
+
+        Raises
+        ------
+        OptionError
+            When values the user gave (``note="given"``) clearly contradict the data.
+        """
+        from motorlab.plausibility import check_signs
+
+        for text in check_signs(self.parameters):
+            if text not in self.warnings:
+                self.warnings.append(text)
+
     def __getitem__(self, name: str) -> Estimate:
         return self.parameters[name]
 

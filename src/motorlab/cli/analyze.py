@@ -62,6 +62,8 @@ def run(args: argparse.Namespace) -> int:
         check_figure_path(plot_path)
     groups = [[path] for path in args.files] if args.each else [list(args.files)]
     results = [module.from_cli(args.experiment, paths, args) for paths in groups]
+    for result in results:
+        result.check_physics()  # also what an analysis added after making its result
     if plot_path is not None:
         _save_plots(results, plot_path, each=args.each)
     if args.json:
