@@ -51,6 +51,7 @@ from pathlib import Path
 from typing import Any
 
 from motorlab.errors import InputError, MotorlabError, OptionError, SessionError
+from motorlab.io._output import write_text_atomic
 from motorlab.io._text import read_bytes
 from motorlab.plan import MATERIALS, disc_inertia
 from motorlab.units import format_unit, parse_quantity
@@ -880,7 +881,7 @@ def write_simulated_session(
             if key == "free-spinup":
                 lines.append(f'current = "{settings["current"]:g} A"')
     path = out / "session.toml"
-    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    write_text_atomic(path, "\n".join(lines) + "\n")
     return path
 
 

@@ -7,12 +7,15 @@ Everything inside motorlab is SI (rad, s, A, V, Ω, H, kg·m², N·m). Text such
 from __future__ import annotations
 
 import math
+import re
 from functools import lru_cache
 from typing import Any
 
 import pint
 
 from motorlab.errors import OptionError
+
+_DIGIT_SEPARATOR = re.compile(r"\d_|_\d")
 
 #: Standard gravity [m/s²], used where a mass stands for a force (scale readings, "in*oz").
 STANDARD_GRAVITY = 9.80665
@@ -82,6 +85,8 @@ def parse_quantity(value: Any, unit: str, *, name: str = "value") -> float:
         number = float(value)
     else:
         text = str(value).strip()
+        if _DIGIT_SEPARATOR.search(text):  # Python and pint read "1_0" as 10: refuse, do not guess
+            raise OptionError(f"{name}: {value!r} is not a number (no '_' between digits)")
         try:
             number = float(text)
         except ValueError:

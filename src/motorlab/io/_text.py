@@ -241,6 +241,8 @@ def read_text(path: PathArg) -> TextFile:
 def parse_number(token: str, *, path: str, line: int, column: str) -> float:
     """``token`` as a finite float, or a :class:`LogFormatError` naming the column and line."""
     try:
+        if "_" in token:  # Python reads "1_0" as 10; no instrument writes that
+            raise ValueError(token)
         value = float(token)
     except ValueError:
         shown = token if token else "an empty field"
@@ -252,6 +254,8 @@ def parse_number(token: str, *, path: str, line: int, column: str) -> float:
 
 def is_number(token: str) -> bool:
     """True when ``token`` reads as a float (NaN and inf included: they are numbers, only bad ones)."""
+    if "_" in token:  # float("1_0") == 10.0: a digit separator no instrument writes
+        return False
     try:
         float(token)
     except ValueError:

@@ -8,14 +8,24 @@ Leading ``# key: value`` lines are metadata (``# cpr: 1120``, ``# experiment: te
 from __future__ import annotations
 
 import math
-import os
 from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
 
 from motorlab.errors import LogFormatError, OptionError
-from motorlab.io._text import PathArg, TextFile, check_cpr, is_number, parse_number, read_text, unit_factor
+from motorlab.io._output import write_text_atomic
+from motorlab.io._text import (
+    PathArg,
+    TextFile,
+    check_cpr,
+    check_input_file,
+    decode_text,
+    is_number,
+    parse_number,
+    read_text,
+    unit_factor,
+)
 from motorlab.io.glitches import screen_glitches
 from motorlab.recording import SIGNALS, Recording
 
@@ -227,6 +237,27 @@ def read_csv(path: PathArg, *, cpr: float | None = None) -> Recording:
     return screen_glitches(Recording(time=time, signals=signals, metadata=metadata, source=name, lines=line_arr))
 
 
+def check_header(path: PathArg) -> None:
+    """Check the header of a CSV table without reading its rows (a session's files, before any analysis).
+
+    Raises
+    ------
+    LogFormatError
+        An unknown column or unit (``current_furlongs``), two columns for one signal, no header.
+    """
+    name, _limit = check_input_file(path)
+    with open(name, "rb") as handle:
+        head = handle.read(1 << 16)
+    text, _encoding = decode_text(head[: head.rfind(b"\n") + 1] or head)
+    lines = TextFile(path=name, text=text)
+    _metadata, _comments, start = parse_comments(lines)
+    if start >= len(lines.lines):
+        return  # read_csv explains
+    header = split_fields(lines.lines[start].strip(), guess_delimiter(lines.lines[start].strip()))
+    if not all(is_number(f) for f in header):
+        _resolve_header(header, path=name, line=start + 1)
+
+
 def _resolve_header(header: list[str], *, path: str, line: int) -> list[tuple[str, str] | None]:
     """Map each header field to (signal, unit), None for ``x_`` extras; errors for unknown/duplicates."""
     targets: list[tuple[str, str] | None] = []
@@ -304,8 +335,7 @@ def write_csv(
     out.append(",".join(names))
     for k in range(size):
         out.append(",".join(_format(values[k]) for values in arrays))
-    with open(os.fspath(path), "w", encoding="utf-8", newline="") as handle:
-        handle.write("\n".join(out) + "\n")
+    write_text_atomic(path, "\n".join(out) + "\n", newline="")
 
 
 def _format(value: Any) -> str:

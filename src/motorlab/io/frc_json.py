@@ -9,6 +9,7 @@ back separately. See ``docs/formats.md`` and ``shared/data/real/README.md``.
 
 from __future__ import annotations
 
+import difflib
 import math
 import re
 from dataclasses import dataclass
@@ -147,9 +148,25 @@ def _tests(name: str, data: dict[str, Any], text: str, columns: tuple[int, ...])
             i = int(back[0]) + 1
             raise LogFormatError(f"test {key!r}: time goes backwards at row {i}", path=name, line=int(line_arr[i]))
         tests.append(_Test(key, array, line_arr))
+    # frc-characterization's drivetrain files also hold a "track-width" test (not a feedforward test).
+    unknown = [key for key, rows in data.items() if key not in (*TESTS, "track-width") and _looks_like_rows(rows)]
+    for key in unknown:
+        close = difflib.get_close_matches(key, TESTS, n=1)
+        hint = f"did you mean {close[0]!r}? " if close else ""
+        lines = line_map.get(key, [])
+        where = f"{name}:{lines[0]}" if lines else name
+        warnings.append(
+            f"{where}: {key!r} is not a test name ({hint}known: {', '.join(TESTS)}): its rows were not used"
+        )
     if not tests:
-        raise LogFormatError(f"no test data: none of {', '.join(TESTS)} is in the file", path=name)
+        also = f" (found {', '.join(map(repr, unknown))} instead)" if unknown else ""
+        raise LogFormatError(f"no test data: none of {', '.join(TESTS)} is in the file{also}", path=name)
     return tests, warnings
+
+
+def _looks_like_rows(value: Any) -> bool:
+    """True for a non-empty list of lists (a test's data under a name that is not a test's)."""
+    return isinstance(value, list) and bool(value) and all(isinstance(row, list) for row in value[:3])
 
 
 def _units(name: str, data: dict[str, Any]) -> tuple[str, float, str, float]:

@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from motorlab.errors import LogFormatError, OptionError
+from motorlab.io._output import write_text_atomic
 from motorlab.io._text import PathArg, check_cpr, check_distinct, is_number, parse_number, read_text, unit_factor
 from motorlab.io.glitches import screen_glitches
 from motorlab.recording import Recording
@@ -326,5 +327,4 @@ def write_ftc_log(
         out.append(row)
     out += ["0.0 0 0.0 0.0" if four else "0.0 0"] * placeholder_rows
     newline = "\r\n" if crlf else "\n"
-    with open(os.fspath(path), "w", encoding="utf-8", newline="") as handle:
-        handle.write(newline.join(out) + newline)
+    write_text_atomic(path, newline.join(out) + newline, newline="")

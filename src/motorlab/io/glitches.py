@@ -89,7 +89,13 @@ def screen_glitches(recording: Recording) -> Recording:
     if timed and n > 1 and float(recording.time[-1]) == float(recording.time[0]):
         raise LogFormatError("every row has the same time: the time column does not advance", path=_path(recording))
     columns = [("time", recording.time, ABSURD_TIME)] if timed else []
-    columns += [(name, values, ABSURD.get(name, DEFAULT_ABSURD)) for name, values in recording.signals.items()]
+    # A position computed from counts and the user's cpr is the option's business, not the file's.
+    derived = {"position"} if "counts" in recording.signals else set()
+    columns += [
+        (name, values, ABSURD.get(name, DEFAULT_ABSURD))
+        for name, values in recording.signals.items()
+        if name not in derived
+    ]
     for name, values, limit in columns:
         absurd = np.flatnonzero(np.abs(values) > limit)
         if absurd.size > allowed:
