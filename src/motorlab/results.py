@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from motorlab.units import format_unit
+from motorlab.units import format_percent, format_unit
 
 
 @dataclass(frozen=True)
@@ -77,7 +77,7 @@ class Estimate:
             )
         if not math.isfinite(self.stderr):
             return f"{self.name} = {self.value:.6g} ± ? {unit} (uncertainty could not be estimated)"
-        return f"{self.name} = {self.value:.6g} ± {self.stderr:.2g} {unit} ({100 * self.relative_error:.2f} %)"
+        return f"{self.name} = {self.value:.6g} ± {self.stderr:.2g} {unit} ({format_percent(self.relative_error)})"
 
 
 @dataclass

@@ -118,6 +118,12 @@ def _parse_with_pint(text: str, unit: str, name: str) -> float:
     )
 
 
+def format_percent(fraction: float, spec: str = ".2f") -> str:
+    """``100·fraction`` as ``"12.34 %"``, or ``"? %"`` when it is not a finite number (never "nan %")."""
+    value = 100.0 * float(fraction)
+    return f"{value:{spec}} %" if math.isfinite(value) else "? %"
+
+
 def format_unit(unit: str) -> str:
     """A unit string as printed for people: ``"N*m*s/rad"`` -> ``"N·m·s/rad"``."""
     return unit.replace("**", "^").replace("*", "·").replace("^2", "²").replace("ohm", "Ω")

@@ -97,11 +97,14 @@ class Plant:
         The full motor model, when K, R, J are known (simulated instead of the feedforward plant).
     source
         Where the numbers came from (for reports).
+    notes
+        What the tuner must say about the numbers (e.g. kS missing and taken as 0).
     """
 
     feedforward: Feedforward
     params: MotorParams | None = None
     source: str = ""
+    notes: tuple[str, ...] = ()
 
     @property
     def simulated(self) -> MotorParams | Feedforward:
@@ -222,7 +225,11 @@ def load_plant(paths: list[str | PathLike[str]], *, unit: str | None = None) -> 
             params = MotorParams.from_dict(merged)
         if "kV" in merged and "kA" in merged:
             ff = Feedforward(max(merged.get("kS", 0.0), 0.0), merged["kV"], merged["kA"]).check_plant()
-            return Plant(ff, params, source)
+            notes: tuple[str, ...] = ()
+            if "kS" not in merged:  # absent or null (not determined): say so, do not print a silent 0
+                notes = (f"kS is not given (or not determined) in {source}: taken as 0 V, so there is no "
+                         "static-friction feedforward",)
+            return Plant(ff, params, source, notes)
     except InputError as exc:
         raise LogFormatError(exc.message, path=paths[-1] if len(paths) == 1 else source) from None
     if params is not None:

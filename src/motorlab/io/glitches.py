@@ -106,15 +106,15 @@ def screen_glitches(recording: Recording) -> Recording:
                 path=_path(recording, k),
                 line=recording.line_of(k),
             )
-        for k in absurd:
-            bad.setdefault(int(k), f"{name} = {values[k]:.6g} is beyond any measurement")
+        for index in absurd.tolist():
+            bad.setdefault(index, f"{name} = {values[index]:.6g} is beyond any measurement")
         if name == "time":
             continue
         finite = np.abs(values) <= limit
         spikes = _spikes(values) if finite.all() else np.empty(0, dtype=int)
         if 0 < spikes.size <= allowed:
-            for k in spikes:
-                bad.setdefault(int(k), f"{name} = {values[k]:.6g} jumps away from its neighbours and back")
+            for index in spikes.tolist():
+                bad.setdefault(index, f"{name} = {values[index]:.6g} jumps away from its neighbours and back")
     if not bad or len(bad) > allowed or len(bad) >= n - 1:
         return recording
     keep = np.ones(n, dtype=bool)
