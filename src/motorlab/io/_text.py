@@ -11,10 +11,13 @@ import math
 import os
 import re
 import stat
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import cached_property, lru_cache
 from typing import Any
+
+import numpy as np
 
 from motorlab.errors import LogFormatError, OptionError
 from motorlab.units import registry
@@ -287,3 +290,104 @@ def check_cpr(cpr: float | None) -> float | None:
     if not math.isfinite(value) or value <= 0:
         raise OptionError(f"cpr: counts per revolution must be positive, got {cpr!r}")
     return value
+
+
+# ---- the fast path for large numeric tables --------------------------------------------------------
+
+_CHUNK = 1 << 23  # bytes scanned at a time: bounds the temporary arrays of a 2M-row log to a few MB
+_NUMERIC = np.zeros(256, dtype=bool)
+_NUMERIC[np.frombuffer(b"0123456789+-.eE \t\r\n", dtype=np.uint8)] = True
+_SEPARATOR = np.zeros(256, dtype=bool)
+_SEPARATOR[np.frombuffer(b" \t\r\n", dtype=np.uint8)] = True
+
+
+@dataclass(frozen=True)
+class Table:
+    """Rows parsed by :func:`fast_table`: values, their 1-based file lines, a dropped truncated last line."""
+
+    values: np.ndarray
+    lines: np.ndarray
+    truncated: tuple[int, str] | None = None
+
+
+def _line_offset(text: str, line: int) -> int:
+    """Character offset where 1-based ``line`` starts (lines ended by ``\\n``)."""
+    offset = 0
+    for _ in range(line - 1):
+        offset = text.index("\n", offset) + 1
+    return offset
+
+
+def fast_table(text: TextFile, first_line: int, ncol: int, delimiter: str | None) -> Table | None:
+    """Parse the rows of a purely numeric table in C (numpy), or None when the slow path must do it.
+
+    The slow, line-by-line readers name the line and the problem of any bad row; this function only
+    takes the clean case: from ``first_line`` on, nothing but numbers, separators and line ends
+    (no comment, no NaN, no hexadecimal, no ``1_0``), every non-blank line with ``ncol`` fields
+    (``delimiter``-separated, or whitespace when None). A last line without a line end and with
+    fewer fields (a writer cut off) is dropped and reported. Anything else returns None and the
+    caller's own loop finds and names the problem.
+    """
+    try:
+        start = _line_offset(text.text, first_line)
+    except ValueError:
+        return None
+    region = text.text[start:]
+    if not region.strip() or not region.isascii() or region.count("\r") != region.count("\r\n"):
+        return None  # a bare CR ends lines that \n-counting would not see
+    raw = region.encode("ascii")
+    allowed = _NUMERIC.copy()
+    separator = _SEPARATOR.copy()
+    if delimiter is not None:
+        code = ord(delimiter)
+        allowed[code] = separator[code] = True
+    newlines: list[np.ndarray] = []
+    token_starts: list[np.ndarray] = []
+    delimiters: list[np.ndarray] = []
+    previous_is_separator = True
+    for begin in range(0, len(raw), _CHUNK):
+        chunk = np.frombuffer(raw, dtype=np.uint8, count=min(_CHUNK, len(raw) - begin), offset=begin)
+        if not allowed[chunk].all():
+            return None
+        is_sep = separator[chunk]
+        before = np.concatenate([[previous_is_separator], is_sep[:-1]])
+        token_starts.append(np.flatnonzero(~is_sep & before) + begin)
+        newlines.append(np.flatnonzero(chunk == 10) + begin)
+        if delimiter is not None:
+            delimiters.append(np.flatnonzero(chunk == ord(delimiter)) + begin)
+        previous_is_separator = bool(is_sep[-1])
+    nl = np.concatenate(newlines)
+    n_lines = nl.size + (0 if region.endswith("\n") else 1)
+    # Line k spans [bounds[k], bounds[k + 1]): count the sorted token starts in each span.
+    bounds = np.concatenate([[0], nl[: n_lines - 1] + 1, [len(raw)]])
+
+    def per_line(positions: list[np.ndarray]) -> np.ndarray:
+        return np.diff(np.searchsorted(np.concatenate(positions), bounds))
+
+    tokens = per_line(token_starts)
+    nonblank = np.flatnonzero(tokens)
+    if nonblank.size == 0:
+        return None
+    counts_ok = tokens[nonblank] == ncol
+    if delimiter is not None:
+        counts_ok &= per_line(delimiters)[nonblank] == ncol - 1
+    truncated: tuple[int, str] | None = None
+    last = int(nonblank[-1])
+    if tokens[last] < ncol and last == n_lines - 1 and not text.ends_with_newline:
+        last_start = int(nl[-1]) + 1 if nl.size else 0
+        truncated = (first_line + n_lines - 1, region[last_start:].strip())
+        raw = raw[:last_start]
+        nonblank, counts_ok = nonblank[:-1], counts_ok[:-1]
+    if not counts_ok.all() or nonblank.size == 0:
+        return None
+    if delimiter is not None:
+        raw = raw.replace(delimiter.encode("ascii"), b" ")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a token C cannot read ("1e", "+-") stops the parse: slow path
+        try:
+            values = np.fromstring(raw, dtype=float, sep=" ")
+        except (ValueError, DeprecationWarning):
+            return None
+    if values.size != nonblank.size * ncol or not np.all(np.isfinite(values)):
+        return None
+    return Table(values.reshape(nonblank.size, ncol), nonblank.astype(int) + first_line, truncated)

@@ -22,7 +22,17 @@ import numpy as np
 
 from motorlab.errors import LogFormatError, OptionError
 from motorlab.io._output import write_text_atomic
-from motorlab.io._text import PathArg, check_cpr, check_distinct, is_number, parse_number, read_text, unit_factor
+from motorlab.io._text import (
+    PathArg,
+    TextFile,
+    check_cpr,
+    check_distinct,
+    fast_table,
+    is_number,
+    parse_number,
+    read_text,
+    unit_factor,
+)
 from motorlab.io.glitches import screen_glitches
 from motorlab.recording import Recording
 
@@ -169,6 +179,36 @@ def read_ftc_log(
 
 def _read_part(path: PathArg) -> _Part:
     text = read_text(path)
+    parsed = _parse_fast(text) or _parse_slow(text)
+    return _clean_part(text.path, *parsed)
+
+
+def _parse_fast(text: TextFile) -> tuple[np.ndarray, np.ndarray, str | None, list[str]] | None:
+    """The rows of a clean log parsed in C (a 2M-row log in about a second), or None (slow path)."""
+    head = text.head(2)
+    if not head:
+        return None
+    header: str | None = None
+    if not all(is_number(t) for t in head[0][1].split()):
+        header = head[0][1]
+        head = head[1:]
+    if not head or not all(is_number(t) for t in head[0][1].split()):
+        return None
+    ncol = len(head[0][1].split())
+    if ncol not in (2, 4):
+        return None
+    table = fast_table(text, head[0][0], ncol, None)
+    if table is None:
+        return None
+    warnings = []
+    if table.truncated is not None:
+        number, line = table.truncated
+        warnings.append(f"{text.path}:{number}: truncated last line dropped ({line[:40]!r})")
+    return table.values, table.lines, header, warnings
+
+
+def _parse_slow(text: TextFile) -> tuple[np.ndarray, np.ndarray, str | None, list[str]]:
+    """Line by line: finds and names the first bad line."""
     name = text.path
     header: str | None = None
     ncol: int | None = None
@@ -202,14 +242,18 @@ def _read_part(path: PathArg) -> _Part:
         lines.append(number)
     if not values:
         raise LogFormatError("no data rows (only blank or text lines)", path=name)
-    rows = np.array(values, dtype=float)
+    return np.array(values, dtype=float), np.asarray(lines, dtype=int), header, warnings
+
+
+def _clean_part(name: str, rows: np.ndarray, lines: np.ndarray, header: str | None, warnings: list[str]) -> _Part:
+    """Drop the trailing placeholder zeros, check that time runs forward."""
     nonzero = np.flatnonzero(np.any(rows != 0.0, axis=1))
     if nonzero.size == 0:
-        raise LogFormatError("only placeholder rows of zeros, no data", path=name, line=lines[0])
+        raise LogFormatError("only placeholder rows of zeros, no data", path=name, line=int(lines[0]))
     keep = int(nonzero[-1]) + 1
     placeholders = rows.shape[0] - keep
     rows = rows[:keep]
-    line_arr = np.asarray(lines[:keep], dtype=int)
+    line_arr = lines[:keep]
     backwards = np.flatnonzero(np.diff(rows[:, 0]) < 0)
     if backwards.size:
         i = int(backwards[0]) + 1
