@@ -33,21 +33,27 @@ MAX_SIZE_ENV = "MOTORLAB_MAX_INPUT_SIZE"
 
 @dataclass(frozen=True)
 class TextFile:
-    """The text of a log file, with what the readers need to know about its ending.
+    """The content of a text log, with what the readers need to know about its ending.
 
     Attributes
     ----------
     path
         The path as given (a string).
-    text
-        The decoded text (UTF-8 with or without BOM, else Latin-1: see ``encoding``).
+    raw
+        The bytes of the file, a UTF-8 byte order mark removed. Kept as bytes: the fast path of
+        :func:`fast_table` parses them without ever making the text of a 2M-row log.
     encoding
         ``"utf-8"`` or ``"latin-1"`` (a file that is not UTF-8, e.g. a Windows editor's "µH").
     """
 
     path: str
-    text: str
+    raw: bytes
     encoding: str = "utf-8"
+
+    @cached_property
+    def text(self) -> str:
+        """The decoded text."""
+        return self.raw.decode(self.encoding)
 
     @cached_property
     def lines(self) -> list[str]:
@@ -57,18 +63,18 @@ class TextFile:
     @property
     def ends_with_newline(self) -> bool:
         """False when the last line has no terminator: a log whose writer stopped mid-line."""
-        return self.text.endswith(("\n", "\r"))
+        return self.raw.endswith((b"\n", b"\r"))
 
     def numbered(self) -> list[tuple[int, str]]:
         """``(line_number, stripped_text)`` of the lines that are not blank (1-based numbers)."""
         return [(n, text.strip()) for n, text in enumerate(self.lines, start=1) if text.strip()]
 
     def head(self, count: int) -> list[tuple[int, str]]:
-        """The first ``count`` non-blank lines as :meth:`numbered` gives them, without splitting the whole file."""
+        """The first ``count`` non-blank lines as :meth:`numbered` gives them, without decoding the whole file."""
         size = 1 << 16
         while True:
-            complete = size >= len(self.text)
-            lines = self.text[:size].splitlines()
+            complete = size >= len(self.raw)
+            lines = self.raw[:size].decode(self.encoding, errors="replace").splitlines()
             if not complete:
                 lines = lines[:-1]  # the last one may be cut by the prefix
             out = [(n, line.strip()) for n, line in enumerate(lines, start=1) if line.strip()][:count]
@@ -107,7 +113,7 @@ def _megabytes(size: int) -> str:
 
 
 def check_input_file(path: PathArg) -> tuple[str, int]:
-    """The name and size of an input file, refusing at once what cannot be a log.
+    """The name and the number of bytes to read of an input file, refusing at once what cannot be a log.
 
     Only regular files are read: a directory, a FIFO (which would wait for a writer for ever), a
     device such as ``/dev/zero`` (which never ends) or a socket is refused before it is opened;
@@ -147,7 +153,7 @@ def check_input_file(path: PathArg) -> tuple[str, int]:
             f"set {MAX_SIZE_ENV} (e.g. {MAX_SIZE_ENV}='2 GB') to read it anyway",
             path=name,
         )
-    return name, limit
+    return name, min(limit, int(info.st_size))
 
 
 def check_distinct(paths: Sequence[PathArg]) -> None:
@@ -178,10 +184,15 @@ def read_bytes(path: PathArg) -> tuple[str, bytes]:
     Every reader comes through here: :func:`check_input_file` refuses special files and files above
     the size limit before anything is read, and at most the limit is ever read.
     """
-    name, limit = check_input_file(path)
+    name, size = check_input_file(path)
+    limit = max_input_size()
     try:
         with open(name, "rb") as handle:
-            raw = handle.read(limit + 1)
+            # Read what stat promised plus one byte: a buffer of the limit's size is never allocated,
+            # and a file that grew meanwhile is noticed (then read on up to the limit, no further).
+            raw = handle.read(size + 1)
+            if len(raw) > size:
+                raw += handle.read(limit + 1 - len(raw))
     except IsADirectoryError:
         raise LogFormatError("is a directory, not a log file", path=name) from None
     except OSError as exc:
@@ -206,6 +217,8 @@ def is_binary(raw: bytes) -> bool:
     """True for bytes no text log holds: a NUL, or control characters in a file that is not UTF-8."""
     if b"\0" in raw:
         return True
+    if raw.isascii():
+        return False  # ASCII is UTF-8: only a NUL makes it binary
     try:
         raw.decode("utf-8-sig")
     except UnicodeDecodeError:
@@ -233,12 +246,23 @@ def read_text(path: PathArg) -> TextFile:
         file") or empty.
     """
     name, raw = read_bytes(path)
-    if not raw.strip():
+    if not raw or raw.isspace():  # (raw.strip() would copy a 2M-row log)
         raise LogFormatError("the file is empty", path=name)
     if is_binary(raw):
         raise LogFormatError("not a text file (it contains binary data)", path=name)
-    text, encoding = decode_text(raw)
-    return TextFile(path=name, text=text, encoding=encoding)
+    return text_file(name, raw)
+
+
+def text_file(name: str, raw: bytes) -> TextFile:
+    """A :class:`TextFile` of ``raw``: UTF-8 (its BOM removed) when it is, else Latin-1."""
+    raw = raw.removeprefix(b"\xef\xbb\xbf")
+    if raw.isascii():
+        return TextFile(path=name, raw=raw, encoding="utf-8")
+    try:
+        raw.decode("utf-8")
+    except UnicodeDecodeError:
+        return TextFile(path=name, raw=raw, encoding="latin-1")
+    return TextFile(path=name, raw=raw, encoding="utf-8")
 
 
 def parse_number(token: str, *, path: str, line: int, column: str) -> float:
@@ -310,12 +334,51 @@ class Table:
     truncated: tuple[int, str] | None = None
 
 
-def _line_offset(text: str, line: int) -> int:
-    """Character offset where 1-based ``line`` starts (lines ended by ``\\n``)."""
+def _line_offset(raw: bytes, line: int) -> int:
+    """Byte offset where 1-based ``line`` starts (lines ended by ``\\n``)."""
     offset = 0
     for _ in range(line - 1):
-        offset = text.index("\n", offset) + 1
+        offset = raw.index(b"\n", offset) + 1
     return offset
+
+
+def _count_per_line(raw: bytes, begin: int, delimiter: int | None) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """Fields and delimiters on each line of ``raw[begin:]``, and where each line starts; None if not numeric.
+
+    Scanned in chunks of :data:`_CHUNK` bytes, so that the temporaries stay small; a line that
+    straddles two chunks adds up its counts from both.
+    """
+    allowed = _NUMERIC.copy()
+    separator = _SEPARATOR.copy()
+    if delimiter is not None:
+        allowed[delimiter] = separator[delimiter] = True
+    fields: list[np.ndarray] = []
+    delimiters: list[np.ndarray] = []
+    starts: list[np.ndarray] = [np.array([begin])]
+    carry_fields = carry_delims = 0
+    previous_is_separator = True
+    for at in range(begin, len(raw), _CHUNK):
+        chunk = np.frombuffer(raw, dtype=np.uint8, count=min(_CHUNK, len(raw) - at), offset=at)
+        if not allowed[chunk].all():
+            return None
+        is_sep = separator[chunk]
+        first = np.flatnonzero(~is_sep & np.concatenate([[previous_is_separator], is_sep[:-1]]))
+        newline = np.flatnonzero(chunk == 10)
+        bounds = np.concatenate([[0], newline + 1, [chunk.size]])
+        counts = np.diff(np.searchsorted(first, bounds))
+        counts[0] += carry_fields
+        if delimiter is not None:
+            delims = np.diff(np.searchsorted(np.flatnonzero(chunk == delimiter), bounds))
+            delims[0] += carry_delims
+            carry_delims = int(delims[-1])
+            delimiters.append(delims[:-1])
+        carry_fields = int(counts[-1])
+        fields.append(counts[:-1])
+        starts.append(newline + 1 + at)
+        previous_is_separator = bool(is_sep[-1])
+    fields.append(np.array([carry_fields]))
+    delimiters.append(np.array([carry_delims]))
+    return np.concatenate(fields), np.concatenate(delimiters), np.concatenate(starts)
 
 
 def fast_table(text: TextFile, first_line: int, ncol: int, delimiter: str | None) -> Table | None:
@@ -326,68 +389,57 @@ def fast_table(text: TextFile, first_line: int, ncol: int, delimiter: str | None
     (no comment, no NaN, no hexadecimal, no ``1_0``), every non-blank line with ``ncol`` fields
     (``delimiter``-separated, or whitespace when None). A last line without a line end and with
     fewer fields (a writer cut off) is dropped and reported. Anything else returns None and the
-    caller's own loop finds and names the problem.
+    caller's own loop finds and names the problem. The file's bytes are parsed in place, chunk by
+    chunk: no text, no list of lines, no Python float per value.
     """
+    raw = text.raw
     try:
-        start = _line_offset(text.text, first_line)
+        begin = _line_offset(raw, first_line)
     except ValueError:
         return None
-    region = text.text[start:]
-    if not region.strip() or not region.isascii() or region.count("\r") != region.count("\r\n"):
-        return None  # a bare CR ends lines that \n-counting would not see
-    raw = region.encode("ascii")
-    allowed = _NUMERIC.copy()
-    separator = _SEPARATOR.copy()
-    if delimiter is not None:
-        code = ord(delimiter)
-        allowed[code] = separator[code] = True
-    newlines: list[np.ndarray] = []
-    token_starts: list[np.ndarray] = []
-    delimiters: list[np.ndarray] = []
-    previous_is_separator = True
-    for begin in range(0, len(raw), _CHUNK):
-        chunk = np.frombuffer(raw, dtype=np.uint8, count=min(_CHUNK, len(raw) - begin), offset=begin)
-        if not allowed[chunk].all():
-            return None
-        is_sep = separator[chunk]
-        before = np.concatenate([[previous_is_separator], is_sep[:-1]])
-        token_starts.append(np.flatnonzero(~is_sep & before) + begin)
-        newlines.append(np.flatnonzero(chunk == 10) + begin)
-        if delimiter is not None:
-            delimiters.append(np.flatnonzero(chunk == ord(delimiter)) + begin)
-        previous_is_separator = bool(is_sep[-1])
-    nl = np.concatenate(newlines)
-    n_lines = nl.size + (0 if region.endswith("\n") else 1)
-    # Line k spans [bounds[k], bounds[k + 1]): count the sorted token starts in each span.
-    bounds = np.concatenate([[0], nl[: n_lines - 1] + 1, [len(raw)]])
-
-    def per_line(positions: list[np.ndarray]) -> np.ndarray:
-        return np.diff(np.searchsorted(np.concatenate(positions), bounds))
-
-    tokens = per_line(token_starts)
-    nonblank = np.flatnonzero(tokens)
+    if not raw[begin:].strip() or raw.count(b"\r", begin) != raw.count(b"\r\n", begin):
+        return None  # nothing, or a bare CR ending lines that \n-counting would not see
+    code = None if delimiter is None else ord(delimiter)
+    counted = _count_per_line(raw, begin, code)
+    if counted is None:
+        return None
+    fields, delimiters, starts = counted
+    if raw.endswith(b"\n"):  # the "line" after the final newline is empty
+        fields, delimiters, starts = fields[:-1], delimiters[:-1], starts[:-1]
+    nonblank = np.flatnonzero(fields)
     if nonblank.size == 0:
         return None
-    counts_ok = tokens[nonblank] == ncol
-    if delimiter is not None:
-        counts_ok &= per_line(delimiters)[nonblank] == ncol - 1
+    ok = fields[nonblank] == ncol
+    if code is not None:
+        ok &= delimiters[nonblank] == ncol - 1
     truncated: tuple[int, str] | None = None
+    end = len(raw)
     last = int(nonblank[-1])
-    if tokens[last] < ncol and last == n_lines - 1 and not text.ends_with_newline:
-        last_start = int(nl[-1]) + 1 if nl.size else 0
-        truncated = (first_line + n_lines - 1, region[last_start:].strip())
-        raw = raw[:last_start]
-        nonblank, counts_ok = nonblank[:-1], counts_ok[:-1]
-    if not counts_ok.all() or nonblank.size == 0:
+    if fields[last] < ncol and last == fields.size - 1 and not text.ends_with_newline:
+        end = int(starts[last])
+        truncated = (first_line + last, raw[end:].decode("ascii").strip())
+        nonblank, ok = nonblank[:-1], ok[:-1]
+    if nonblank.size == 0 or not ok.all():
         return None
-    if delimiter is not None:
-        raw = raw.replace(delimiter.encode("ascii"), b" ")
+    values = np.empty(nonblank.size * ncol)
+    filled = 0
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # a token C cannot read ("1e", "+-") stops the parse: slow path
-        try:
-            values = np.fromstring(raw, dtype=float, sep=" ")
-        except (ValueError, DeprecationWarning):
-            return None
-    if values.size != nonblank.size * ncol or not np.all(np.isfinite(values)):
+        at = begin
+        while at < end:
+            stop = raw.rfind(b"\n", at, min(at + _CHUNK, end)) + 1 if at + _CHUNK < end else end
+            if stop <= at:
+                stop = end if raw.find(b"\n", at, end) < 0 else raw.find(b"\n", at, end) + 1
+            piece = raw[at:stop] if code is None else raw[at:stop].replace(bytes([code]), b" ")
+            try:
+                parsed = np.fromstring(piece, dtype=float, sep=" ")
+            except (ValueError, DeprecationWarning):
+                return None
+            if filled + parsed.size > values.size:
+                return None
+            values[filled : filled + parsed.size] = parsed
+            filled += parsed.size
+            at = stop
+    if filled != values.size or not np.all(np.isfinite(values)):
         return None
     return Table(values.reshape(nonblank.size, ncol), nonblank.astype(int) + first_line, truncated)

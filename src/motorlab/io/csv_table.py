@@ -20,11 +20,11 @@ from motorlab.io._text import (
     TextFile,
     check_cpr,
     check_input_file,
-    decode_text,
     fast_table,
     is_number,
     parse_number,
     read_text,
+    text_file,
     unit_factor,
 )
 from motorlab.io.glitches import screen_glitches
@@ -280,8 +280,7 @@ def check_header(path: PathArg) -> None:
     name, _limit = check_input_file(path)
     with open(name, "rb") as handle:
         head = handle.read(1 << 16)
-    text, _encoding = decode_text(head[: head.rfind(b"\n") + 1] or head)
-    lines = TextFile(path=name, text=text)
+    lines = text_file(name, head[: head.rfind(b"\n") + 1] or head)
     _metadata, _comments, start = parse_comments(lines)
     if start >= len(lines.lines):
         return  # read_csv explains

@@ -140,7 +140,7 @@ def read_ftc_log(
                 path=parts[0].path,
                 line=int(parts[0].lines[0]),
             )
-    rows = np.concatenate([p.rows for p in parts])
+    rows = parts[0].rows if len(parts) == 1 else np.concatenate([p.rows for p in parts])
     header = next((p.header for p in parts if p.header is not None), None)
     # Each file's own header decides its current unit (unless the caller says).
     units = [_current_unit(current_unit, p.header) for p in parts]
