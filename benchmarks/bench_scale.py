@@ -5,7 +5,7 @@ Targets: any analysis on 2M rows within 10 s and 500 MB peak resident memory. Ea
 own, imports included); the files are written first, in the formats a real rig writes:
 
 - spindown, spinup: FTC OpMode logs from the exact simulator (flywheel rig, 1 ms log period);
-- identify: the virtual rig's transient CSV (1 kHz); pulse: its scope CSV (1 ms samples);
+- identify: the virtual rig's transient CSV (1 kHz); pulse: its scope CSV (four periods of 2 s);
 - free-spinup: scope cursor times of n rising edges of a constant-current spin-up (closed form);
 - feedforward: a SysId JSON whose four tests follow the feedforward model (closed form, 10 ms rows);
 - terminal, lcr, torque, amplifier, tachometer: tables of n readings around the model's line.
@@ -118,7 +118,8 @@ def write_inputs(folder: Path, n: int) -> dict[str, tuple[list[str], list[str]]]
     out["spinup"] = ([str(folder / "spinup.txt")], ["--cpr", str(CPR), "--inertia", "0.95"])
     rig.run("transient", folder / "transient.csv", duration=n / 1000.0, rate=1000.0)
     out["identify"] = ([str(folder / "transient.csv")], ["--cpr", str(CPR)])
-    rig.run("pulse", folder / "pulse.csv", period=2.0, periods=max(1, round(n / 2000)), sample_interval=1e-3)
+    # A scope capture: four periods, n samples (a longer trace is a finer one, as on a real scope).
+    rig.run("pulse", folder / "pulse.csv", period=2.0, periods=4, sample_interval=8.0 / n)
     out["pulse"] = ([str(folder / "pulse.csv")], ["--Ka", "1.96", "--K", "0.7"])
     _edges(folder / "edges.csv", n)
     out["free-spinup"] = ([str(folder / "edges.csv")], ["--K", "0.7", "--current", "0.5 A", "--cpr", str(CPR)])
