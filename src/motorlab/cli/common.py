@@ -20,8 +20,23 @@ EXIT_INPUT = 2
 EXIT_PARTIAL = 3
 
 
+_RST_LITERAL = re.compile(r"``(.+?)``", re.DOTALL)
+_RST_ROLE = re.compile(r":[a-z]+:`~?([^`]+)`")
+
+
+def plain_text(text: str) -> str:
+    """``text`` without reStructuredText markup: ````V = kS````, ``:func:`x``` read as plain words."""
+    return _RST_ROLE.sub(lambda m: m.group(1).rsplit(".", 1)[-1], _RST_LITERAL.sub(r"\1", text))
+
+
 class Parser(argparse.ArgumentParser):
-    """An ``ArgumentParser`` whose errors are one line on stderr and exit code 2."""
+    """An ``ArgumentParser`` whose errors are one line on stderr and exit code 2.
+
+    Help texts come from docstrings; :meth:`format_help` shows them without reStructuredText markup.
+    """
+
+    def format_help(self) -> str:
+        return plain_text(super().format_help())
 
     def error(self, message: str) -> NoReturn:
         print(f"{self.prog}: error: {message}", file=sys.stderr)
