@@ -88,8 +88,10 @@ NUMBER = st.one_of(
 
 @settings(max_examples=READER_EXAMPLES, deadline=None)
 @given(
-    header=st.sampled_from(["", "time_ms encoder_counts bus_voltage_V shunt_current_A\n", "time_s,voltage_V,current_A\n",
-                            "current_A,frequency_Hz\n", "time_ms\n", "L_uH,Q,DCR_ohm\n", "X,CH1,Start,Increment,\n"]),
+    header=st.sampled_from([
+        "", "time_ms encoder_counts bus_voltage_V shunt_current_A\n", "time_s,voltage_V,current_A\n",
+        "current_A,frequency_Hz\n", "time_ms\n", "L_uH,Q,DCR_ohm\n", "X,CH1,Start,Increment,\n",
+    ]),
     rows=st.lists(st.lists(NUMBER, min_size=1, max_size=5), max_size=12),
     delimiter=st.sampled_from([",", " ", "\t", ";"]),
 )
