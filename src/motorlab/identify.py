@@ -36,6 +36,7 @@ import numpy as np
 
 from motorlab import _oe
 from motorlab.analyses._common import reader_warnings
+from motorlab.decimate import block_mean
 from motorlab.errors import FitError, LogFormatError, OptionError
 from motorlab.fitting import MAX_RELATIVE_STDERR
 from motorlab.model import MotorParams, feedforward_from_params
@@ -396,6 +397,7 @@ def identify(
     (:func:`motorlab._oe.noise_propagation_covariance`); the Newey–West covariance of the residuals
     is used when these noises do not explain the residuals.
     """
+    recordings = [block_mean(r) for r in ([recordings] if isinstance(recordings, Recording) else recordings)]
     recs = [recordings] if isinstance(recordings, Recording) else list(recordings)
     if not recs:
         raise OptionError("no recordings to identify")

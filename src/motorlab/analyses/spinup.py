@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from motorlab.analyses import _common as common
+from motorlab.decimate import block_mean
 from motorlab.errors import FitError, OptionError
 from motorlab.fitting import r_squared
 from motorlab.recording import Recording
@@ -125,6 +126,7 @@ def spinup(
     ----------
     Seed 1, "First Experiment", equations (1), (3) and (5).
     """
+    recording = block_mean(recording)  # a 2M-row log: block means, not 2M-point fits
     source = recording.source or "log"
     common.check_positive(inertia, "inertia", allow_none=False)
     common.check_limits(inertia, "J", "the inertia (--inertia)")
