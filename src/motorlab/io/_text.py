@@ -318,7 +318,7 @@ def check_cpr(cpr: float | None) -> float | None:
 
 # ---- the fast path for large numeric tables --------------------------------------------------------
 
-_CHUNK = 1 << 23  # bytes scanned at a time: bounds the temporary arrays of a 2M-row log to a few MB
+_CHUNK = 1 << 21  # bytes scanned at a time: bounds the temporary arrays of a 2M-row log to a few MB
 _NUMERIC = np.zeros(256, dtype=bool)
 _NUMERIC[np.frombuffer(b"0123456789+-.eE \t\r\n", dtype=np.uint8)] = True
 _SEPARATOR = np.zeros(256, dtype=bool)

@@ -166,7 +166,7 @@ def read_csv(path: PathArg, *, cpr: float | None = None) -> Recording:
     used = [i for i, t in enumerate(targets) if t is not None]
     table = fast_table(text, header_no + 1, len(header), delimiter)
     if table is not None:  # a clean numeric table, parsed in C
-        data = table.values[:, used]
+        data = table.values if len(used) == table.values.shape[1] else table.values[:, used]
         line_arr = table.lines
         warnings = []
         if table.truncated is not None:
@@ -176,6 +176,7 @@ def read_csv(path: PathArg, *, cpr: float | None = None) -> Recording:
         data, line_arr, warnings = _parse_rows(text, start, header, delimiter, used)
     if data.shape[0] == 0:
         raise LogFormatError("no data rows after the header", path=name, line=header_no)
+    del text, table  # the file's bytes are not needed any more (a 2M-row table: 100 MB)
     return _assemble(name, data, line_arr, warnings, header, targets, used, metadata, comments, cpr)
 
 
@@ -233,7 +234,8 @@ def _assemble(
         assert target is not None  # used holds only resolved columns
         signal, unit = target
         si = "s" if signal == "time" else SIGNALS[signal]
-        values = data[:, col] * unit_factor(unit, si)
+        factor = unit_factor(unit, si)
+        values = data[:, col] * factor if factor != 1.0 else data[:, col]  # SI already: a view, no copy
         units[signal] = unit
         if signal == "time":
             time = values
