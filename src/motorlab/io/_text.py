@@ -318,6 +318,7 @@ def check_cpr(cpr: float | None) -> float | None:
 
 # ---- the fast path for large numeric tables --------------------------------------------------------
 
+_NON_BLANK = re.compile(rb"\S")
 _CHUNK = 1 << 21  # bytes scanned at a time: bounds the temporary arrays of a 2M-row log to a few MB
 _NUMERIC = np.zeros(256, dtype=bool)
 _NUMERIC[np.frombuffer(b"0123456789+-.eE \t\r\n", dtype=np.uint8)] = True
@@ -342,20 +343,31 @@ def _line_offset(raw: bytes, line: int) -> int:
     return offset
 
 
-def _count_per_line(raw: bytes, begin: int, delimiter: int | None) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
-    """Fields and delimiters on each line of ``raw[begin:]``, and where each line starts; None if not numeric.
+@dataclass(frozen=True)
+class _Scan:
+    """What :func:`_scan` found: line count, blank lines, the last line's fields and start."""
 
-    Scanned in chunks of :data:`_CHUNK` bytes, so that the temporaries stay small; a line that
-    straddles two chunks adds up its counts from both.
+    n_lines: int
+    blank: np.ndarray
+    last_fields: int
+    last_start: int
+
+
+def _scan(raw: bytes, begin: int, ncol: int, delimiter: int | None) -> _Scan | None:
+    """Check that every line of ``raw[begin:]`` holds ``ncol`` numeric fields (or none), chunk by chunk.
+
+    Only the indices of blank lines are kept (a 2M-row log has none), not a count per line. The
+    last line (after the last newline) is returned apart: it may be a truncated one. None when a
+    byte is not part of a number or a line has another number of fields.
     """
     allowed = _NUMERIC.copy()
     separator = _SEPARATOR.copy()
     if delimiter is not None:
         allowed[delimiter] = separator[delimiter] = True
-    fields: list[np.ndarray] = []
-    delimiters: list[np.ndarray] = []
-    starts: list[np.ndarray] = [np.array([begin])]
+    blank: list[np.ndarray] = []
     carry_fields = carry_delims = 0
+    n_lines = 0
+    last_start = begin
     previous_is_separator = True
     for at in range(begin, len(raw), _CHUNK):
         chunk = np.frombuffer(raw, dtype=np.uint8, count=min(_CHUNK, len(raw) - at), offset=at)
@@ -365,20 +377,25 @@ def _count_per_line(raw: bytes, begin: int, delimiter: int | None) -> tuple[np.n
         first = np.flatnonzero(~is_sep & np.concatenate([[previous_is_separator], is_sep[:-1]]))
         newline = np.flatnonzero(chunk == 10)
         bounds = np.concatenate([[0], newline + 1, [chunk.size]])
-        counts = np.diff(np.searchsorted(first, bounds))
-        counts[0] += carry_fields
+        fields = np.diff(np.searchsorted(first, bounds))
+        fields[0] += carry_fields
+        good = (fields[:-1] == ncol) | (fields[:-1] == 0)
         if delimiter is not None:
             delims = np.diff(np.searchsorted(np.flatnonzero(chunk == delimiter), bounds))
             delims[0] += carry_delims
+            good &= (delims[:-1] == ncol - 1) | (fields[:-1] == 0)
             carry_delims = int(delims[-1])
-            delimiters.append(delims[:-1])
-        carry_fields = int(counts[-1])
-        fields.append(counts[:-1])
-        starts.append(newline + 1 + at)
+        if not good.all():
+            return None
+        blank.append(np.flatnonzero(fields[:-1] == 0) + n_lines)
+        n_lines += newline.size
+        carry_fields = int(fields[-1])
+        if newline.size:
+            last_start = at + int(newline[-1]) + 1
         previous_is_separator = bool(is_sep[-1])
-    fields.append(np.array([carry_fields]))
-    delimiters.append(np.array([carry_delims]))
-    return np.concatenate(fields), np.concatenate(delimiters), np.concatenate(starts)
+    if delimiter is not None and carry_fields == ncol and carry_delims != ncol - 1:
+        return None
+    return _Scan(n_lines, np.concatenate(blank) if blank else np.empty(0, dtype=int), carry_fields, last_start)
 
 
 def fast_table(text: TextFile, first_line: int, ncol: int, delimiter: str | None) -> Table | None:
@@ -397,29 +414,26 @@ def fast_table(text: TextFile, first_line: int, ncol: int, delimiter: str | None
         begin = _line_offset(raw, first_line)
     except ValueError:
         return None
-    if not raw[begin:].strip() or raw.count(b"\r", begin) != raw.count(b"\r\n", begin):
+    if _NON_BLANK.search(raw, begin) is None or raw.count(b"\r", begin) != raw.count(b"\r\n", begin):
         return None  # nothing, or a bare CR ending lines that \n-counting would not see
     code = None if delimiter is None else ord(delimiter)
-    counted = _count_per_line(raw, begin, code)
-    if counted is None:
+    scan = _scan(raw, begin, ncol, code)
+    if scan is None:
         return None
-    fields, delimiters, starts = counted
-    if raw.endswith(b"\n"):  # the "line" after the final newline is empty
-        fields, delimiters, starts = fields[:-1], delimiters[:-1], starts[:-1]
-    nonblank = np.flatnonzero(fields)
-    if nonblank.size == 0:
-        return None
-    ok = fields[nonblank] == ncol
-    if code is not None:
-        ok &= delimiters[nonblank] == ncol - 1
     truncated: tuple[int, str] | None = None
     end = len(raw)
-    last = int(nonblank[-1])
-    if fields[last] < ncol and last == fields.size - 1 and not text.ends_with_newline:
-        end = int(starts[last])
-        truncated = (first_line + last, raw[end:].decode("ascii").strip())
-        nonblank, ok = nonblank[:-1], ok[:-1]
-    if nonblank.size == 0 or not ok.all():
+    n_rows_lines = scan.n_lines  # complete lines (ended by a newline)
+    if scan.last_fields == ncol:
+        n_rows_lines += 1  # a complete last line without its newline
+    elif scan.last_fields:
+        if text.ends_with_newline or scan.last_fields > ncol:
+            return None
+        end = scan.last_start
+        truncated = (first_line + scan.n_lines, raw[end:].decode("ascii").strip())
+    nonblank = np.arange(n_rows_lines)
+    if scan.blank.size:
+        nonblank = np.delete(nonblank, scan.blank)
+    if nonblank.size == 0:
         return None
     values = np.empty(nonblank.size * ncol)
     filled = 0
@@ -431,6 +445,9 @@ def fast_table(text: TextFile, first_line: int, ncol: int, delimiter: str | None
             if stop <= at:
                 stop = end if raw.find(b"\n", at, end) < 0 else raw.find(b"\n", at, end) + 1
             piece = raw[at:stop] if code is None else raw[at:stop].replace(bytes([code]), b" ")
+            at = stop
+            if not piece.strip():  # numpy reads a blank piece as [-1.0]
+                continue
             try:
                 parsed = np.fromstring(piece, dtype=float, sep=" ")
             except (ValueError, DeprecationWarning):
@@ -439,7 +456,6 @@ def fast_table(text: TextFile, first_line: int, ncol: int, delimiter: str | None
                 return None
             values[filled : filled + parsed.size] = parsed
             filled += parsed.size
-            at = stop
     if filled != values.size or not np.all(np.isfinite(values)):
         return None
     return Table(values.reshape(nonblank.size, ncol), nonblank.astype(int) + first_line, truncated)

@@ -104,12 +104,14 @@ def parse_comments(text: TextFile) -> tuple[dict[str, Any], list[str], int]:
     """
     metadata: dict[str, Any] = {}
     comments: list[str] = []
-    for index, raw in enumerate(text.lines):
-        line = raw.strip()
-        if not line:
-            continue
+    count = 64
+    head = text.head(count)  # the top of the file only: a 2M-row table is not split into lines here
+    while len(head) == count and all(line.startswith("#") for _, line in head):
+        count *= 4
+        head = text.head(count)
+    for number, line in head:
         if not line.startswith("#"):
-            return metadata, comments, index
+            return metadata, comments, number - 1
         body = line.lstrip("#").strip()
         key, sep, value = body.partition(":")
         if sep and key.strip() and " " not in key.strip():
@@ -117,7 +119,22 @@ def parse_comments(text: TextFile) -> tuple[dict[str, Any], list[str], int]:
             metadata[key.strip()] = float(value) if is_number(value) else value
         elif body:
             comments.append(body)
-    return metadata, comments, len(text.lines)
+    return metadata, comments, len(text.lines)  # only comments (a short file: splitting it is cheap)
+
+
+def _line_at(text: TextFile, index: int) -> str | None:
+    """The stripped line at 0-based ``index`` if it is not blank, from the top of the file only."""
+    count = 64
+    while True:
+        head = text.head(count)
+        for number, line in head:
+            if number == index + 1:
+                return line
+            if number > index + 1:
+                return None
+        if len(head) < count:
+            return None
+        count *= 4
 
 
 def read_csv(path: PathArg, *, cpr: float | None = None) -> Recording:
@@ -151,9 +168,9 @@ def read_csv(path: PathArg, *, cpr: float | None = None) -> Recording:
     text = read_text(path)
     name = text.path
     metadata, comments, start = parse_comments(text)
-    if start >= len(text.lines):
+    header_line = _line_at(text, start)
+    if header_line is None:
         raise LogFormatError("no header line naming the columns (only comments)", path=name)
-    header_line = text.lines[start].strip()
     delimiter = guess_delimiter(header_line)
     header = split_fields(header_line, delimiter)
     header_no = start + 1

@@ -84,7 +84,7 @@ def _parse_rows(segment: bytes) -> np.ndarray | None:
     commas = np.flatnonzero(codes == ord(","))
     per_row = np.searchsorted(commas, closes) - np.searchsorted(commas, opens)
     ncol = int(per_row[0]) + 1
-    if np.any(per_row != ncol - 1):
+    if ncol < 2 or np.any(per_row != ncol - 1):  # (numpy reads a blank "[]" row as -1.0)
         return None
     with warnings.catch_warnings():
         warnings.simplefilter("error")
