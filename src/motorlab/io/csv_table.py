@@ -122,7 +122,7 @@ def parse_comments(text: TextFile) -> tuple[dict[str, Any], list[str], int]:
     return metadata, comments, len(text.lines)  # only comments (a short file: splitting it is cheap)
 
 
-def _line_at(text: TextFile, index: int) -> str | None:
+def line_at(text: TextFile, index: int) -> str | None:
     """The stripped line at 0-based ``index`` if it is not blank, from the top of the file only."""
     count = 64
     while True:
@@ -168,7 +168,7 @@ def read_csv(path: PathArg, *, cpr: float | None = None) -> Recording:
     text = read_text(path)
     name = text.path
     metadata, comments, start = parse_comments(text)
-    header_line = _line_at(text, start)
+    header_line = line_at(text, start)
     if header_line is None:
         raise LogFormatError("no header line naming the columns (only comments)", path=name)
     delimiter = guess_delimiter(header_line)
