@@ -52,6 +52,7 @@ from motorlab.efficiency import (  # noqa: F401 - re-exported: the session's gea
 )
 from motorlab.errors import MotorlabError, OptionError
 from motorlab.fleet import DEFAULT_THRESHOLD, FleetSummary, fleet_summary
+from motorlab.io._output import atomic_path, write_text_atomic
 from motorlab.results import Estimate, FitResult
 from motorlab.session import LOADED_EXPERIMENTS, ExperimentSpec, Session, UnitSpec, read_truth
 from motorlab.units import SI_UNITS
@@ -715,7 +716,7 @@ def write_csv(result: Characterization, path: str | Path) -> Path:
         unit = _GEARBOX_UNITS.get(p) or SI_UNITS[p]
         header += [f"{p} ({unit})", f"{p} stderr ({unit})", f"{p} source"]
     header += ["fleet outliers", "status"]
-    with path.open("w", newline="", encoding="utf-8") as handle:
+    with atomic_path(path) as temporary, temporary.open("w", newline="", encoding="utf-8") as handle:
         writer = csv.writer(handle)
         writer.writerow(header)
         for row in results_table(result):
@@ -725,6 +726,22 @@ def write_csv(result: Characterization, path: str | Path) -> Path:
             cells += [row["fleet"], row["status"]]
             writer.writerow(cells)
     return path
+
+
+def output_paths(out_dir: str | Path, *, report: bool = True) -> list[Path]:
+    """The files :func:`write_outputs` writes into ``out_dir``."""
+    names = ["results.json", "results.csv"] + (["report.html"] if report else [])
+    return [Path(out_dir) / name for name in names]
+
+
+def session_inputs(session: Session) -> list[Path]:
+    """Every file a session reads: the TOML, each experiment's data files, each unit's truth file."""
+    found = [session.path]
+    for unit in session.units.values():
+        found.extend(f for spec in unit.experiments.values() for f in spec.files)
+        if unit.truth is not None:
+            found.append(unit.truth)
+    return found
 
 
 def write_outputs(result: Characterization, out_dir: str | Path, *, report: bool = True) -> dict[str, Path]:
@@ -738,7 +755,7 @@ def write_outputs(result: Characterization, out_dir: str | Path, *, report: bool
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     paths = {"json": out / "results.json", "csv": out / "results.csv"}
-    paths["json"].write_text(json.dumps(result.to_dict(), indent=2, allow_nan=False) + "\n", encoding="utf-8")
+    write_text_atomic(paths["json"], json.dumps(result.to_dict(), indent=2, allow_nan=False) + "\n")
     write_csv(result, paths["csv"])
     if report:
         from motorlab.report import write_report

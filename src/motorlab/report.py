@@ -205,7 +205,9 @@ def write_report(result: Characterization, path: str | Path, *, figures: bool = 
     """Write :func:`render_report`'s HTML to ``path`` (UTF-8) and return the path."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(render_report(result, figures=figures), encoding="utf-8")
+    from motorlab.io._output import write_text_atomic
+
+    write_text_atomic(path, render_report(result, figures=figures))
     return path
 
 

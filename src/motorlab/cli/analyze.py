@@ -60,6 +60,9 @@ def run(args: argparse.Namespace) -> int:
     plot_path = args.plot
     if plot_path is not None:
         check_figure_path(plot_path)
+        from motorlab.io._output import check_not_inputs
+
+        check_not_inputs([plot_path], args.files, option="--plot")
     groups = [[path] for path in args.files] if args.each else [list(args.files)]
     results = [module.from_cli(args.experiment, paths, args) for paths in groups]
     from motorlab.efficiency import SHAFTS
@@ -67,6 +70,7 @@ def run(args: argparse.Namespace) -> int:
     for result in results:  # which shaft, load and torque units the figures refer to (docs/gearbox.md)
         if args.experiment in SHAFTS:
             result.details.setdefault("shaft", SHAFTS[args.experiment])
+        result.check_physics()  # also what an analysis added after making its result
     if plot_path is not None:
         _save_plots(results, plot_path, each=args.each)
     if args.json:

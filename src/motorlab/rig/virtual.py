@@ -37,6 +37,7 @@ from motorlab.analyses.torque import approach_direction
 from motorlab.catalog import Motor
 from motorlab.errors import OptionError, RigError
 from motorlab.gearbox import Drivetrain, Gearbox
+from motorlab.io._output import write_text_atomic
 from motorlab.io.csv_table import write_csv
 from motorlab.io.ftc import write_ftc_log
 from motorlab.model import MotorParams, feedforward_from_params
@@ -640,7 +641,7 @@ class VirtualRig:
         volts = volts + rng.normal(0.0, scope.vertical_noise, volts.shape)
         lines = ["X,CH1,Start,Increment,", f"Sequence,Volt,{start:.6e},{increment:.6e},"]
         lines += [f"{k},{v:.4e}," for k, v in enumerate(volts)]
-        path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+        write_text_atomic(path, "\n".join(lines) + "\n")
 
     def terminal(
         self,
@@ -1215,7 +1216,7 @@ class VirtualRig:
             clock += t_rows[-1] + gap
         doc.update({"sysid": True, "test": "Simple", "units": "Rotations", "unitsPerRotation": 1.0})
         path = Path(path)
-        path.write_text(json.dumps(doc) + "\n", encoding="utf-8")
+        write_text_atomic(path, json.dumps(doc) + "\n")
         ff = feedforward_from_params(loaded)
         two_pi = 2 * math.pi
         expected = {
