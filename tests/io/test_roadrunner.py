@@ -42,11 +42,13 @@ def test_reader_gives_voltage_position_and_repaired_velocity(ramp):
     raw = json.loads(path.read_text())
     n = len(raw["voltages"]["values"])
     assert len(rec) == n - 3  # the tuning page drops the first sample and the last two
-    power = np.asarray(raw["powers"][0]["values"])[1:-2]
+    power = np.mean([np.asarray(p["values"])[1:-2] for p in raw["powers"]], axis=0)
+    assert np.all(np.diff([p["values"][100] for p in raw["powers"]]) > 0)  # power(t.seconds()) per motor
     applied = power * np.asarray(raw["voltages"]["values"])[1:-2]
     np.testing.assert_allclose(drive_voltage(data), applied)
-    # the recording holds each interval's mean (powers held, battery noise smoothed)
+    # the recording holds each interval's mean (the next powers act for the end of the interval)
     np.testing.assert_allclose(rec["voltage"], applied, rtol=0.02, atol=0.03)
+    assert np.mean(rec["voltage"][:-1] - applied[:-1]) > 0  # a ramp: the next power is higher
     counts = np.mean([np.asarray(p["values"])[1:-2] for p in raw["forwardEncPositions"]], axis=0)
     np.testing.assert_allclose(rec["position"], counts * 2 * math.pi / truth["cpr"])
     assert rec.metadata["repaired"]
