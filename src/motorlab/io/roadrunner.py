@@ -362,27 +362,26 @@ def held_voltage(data: RampData) -> np.ndarray:
     """Applied voltage over each encoder interval [t_k, t_k+1) [V], the powers held as the hub holds them.
 
     A motor's power of iteration k+1 takes effect (:func:`power_effect_times`) a few ms before that
-    iteration's encoder read t_k+1, so over [t_k, t_k+1) the motor sees P_k·B_k·(1 − f) +
-    P_k+1·B_k+1·f, f the share of the interval after the change. Assigning each iteration's power
-    to its encoder read instead puts the voltage a few ms late, which on a ramp (1.3 V/s) reads as
-    kS about 1 % high per 2.5 ms. B_k is the battery reading of iteration k: it is read after that
-    iteration's powers are set, so it is the bus voltage while they act (the bus steps down with each
-    power step; interpolating the readings in time would put the next, lower, level into the
-    interval: kV −0.015 % on a sagging battery). The drive voltage is the motors' mean. The readings
-    are not smoothed: the fit estimates their noise from the voltage it is given, and a smoothed
-    input hides it (standard errors half the scatter at a fixed loop period).
+    iteration's encoder read t_k+1, so over [t_k, t_k+1) the motor holds P_k·(1 − f) + P_k+1·f on
+    average, f the share of the interval after the change. Assigning each iteration's power to its
+    encoder read instead puts the voltage a few ms late, which on a ramp (1.3 V/s) reads as kS about
+    1 % high per 2.5 ms. The drive voltage is the motors' mean held power times the battery reading
+    B_k of the iteration, as read: neither smoothed nor mixed with the next reading. The fit
+    estimates the voltage noise from the sample-to-sample differences of its input and takes it as
+    white; averaging readings (smoothing, or mixing B_k and B_k+1 like the powers) hides most of that
+    noise from the estimate while leaving its slow part, which is what moves the gains: the
+    standard errors came out 2.4 times too small at a fixed loop period.
     """
     t = data.time
     effect = power_effect_times(data)
     mixed = []
     for name, pw in signed_powers(data).items():
-        volts = pw * data.battery
-        held = volts.copy()
+        held = pw.copy()
         if name in effect and t.size > 1:
             frac = np.clip((t[1:] - effect[name][1:]) / np.diff(t), 0.0, 1.0)
-            held[:-1] = volts[:-1] * (1.0 - frac) + volts[1:] * frac
+            held[:-1] = pw[:-1] * (1.0 - frac) + pw[1:] * frac
         mixed.append(held)
-    return np.maximum(np.mean(mixed, axis=0), 0.0)
+    return np.maximum(np.mean(mixed, axis=0), 0.0) * data.battery
 
 
 def motion_counts(data: RampData) -> tuple[np.ndarray, np.ndarray, list[str]]:
