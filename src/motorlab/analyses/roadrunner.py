@@ -36,7 +36,7 @@ import numpy as np
 
 from motorlab.errors import FitError, OptionError
 from motorlab.fitting import fit_linear
-from motorlab.io.roadrunner import RampData, drive_voltage
+from motorlab.io.roadrunner import RampData, held_voltage
 from motorlab.recording import Recording
 from motorlab.results import Estimate, FitResult, Panel, Series
 
@@ -124,7 +124,7 @@ def lateral_ratio(data: RampData, gains: np.ndarray, cov: np.ndarray, *, cpr: fl
     if not data.velocities:
         raise FitError(f"{data.source}: the lateral ramp has no perpendicular encoder (drive encoders: "
                        "use Road Runner's LateralPushTest)")
-    volts = drive_voltage(data)
+    volts = held_voltage(data)
     pos = np.mean(list(data.positions.values()), axis=0)
     vel = np.mean(list(data.velocities.values()), axis=0)
     per_tick = 2 * math.pi / cpr
@@ -166,7 +166,7 @@ def track_width(data: RampData, gains: np.ndarray | None, cov: np.ndarray | None
         if gains is None or cov is None:
             raise OptionError(f"{data.source}: an angular ramp with dead wheels needs kS and kV: give the forward "
                               "ramp file too")
-        volts = drive_voltage(data)
+        volts = held_voltage(data)
         per_tick = 2 * math.pi / cpr
         factor = 1.0 if mec else 2.0  # mecanum wheel at ω·tw; tank side at ω·tw/2 (Kinematics.kt)
 
