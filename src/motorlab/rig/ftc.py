@@ -522,14 +522,15 @@ def simulate_flight_log(
     duration: float = 8.0,
     loop: BulkReadLoop | None = None,
     battery: Battery | None = None,
-    dead_wheels: bool = False,
+    dead_wheels: bool | int = False,
     seed: int = 0,
 ) -> dict[str, Any]:
     """A FlightRecorder log of a mecanum robot following back-and-forth moves.
 
-    With ``dead_wheels`` the localizer is the quickstart's ThreeDeadWheelLocalizer (8192-count dead
-    wheels; ``THREE_DEAD_WHEEL_INPUTS`` and the ``MECANUM_PARAMS`` / ``THREE_DEAD_WHEEL_PARAMS`` it needs),
-    and the truth is at the dead wheel.
+    With ``dead_wheels`` (True or 3) the localizer is the quickstart's ThreeDeadWheelLocalizer
+    (8192-count dead wheels; ``THREE_DEAD_WHEEL_INPUTS`` and the ``MECANUM_PARAMS`` /
+    ``THREE_DEAD_WHEEL_PARAMS`` it needs); with 2, the TwoDeadWheelLocalizer (``TWO_DEAD_WHEEL_INPUTS``
+    with the IMU's angles and rates, ``TWO_DEAD_WHEEL_PARAMS``). The truth is then at the dead wheel.
 
     Each wheel is the forward-motion wheel of :class:`MecanumDrive` (drive motor encoders, ``cpr`` at
     the motor's output). The drive sets its powers every loop iteration from a smooth profile
@@ -564,15 +565,21 @@ def simulate_flight_log(
     ns = lambda t: round(1e9 * (t + 100.0))  # noqa: E731  (nanoTime has an arbitrary origin)
     messages: list[tuple[str, Any]] = []
     truth = drive.truth()
+    two = dead_wheels == 2 and dead_wheels is not True
     if dead_wheels:
         ticks = truth["track_width_ticks"] / drive.track_width  # dead-wheel ticks per metre
         messages.append(("MECANUM_PARAMS", {"inPerTick": truth["in_per_tick"], "lateralInPerTick": truth["in_per_tick"],
                                             "trackWidthTicks": truth["track_width_ticks"], "kS": 0.0, "kV": 0.0,
                                             "kA": 0.0}))
-        messages.append(("THREE_DEAD_WHEEL_PARAMS", {"par0YTicks": drive.par_y[0] * ticks,
-                                                     "par1YTicks": drive.par_y[1] * ticks,
-                                                     "perpXTicks": drive.perp_x * ticks}))
-    names = ("par0", "par1", "perp", "unused") if dead_wheels else MECANUM_WHEELS
+        if two:
+            messages.append(("TWO_DEAD_WHEEL_PARAMS", {"parYTicks": drive.par_y[0] * ticks,
+                                                       "perpXTicks": drive.perp_x * ticks}))
+        else:
+            messages.append(("THREE_DEAD_WHEEL_PARAMS", {"par0YTicks": drive.par_y[0] * ticks,
+                                                         "par1YTicks": drive.par_y[1] * ticks,
+                                                         "perpXTicks": drive.perp_x * ticks}))
+    names = (("par", "perp", "unused0", "unused1") if two else ("par0", "par1", "perp", "unused0")) if dead_wheels \
+        else MECANUM_WHEELS
     last = -math.inf
     for k in range(starts.size):
         pairs = {}
@@ -585,8 +592,12 @@ def simulate_flight_log(
             c = int(enc.counts(angle(np.array([bulk[k]])))[0] - enc.counts(np.array([off]))[0])
             v = int(enc.velocity(np.array([bulk[k]]), angle)[0])
             pairs[w] = {"position": c, "rawPosition": c, "rawVelocity": v, "velocity": v}
-        if dead_wheels:
-            pairs.pop("unused")
+        for unused in ("unused0", "unused1"):
+            pairs.pop(unused, None)
+        if two:  # a robot moving straight: the IMU reads no turn (yaw, pitch, roll; rates in rad/s)
+            imu = dict.fromkeys(("yaw", "pitch", "roll", "xRotationRate", "yRotationRate", "zRotationRate"), 0.0)
+            messages.append(("TWO_DEAD_WHEEL_INPUTS", {"timestamp": ns(bulk[k]), **pairs, **imu}))
+        elif dead_wheels:
             messages.append(("THREE_DEAD_WHEEL_INPUTS", {"timestamp": ns(bulk[k]), **pairs}))
         else:
             messages.append(("MECANUM_LOCALIZER_INPUTS", {"timestamp": ns(bulk[k]), **pairs, "pitch": 0.0,
