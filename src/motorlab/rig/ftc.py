@@ -203,6 +203,12 @@ class LCFilter:
         _, y, _ = sps.lsim((a, b, c, d), v, t - t[0], X0=x0)
         return np.asarray(y, dtype=float)
 
+    def gain(self, frequency: float) -> float:
+        """|H(j2πf)|: the amplitude ratio of output to source at ``frequency`` [Hz]."""
+        a, b, c, _ = self.state_space()
+        h = c @ np.linalg.solve(2j * math.pi * frequency * np.eye(4) - a, b)
+        return float(abs(h[0, 0]))
+
     def resonances(self) -> list[float]:
         """Resonant frequencies [Hz] of the ladder (lossless)."""
         a, *_ = self.state_space()
