@@ -61,6 +61,9 @@ def test_cli_all_three_ramps(tmp_path, capsys):
         assert abs(est["value"] - truth[name]) < 4 * est["stderr"], name
     assert params["track_width_ticks"]["value"] == pytest.approx(truth["track_width_ticks"], rel=0.005)
     assert params["lateral_multiplier"]["value"] == pytest.approx(1 / truth["lateral_ratio"], rel=0.005)
+    lateral_ka = params["lateral_kA"]  # the strafing inertia, for Pedro's lateralZeroPowerAcceleration
+    assert abs(lateral_ka["value"] - truths["lateral"]["lateral_kA"]) < 3 * lateral_ka["stderr"]
+    assert lateral_ka["value"] == pytest.approx(truths["lateral"]["lateral_kA"], rel=0.15)
     assert params["par0_y_ticks"]["unit"] == "tick"
 
 

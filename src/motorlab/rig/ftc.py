@@ -509,6 +509,8 @@ def simulate_ramp(
         content["angVels"] = [(imu_t, rng.normal(0, noise, bulk_t.size)), (imu_t, rng.normal(0, noise, bulk_t.size)),
                               (imu_t, yaw_rate + rng.normal(0, noise, bulk_t.size))]
     write_roadrunner_ramp(path, content)
+    if kind == "lateral":
+        extra["lateral_kA"] = feedforward_from_params(drive.encoder_params("lateral"))["kA"]
     return {
         **drive.truth(),
         "kind": kind,
