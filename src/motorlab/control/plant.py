@@ -86,7 +86,7 @@ class MechanismUnits:
 
 
 #: Road Runner ramp results a plant may carry (motorlab.analyses.roadrunner).
-GEOMETRY = ("lateral_ratio", "track_width_ticks")
+GEOMETRY = ("lateral_ratio", "track_width_ticks", "lateral_kA")
 
 
 @dataclass(frozen=True)

@@ -406,11 +406,12 @@ class VirtualRig:
         times = ins.logger.times(duration, rng)
         d_enc, d_bus, d_cur = ins.logger.read_delays
         counts = self.encoder.counts(sim.sample(times + d_enc)["position"])
+        bus_in = ins.ina219.bus_input(sim.time, sim.voltage)  # through the LC filter, when fitted
         if ins.ina219.averaging > 1:  # the register holds the mean of the last completed conversion window
-            true_v = ins.ina219.conversion_average(times + d_bus, sim.time, sim.voltage)
+            true_v = ins.ina219.conversion_average(times + d_bus, sim.time, bus_in)
             true_i = ins.ina219.conversion_average(times + d_cur, sim.time, sim.current)
         else:
-            true_v, true_i = sim.sample(times + d_bus)["voltage"], sim.sample(times + d_cur)["current"]
+            true_v, true_i = np.interp(times + d_bus, sim.time, bus_in), sim.sample(times + d_cur)["current"]
         bus = ins.ina219.read_bus_voltage(true_v, rng)
         current = ins.ina219.read_current(true_i, rng)
         return times, counts, bus, current
