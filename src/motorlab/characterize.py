@@ -52,6 +52,7 @@ from motorlab.errors import MotorlabError, OptionError
 from motorlab.experiments import all_experiments
 from motorlab.experiments import stderr_or_none as _stderr
 from motorlab.fleet import DEFAULT_THRESHOLD, FleetSummary, fleet_summary
+from motorlab.io._output import atomic_path
 from motorlab.results import Estimate, FitResult
 from motorlab.session import LOADED_EXPERIMENTS, ExperimentSpec, Session, UnitSpec, read_truth
 from motorlab.units import SI_UNITS
@@ -495,7 +496,7 @@ def write_csv(result: Characterization, path: str | Path) -> Path:
         unit = _GEARBOX_UNITS.get(p) or SI_UNITS[p]
         header += [f"{p} ({unit})", f"{p} stderr ({unit})", f"{p} source"]
     header += ["fleet outliers", "status"]
-    with path.open("w", newline="", encoding="utf-8") as handle:
+    with atomic_path(path) as temporary, temporary.open("w", newline="", encoding="utf-8") as handle:
         writer = csv.writer(handle)
         writer.writerow(header)
         for row in results_table(result):
@@ -505,6 +506,22 @@ def write_csv(result: Characterization, path: str | Path) -> Path:
             cells += [row["fleet"], row["status"]]
             writer.writerow(cells)
     return path
+
+
+def output_paths(out_dir: str | Path, *, report: bool = True) -> list[Path]:
+    """The files :func:`write_outputs` writes into ``out_dir``."""
+    names = ["results.json", "results.csv"] + (["report.html"] if report else [])
+    return [Path(out_dir) / name for name in names]
+
+
+def session_inputs(session: Session) -> list[Path]:
+    """Every file a session reads: the TOML, each experiment's data files, each unit's truth file."""
+    found = [session.path]
+    for unit in session.units.values():
+        found.extend(f for spec in unit.experiments.values() for f in spec.files)
+        if unit.truth is not None:
+            found.append(unit.truth)
+    return found
 
 
 def _csv_float(x: float) -> str:

@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 
 from motorlab import _oe
+from motorlab.decimate import block_mean
 from motorlab.errors import FitError, OptionError
 from motorlab.fitting import MAX_RELATIVE_STDERR
 from motorlab.model import MotorParams, feedforward_from_params, params_from_feedforward
@@ -271,6 +272,7 @@ def feedforward(
     (:func:`motorlab._oe.grid_angle`), and φ's variance includes q²/12 for the encoder's quantiser
     phase (q = 2π/cpr), which no fit can resolve.
     """
+    recordings = [block_mean(r) for r in ([recordings] if isinstance(recordings, Recording) else recordings)]
     if mechanism not in MECHANISMS:
         raise OptionError(f"mechanism must be one of {', '.join(MECHANISMS)}, got {mechanism!r}")
     if cpr is not None and not (math.isfinite(cpr) and cpr > 0):

@@ -35,6 +35,7 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from motorlab import _oe, held_input
+from motorlab.decimate import block_mean
 from motorlab.errors import FitError, OptionError
 from motorlab.fitting import MAX_RELATIVE_STDERR
 from motorlab.model import MotorParams, feedforward_from_params
@@ -58,6 +59,7 @@ from motorlab.oe_runs import (  # noqa: F401 - public names re-exported (they we
 )
 from motorlab.recording import Recording
 from motorlab.results import Estimate, FitResult
+from motorlab.units import SI_UNITS, format_unit
 
 
 #: Parameters of the full model, in the order of the fit.
@@ -122,6 +124,7 @@ def identify(
     (:func:`motorlab._oe.noise_propagation_covariance`); the Newey–West covariance of the residuals
     is used when these noises do not explain the residuals.
     """
+    recordings = [block_mean(r) for r in ([recordings] if isinstance(recordings, Recording) else recordings)]
     recs = [recordings] if isinstance(recordings, Recording) else list(recordings)
     if not recs:
         raise OptionError("no recordings to identify")
@@ -183,6 +186,14 @@ def identify(
         warnings.append(f"the optimiser stopped early: {fit.message}")
     warnings.extend(_oe.noise_warning(fit, rms_text=f"{fit.residual_rms['position']:.3g} rad"))
     warnings.extend(excitation_warnings(logs, [s["speed"] for s in fit.simulations]))
+    for symbol, given, index in (("R", resistance, 1), ("K", torque_constant, 0)):
+        if given is not None:  # the current log determines it: say so, and how far the given value is
+            warnings.append(
+                f"the given {symbol} = {given:.4g} {format_unit(SI_UNITS[symbol])} was not used: with a current "
+                f"column {symbol} is fitted ({values[index]:.4g}, {100 * (values[index] / given - 1):+.1f} % "
+                "from the given value); "
+                "--no-current fits without the current and uses it"
+            )
     with np.errstate(invalid="ignore", divide="ignore"):
         corr = cov / np.outer(stderr, stderr)
     np.fill_diagonal(corr, 1.0)
@@ -299,6 +310,7 @@ def _identify_without_current(
     result.parameters.update(
         feedforward.motor_estimates(result, resistance=resistance, torque_constant=torque_constant)
     )
+    result.check_physics()
     return result
 
 

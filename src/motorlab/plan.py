@@ -48,6 +48,10 @@ MATERIALS: dict[str, float] = {
     "hdpe": 960.0,
 }
 
+#: A supply setting above this many times the motor's nominal voltage is refused (12 V motors run
+#: to 24 V at most on a bench; 1e6 V is a typo).
+MAX_VOLTAGE_FACTOR = 4.0
+
 #: INA219 limits: bus voltage it survives in the seed's experience [V] (seed 1: "do NOT set the
 #: voltage ... higher than 16 volts ... a high voltage will fry the sensor"), and full-scale shunt
 #: voltage at gain /8 [V] (±320 mV, i.e. ±3.2 A with the 0.1 Ω shunt of the Adafruit board).
@@ -419,6 +423,11 @@ def plan_rig(
     if voltage is None:
         voltage = motor.nominal_voltage
     _positive(voltage=voltage)
+    if voltage > MAX_VOLTAGE_FACTOR * motor.nominal_voltage:
+        raise OptionError(
+            f"voltage {voltage:g} V is more than {MAX_VOLTAGE_FACTOR:g} times the nominal "
+            f"{motor.nominal_voltage:g} V of {motor.key}: no bench test drives a motor there"
+        )
     density = MATERIALS[material]
     params = motor.nominal_params()
     warnings: list[str] = []

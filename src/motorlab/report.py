@@ -206,7 +206,9 @@ def write_report(result: Characterization, path: str | Path, *, figures: bool = 
     """Write :func:`render_report`'s HTML to ``path`` (UTF-8) and return the path."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(render_report(result, figures=figures), encoding="utf-8")
+    from motorlab.io._output import write_text_atomic
+
+    write_text_atomic(path, render_report(result, figures=figures))
     return path
 
 
@@ -219,11 +221,12 @@ def write_outputs(result: Characterization, out_dir: str | Path, *, report: bool
         ``{"json": path, "csv": path, "html": path}``.
     """
     from motorlab.characterize import write_csv
+    from motorlab.io._output import write_text_atomic
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     paths = {"json": out / "results.json", "csv": out / "results.csv"}
-    paths["json"].write_text(json.dumps(result.to_dict(), indent=2, allow_nan=False) + "\n", encoding="utf-8")
+    write_text_atomic(paths["json"], json.dumps(result.to_dict(), indent=2, allow_nan=False) + "\n")
     write_csv(result, paths["csv"])
     if report:
         paths["html"] = write_report(result, out / "report.html")

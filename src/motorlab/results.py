@@ -14,7 +14,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from motorlab.units import format_unit
+from motorlab.units import format_percent, format_unit
 
 
 @dataclass(frozen=True)
@@ -77,7 +77,7 @@ class Estimate:
             )
         if not math.isfinite(self.stderr):
             return f"{self.name} = {self.value:.6g} ± ? {unit} (uncertainty could not be estimated)"
-        return f"{self.name} = {self.value:.6g} ± {self.stderr:.2g} {unit} ({100 * self.relative_error:.2f} %)"
+        return f"{self.name} = {self.value:.6g} ± {self.stderr:.2g} {unit} ({format_percent(self.relative_error)})"
 
 
 @dataclass
@@ -147,6 +147,26 @@ class FitResult:
 
     #: What :func:`motorlab.plot.plot_fit` draws for a result without curves.
     EMPTY_PANEL: ClassVar[Panel] = Panel(title="(no curves to plot)", x_label="", y_label="")
+
+    def __post_init__(self) -> None:
+        self.check_physics()
+
+    def check_physics(self) -> None:
+        """Warn of parameters fitted negative that must be positive; refuse when given options force them.
+
+        Runs when the result is made; run it again after adding parameters (see
+        :mod:`motorlab.plausibility`).
+
+        Raises
+        ------
+        OptionError
+            When values the user gave (``note="given"``) clearly contradict the data.
+        """
+        from motorlab.plausibility import check_signs
+
+        for text in check_signs(self.parameters):
+            if text not in self.warnings:
+                self.warnings.append(text)
 
     def __getitem__(self, name: str) -> Estimate:
         return self.parameters[name]

@@ -50,8 +50,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from motorlab.errors import MotorlabError, OptionError, SessionError
+from motorlab.errors import InputError, MotorlabError, OptionError, SessionError
 from motorlab.experiments import all_experiments
+from motorlab.io._output import write_text_atomic
+from motorlab.io._text import read_bytes
 from motorlab.plan import MATERIALS, disc_inertia
 from motorlab.units import format_unit, parse_quantity
 
@@ -399,11 +401,11 @@ def load_session(path: str | Path) -> Session:
     """
     path = Path(path)
     try:
-        raw_bytes = path.read_bytes()
-    except OSError as exc:
-        raise SessionError(f"cannot read the session file ({exc.strerror})", path=path) from None
+        _name, raw_bytes = read_bytes(path)  # a regular file of sane size only (not a FIFO, not /dev/zero)
+    except InputError as exc:
+        raise SessionError(exc.message, path=path) from None
     try:
-        text = raw_bytes.decode("utf-8")
+        text = raw_bytes.decode("utf-8-sig")
     except UnicodeDecodeError:
         raise SessionError("the session file is not UTF-8 text", path=path) from None
     try:
@@ -862,7 +864,7 @@ def write_simulated_session(
             if key == "free-spinup":
                 lines.append(f'current = "{settings["current"]:g} A"')
     path = out / "session.toml"
-    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    write_text_atomic(path, "\n".join(lines) + "\n")
     return path
 
 

@@ -7,12 +7,15 @@ Everything inside motorlab is SI (rad, s, A, V, Ω, H, kg·m², N·m). Text such
 from __future__ import annotations
 
 import math
+import re
 from functools import lru_cache
 from typing import Any
 
 import pint
 
 from motorlab.errors import OptionError
+
+_DIGIT_SEPARATOR = re.compile(r"\d_|_\d")
 
 #: Standard gravity [m/s²], used where a mass stands for a force (scale readings, "in*oz").
 STANDARD_GRAVITY = 9.80665
@@ -82,6 +85,8 @@ def parse_quantity(value: Any, unit: str, *, name: str = "value") -> float:
         number = float(value)
     else:
         text = str(value).strip()
+        if _DIGIT_SEPARATOR.search(text):  # Python and pint read "1_0" as 10: refuse, do not guess
+            raise OptionError(f"{name}: {value!r} is not a number (no '_' between digits)")
         try:
             number = float(text)
         except ValueError:
@@ -111,6 +116,12 @@ def _parse_with_pint(text: str, unit: str, name: str) -> float:
     raise OptionError(
         f"{name}: {text!r} has units of {quantity.units:~P}, which cannot be converted to {unit}"
     )
+
+
+def format_percent(fraction: float, spec: str = ".2f") -> str:
+    """``100·fraction`` as ``"12.34 %"``, or ``"? %"`` when it is not a finite number (never "nan %")."""
+    value = 100.0 * float(fraction)
+    return f"{value:{spec}} %" if math.isfinite(value) else "? %"
 
 
 def format_unit(unit: str) -> str:

@@ -9,7 +9,7 @@ import pytest
 from motorlab.cli import main
 from motorlab.feedforward import feedforward
 from motorlab.io import read_any
-from motorlab.rig.ftc import simulate_ramp
+from motorlab.rig.ftc import BulkReadLoop, HubEncoder, MecanumDrive, RampSettings, simulate_ramp
 
 
 @pytest.mark.parametrize("seed", [11, 12, 13])
@@ -27,6 +27,27 @@ def test_forward_ramp_gains_with_known_truth(tmp_path, seed):
     assert ka.determined  # the break-away at the start of the ramp shows the inertia
 
 
+def test_forward_ramp_other_loops_and_encoders(tmp_path):
+    """Files unlike the default simulation: the logger's own loop (no idle time between iterations,
+    so a fixed period and long Lynx commands), a fast loop, a fractional-cpr encoder, a short ramp."""
+    cases = [
+        ({"loop": BulkReadLoop(min_period=0.0205, max_period=0.0205, mean_extra=0.0, command_time=3e-3,
+                               voltage_read_time=3.5e-3, bulk_read_time=5e-3)}, 21),
+        ({"loop": BulkReadLoop(min_period=0.005, max_period=0.012, mean_extra=0.002, command_time=3e-4,
+                               voltage_read_time=5e-4, bulk_read_time=1e-3),
+          "settings": RampSettings(duration=3.0)}, 22),
+        ({"drive": MecanumDrive(dead_wheel=HubEncoder(537.7), dead_wheel_radius=0.048)}, 23),
+    ]
+    for options, seed in cases:
+        path = tmp_path / f"forward{seed}.json"
+        truth = simulate_ramp(path, seed=seed, **options)
+        result = feedforward(read_any(path, cpr=truth["cpr"]), cpr=truth["cpr"])
+        ks, kv = result["kS"], result["kV"]
+        assert ks.value == pytest.approx(truth["kS"], rel=0.05), options
+        assert kv.value == pytest.approx(truth["kV"], rel=0.02), options
+        assert abs(ks.value - truth["kS"]) < 3 * ks.stderr, options
+
+
 def test_cli_all_three_ramps(tmp_path, capsys):
     paths = {k: tmp_path / f"{k}.json" for k in ("forward", "lateral", "angular")}
     truths = {k: simulate_ramp(p, kind=k, seed=5) for k, p in paths.items()}
@@ -40,6 +61,9 @@ def test_cli_all_three_ramps(tmp_path, capsys):
         assert abs(est["value"] - truth[name]) < 4 * est["stderr"], name
     assert params["track_width_ticks"]["value"] == pytest.approx(truth["track_width_ticks"], rel=0.005)
     assert params["lateral_multiplier"]["value"] == pytest.approx(1 / truth["lateral_ratio"], rel=0.005)
+    lateral_ka = params["lateral_kA"]  # the strafing inertia, for Pedro's lateralZeroPowerAcceleration
+    assert abs(lateral_ka["value"] - truths["lateral"]["lateral_kA"]) < 3 * lateral_ka["stderr"]
+    assert lateral_ka["value"] == pytest.approx(truths["lateral"]["lateral_kA"], rel=0.15)
     assert params["par0_y_ticks"]["unit"] == "tick"
 
 

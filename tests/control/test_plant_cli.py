@@ -106,7 +106,7 @@ def test_cli_plot(monkeypatch, capsys, tmp_path):
         (("velocity", "--kv", "3", "--ka", "0.3", "--params", "x.json"), "not both"),
         (("velocity", "--kv", "nan", "--ka", "0.3"), "finite"),
         (("velocity", "--kv", "3", "--ka", "0.3", "--target", "talon"), "invalid choice"),
-        (("velocity", "--params", "/nonexistent/p.json"), "No such file"),
+        (("velocity", "--params", "/nonexistent/p.json"), "no such file"),
     ],
 )
 def test_cli_bad_input_is_one_line_exit_2(monkeypatch, capsys, argv, message):

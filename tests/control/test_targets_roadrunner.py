@@ -68,6 +68,7 @@ def test_ramp_geometry_reaches_the_snippets(tmp_path, capsys):
         "kS": {"value": 0.3, "stderr": 0.01, "unit": "V"}, "kV": {"value": 0.125, "stderr": 1e-4, "unit": "V*s/rad"},
         "kA": {"value": 0.0124, "stderr": 1e-3, "unit": "V*s^2/rad"},
         "lateral_ratio": {"value": 0.85, "stderr": 1e-3, "unit": "1"},
+        "lateral_kA": {"value": 0.0155, "stderr": 1e-3, "unit": "V*s^2/rad"},
         "track_width_ticks": {"value": 23840.0, "stderr": 6.0, "unit": "tick"}}}
     path = tmp_path / "rr.json"
     path.write_text(json.dumps(doc))
@@ -82,3 +83,5 @@ def test_ramp_geometry_reaches_the_snippets(tmp_path, capsys):
     out = capsys.readouterr().out
     x = (12.0 - 0.3) / 0.125 * 0.0175 / 0.0254
     assert f".yVelocity({0.85 * x:.6g})" in out
+    # Pedro's LateralZeroPowerAccelerationTuner: friction alone decelerating the strafing robot
+    assert f".lateralZeroPowerAcceleration({-0.3 / 0.0155 * 0.0175 / 0.0254:.6g})" in out

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import struct
 
+import numpy as np
 import pytest
 
 from motorlab.errors import LogFormatError
@@ -91,12 +92,35 @@ def test_feedforward_from_an_ordinary_run(tmp_path):
     assert any("interpolated" in w for w in rec.metadata["warnings"])
 
 
-def test_three_dead_wheel_runs_give_wheel_travel_in_dead_wheel_ticks(tmp_path):
+@pytest.mark.parametrize(("wheels", "channel"), [(3, "THREE_DEAD_WHEEL_INPUTS"), (2, "TWO_DEAD_WHEEL_INPUTS")])
+def test_dead_wheel_runs_give_wheel_travel_in_dead_wheel_ticks(tmp_path, wheels, channel):
     path = tmp_path / "auto-dw.log"
-    truth = simulate_flight_log(path, seed=5, dead_wheels=True)
+    truth = simulate_flight_log(path, seed=3 + wheels, dead_wheels=wheels)
+    channels, _ = read_flight_log_channels(path)
+    assert channel in channels
     rec = read_any(path, cpr=truth["cpr"])
     assert len(rec.segments) == 4
     result = feedforward(rec.split()[:1], cpr=truth["cpr"])
     assert result["kS"].value == pytest.approx(truth["kS"], rel=0.05)
     assert result["kV"].value == pytest.approx(truth["kV"], rel=0.01)
     assert result["kA"].value == pytest.approx(truth["kA"], rel=0.1)
+
+
+def test_two_dead_wheel_travel_follows_the_localizer_twist():
+    """x = par − parY·ψ, y = perp − perpX·ψ, ψ the unwrapped IMU yaw; then MecanumKinematics.inverse."""
+    from motorlab.io.flightrecorder import Channel, _two_dead_wheel_travel
+
+    psi = np.linspace(0.0, 7.0, 50)  # more than a turn: the IMU's yaw wraps at ±π
+    x, y = 300.0 * psi**2, -40.0 * psi
+    par_y, perp_x, tw, lm = 1500.0, -900.0, 12000.0, 1.2
+    yaw = np.angle(np.exp(1j * psi))
+    inputs = Channel("TWO_DEAD_WHEEL_INPUTS", (), [
+        {"par": {"position": x[k] + par_y * psi[k]}, "perp": {"position": y[k] + perp_x * psi[k]}, "yaw": yaw[k]}
+        for k in range(psi.size)])
+    channels = {"TWO_DEAD_WHEEL_INPUTS": inputs,
+                "TWO_DEAD_WHEEL_PARAMS": Channel("p", (), [{"parYTicks": par_y, "perpXTicks": perp_x}]),
+                "MECANUM_PARAMS": Channel("m", (), [{"inPerTick": 1.2e-3, "lateralInPerTick": 1e-3,
+                                                     "trackWidthTicks": tw}])}
+    travel = _two_dead_wheel_travel(channels)
+    np.testing.assert_allclose(travel["leftFront"], x - y * lm - psi * tw, atol=1e-6)
+    np.testing.assert_allclose(travel["rightFront"], x + y * lm + psi * tw, atol=1e-6)

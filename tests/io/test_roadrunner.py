@@ -11,7 +11,14 @@ import pytest
 from motorlab.cli import main
 from motorlab.errors import LogFormatError, OptionError
 from motorlab.io import detect_format, read_any, read_roadrunner_ramp
-from motorlab.io.roadrunner import drive_voltage, read_ramp_data, repair_velocity
+from motorlab.io.roadrunner import (
+    RampData,
+    drive_voltage,
+    held_voltage,
+    power_effect_times,
+    read_ramp_data,
+    repair_velocity,
+)
 from motorlab.rig.ftc import simulate_ramp, wrap_int16
 
 
@@ -42,11 +49,13 @@ def test_reader_gives_voltage_position_and_repaired_velocity(ramp):
     raw = json.loads(path.read_text())
     n = len(raw["voltages"]["values"])
     assert len(rec) == n - 3  # the tuning page drops the first sample and the last two
-    power = np.asarray(raw["powers"][0]["values"])[1:-2]
+    power = np.mean([np.asarray(p["values"])[1:-2] for p in raw["powers"]], axis=0)
+    assert np.all(np.diff([p["values"][100] for p in raw["powers"]]) > 0)  # power(t.seconds()) per motor
     applied = power * np.asarray(raw["voltages"]["values"])[1:-2]
     np.testing.assert_allclose(drive_voltage(data), applied)
-    # the recording holds each interval's mean (powers held, battery noise smoothed)
+    # the recording holds each interval's mean (the next powers act for the end of the interval)
     np.testing.assert_allclose(rec["voltage"], applied, rtol=0.02, atol=0.03)
+    assert np.mean(rec["voltage"][:-1] - applied[:-1]) > 0  # a ramp: the next power is higher
     counts = np.mean([np.asarray(p["values"])[1:-2] for p in raw["forwardEncPositions"]], axis=0)
     np.testing.assert_allclose(rec["position"], counts * 2 * math.pi / truth["cpr"])
     assert rec.metadata["repaired"]
@@ -123,3 +132,24 @@ def test_real_hub_overflow_log_is_repaired():
     assert np.all(np.mod(fixed, 20) == 0)  # the hub's 50 ms window
     inner = slice(1, -1)
     assert np.median(np.abs(fixed[inner] - estimate[inner]) / np.abs(estimate[inner])) < 0.01
+
+
+def test_first_power_time_is_extrapolated_past_the_idle_split():
+    """MidpointTimer: the first setPower's split also spans the end of the previous iteration."""
+    starts = np.arange(10) * 0.03  # each iteration: 10 ms idle, then four 2 ms setPowers, a 2 ms battery read
+    ends = starts[:, None] + 0.010 + 0.002 * np.arange(1, 6)[None, :]
+    previous = np.concatenate([[0.0], ends[:-1, -1]])
+    mids = 0.5 * (np.column_stack([previous, ends[:, :-1]]) + ends)
+    names = ["powers0", "powers1", "powers2", "powers3"]
+    data = RampData(kind="forward", drive="mecanum", time=ends[:, -1] + 0.001, battery=np.full(10, 12.0),
+                    powers=dict.fromkeys(names, 0.1 * starts), positions={}, velocities={},
+                    power_times={k: mids[:, i] for i, k in enumerate(names)}, voltage_time=mids[:, 4])
+    effect = power_effect_times(data)
+    assert mids[3, 0] < ends[3, 0] - 0.004  # as logged: 5 ms before the command's middle
+    np.testing.assert_allclose(effect["powers0"], ends[:, 0] - 0.001, atol=1e-12)  # the command's middle
+    np.testing.assert_allclose(effect["powers2"], ends[:, 2] - 0.001, atol=1e-12)
+    # each motor holds its old power until the new one acts: the interval means
+    held = held_voltage(data)
+    dt = np.diff(data.time)
+    expected = np.mean([0.1 * starts[:-1] + 0.1 * 0.03 * (data.time[1:] - effect[k][1:]) / dt for k in names], axis=0)
+    np.testing.assert_allclose(held[:-1], 12.0 * expected, rtol=1e-12)

@@ -91,3 +91,34 @@ def test_virtual_rig_ina219_averaging_lags_the_bus_voltage(tmp_path):
     after = (plain.time > 3.2) & (plain.time < 3.3)
     assert np.all(averaged["voltage"][after] >= plain["voltage"][after] - 0.01)
     assert np.mean(averaged["voltage"][after] - plain["voltage"][after]) > 0.05
+
+
+def test_virtual_rig_lc_filter_quiets_the_bus_voltage_trace(tmp_path):
+    """The seed's LC filter as an option of the rig's INA219: commutation noise down, DC kept."""
+    import dataclasses
+
+    from motorlab.io import read_ftc_log
+    from motorlab.rig import Instruments, VirtualRig
+
+    logs = {}
+    for name, bus_filter in (("bare", None), ("filtered", LCFilter())):
+        ins = dataclasses.replace(Instruments(), ina219=dataclasses.replace(INA219(), bus_filter=bus_filter))
+        rig = VirtualRig("neverest40", unit_seed=1, noise_seed=4, instruments=ins)
+        path = tmp_path / f"{name}.txt"
+        rig.spindown(path, on_time=3.0, coast_time=1.0)
+        logs[name] = read_ftc_log(path)
+    bare, filtered = logs["bare"], logs["filtered"]
+    on = (bare.time > 0.5) & (bare.time < 2.9)  # on the supply, spinning up slowly
+
+    def noise(v):  # sample-to-sample noise, blind to the slow rise
+        return np.std(np.diff(v[on])) / math.sqrt(2)
+
+    assert noise(bare["voltage"]) > 0.05  # the seed's "extremely noisy" bus reading
+    assert noise(filtered["voltage"]) < 0.3 * noise(bare["voltage"])
+    assert np.mean(filtered["voltage"][on]) == pytest.approx(np.mean(bare["voltage"][on]), abs=0.03)
+    # on the bus itself: the relay's step rings through the filter (its resonance) and settles
+    f = LCFilter()
+    t = np.arange(0.0, 0.1, 1e-5)
+    out = INA219(bus_filter=f).bus_input(t, np.where(t < 0.02, 12.0, 10.0))
+    assert out[t > 0.02].min() < 10.0 - 0.2  # overshoot below the new level
+    assert out[-1] == pytest.approx(10.0, abs=0.01)

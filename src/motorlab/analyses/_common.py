@@ -26,6 +26,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from scipy import optimize
@@ -598,3 +599,15 @@ def derived_stderr(fit: LeastSquares, x_full: np.ndarray, names: list[str],
         down[k] -= h
         grad[j] = (func(up) - func(down)) / (2 * h)
     return float(math.sqrt(max(grad @ fit.covariance @ grad, 0.0)))
+
+
+#: Per-reading tables in ``details`` list at most this many rows (a table of a hand-run experiment
+#: has ten; a two-million-row log listed row by row would cost gigabytes and say nothing).
+MAX_LISTED_ROWS = 1000
+
+
+def listed_rows(count: int, row: Callable[[int], dict[str, Any]]) -> list[dict[str, Any]] | str:
+    """``[row(0), …, row(count − 1)]``, or a note when there are more than :data:`MAX_LISTED_ROWS`."""
+    if count > MAX_LISTED_ROWS:
+        return f"not listed: {count} readings (more than {MAX_LISTED_ROWS})"
+    return [row(k) for k in range(count)]

@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 
 from motorlab.analyses import _common as common
+from motorlab.decimate import block_mean
 from motorlab.errors import FitError, OptionError
 from motorlab.fitting import r_squared
 from motorlab.recording import Recording
@@ -95,6 +96,7 @@ def free_spinup(
     ----------
     Seed 1, "Free Motor Spin-Up Experiment", "Data Analysis".
     """
+    edges = block_mean(edges)  # two million edge times: block means
     source = edges.source or "edge times"
     common.check_positive(torque_constant, "K (torque constant)", allow_none=False)
     common.check_positive(current, "current", allow_none=False)
@@ -190,6 +192,14 @@ def free_spinup(
         warnings.append(f"only {t_edges.size} edges: the estimate is fragile")
     if viscous_friction is None:
         warnings.append("no viscous friction given (--b): the drag b·ω is folded into J (J is overestimated)")
+    if coulomb_friction is None:
+        # J = (K·I − Tf)/α: taking Tf = 0 overestimates J by the factor K·I/(K·I − Tf).
+        drive = torque_constant * current
+        warnings.append(
+            f"no Coulomb friction given (--Tf): Tf was taken as 0, which overestimates J by Tf/(K·I − Tf); "
+            f"with the drive torque K·I = {drive:.3g} N·m here, Tf = {0.1 * drive:.2g} N·m would make J "
+            f"11 % too high and Tf = {0.5 * drive:.2g} N·m 100 % too high: give --Tf (from a spin-down)"
+        )
     model_theta = position(x_full)
     model_speed = speed(x_full)
     mid = 0.5 * (t_edges[1:] + t_edges[:-1])

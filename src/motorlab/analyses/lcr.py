@@ -14,6 +14,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from motorlab.analyses import _common as common
 from motorlab.analyses._common import finite_rows, metadata_quantity, reader_warnings, sources_of
 from motorlab.errors import LogFormatError, OptionError
 from motorlab.recording import Recording
@@ -294,11 +295,11 @@ def lcr(
         details["L_min"] = float(np.min(inductance))
         details["L_max"] = float(np.max(inductance))
         details["L_relative_spread"] = float(np.std(inductance, ddof=1) / np.mean(inductance))
-        details["lq_readings"] = [
-            {"reading": k + 1, "L_H": float(inductance[k]), "Q": float(q[k]), "R_ohm": float(r_rows[k]),
-             "outlier": bool(r_out[k])}
-            for k in range(inductance.size)
-        ]
+        details["lq_readings"] = common.listed_rows(
+            inductance.size,
+            lambda k: {"reading": k + 1, "L_H": float(inductance[k]), "Q": float(q[k]), "R_ohm": float(r_rows[k]),
+                       "outlier": bool(r_out[k])},
+        )
         x = np.arange(1, r_rows.size + 1, dtype=float)
         extra = []
         if np.any(r_out):
@@ -339,9 +340,9 @@ def lcr(
                 f"({', '.join(f'{v:.3g} Ω' for v in dcr[d_out])}; median {np.median(dcr):.3g} Ω): "
                 "excluded from R_dc (poor brush contact at that shaft position?)"
             )
-        details["dcr_readings"] = [
-            {"reading": k + 1, "DCR_ohm": float(dcr[k]), "outlier": bool(d_out[k])} for k in range(dcr.size)
-        ]
+        details["dcr_readings"] = common.listed_rows(
+            dcr.size, lambda k: {"reading": k + 1, "DCR_ohm": float(dcr[k]), "outlier": bool(d_out[k])}
+        )
         x = np.arange(1, dcr.size + 1, dtype=float)
         rdc = parameters["R_dc"].value
         dc_panel = Panel(

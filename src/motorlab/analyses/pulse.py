@@ -25,6 +25,7 @@ from motorlab.analyses._common import (
     reader_warnings,
     sources_of,
 )
+from motorlab.decimate import block_mean
 from motorlab.errors import FitError, LogFormatError, OptionError
 from motorlab.fitting import LeastSquares, fit_least_squares, fit_linear, r_squared
 from motorlab.recording import Recording
@@ -338,6 +339,7 @@ def pulse(
     ----------
     Seed 2 (MIT 2.010 Lab 2), "Motor Mechanical Properties (Shaft Inertia and Friction)", eqs. (1)–(5).
     """
+    recordings = [block_mean(r) for r in ([recordings] if isinstance(recordings, Recording) else recordings)]
     if not (math.isfinite(amplifier_gain) and amplifier_gain > 0):
         raise OptionError(f"the amplifier gain Ka must be positive, got {amplifier_gain} A/V")
     if not (math.isfinite(torque_constant) and torque_constant > 0):

@@ -36,7 +36,7 @@ import numpy as np
 
 from motorlab.errors import FitError, OptionError
 from motorlab.fitting import fit_linear
-from motorlab.io.roadrunner import RampData, drive_voltage
+from motorlab.io.roadrunner import RampData, held_voltage
 from motorlab.recording import Recording
 from motorlab.results import Estimate, FitResult, Panel, Series
 
@@ -75,7 +75,10 @@ def integral_fit(time: np.ndarray, voltage: np.ndarray, position: np.ndarray, ve
     if time.size - start < 10:
         raise FitError("the robot hardly moved during the ramp")
     t, v = time[start:], voltage[start:]
-    lhs = _cumulative(t, np.sign(v) * np.maximum(np.abs(v) - ks, 0.0))
+    # the voltage is held over each interval (held_voltage): rectangles, not trapezoids, which would
+    # take each interval's voltage half an interval early (kA +10 % on the simulated ramps)
+    drive = np.sign(v) * np.maximum(np.abs(v) - ks, 0.0)
+    lhs = np.concatenate([[0.0], np.cumsum(drive[:-1] * np.diff(t))])
     design = np.column_stack([position[start:] - position[start], velocity[start:] - velocity[start]])
     # Fit the increments over windows of about 0.1 s: the cumulative sums carry random-walk errors
     # (input noise integrated) that no covariance estimator of a few hundred samples gets right.
@@ -116,15 +119,18 @@ def _gains(forward: FitResult) -> tuple[np.ndarray, np.ndarray]:
 
 
 def lateral_ratio(data: RampData, gains: np.ndarray, cov: np.ndarray, *, cpr: float) -> list[Estimate]:
-    """Lateral speed ratio s and lateral multiplier 1/s from a lateral ramp (perpendicular dead wheels).
+    """Lateral speed ratio s, lateral multiplier 1/s and the strafing kA from a lateral ramp.
 
-    V = kS + (kV/s)·v_perp + …: the perpendicular wheel turns s times as fast as a forward move at the
-    same voltage would turn the forward wheels, so c₁ = kV/s (kV per tick of the same dead wheels).
+    V = kS + (kV/s)·v_perp + kA_lat·v_perp' (perpendicular dead-wheel ticks): the perpendicular wheel
+    turns s times as fast as a forward move at the same voltage would turn the forward wheels, so
+    c₁ = kV/s (kV per tick of the same dead wheels); c₂ = kA_lat is the strafing robot's inertia
+    (rollers and the 1/s gearing make it differ from kA), reported as ``lateral_kA`` [V·s²/rad at the
+    perpendicular dead wheel] where the ramp's break-away shows it.
     """
     if not data.velocities:
         raise FitError(f"{data.source}: the lateral ramp has no perpendicular encoder (drive encoders: "
                        "use Road Runner's LateralPushTest)")
-    volts = drive_voltage(data)
+    volts = held_voltage(data)
     pos = np.mean(list(data.positions.values()), axis=0)
     vel = np.mean(list(data.velocities.values()), axis=0)
     per_tick = 2 * math.pi / cpr
@@ -140,7 +146,17 @@ def lateral_ratio(data: RampData, gains: np.ndarray, cov: np.ndarray, *, cpr: fl
     mult = Estimate("lateral_multiplier", 1.0 / s.value if s.value else math.nan,
                     s.stderr / s.value**2 if s.value else math.nan, "1", s.determined,
                     "MecanumKinematics lateralMultiplier = inPerTick / lateralInPerTick")
-    return [s, mult]
+
+    def inertia(g: np.ndarray) -> float:
+        c, *_ = integral_fit(data.time, volts, pos, vel, g[0])
+        return float(c[1]) / per_tick
+
+    ka = _with_gains("lateral_kA", "V*s^2/rad", inertia, se[1] / per_tick, gains, cov,
+                     "strafing kA at the perpendicular dead wheel (∫(V − kS)dt = c₁·Δx + c₂·Δv)")
+    if not (ka.determined and ka.value > 0):
+        ka = Estimate("lateral_kA", ka.value, ka.stderr, ka.unit, False,
+                      "not determined: the lateral ramp's break-away does not show the strafing inertia")
+    return [s, mult, ka]
 
 
 def track_width(data: RampData, gains: np.ndarray | None, cov: np.ndarray | None, *,
@@ -166,7 +182,7 @@ def track_width(data: RampData, gains: np.ndarray | None, cov: np.ndarray | None
         if gains is None or cov is None:
             raise OptionError(f"{data.source}: an angular ramp with dead wheels needs kS and kV: give the forward "
                               "ramp file too")
-        volts = drive_voltage(data)
+        volts = held_voltage(data)
         per_tick = 2 * math.pi / cpr
         factor = 1.0 if mec else 2.0  # mecanum wheel at ω·tw; tank side at ω·tw/2 (Kinematics.kt)
 

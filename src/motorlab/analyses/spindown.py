@@ -22,6 +22,7 @@ import numpy as np
 from scipy import stats
 
 from motorlab.analyses import _common as common
+from motorlab.decimate import block_mean
 from motorlab.errors import FitError, OptionError
 from motorlab.fitting import LeastSquares, fit_least_squares, fit_linear, r_squared
 from motorlab.recording import Recording
@@ -190,6 +191,7 @@ def spindown(
     ----------
     Seed 1, "Flywheel and INA219 Experiment", "Data Analysis" steps 3–7; "Noisy Bus Voltage Data".
     """
+    recording = block_mean(recording)  # a 2M-row log: block means, not 2M-point fits
     source = recording.source or "log"
     common.check_nonnegative(guard, "guard")
     common.check_positive(inertia, "inertia")

@@ -19,11 +19,12 @@ from typing import Any
 import numpy as np
 
 from motorlab.analyses import _common as common
+from motorlab.decimate import block_mean
 from motorlab.errors import FitError, OptionError
 from motorlab.fitting import r_squared
 from motorlab.recording import Recording
 from motorlab.results import Estimate, FitResult, Panel, Series
-from motorlab.units import SI_UNITS
+from motorlab.units import SI_UNITS, format_percent
 
 _MIN_SAMPLES = 8
 #: Relative scatter of the current above which a warning says it was not constant.
@@ -124,6 +125,7 @@ def spinup(
     ----------
     Seed 1, "First Experiment", equations (1), (3) and (5).
     """
+    recording = block_mean(recording)  # a 2M-row log: block means, not 2M-point fits
     source = recording.source or "log"
     common.check_positive(inertia, "inertia", allow_none=False)
     common.check_limits(inertia, "J", "the inertia (--inertia)")
@@ -183,7 +185,7 @@ def spinup(
         raise FitError(f"{source}: the current and the motion have opposite signs: not a spin-up")
     if i_std > _CURRENT_TOLERANCE * i_mean:
         warnings.append(
-            f"the current was not constant during the spin-up: {i_mean:.4g} A ± {100 * i_std / i_mean:.1f} %"
+            f"the current was not constant during the spin-up: {i_mean:.4g} A ± {format_percent(i_std / i_mean, '.1f')}"
         )
 
     # ---- friction: priors on (b, Tf) or on (gamma, Tf/J) from a spin-down ---------------------------

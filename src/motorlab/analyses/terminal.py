@@ -162,7 +162,9 @@ def terminal(
     one_current = current.size >= 2 and float(np.ptp(current)) == 0.0
     several = current.size >= 2 and spread >= _MIN_SPREAD and not one_current
     details: dict[str, Any] = {
-        "rows": [{"current_A": float(i), "speed_rad_per_s": float(w)} for i, w in zip(current, omega, strict=True)]
+        "rows": common.listed_rows(
+            current.size, lambda k: {"current_A": float(current[k]), "speed_rad_per_s": float(omega[k])}
+        )
     }
     parameters: dict[str, Estimate] = {}
     correlation = None

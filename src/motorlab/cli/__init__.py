@@ -15,7 +15,7 @@ import warnings
 from collections.abc import Sequence
 from typing import TextIO
 
-from motorlab.cli.common import EXIT_INPUT, EXIT_INTERNAL, Parser
+from motorlab.cli.common import EXIT_INPUT, EXIT_INTERNAL, Parser, is_numerical_failure, numerical_failure_message
 from motorlab.errors import MotorlabError
 
 #: Sub-command modules, in the order ``motorlab --help`` lists them.
@@ -78,6 +78,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         print("motorlab: interrupted", file=sys.stderr)
         return 130
     except Exception as exc:  # last resort: a bug must not greet the user with a traceback
+        if is_numerical_failure(exc):  # absurd numbers in the input: the user's to fix (exit 2)
+            print(f"motorlab: error: {numerical_failure_message(exc, args)}", file=sys.stderr)
+            return EXIT_INPUT
         if os.environ.get("MOTORLAB_TRACEBACK"):
             raise
         detail = " ".join(str(exc).split()) or "no message"

@@ -39,12 +39,19 @@ def register(subparsers: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Load, characterise, write, print the table."""
+    from motorlab.characterize import output_paths, session_inputs
+    from motorlab.io._output import check_not_inputs
+    from motorlab.io.csv_table import check_header
     from motorlab.report import write_outputs
     from motorlab.session import load_session
 
     session = load_session(args.session)  # every validation error happens here, before any analysis
     out_dir = Path(args.output) if args.output else session.folder / "results"
     check_output_dir(out_dir)
+    check_not_inputs(output_paths(out_dir, report=not args.no_report), session_inputs(session))
+    for path in session_inputs(session)[1:]:  # a column in an unknown unit is refused now, not after hours
+        if path.suffix.lower() == ".csv" and path.is_file() and _is_table(path):
+            check_header(path)
     result = run_with_progress(session, quiet=args.quiet, figures=not args.no_report)
     paths = write_outputs(result, out_dir, report=not args.no_report)
     if not args.quiet:
@@ -53,6 +60,17 @@ def run(args: argparse.Namespace) -> int:
         if kind in paths:
             print(f"wrote {paths[kind]}")
     return report_failures(result, paths)
+
+
+def _is_table(path: Path) -> bool:
+    """True for a CSV table with a unit header (not a scope export); unreadable files are the analyses' to report."""
+    from motorlab.errors import LogFormatError
+    from motorlab.io import detect_format
+
+    try:
+        return detect_format(path) == "csv"
+    except LogFormatError:
+        return False
 
 
 def report_failures(result: Any, paths: dict[str, Any]) -> int:

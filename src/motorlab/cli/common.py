@@ -4,8 +4,11 @@ from __future__ import annotations
 
 import argparse
 import os
+import re
 import sys
 from typing import Any, NoReturn
+
+import numpy as np
 
 from motorlab.errors import OptionError
 from motorlab.options import quantity  # noqa: F401  (the CLI's option type; defined in the library)
@@ -16,8 +19,23 @@ EXIT_INPUT = 2
 EXIT_PARTIAL = 3
 
 
+_RST_LITERAL = re.compile(r"``(.+?)``", re.DOTALL)
+_RST_ROLE = re.compile(r":[a-z]+:`~?([^`]+)`")
+
+
+def plain_text(text: str) -> str:
+    """``text`` without reStructuredText markup: ````V = kS````, ``:func:`x``` read as plain words."""
+    return _RST_ROLE.sub(lambda m: m.group(1).rsplit(".", 1)[-1], _RST_LITERAL.sub(r"\1", text))
+
+
 class Parser(argparse.ArgumentParser):
-    """An ``ArgumentParser`` whose errors are one line on stderr and exit code 2."""
+    """An ``ArgumentParser`` whose errors are one line on stderr and exit code 2.
+
+    Help texts come from docstrings; :meth:`format_help` shows them without reStructuredText markup.
+    """
+
+    def format_help(self) -> str:
+        return plain_text(super().format_help())
 
     def error(self, message: str) -> NoReturn:
         print(f"{self.prog}: error: {message}", file=sys.stderr)
@@ -88,6 +106,64 @@ def check_output_dir(path: str | os.PathLike[str], *, option: str = "-o") -> Non
         raise OptionError(f"{option} {os.fspath(path)}: {probe} is a file, not a folder")
     if not os.access(probe, os.W_OK):
         raise OptionError(f"{option} {os.fspath(path)}: the folder {probe} is not writable")
+
+
+#: Failures of the numerics on numbers that are readable but absurd (1e308, 1e-300, identical
+#: timestamps, JSON nested a million deep): the input's fault, reported as such (exit 2).
+NUMERICAL_ERRORS: tuple[type[BaseException], ...] = (
+    np.linalg.LinAlgError,
+    OverflowError,
+    FloatingPointError,
+    RecursionError,
+    MemoryError,
+)
+
+_NON_FINITE = re.compile(r"\b(inf|infs|nan|nans|not finite|infinite)\b", re.IGNORECASE)
+_OUTPUT_OPTIONS = {"output", "out", "out_dir", "plot", "o", "emit"}
+
+
+def is_numerical_failure(exc: BaseException) -> bool:
+    """True for an exception the numerics raise on absurd numbers (see :data:`NUMERICAL_ERRORS`).
+
+    A ``ValueError`` counts when it complains of non-finite values (scipy's "array must not contain
+    infs or NaNs" after an overflow); any other ``ValueError`` is a bug.
+    """
+    if isinstance(exc, NUMERICAL_ERRORS):
+        return True
+    return type(exc) is ValueError and bool(_NON_FINITE.search(str(exc)))
+
+
+def input_paths(args: argparse.Namespace) -> list[str]:
+    """The existing files among the parsed options (``files``, ``session``, ``--params`` …), outputs excluded."""
+    found: list[str] = []
+    for key, value in vars(args).items():
+        if key in _OUTPUT_OPTIONS:
+            continue
+        values = value if isinstance(value, list | tuple) else [value]
+        for item in values:
+            if isinstance(item, str | os.PathLike) and os.path.isfile(item) and os.fspath(item) not in found:
+                found.append(os.fspath(item))
+    return found
+
+
+def numerical_failure_message(exc: BaseException, args: argparse.Namespace) -> str:
+    """One line for a numerical failure: the input files, the cause, and what to look at."""
+    causes: dict[type[BaseException], str] = {
+        np.linalg.LinAlgError: "a singular or ill-conditioned system",
+        OverflowError: "an overflow",
+        FloatingPointError: "a floating-point failure",
+        RecursionError: "nesting too deep",
+        MemoryError: "more memory than there is",
+    }
+    cause = next((text for kind, text in causes.items() if isinstance(exc, kind)), "values that are not finite")
+    detail = " ".join(str(exc).split())[:120]
+    files = input_paths(args)
+    where = f"{', '.join(files)}: " if files else ""
+    hint = (
+        "values far outside any measurement (such as 1e308 or 1e-300), identical timestamps or options "
+        "that contradict each other cannot be computed with"
+    )
+    return f"{where}the computation failed on these numbers ({cause}{': ' + detail if detail else ''}); {hint}"
 
 
 def check_option(condition: bool, message: str) -> None:

@@ -250,6 +250,8 @@ def _pedro(tg: TargetGains, language: str) -> list[str]:
     follower = []
     if "forwardZeroPowerAcceleration" in ff:
         follower.append(f".forwardZeroPowerAcceleration({_num(ff['forwardZeroPowerAcceleration'])})  // in/s^2")
+    if "lateralZeroPowerAcceleration" in ff:
+        follower.append(f".lateralZeroPowerAcceleration({_num(ff['lateralZeroPowerAcceleration'])})  // in/s^2")
     follower.append(f"// drive PIDF from the position gains: P = {_num(tg.gains['driveP'])} power/in, "
                     f"D = {_num(tg.gains['driveD'])} power*s/in")
     if java:

@@ -61,6 +61,15 @@ class Feedforward:
             raise OptionError(f"kS, kV, kA must be finite, got {self.kS}, {self.kV}, {self.kA}")
         if not (tau > 0 and math.isfinite(1.0 / tau) and math.isfinite(1.0 / self.kA)):
             raise OptionError(f"kA/kV = {tau:g} s is not a motor's time constant (kV = {self.kV:g}, kA = {self.kA:g})")
+        # Magnitudes no motor has (kA = 1e308 V·s²/rad, kV = 1e-300): refused here rather than
+        # overflowing in the design and the simulation. τ up to a day (a negligible kA, τ → 0, is
+        # SysId's special case and allowed); kV from 1e-12 and kS, kV, kA up to 1e12 in SI.
+        if tau > 1e5:
+            raise OptionError(f"kA/kV = {tau:.3g} s is not a motor's time constant (at most a day): "
+                              f"kV = {self.kV:g}, kA = {self.kA:g}")
+        if self.kV < 1e-12 or max(abs(self.kS), self.kV, self.kA) > 1e12:
+            raise OptionError(f"kS = {self.kS:g}, kV = {self.kV:g}, kA = {self.kA:g} are beyond any motor's "
+                              "(kV from 1e-12, each at most 1e12 in SI units)")
         return self
 
     def voltage(self, velocity: Any, acceleration: Any = 0.0) -> Any:
@@ -125,5 +134,3 @@ class Gains:
     def to_dict(self) -> dict[str, float]:
         """``{"kP", "kI", "kD"}``."""
         return {"kP": self.kP, "kI": self.kI, "kD": self.kD}
-
-

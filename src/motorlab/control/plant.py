@@ -6,15 +6,14 @@ rotations, degrees, encoder ticks, or metres of a wheel of given radius.
 
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass, field
 from os import PathLike
-from pathlib import Path
 from typing import Any
 
 from motorlab.control.design import Feedforward
 from motorlab.errors import InputError, LogFormatError, OptionError
+from motorlab.io._text import load_json, read_bytes
 from motorlab.model import PARAMETER_NAMES, MotorParams, feedforward_from_params
 
 UNIT_NAMES = ("rad", "rotations", "degrees", "ticks", "m")
@@ -87,7 +86,7 @@ class MechanismUnits:
 
 
 #: Road Runner ramp results a plant may carry (motorlab.analyses.roadrunner).
-GEOMETRY = ("lateral_ratio", "track_width_ticks")
+GEOMETRY = ("lateral_ratio", "track_width_ticks", "lateral_kA")
 
 
 @dataclass(frozen=True)
@@ -105,12 +104,15 @@ class Plant:
     geometry
         Drive geometry from Road Runner ramps (``lateral_ratio`` [-], ``track_width_ticks`` [tick]), when
         the ``analyze --json`` file has it (for ``--target roadrunner`` / ``pedro``).
+    notes
+        What the tuner must say about the numbers (e.g. kS missing and taken as 0).
     """
 
     feedforward: Feedforward
     params: MotorParams | None = None
     source: str = ""
     geometry: dict[str, float] = field(default_factory=dict)
+    notes: tuple[str, ...] = ()
 
     @property
     def simulated(self) -> MotorParams | Feedforward:
@@ -193,16 +195,11 @@ def load_plant(paths: list[str | PathLike[str]], *, unit: str | None = None) -> 
     merged: dict[str, float] = {}
     names = (*PARAMETER_NAMES, "kS", "kV", "kA", *GEOMETRY)
     for path in paths:
-        try:
-            raw = Path(path).read_bytes()
-        except OSError as exc:  # missing, a directory, unreadable: the user's file, named in one line
-            raise LogFormatError(f"cannot read the file ({exc.strerror})", path=path) from None
+        _name, raw = read_bytes(path)  # missing, a directory, a FIFO, too large: named in one line
         if not raw.strip():
             raise LogFormatError("the file is empty (expected motorlab analyze --json output)", path=path)
         try:
-            doc = json.loads(raw.decode("utf-8-sig"))
-        except json.JSONDecodeError as exc:
-            raise LogFormatError(f"not valid JSON ({exc.msg})", path=path, line=exc.lineno) from None
+            doc = load_json(raw.decode("utf-8-sig"), str(path))
         except UnicodeDecodeError:
             raise LogFormatError("not a text (JSON) file", path=path) from None
         found: list[dict[str, Any]] = []
@@ -236,7 +233,11 @@ def load_plant(paths: list[str | PathLike[str]], *, unit: str | None = None) -> 
             params = MotorParams.from_dict(merged)
         if "kV" in merged and "kA" in merged:
             ff = Feedforward(max(merged.get("kS", 0.0), 0.0), merged["kV"], merged["kA"]).check_plant()
-            return Plant(ff, params, source, {k: merged[k] for k in GEOMETRY if k in merged})
+            notes: tuple[str, ...] = ()
+            if "kS" not in merged:  # absent or null (not determined): say so, do not print a silent 0
+                notes = (f"kS is not given (or not determined) in {source}: taken as 0 V, so there is no "
+                         "static-friction feedforward",)
+            return Plant(ff, params, source, {k: merged[k] for k in GEOMETRY if k in merged}, notes)
     except InputError as exc:
         raise LogFormatError(exc.message, path=paths[-1] if len(paths) == 1 else source) from None
     if params is not None:

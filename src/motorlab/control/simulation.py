@@ -26,6 +26,7 @@ import numpy as np
 from motorlab.control.loop import Feedforward, Gains
 from motorlab.errors import OptionError
 from motorlab.model import MotorParams, feedforward_from_params
+from motorlab.units import format_percent
 
 #: Settling band: fraction of the step size (plus one encoder count when the encoder is quantised).
 SETTLING_BAND = 0.02
@@ -611,7 +612,7 @@ def plot_response(
     m = resp.metrics
     title = f"{resp.loop} {resp.kind}"
     if resp.kind == "step" and math.isfinite(m.get("rise_time", math.nan)):
-        title += f": rise {m['rise_time'] * 1e3:.0f} ms, overshoot {m['overshoot']:.1f} %"
+        title += f": rise {m['rise_time'] * 1e3:.0f} ms, overshoot {format_percent(m['overshoot'] / 100, '.1f')}"
     ax.set_title(title, fontsize=10)
     if voltage_axis:
         ax2 = ax.twinx()

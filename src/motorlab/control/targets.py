@@ -41,7 +41,10 @@ Targets
     kS / nominalVoltage (the share of the battery that static friction takes, in
     ``Mecanum.getVoltageNormalized``); the drive PIDF (P, D on the remaining distance [in] → power)
     from the position gains. ``yVelocity`` and ``lateralZeroPowerAcceleration`` need the lateral
-    ramp's ratio (``analyze feedforward … lateral.json``): yVelocity = lateral_ratio·xVelocity.
+    ramp's ratio (``analyze feedforward … lateral.json``): yVelocity = lateral_ratio·xVelocity, and
+    lateralZeroPowerAcceleration = −kS/lateral_kA (Pedro's LateralZeroPowerAccelerationTuner: strafe to
+    30 in/s, ``setTeleOpDrive(0, 0, 0, true)``, average the per-loop accelerations down to the
+    velocity constraint; with Coulomb friction only the deceleration is the constant kS/kA_lat).
 """
 
 from __future__ import annotations
@@ -280,10 +283,13 @@ def _pedro(gains: Gains, feedforward: Feedforward, units: MechanismUnits, voltag
         ff["forwardZeroPowerAcceleration"] = -feedforward.kS / feedforward.kA * in_per_rad
     if "lateral_ratio" in geometry:
         ff["yVelocity"] = geometry["lateral_ratio"] * ff["xVelocity"]
+    if geometry.get("lateral_kA", 0.0) > 0:  # the perpendicular dead wheel: same radius as --wheel-radius
+        ff["lateralZeroPowerAcceleration"] = -feedforward.kS / geometry["lateral_kA"] * in_per_rad
     power_per_in = 1.0 / (voltage * in_per_rad)
     g = {"driveP": gains.kP * power_per_in, "driveD": gains.kD * power_per_in} if gains.loop == "position" else \
         {"driveP": 0.0, "driveD": gains.kP * power_per_in}
     unit_map = {"xVelocity": "in/s", "yVelocity": "in/s", "forwardZeroPowerAcceleration": "in/s^2",
+                "lateralZeroPowerAcceleration": "in/s^2",
                 "staticFrictionCoefficient": "1",
                 "nominalVoltage": "V", "driveP": "power/in", "driveD": "power*s/in", "output": "power",
                 "position": "in", "velocity": "in/s", "kS": "V", "kV": "V*s/in", "kA": "V*s^2/in"}
@@ -295,8 +301,11 @@ def _pedro(gains: Gains, feedforward: Feedforward, units: MechanismUnits, voltag
     notes = [
         "forwardZeroPowerAcceleration = −kS/kA assumes no viscous friction (K = kV): the coasting deceleration "
         "is at least this large; give --K to the analysis for the viscous part",
-        "yVelocity = lateral_ratio × xVelocity needs the lateral ramp (motorlab analyze feedforward forward.json "
-        "lateral.json); lateralZeroPowerAcceleration is not determined (strafing friction differs)",
+        "yVelocity = lateral_ratio × xVelocity and lateralZeroPowerAcceleration = −kS/lateral_kA need the lateral "
+        "ramp (motorlab analyze feedforward forward.json lateral.json; lateral_kA where its break-away shows "
+        "the strafing inertia): the motors' friction kS decelerating the strafing robot's inertia, the same "
+        "assumptions as forwardZeroPowerAcceleration, and roller friction beyond the forward ramp's kS left out "
+        "(Pedro's LateralZeroPowerAccelerationTuner measures it all: prefer its number when you have run it)",
         "staticFrictionCoefficient = kS / nominalVoltage (our reading of Mecanum.getVoltageNormalized)",
     ]
     if feedforward.kA <= 0:

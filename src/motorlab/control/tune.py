@@ -33,6 +33,7 @@ from motorlab.control.simulation import (
 from motorlab.control.targets import TargetGains, to_target
 from motorlab.errors import OptionError
 from motorlab.model import MotorParams
+from motorlab.units import format_percent
 
 METHODS = ("lqr", "poles")
 
@@ -274,7 +275,7 @@ def tune(
         kind="profile",
         target=size,
     )
-    warnings = _check(gains, step_resp, prof_resp, overshoot if method == "poles" else None, rise_time)
+    warnings = [*plant.notes, *_check(gains, step_resp, prof_resp, overshoot if method == "poles" else None, rise_time)]
     return TuneResult(gains, tg, step_resp, prof_resp, limits, plant, units, warnings)
 
 
@@ -380,7 +381,8 @@ def tune_summary(
             + ", ".join(f"{k} = {v:.4g} {res.target.units.get(k, '')}" for k, v in g.items())
         )
         lines.append(
-            f"    step: rise {resp['rise_time'] * 1e3:.0f} ms, overshoot {resp['overshoot']:.1f} %, "
+            f"    step: rise {resp['rise_time'] * 1e3:.0f} ms, "
+            f"overshoot {format_percent(resp['overshoot'] / 100, '.1f')}, "
             f"settling {resp['settling_time'] * 1e3:.0f} ms"
             if math.isfinite(resp["rise_time"]) and math.isfinite(resp["settling_time"])
             else "    step: does not settle in the simulated run"

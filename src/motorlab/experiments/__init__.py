@@ -255,6 +255,7 @@ class Experiment:
         result = self.run([str(p) for p in paths], dict(values))
         if self.shaft:
             result.details.setdefault("shaft", self.shaft)
+        result.check_physics()  # also what the run added after the analysis made its result
         return result
 
     def schema(self) -> dict[str, Any]:

@@ -30,7 +30,7 @@ from collections.abc import Callable, Sequence
 from typing import Any
 
 from motorlab.errors import LogFormatError, OptionError
-from motorlab.io._text import PathArg, is_number, read_bytes
+from motorlab.io._text import PathArg, check_distinct, check_input_file, decode_text, is_binary, is_number, read_bytes
 from motorlab.io.csv_table import COLUMNS, guess_delimiter, is_known_header, read_csv, split_fields, write_csv
 from motorlab.io.flightrecorder import read_flight_log_channels, read_flight_recorder, write_flight_log
 from motorlab.io.frc_json import read_frc_char_json, read_sysid_json
@@ -62,6 +62,7 @@ READERS: dict[str, Callable[..., Recording]] = {
 _CHANNEL = re.compile(r"^ch\d+(_v)?$", re.IGNORECASE)
 _SYSID_FLAG = re.compile(r'"sysid"\s*:\s*true')
 _RR_RAMP = re.compile(r'"(forwardEncPositions|perpEncPositions|angVels)"\s*:')
+_HEAD = 1 << 16
 
 
 def detect_format(path: PathArg) -> str:
@@ -72,7 +73,12 @@ def detect_format(path: PathArg) -> str:
     LogFormatError
         Missing, empty or binary file that is not a data log; text in no known layout.
     """
-    name, raw = read_bytes(path)
+    name, _limit = check_input_file(path)
+    try:
+        with open(name, "rb") as handle:
+            raw = handle.read(_HEAD)  # the layout shows in the first lines; a 2M-row log is not read twice
+    except OSError as exc:
+        raise LogFormatError(f"cannot read the file ({exc.strerror})", path=name) from None
     extension = os.path.splitext(name)[1].lower()
     if raw[:6] == b"WPILOG" or extension == ".wpilog":
         return "wpilog"
@@ -80,13 +86,16 @@ def detect_format(path: PathArg) -> str:
         return "roadrunner-log"
     if not raw.strip():
         raise LogFormatError("the file is empty", path=name)
-    if b"\0" in raw:
+    if is_binary(raw[: raw.rfind(b"\n") + 1] if len(raw) == _HEAD else raw):
         raise LogFormatError("not a text file (it contains binary data) and not a WPILib data log", path=name)
-    text = raw.decode("utf-8-sig", errors="replace")
+    text, _encoding = decode_text(raw)
     if extension == ".json" or text.lstrip().startswith("{"):
+        text, _encoding = decode_text(read_bytes(name)[1])
         if _RR_RAMP.search(text):
             return "roadrunner-ramp"
         return "sysid-json" if _SYSID_FLAG.search(text) else "frc-char-json"
+    if len(raw) == _HEAD:
+        text = text[: max(text.rfind("\n"), 0)]  # drop the line the head cut
     lines = [line.strip() for line in text.splitlines()]
     lines = [line for line in lines if line and not line.startswith("#")]
     if not lines:
@@ -137,6 +146,7 @@ def read_any(path: PathArg | Sequence[PathArg], *, cpr: float | None = None, **o
         target: Any = path
     else:
         files = list(path)
+        check_distinct(files)
         if len(files) == 1:
             return read_any(files[0], cpr=cpr, **options)
         formats = {detect_format(p) for p in files}

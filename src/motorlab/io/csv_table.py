@@ -8,14 +8,26 @@ Leading ``# key: value`` lines are metadata (``# cpr: 1120``, ``# experiment: te
 from __future__ import annotations
 
 import math
-import os
 from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
 
 from motorlab.errors import LogFormatError, OptionError
-from motorlab.io._text import PathArg, TextFile, check_cpr, is_number, parse_number, read_text, unit_factor
+from motorlab.io._output import write_text_atomic
+from motorlab.io._text import (
+    PathArg,
+    TextFile,
+    check_cpr,
+    check_input_file,
+    fast_table,
+    is_number,
+    parse_number,
+    read_text,
+    text_file,
+    unit_factor,
+)
+from motorlab.io.glitches import screen_glitches
 from motorlab.recording import SIGNALS, Recording
 
 #: Known column names -> (canonical signal, unit as written). ``"time"`` is the time axis [s].
@@ -92,12 +104,14 @@ def parse_comments(text: TextFile) -> tuple[dict[str, Any], list[str], int]:
     """
     metadata: dict[str, Any] = {}
     comments: list[str] = []
-    for index, raw in enumerate(text.lines):
-        line = raw.strip()
-        if not line:
-            continue
+    count = 64
+    head = text.head(count)  # the top of the file only: a 2M-row table is not split into lines here
+    while len(head) == count and all(line.startswith("#") for _, line in head):
+        count *= 4
+        head = text.head(count)
+    for number, line in head:
         if not line.startswith("#"):
-            return metadata, comments, index
+            return metadata, comments, number - 1
         body = line.lstrip("#").strip()
         key, sep, value = body.partition(":")
         if sep and key.strip() and " " not in key.strip():
@@ -105,7 +119,22 @@ def parse_comments(text: TextFile) -> tuple[dict[str, Any], list[str], int]:
             metadata[key.strip()] = float(value) if is_number(value) else value
         elif body:
             comments.append(body)
-    return metadata, comments, len(text.lines)
+    return metadata, comments, len(text.lines)  # only comments (a short file: splitting it is cheap)
+
+
+def line_at(text: TextFile, index: int) -> str | None:
+    """The stripped line at 0-based ``index`` if it is not blank, from the top of the file only."""
+    count = 64
+    while True:
+        head = text.head(count)
+        for number, line in head:
+            if number == index + 1:
+                return line
+            if number > index + 1:
+                return None
+        if len(head) < count:
+            return None
+        count *= 4
 
 
 def read_csv(path: PathArg, *, cpr: float | None = None) -> Recording:
@@ -139,9 +168,9 @@ def read_csv(path: PathArg, *, cpr: float | None = None) -> Recording:
     text = read_text(path)
     name = text.path
     metadata, comments, start = parse_comments(text)
-    if start >= len(text.lines):
+    header_line = line_at(text, start)
+    if header_line is None:
         raise LogFormatError("no header line naming the columns (only comments)", path=name)
-    header_line = text.lines[start].strip()
     delimiter = guess_delimiter(header_line)
     header = split_fields(header_line, delimiter)
     header_no = start + 1
@@ -151,10 +180,31 @@ def read_csv(path: PathArg, *, cpr: float | None = None) -> Recording:
         )
     targets = _resolve_header(header, path=name, line=header_no)
 
+    used = [i for i, t in enumerate(targets) if t is not None]
+    table = fast_table(text, header_no + 1, len(header), delimiter)
+    if table is not None:  # a clean numeric table, parsed in C
+        data = table.values if len(used) == table.values.shape[1] else table.values[:, used]
+        line_arr = table.lines
+        warnings = []
+        if table.truncated is not None:
+            number, line = table.truncated
+            warnings.append(f"{name}:{number}: truncated last line dropped ({line[:40]!r})")
+    else:
+        data, line_arr, warnings = _parse_rows(text, start, header, delimiter, used)
+    if data.shape[0] == 0:
+        raise LogFormatError("no data rows after the header", path=name, line=header_no)
+    del text, table  # the file's bytes are not needed any more (a 2M-row table: 100 MB)
+    return _assemble(name, data, line_arr, warnings, header, targets, used, metadata, comments, cpr)
+
+
+def _parse_rows(
+    text: TextFile, start: int, header: list[str], delimiter: str | None, used: list[int]
+) -> tuple[np.ndarray, np.ndarray, list[str]]:
+    """Line by line (the slow path): finds and names the first bad line."""
+    name = text.path
     rows: list[list[float]] = []
     lines: list[int] = []
     warnings: list[str] = []
-    used = [i for i, t in enumerate(targets) if t is not None]
     for number, raw in enumerate(text.lines[start + 1 :], start=start + 2):
         line = raw.strip()
         if not line or line.startswith("#"):
@@ -177,11 +227,22 @@ def read_csv(path: PathArg, *, cpr: float | None = None) -> Recording:
                 break
             raise
         lines.append(number)
-    if not rows:
-        raise LogFormatError("no data rows after the header", path=name, line=header_no)
+    return np.array(rows, dtype=float).reshape(len(rows), len(used)), np.asarray(lines, dtype=int), warnings
 
-    data = np.array(rows, dtype=float)
-    line_arr = np.asarray(lines, dtype=int)
+
+def _assemble(
+    name: str,
+    data: np.ndarray,
+    line_arr: np.ndarray,
+    warnings: list[str],
+    header: list[str],
+    targets: list[tuple[str, str] | None],
+    used: list[int],
+    metadata: dict[str, Any],
+    comments: list[str],
+    cpr: float | None,
+) -> Recording:
+    """Columns to SI signals, time checked, cpr applied: the Recording of :func:`read_csv`."""
     signals: dict[str, np.ndarray] = {}
     units: dict[str, str] = {}
     time: np.ndarray | None = None
@@ -190,7 +251,8 @@ def read_csv(path: PathArg, *, cpr: float | None = None) -> Recording:
         assert target is not None  # used holds only resolved columns
         signal, unit = target
         si = "s" if signal == "time" else SIGNALS[signal]
-        values = data[:, col] * unit_factor(unit, si)
+        factor = unit_factor(unit, si)
+        values = data[:, col] * factor if factor != 1.0 else data[:, col]  # SI already: a view, no copy
         units[signal] = unit
         if signal == "time":
             time = values
@@ -223,7 +285,27 @@ def read_csv(path: PathArg, *, cpr: float | None = None) -> Recording:
             "warnings": warnings,
         }
     )
-    return Recording(time=time, signals=signals, metadata=metadata, source=name, lines=line_arr)
+    return screen_glitches(Recording(time=time, signals=signals, metadata=metadata, source=name, lines=line_arr))
+
+
+def check_header(path: PathArg) -> None:
+    """Check the header of a CSV table without reading its rows (a session's files, before any analysis).
+
+    Raises
+    ------
+    LogFormatError
+        An unknown column or unit (``current_furlongs``), two columns for one signal, no header.
+    """
+    name, _limit = check_input_file(path)
+    with open(name, "rb") as handle:
+        head = handle.read(1 << 16)
+    lines = text_file(name, head[: head.rfind(b"\n") + 1] or head)
+    _metadata, _comments, start = parse_comments(lines)
+    if start >= len(lines.lines):
+        return  # read_csv explains
+    header = split_fields(lines.lines[start].strip(), guess_delimiter(lines.lines[start].strip()))
+    if not all(is_number(f) for f in header):
+        _resolve_header(header, path=name, line=start + 1)
 
 
 def _resolve_header(header: list[str], *, path: str, line: int) -> list[tuple[str, str] | None]:
@@ -303,8 +385,7 @@ def write_csv(
     out.append(",".join(names))
     for k in range(size):
         out.append(",".join(_format(values[k]) for values in arrays))
-    with open(os.fspath(path), "w", encoding="utf-8", newline="") as handle:
-        handle.write("\n".join(out) + "\n")
+    write_text_atomic(path, "\n".join(out) + "\n", newline="")
 
 
 def _format(value: Any) -> str:

@@ -220,9 +220,34 @@ def _dead_wheel_travel(channels: dict[str, Channel]) -> dict[str, np.ndarray]:
     x = (dw["par0YTicks"] * p1 - dw["par1YTicks"] * p0) / span
     y = dw["perpXTicks"] * (p1 - p0) / span + pp
     psi = (p0 - p1) / span
+    return _mecanum_inverse(x, y, psi, mp)
+
+
+def _mecanum_inverse(x: np.ndarray, y: np.ndarray, psi: np.ndarray, mp: dict[str, float]) -> dict[str, np.ndarray]:
+    """Wheel travel [ticks] from the robot-frame travel x, y [ticks] and yaw ψ [rad] (Kinematics.kt inverse)."""
     lm, tw = mp["inPerTick"] / mp["lateralInPerTick"], mp["trackWidthTicks"]
     return {"leftFront": x - y * lm - psi * tw, "leftBack": x + y * lm - psi * tw,
             "rightBack": x - y * lm + psi * tw, "rightFront": x + y * lm + psi * tw}
+
+
+def _two_dead_wheel_travel(channels: dict[str, Channel]) -> dict[str, np.ndarray]:
+    """Each mecanum wheel's travel [dead-wheel ticks] from two dead wheels and the IMU's yaw.
+
+    TwoDeadWheelLocalizer (quickstart): the twist of an update is x = Δpar − parYTicks·Δψ,
+    y = Δperp − perpXTicks·Δψ, ψ the IMU's yaw (``TWO_DEAD_WHEEL_INPUTS.yaw`` [rad], unwrapped here as
+    ``Rotation2d.minus`` does); then ``MecanumKinematics.inverse`` as for three dead wheels.
+    """
+    dw = _params(channels, "TWO_DEAD_WHEEL_PARAMS", ("parYTicks", "perpXTicks"))
+    mp = _params(channels, "MECANUM_PARAMS", ("inPerTick", "lateralInPerTick", "trackWidthTicks"))
+    if mp["lateralInPerTick"] == 0:
+        raise LogFormatError("MECANUM_PARAMS is not tuned (lateralInPerTick = 0)")
+    inputs = channels["TWO_DEAD_WHEEL_INPUTS"]
+    par, perp = (inputs.column(k, "position") for k in ("par", "perp"))
+    psi = np.unwrap(inputs.column("yaw"))
+    psi = psi - psi[0]
+    x = par - par[0] - dw["parYTicks"] * psi
+    y = perp - perp[0] - dw["perpXTicks"] * psi
+    return _mecanum_inverse(x, y, psi, mp)
 
 
 def _wheels(channels: dict[str, Channel]) -> tuple[Channel, Channel, dict[str, tuple[str, np.ndarray]]]:
@@ -235,6 +260,10 @@ def _wheels(channels: dict[str, Channel]) -> tuple[Channel, Channel, dict[str, t
         travel = _dead_wheel_travel(channels)
         return channels["MECANUM_COMMAND"], channels["THREE_DEAD_WHEEL_INPUTS"], {
             w: (f"{w}Power", travel[w]) for w in MECANUM_WHEELS}
+    if "MECANUM_COMMAND" in channels and "TWO_DEAD_WHEEL_INPUTS" in channels:
+        travel = _two_dead_wheel_travel(channels)
+        return channels["MECANUM_COMMAND"], channels["TWO_DEAD_WHEEL_INPUTS"], {
+            w: (f"{w}Power", travel[w]) for w in MECANUM_WHEELS}
     if "TANK_COMMAND" in channels and "TANK_LOCALIZER_INPUTS" in channels:
         inputs = channels["TANK_LOCALIZER_INPUTS"]
         wheels = {side: (f"{side}Power", np.asarray([np.mean([p["position"] for p in m[side]])
@@ -242,8 +271,9 @@ def _wheels(channels: dict[str, Channel]) -> tuple[Channel, Channel, dict[str, t
                   for side in ("left", "right")}
         return channels["TANK_COMMAND"], inputs, wheels
     raise LogFormatError(
-        "no drive commands with localizer inputs (MECANUM_COMMAND + MECANUM_LOCALIZER_INPUTS or "
-        "THREE_DEAD_WHEEL_INPUTS, or TANK_COMMAND + TANK_LOCALIZER_INPUTS); channels: " + ", ".join(sorted(channels)))
+        "no drive commands with localizer inputs (MECANUM_COMMAND + MECANUM_LOCALIZER_INPUTS, "
+        "THREE_DEAD_WHEEL_INPUTS or TWO_DEAD_WHEEL_INPUTS, or TANK_COMMAND + TANK_LOCALIZER_INPUTS); "
+        "channels: " + ", ".join(sorted(channels)))
 
 
 def read_flight_recorder(path: PathArg, *, cpr: float | None = None) -> Recording:
@@ -253,7 +283,7 @@ def read_flight_recorder(path: PathArg, *, cpr: float | None = None) -> Recordin
     ----------
     path
         A FlightRecorder ``.log`` of an OpMode that followed trajectories with the quickstart's
-        ``MecanumDrive`` (drive-encoder or three-dead-wheel localizer) or ``TankDrive``.
+        ``MecanumDrive`` (drive-encoder, two- or three-dead-wheel localizer) or ``TankDrive``.
     cpr
         Counts per revolution of the encoders whose ticks the positions count: the drive motors', or
         the dead wheels' for a dead-wheel localizer (wheel travel is then in dead-wheel ticks, as Road

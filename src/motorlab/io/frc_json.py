@@ -9,16 +9,17 @@ back separately. See ``docs/formats.md`` and ``shared/data/real/README.md``.
 
 from __future__ import annotations
 
-import json
+import difflib
 import math
 import re
+import warnings
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from motorlab.errors import LogFormatError, OptionError
-from motorlab.io._text import PathArg, read_bytes, unit_factor
+from motorlab.io._text import PathArg, load_json, read_bytes, unit_factor
 from motorlab.recording import Recording
 
 #: The four tests, in the order the tools run them (segments keep this order).
@@ -58,20 +59,93 @@ class _Test:
     lines: np.ndarray
 
 
+@dataclass(frozen=True)
+class _Parsed:
+    """A test's rows parsed by numpy before ``json.loads`` saw them (see :func:`_extract_tests`)."""
+
+    rows: np.ndarray
+    lines: np.ndarray
+
+
+_TEST_START = re.compile(rb'"(slow-forward|slow-backward|fast-forward|fast-backward)"\s*:\s*(\[)\s*\[')
+_TEST_END = re.compile(rb"\]\s*\]")
+_JSON_NUMERIC = np.zeros(256, dtype=bool)
+_JSON_NUMERIC[np.frombuffer(b"0123456789+-.eE \t\r\n,[]", dtype=np.uint8)] = True
+_TO_SPACE = bytes.maketrans(b",[]", b"   ")
+
+
+def _parse_rows(segment: bytes) -> np.ndarray | None:
+    """``[[t, V, x, v], ...]`` as an (n, ncol) array, or None unless every row is plain numbers of one length."""
+    codes = np.frombuffer(segment, dtype=np.uint8)
+    if not _JSON_NUMERIC[codes].all():
+        return None  # NaN, Infinity, strings, objects: json.loads and the checks below name them
+    opens = np.flatnonzero(codes == ord("["))[1:]
+    closes = np.flatnonzero(codes == ord("]"))[:-1]
+    if opens.size == 0 or opens.size != closes.size or np.any(closes <= opens) or np.any(opens[1:] <= closes[:-1]):
+        return None
+    commas = np.flatnonzero(codes == ord(","))
+    per_row = np.searchsorted(commas, closes) - np.searchsorted(commas, opens)
+    ncol = int(per_row[0]) + 1
+    if ncol < 2 or np.any(per_row != ncol - 1):  # (numpy reads a blank "[]" row as -1.0)
+        return None
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        try:
+            values = np.fromstring(segment.translate(_TO_SPACE), dtype=float, sep=" ")
+        except (ValueError, DeprecationWarning):
+            return None
+    if values.size != opens.size * ncol or not np.all(np.isfinite(values)):
+        return None
+    return values.reshape(opens.size, ncol)
+
+
+def _extract_tests(raw: bytes) -> tuple[bytes, dict[str, _Parsed]]:
+    """The four tests' arrays parsed by numpy, and ``raw`` with each replaced by ``[]`` (lines kept).
+
+    A 2M-row SysId file as Python lists would take about 1 GB; as arrays it takes 64 MB. A test
+    whose rows are not plain numbers of one length is left in place for ``json.loads`` and the
+    row-by-row checks, which name the line of the problem.
+    """
+    parsed: dict[str, _Parsed] = {}
+    pieces: list[bytes] = []
+    at = 0
+    for match in _TEST_START.finditer(raw):
+        if match.start() < at:
+            continue
+        end = _TEST_END.search(raw, match.end())
+        if end is None:
+            break
+        start = match.start(2)
+        segment = raw[start : end.end()]
+        rows = _parse_rows(segment)
+        if rows is None:
+            continue
+        base = raw.count(b"\n", 0, start) + 1
+        codes = np.frombuffer(segment, dtype=np.uint8)
+        newlines = np.flatnonzero(codes == ord("\n"))
+        row_starts = np.flatnonzero(codes == ord("["))[1:]
+        lines = base + np.searchsorted(newlines, row_starts)
+        parsed[match.group(1).decode("ascii")] = _Parsed(rows, lines.astype(int))
+        pieces += [raw[at:start], b"[" + b"\n" * newlines.size + b"]"]
+        at = end.end()
+    return b"".join([*pieces, raw[at:]]), parsed
+
+
 def _load(path: PathArg) -> tuple[str, dict[str, Any], str]:
     name, raw = read_bytes(path)
+    raw, parsed = _extract_tests(raw.removeprefix(b"\xef\xbb\xbf"))
     if not raw.strip():
         raise LogFormatError("the file is empty", path=name)
+    if b"\0" in raw:
+        raise LogFormatError("not a text file (it contains binary data)", path=name)
     try:
-        text = raw.decode("utf-8-sig")
+        text = raw.decode("utf-8-sig")  # JSON is UTF-8 by definition (RFC 8259)
     except UnicodeDecodeError:
         raise LogFormatError("not a text file (invalid UTF-8)", path=name) from None
-    try:
-        data = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise LogFormatError(f"not valid JSON ({exc.msg})", path=name, line=exc.lineno) from None
+    data = load_json(text, name)
     if not isinstance(data, dict):
         raise LogFormatError("expected a JSON object with test names as keys", path=name, line=1)
+    data.update(parsed)
     return name, data, text
 
 
@@ -120,6 +194,17 @@ def _tests(name: str, data: dict[str, Any], text: str, columns: tuple[int, ...])
             continue
         rows = data[key]
         lines = line_map.get(key, [])
+        if isinstance(rows, _Parsed):  # parsed by numpy: plain numbers, one row length, finite
+            if rows.rows.shape[1] not in columns:
+                raise LogFormatError(
+                    f"test {key!r}: rows should have {' or '.join(map(str, columns))} columns, "
+                    f"found {rows.rows.shape[1]}",
+                    path=name,
+                    line=int(rows.lines[0]),
+                )
+            _check_time_order(key, rows.rows, rows.lines, name)
+            tests.append(_Test(key, rows.rows, rows.lines))
+            continue
         if not isinstance(rows, list):
             raise LogFormatError(f"{key!r} should be a list of rows", path=name)
         if not rows:
@@ -146,14 +231,34 @@ def _tests(name: str, data: dict[str, Any], text: str, columns: tuple[int, ...])
                     raise LogFormatError(message, path=name, line=line)
         array = np.asarray(rows, dtype=float)
         line_arr = np.asarray(lines if len(lines) == len(rows) else np.zeros(len(rows)), dtype=int)
-        back = np.flatnonzero(np.diff(array[:, 0]) < 0)
-        if back.size:
-            i = int(back[0]) + 1
-            raise LogFormatError(f"test {key!r}: time goes backwards at row {i}", path=name, line=int(line_arr[i]))
+        _check_time_order(key, array, line_arr, name)
         tests.append(_Test(key, array, line_arr))
+    # frc-characterization's drivetrain files also hold a "track-width" test (not a feedforward test).
+    unknown = [key for key, rows in data.items() if key not in (*TESTS, "track-width") and _looks_like_rows(rows)]
+    for key in unknown:
+        close = difflib.get_close_matches(key, TESTS, n=1)
+        hint = f"did you mean {close[0]!r}? " if close else ""
+        lines = line_map.get(key, [])
+        where = f"{name}:{lines[0]}" if lines else name
+        warnings.append(
+            f"{where}: {key!r} is not a test name ({hint}known: {', '.join(TESTS)}): its rows were not used"
+        )
     if not tests:
-        raise LogFormatError(f"no test data: none of {', '.join(TESTS)} is in the file", path=name)
+        also = f" (found {', '.join(map(repr, unknown))} instead)" if unknown else ""
+        raise LogFormatError(f"no test data: none of {', '.join(TESTS)} is in the file{also}", path=name)
     return tests, warnings
+
+
+def _check_time_order(key: str, rows: np.ndarray, lines: np.ndarray, name: str) -> None:
+    back = np.flatnonzero(np.diff(rows[:, 0]) < 0)
+    if back.size:
+        i = int(back[0]) + 1
+        raise LogFormatError(f"test {key!r}: time goes backwards at row {i}", path=name, line=int(lines[i]))
+
+
+def _looks_like_rows(value: Any) -> bool:
+    """True for a non-empty list of lists (a test's data under a name that is not a test's)."""
+    return isinstance(value, list) and bool(value) and all(isinstance(row, list) for row in value[:3])
 
 
 @dataclass

@@ -75,6 +75,8 @@ class RampData:
         Names of the encoders whose velocities were unwrapped, with how many samples changed.
     ang_vels
         IMU angular velocities about x, y, z [rad/s] (angular ramp only).
+    power_times, voltage_time
+        The logged ``MidpointTimer`` times of each power signal and of the battery reading [s].
     """
 
     kind: str
@@ -87,7 +89,8 @@ class RampData:
     repaired: dict[str, int] = field(default_factory=dict)
     ang_vels: list[np.ndarray] = field(default_factory=list)
     source: str = ""
-    power_time: np.ndarray | None = None
+    power_times: dict[str, np.ndarray] = field(default_factory=dict)
+    voltage_time: np.ndarray | None = None
 
 
 def repair_velocity(raw: np.ndarray, estimate: np.ndarray) -> np.ndarray:
@@ -242,15 +245,15 @@ def read_ramp_data(path: PathArg) -> RampData:
     drive = str(p.get("type")).lower()
     if drive not in ("mecanum", "tank"):  # Jackson writes the enum's name (MECANUM); the page expects lowercase
         raise p.fail("type", f"drive type {data['type']!r} is neither mecanum nor tank")
-    _battery_t, battery = p.signal(p.get("voltages"), "voltages")
+    battery_t, battery = p.signal(p.get("voltages"), "voltages")
     n = battery.size
     powers: dict[str, np.ndarray] = {}
-    power_times: list[np.ndarray] = []
+    power_times: dict[str, np.ndarray] = {}
     for key in POWERS[kind]:
         for i, (times, values) in enumerate(p.signals(key)):
             label = key if kind == "lateral" else f"{key}{i}"
             powers[label] = values
-            power_times.append(times)
+            power_times[label] = times
     positions: dict[str, np.ndarray] = {}
     velocities: dict[str, np.ndarray] = {}
     repaired: dict[str, int] = {}
@@ -301,62 +304,84 @@ def read_ramp_data(path: PathArg) -> RampData:
         positions={k: v[keep] for k, v in positions.items()},
         velocities={k: v[keep] for k, v in velocities.items()},
         repaired=repaired, ang_vels=[a[keep] for a in ang], source=name,
-        power_time=np.mean(power_times, axis=0)[keep] if power_times else None,
+        power_times={k: v[keep] for k, v in power_times.items()}, voltage_time=battery_t[keep],
     )
 
 
-def smooth_battery(time: np.ndarray, battery: np.ndarray, *, window: float = 0.2) -> np.ndarray:
-    """The battery voltage with the sensor's sample-to-sample noise averaged out [V].
+def signed_powers(data: RampData) -> dict[str, np.ndarray]:
+    """Each motor's power with the sign that drives the ramp's motion (Tuning.kt's power signs).
 
-    The bus voltage moves with the drive's current, smoothly on the scale of the mechanical time
-    constant; the hub's reading adds white noise of a few mV, which, multiplied by the power, is noise
-    on the fit's input. A local quadratic (Savitzky–Golay) over ``window`` seconds keeps the sag and
-    drops the noise.
+    Forward ramp: the powers; lateral: −frontLeft, backLeft, frontRight, −backRight; angular: the
+    right-side powers and the negated left-side ones.
     """
-    from scipy.signal import savgol_filter
-
-    dt = float(np.median(np.diff(time))) if time.size > 1 else 0.0
-    n = int(window / dt) if dt > 0 else 0
-    n += 1 - n % 2  # odd
-    if n < 5 or battery.size <= n:
-        return battery
-    return np.asarray(savgol_filter(battery, n, 2, mode="interp"), dtype=float)
+    flip = {"frontLeftPower", "backRightPower"} if data.kind == "lateral" else set()
+    out = {}
+    for k, v in data.powers.items():
+        sign = -1.0 if k in flip or (data.kind == "angular" and k.startswith("leftPowers")) else 1.0
+        out[k] = sign * v
+    return out
 
 
-def drive_voltage(data: RampData, *, smooth: bool = False) -> np.ndarray:
-    """Applied voltage [V]: battery × the largest power driving the motion, as the tuning page does.
+def drive_voltage(data: RampData) -> np.ndarray:
+    """Applied voltage [V]: battery × the mean power driving the motion (negative values clipped).
 
-    Forward ramp: max of the powers; lateral: max(−frontLeft, backLeft, frontRight, −backRight);
-    angular: max of the right-side powers (the left side runs at the negative power).
+    The tuning page takes the largest power. The logger evaluates ``power(t.seconds())`` afresh for
+    each motor (Tuning.kt), so on a ramp the powers of one iteration differ by a few milliseconds of
+    ramp (the last motor's is the largest), and the chassis, which the motors push together, sees
+    their mean.
     """
-    if data.kind == "lateral":
-        pw = data.powers
-        stack = np.vstack([-pw["frontLeftPower"], pw["backLeftPower"], pw["frontRightPower"], -pw["backRightPower"]])
-    elif data.kind == "angular":
-        stack = np.vstack([v for k, v in data.powers.items() if k.startswith("rightPowers")])
-    else:
-        stack = np.vstack(list(data.powers.values()))
-    battery = smooth_battery(data.time, data.battery) if smooth else data.battery
-    return np.maximum(np.max(stack, axis=0), 0.0) * battery
+    stack = np.vstack(list(signed_powers(data).values()))
+    return np.maximum(np.mean(stack, axis=0), 0.0) * data.battery
+
+
+def power_effect_times(data: RampData) -> dict[str, np.ndarray]:
+    """When each logged power took effect [s], from the ``MidpointTimer`` splits.
+
+    Tuning.kt calls ``addSplit()`` after each ``setPower``, and a split's time is the midpoint of
+    the interval since the previous split. For every motor but the first, that interval is its own
+    ``setPower`` (a Lynx round trip, during which the hub applies the power): its midpoint is taken
+    as the moment the power changed. The first motor's interval starts at the previous iteration's
+    last split and includes whatever the loop did in between (loop overhead, another encoder group's
+    bulk read, a team's own code), so its midpoint can be many milliseconds early; it is
+    extrapolated from the next two splits (commands of equal length): τ₀ = 2·m₁ − m₂, m₂ being the
+    battery read's split when there are only two motors.
+    """
+    if not data.power_times:
+        return {}
+    order = sorted(data.power_times, key=lambda k: float(np.mean(data.power_times[k])))
+    later = [data.power_times[k] for k in order[1:]]
+    if data.voltage_time is not None:
+        later.append(data.voltage_time)
+    out = {k: data.power_times[k] for k in order}
+    if len(later) >= 2:
+        out[order[0]] = np.minimum(2.0 * later[0] - later[1], later[0])
+    return out
 
 
 def held_voltage(data: RampData) -> np.ndarray:
     """Applied voltage over each encoder interval [t_k, t_k+1) [V], the powers held as the hub holds them.
 
-    A power set in iteration k+1 (at its own logged time, a few ms before that iteration's encoder
-    read) takes effect before t_k+1: the interval's mean voltage is V_k·(1 − f) + V_k+1·f with f the
-    share of the interval after the next power was set (assigning each iteration's voltage to its
-    encoder read would put the voltage a few ms late, which on a ramp reads as a change of kS). The
-    battery voltage is smoothed (:func:`smooth_battery`).
+    A motor's power of iteration k+1 takes effect (:func:`power_effect_times`) a few ms before that
+    iteration's encoder read t_k+1, so over [t_k, t_k+1) the motor holds P_k·(1 − f) + P_k+1·f on
+    average, f the share of the interval after the change. Assigning each iteration's power to its
+    encoder read instead puts the voltage a few ms late, which on a ramp (1.3 V/s) reads as kS about
+    1 % high per 2.5 ms. The drive voltage is the motors' mean held power times the battery reading
+    B_k of the iteration, as read: neither smoothed nor mixed with the next reading. The fit
+    estimates the voltage noise from the sample-to-sample differences of its input and takes it as
+    white; averaging readings (smoothing, or mixing B_k and B_k+1 like the powers) hides most of that
+    noise from the estimate while leaving its slow part, which is what moves the gains: the
+    standard errors came out 2.4 times too small at a fixed loop period.
     """
-    volts = drive_voltage(data, smooth=True)
-    if data.power_time is None or volts.size < 2:
-        return volts
     t = data.time
-    frac = np.clip((t[1:] - data.power_time[1:]) / np.diff(t), 0.0, 1.0)
-    out = volts.copy()
-    out[:-1] = volts[:-1] * (1.0 - frac) + volts[1:] * frac
-    return out
+    effect = power_effect_times(data)
+    mixed = []
+    for name, pw in signed_powers(data).items():
+        held = pw.copy()
+        if name in effect and t.size > 1:
+            frac = np.clip((t[1:] - effect[name][1:]) / np.diff(t), 0.0, 1.0)
+            held[:-1] = pw[:-1] * (1.0 - frac) + pw[1:] * frac
+        mixed.append(held)
+    return np.maximum(np.mean(mixed, axis=0), 0.0) * data.battery
 
 
 def motion_counts(data: RampData) -> tuple[np.ndarray, np.ndarray, list[str]]:

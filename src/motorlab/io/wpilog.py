@@ -17,7 +17,6 @@ doubles with the unit name as entry metadata (``Volt``, ``Rotation``, ``Rotation
 from __future__ import annotations
 
 import json
-import os
 import re
 import struct
 from collections.abc import Iterable, Sequence
@@ -27,6 +26,7 @@ from typing import Any
 import numpy as np
 
 from motorlab.errors import LogFormatError, OptionError
+from motorlab.io._output import write_bytes_atomic
 from motorlab.io._text import PathArg, read_bytes
 from motorlab.io.frc_json import test_kind
 from motorlab.recording import Recording
@@ -609,8 +609,7 @@ def write_wpilog(path: PathArg, entries: Iterable[WpilogEntry], *, extra_header:
             payload = _encode_value(entry.type, entry.values[k])
             records.append((int(stamp), entry_id, _record(entry_id, int(stamp), payload)))
     records.sort(key=lambda r: r[0])  # stable: same-time records keep the entries' order
-    with open(os.fspath(path), "wb") as handle:
-        handle.write(header + b"".join(starts) + b"".join(r[2] for r in records))
+    write_bytes_atomic(path, header + b"".join(starts) + b"".join(r[2] for r in records))
 
 
 def write_sysid_wpilog(

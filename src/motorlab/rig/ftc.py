@@ -203,6 +203,12 @@ class LCFilter:
         _, y, _ = sps.lsim((a, b, c, d), v, t - t[0], X0=x0)
         return np.asarray(y, dtype=float)
 
+    def gain(self, frequency: float) -> float:
+        """|H(j2πf)|: the amplitude ratio of output to source at ``frequency`` [Hz]."""
+        a, b, c, _ = self.state_space()
+        h = c @ np.linalg.solve(2j * math.pi * frequency * np.eye(4) - a, b)
+        return float(abs(h[0, 0]))
+
     def resonances(self) -> list[float]:
         """Resonant frequencies [Hz] of the ladder (lossless)."""
         a, *_ = self.state_space()
@@ -323,18 +329,42 @@ def _motion(drive: MecanumDrive, kind: str, wheel_angle: Any) -> dict[str, Any]:
         par = [par_wheel(y) for y in drive.par_y]
         perp = [lambda t: drive.perp_x * along(t) / drive.track_width / rd]
     return {"par": par, "perp": perp}
+def held_mean(edges: np.ndarray, switch: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """Mean over each step [edges_j, edges_j+1) of a staircase set to ``values[k]`` at ``switch[k]`` (0 before).
+
+    The integral of a staircase is piecewise linear, so interpolating it at the edges is exact: a
+    power applied between two simulation steps acts for its share of the step, not from the next one
+    (on the ramp that would delay every power by half a step on average).
+    """
+    knots = np.concatenate([[min(edges[0], switch[0]) - 1.0], switch, [max(edges[-1], switch[-1]) + 1.0]])
+    levels = np.concatenate([[0.0], values])
+    integral = np.concatenate([[0.0], np.cumsum(levels * np.diff(knots))])
+    return np.diff(np.interp(edges, knots, integral)) / np.diff(edges)
+
+
 def _simulate_motion(params: MotorParams, applied: np.ndarray, powers: np.ndarray, battery: Battery,
                      duration: float) -> tuple[Any, np.ndarray]:
-    """One wheel driven by power × bus voltage, the bus sagging with the four motors' current."""
+    """One wheel driven by power × bus voltage, the bus sagging with the four motors' current.
+
+    ``applied`` and ``powers`` are (iterations,) or (iterations × motors): when each motor's power
+    took effect [s] and its value; the wheel sees the motors' mean power, averaged exactly over
+    each simulation step.
+    """
     dt = 1e-3
     bus_t = np.arange(0.0, duration + 0.2, dt)
     bus_v = battery.bus_voltage(bus_t, np.zeros_like(bus_t))
+    applied2, powers2 = np.atleast_2d(np.asarray(applied).T).T, np.atleast_2d(np.asarray(powers).T).T
+    edges = np.append(bus_t, bus_t[-1] + dt)
+    step_power = np.mean([held_mean(edges, applied2[:, m], powers2[:, m]) for m in range(powers2.shape[1])], axis=0)
 
     def power_at(t: np.ndarray) -> np.ndarray:
-        k = np.searchsorted(applied, t, side="right") - 1
-        return np.where(k >= 0, powers[np.clip(k, 0, None)], 0.0)
+        return step_power[np.clip(np.round(np.asarray(t) / dt).astype(np.int64), 0, step_power.size - 1)]
 
-    for _ in range(4):  # fixed point: the bus voltage depends on the current it drives
+    # Fixed point: the bus voltage depends on the current it drives (a contraction by about
+    # R_batt·4·p²/R per pass). Iterate to 1 µV and return the bus the last simulation was driven
+    # with: after a fixed four passes the logged bus differed from the one driving the motors by
+    # a few mV, which reads as kV −0.015 %.
+    for _ in range(30):
         bv = bus_v.copy()
 
         def volts(t: np.ndarray, bv: np.ndarray = bv) -> np.ndarray:
@@ -342,7 +372,9 @@ def _simulate_motion(params: MotorParams, applied: np.ndarray, powers: np.ndarra
 
         sim = simulate(params, VoltageDrive(volts), duration=float(bus_t[-1]), dt=dt)
         bus_v = battery.bus_voltage(sim.time, 4.0 * power_at(sim.time) * np.abs(sim.current))
-    return sim, bus_v
+        if float(np.max(np.abs(bus_v - bv))) < 1e-6:
+            break
+    return sim, bv
 
 
 def _ramp_content(kind: str, mids: np.ndarray, powers: np.ndarray, readings: np.ndarray,
@@ -351,18 +383,19 @@ def _ramp_content(kind: str, mids: np.ndarray, powers: np.ndarray, readings: np.
     signs = SIGNS[kind]
     content: dict[str, Any] = {"type": "MECANUM"}
     if kind == "forward":
-        content["powers"] = [(mids[:, i], signs[i] * powers) for i in range(4)]
+        content["powers"] = [(mids[:, i], signs[i] * powers[:, i]) for i in range(4)]
         content["voltages"] = (mids[:, 4], readings)
         content.update(forwardEncPositions=signals["parPos"], forwardEncVels=signals["parVel"],
                        forwardEncFixVels=[True, True])
     elif kind == "lateral":
+        order = (0, 2, 1, 3)  # Tuning.kt sets frontLeft, frontRight, backLeft, backRight in turn
         for i, key in enumerate(("frontLeftPower", "backLeftPower", "frontRightPower", "backRightPower")):
-            content[key] = (mids[:, i], signs[i] * powers)
+            content[key] = (mids[:, order[i]], signs[i] * powers[:, order[i]])
         content["voltages"] = (mids[:, 4], readings)
         content.update(perpEncPositions=signals["perpPos"], perpEncVels=signals["perpVel"], perpEncFixVels=[True])
     else:
-        content["leftPowers"] = [(mids[:, i], -powers) for i in (0, 1)]
-        content["rightPowers"] = [(mids[:, i], powers) for i in (2, 3)]
+        content["leftPowers"] = [(mids[:, i], -powers[:, i]) for i in (0, 1)]
+        content["rightPowers"] = [(mids[:, i], powers[:, i]) for i in (2, 3)]
         content["voltages"] = (mids[:, 4], readings)
         for side in ("left", "right"):
             content.update({f"{side}EncPositions": [], f"{side}EncVels": [], f"{side}EncFixVels": []})
@@ -439,9 +472,11 @@ def simulate_ramp(
     rng = np.random.default_rng(seed)
     starts = loop.starts(settings.duration, rng)
     sched = loop.schedule(starts, 4)
-    set_times = sched["power"][:, 0] - loop.command_time  # t.seconds() just before setPower
-    powers = np.minimum(settings.power_per_sec * set_times, settings.power_max)
-    sim, bus_v = _simulate_motion(drive.wheel_params(kind), sched["power"].mean(axis=1), powers, battery,
+    # Tuning.kt evaluates power(t.seconds()) just before each motor's setPower; the hub applies it
+    # during that Lynx command (taken at its middle)
+    cmd_start = sched["power"] - loop.command_time
+    powers = np.minimum(settings.power_per_sec * cmd_start, settings.power_max)
+    sim, bus_v = _simulate_motion(drive.wheel_params(kind), cmd_start + 0.5 * loop.command_time, powers, battery,
                                   settings.duration)
     # MidpointTimer splits: each logged time is the midpoint of the previous split and this one
     ends = np.column_stack([sched["power"], sched["voltage"], sched["bulk"]]).ravel()
@@ -474,6 +509,8 @@ def simulate_ramp(
         content["angVels"] = [(imu_t, rng.normal(0, noise, bulk_t.size)), (imu_t, rng.normal(0, noise, bulk_t.size)),
                               (imu_t, yaw_rate + rng.normal(0, noise, bulk_t.size))]
     write_roadrunner_ramp(path, content)
+    if kind == "lateral":
+        extra["lateral_kA"] = feedforward_from_params(drive.encoder_params("lateral"))["kA"]
     return {
         **drive.truth(),
         "kind": kind,
@@ -493,14 +530,15 @@ def simulate_flight_log(
     duration: float = 8.0,
     loop: BulkReadLoop | None = None,
     battery: Battery | None = None,
-    dead_wheels: bool = False,
+    dead_wheels: bool | int = False,
     seed: int = 0,
 ) -> dict[str, Any]:
     """A FlightRecorder log of a mecanum robot following back-and-forth moves.
 
-    With ``dead_wheels`` the localizer is the quickstart's ThreeDeadWheelLocalizer (8192-count dead
-    wheels; ``THREE_DEAD_WHEEL_INPUTS`` and the ``MECANUM_PARAMS`` / ``THREE_DEAD_WHEEL_PARAMS`` it needs),
-    and the truth is at the dead wheel.
+    With ``dead_wheels`` (True or 3) the localizer is the quickstart's ThreeDeadWheelLocalizer
+    (8192-count dead wheels; ``THREE_DEAD_WHEEL_INPUTS`` and the ``MECANUM_PARAMS`` /
+    ``THREE_DEAD_WHEEL_PARAMS`` it needs); with 2, the TwoDeadWheelLocalizer (``TWO_DEAD_WHEEL_INPUTS``
+    with the IMU's angles and rates, ``TWO_DEAD_WHEEL_PARAMS``). The truth is then at the dead wheel.
 
     Each wheel is the forward-motion wheel of :class:`MecanumDrive` (drive motor encoders, ``cpr`` at
     the motor's output). The drive sets its powers every loop iteration from a smooth profile
@@ -535,15 +573,21 @@ def simulate_flight_log(
     ns = lambda t: round(1e9 * (t + 100.0))  # noqa: E731  (nanoTime has an arbitrary origin)
     messages: list[tuple[str, Any]] = []
     truth = drive.truth()
+    two = dead_wheels == 2 and dead_wheels is not True
     if dead_wheels:
         ticks = truth["track_width_ticks"] / drive.track_width  # dead-wheel ticks per metre
         messages.append(("MECANUM_PARAMS", {"inPerTick": truth["in_per_tick"], "lateralInPerTick": truth["in_per_tick"],
                                             "trackWidthTicks": truth["track_width_ticks"], "kS": 0.0, "kV": 0.0,
                                             "kA": 0.0}))
-        messages.append(("THREE_DEAD_WHEEL_PARAMS", {"par0YTicks": drive.par_y[0] * ticks,
-                                                     "par1YTicks": drive.par_y[1] * ticks,
-                                                     "perpXTicks": drive.perp_x * ticks}))
-    names = ("par0", "par1", "perp", "unused") if dead_wheels else MECANUM_WHEELS
+        if two:
+            messages.append(("TWO_DEAD_WHEEL_PARAMS", {"parYTicks": drive.par_y[0] * ticks,
+                                                       "perpXTicks": drive.perp_x * ticks}))
+        else:
+            messages.append(("THREE_DEAD_WHEEL_PARAMS", {"par0YTicks": drive.par_y[0] * ticks,
+                                                         "par1YTicks": drive.par_y[1] * ticks,
+                                                         "perpXTicks": drive.perp_x * ticks}))
+    names = (("par", "perp", "unused0", "unused1") if two else ("par0", "par1", "perp", "unused0")) if dead_wheels \
+        else MECANUM_WHEELS
     last = -math.inf
     for k in range(starts.size):
         pairs = {}
@@ -556,8 +600,12 @@ def simulate_flight_log(
             c = int(enc.counts(angle(np.array([bulk[k]])))[0] - enc.counts(np.array([off]))[0])
             v = int(enc.velocity(np.array([bulk[k]]), angle)[0])
             pairs[w] = {"position": c, "rawPosition": c, "rawVelocity": v, "velocity": v}
-        if dead_wheels:
-            pairs.pop("unused")
+        for unused in ("unused0", "unused1"):
+            pairs.pop(unused, None)
+        if two:  # a robot moving straight: the IMU reads no turn (yaw, pitch, roll; rates in rad/s)
+            imu = dict.fromkeys(("yaw", "pitch", "roll", "xRotationRate", "yRotationRate", "zRotationRate"), 0.0)
+            messages.append(("TWO_DEAD_WHEEL_INPUTS", {"timestamp": ns(bulk[k]), **pairs, **imu}))
+        elif dead_wheels:
             messages.append(("THREE_DEAD_WHEEL_INPUTS", {"timestamp": ns(bulk[k]), **pairs}))
         else:
             messages.append(("MECANUM_LOCALIZER_INPUTS", {"timestamp": ns(bulk[k]), **pairs, "pitch": 0.0,

@@ -28,7 +28,10 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from motorlab.rig.ftc import LCFilter
 
 import numpy as np
 
@@ -88,6 +91,15 @@ class INA219:
         Samples averaged per result (1, 2, 4 … 128; the seed's sensor: 128).
     conversion_time
         Time of one 12-bit conversion [s] (532 µs, datasheet).
+    bus_filter
+        The seed's LC low-pass between the motor leads and the sensor's bus input
+        (:class:`motorlab.rig.ftc.LCFilter`), or None (default: the sensor on the bare leads). The
+        bus voltage it passes on is the filter's response to the terminal voltage, and the
+        commutation noise is attenuated by its gain at ``noise_frequency`` (seed 1, "Noisy Bus
+        Voltage Data and Filter").
+    noise_frequency
+        Frequency of the commutation noise in ``bus_noise`` [Hz] (brush and segment crossings of a
+        small motor at speed: about 1 kHz; an assumption, the seed does not measure it).
     """
 
     shunt_resistance: float = 0.1
@@ -102,6 +114,21 @@ class INA219:
     max_supply_voltage: float = 16.0
     averaging: int = 1
     conversion_time: float = 532e-6
+    bus_filter: LCFilter | None = None
+    noise_frequency: float = 1e3
+
+    @property
+    def effective_bus_noise(self) -> float:
+        """Rms bus-voltage noise at the sensor [V]: ``bus_noise`` × the filter's gain at ``noise_frequency``."""
+        if self.bus_filter is None:
+            return self.bus_noise
+        return self.bus_noise * self.bus_filter.gain(self.noise_frequency)
+
+    def bus_input(self, grid_time: np.ndarray, grid_voltage: np.ndarray) -> np.ndarray:
+        """The voltage at the sensor's bus input [V] on a uniform grid [s]: filtered when there is a filter."""
+        if self.bus_filter is None:
+            return np.asarray(grid_voltage, dtype=float)
+        return self.bus_filter.apply(grid_time, grid_voltage)
 
     @property
     def result_period(self) -> float:
@@ -160,7 +187,7 @@ class INA219:
         read 0; readings clip at ``bus_range``.
         """
         v = np.asarray(voltage, dtype=float)
-        noisy = v + self.bus_offset + rng.normal(0.0, self.bus_noise, v.shape)
+        noisy = v + self.bus_offset + rng.normal(0.0, self.effective_bus_noise, v.shape)
         return np.clip(quantize(noisy, self.bus_lsb), 0.0, self.bus_range)
 
     def read_current(self, current: np.ndarray, rng: np.random.Generator) -> np.ndarray:

@@ -37,6 +37,7 @@ from motorlab.analyses.torque import approach_direction
 from motorlab.catalog import Motor
 from motorlab.errors import OptionError, RigError
 from motorlab.gearbox import Drivetrain, Gearbox
+from motorlab.io._output import write_text_atomic
 from motorlab.io.csv_table import write_csv
 from motorlab.io.ftc import write_ftc_log
 from motorlab.model import MotorParams, feedforward_from_params
@@ -405,11 +406,12 @@ class VirtualRig:
         times = ins.logger.times(duration, rng)
         d_enc, d_bus, d_cur = ins.logger.read_delays
         counts = self.encoder.counts(sim.sample(times + d_enc)["position"])
+        bus_in = ins.ina219.bus_input(sim.time, sim.voltage)  # through the LC filter, when fitted
         if ins.ina219.averaging > 1:  # the register holds the mean of the last completed conversion window
-            true_v = ins.ina219.conversion_average(times + d_bus, sim.time, sim.voltage)
+            true_v = ins.ina219.conversion_average(times + d_bus, sim.time, bus_in)
             true_i = ins.ina219.conversion_average(times + d_cur, sim.time, sim.current)
         else:
-            true_v, true_i = sim.sample(times + d_bus)["voltage"], sim.sample(times + d_cur)["current"]
+            true_v, true_i = np.interp(times + d_bus, sim.time, bus_in), sim.sample(times + d_cur)["current"]
         bus = ins.ina219.read_bus_voltage(true_v, rng)
         current = ins.ina219.read_current(true_i, rng)
         return times, counts, bus, current
@@ -640,7 +642,7 @@ class VirtualRig:
         volts = volts + rng.normal(0.0, scope.vertical_noise, volts.shape)
         lines = ["X,CH1,Start,Increment,", f"Sequence,Volt,{start:.6e},{increment:.6e},"]
         lines += [f"{k},{v:.4e}," for k, v in enumerate(volts)]
-        path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+        write_text_atomic(path, "\n".join(lines) + "\n")
 
     def terminal(
         self,
@@ -1215,7 +1217,7 @@ class VirtualRig:
             clock += t_rows[-1] + gap
         doc.update({"sysid": True, "test": "Simple", "units": "Rotations", "unitsPerRotation": 1.0})
         path = Path(path)
-        path.write_text(json.dumps(doc) + "\n", encoding="utf-8")
+        write_text_atomic(path, json.dumps(doc) + "\n")
         ff = feedforward_from_params(loaded)
         two_pi = 2 * math.pi
         expected = {

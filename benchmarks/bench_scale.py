@@ -1,0 +1,200 @@
+"""Scale (issue 14): time and peak memory of every analysis on logs of 10k, 100k, 1M and 2M rows.
+
+Targets: any analysis on 2M rows within 10 s and 500 MB peak resident memory. Each run is
+``motorlab analyze EXPERIMENT FILE --json`` in a fresh Python process (so the peak is the command's
+own, imports included); the files are written first, in the formats a real rig writes:
+
+- spindown, spinup: FTC OpMode logs from the exact simulator (flywheel rig, 1 ms log period);
+- identify: the virtual rig's transient CSV (1 kHz); pulse: its scope CSV (four periods of 2 s);
+- free-spinup: scope cursor times of n rising edges of a constant-current spin-up (closed form);
+- feedforward: a SysId JSON whose four tests follow the feedforward model (closed form, 10 ms rows);
+- terminal, lcr, torque, amplifier, tachometer: tables of n readings around the model's line.
+
+    python benchmarks/bench_scale.py [SIZES...] [--only spindown,identify]
+
+prints one table row per analysis and size: seconds, peak MiB (VmHWM of the command's own process,
+imports included: about 115 MiB of it is Python, numpy, scipy and pint) and the exit code.
+
+Measured on the project's shared 2-core machine (seconds, peak MiB), after issue 14:
+
+    analysis        10k          100k         1M           2M
+    spindown     1.2 / 122    2.5 / 158    2.8 / 228    4.9 / 310
+    spinup       0.9 / 118    1.3 / 144    2.2 / 205    2.7 / 302
+    identify     1.1 / 128    2.9 / 168    8.2 / 241   10.0 / 291
+    pulse        1.3 / 121    3.4 / 161    5.8 / 193    4.5 / 236
+    free-spinup  1.0 / 117    1.4 / 132    1.8 / 297    1.5 / 185 (after the scope fast path)
+    feedforward  1.1 / 121    2.0 / 195    4.5 / 245    4.9 / 383
+    terminal     1.2 / 114    1.4 / 129    2.7 / 273    2.6 / 433
+    lcr          1.2 / 114    1.0 / 131    2.8 / 304    2.8 / 496
+    torque       1.0 / 114    1.5 / 128    4.1 / 258    4.1 / 405
+    amplifier    1.0 / 114    1.0 / 128    1.5 / 250    2.6 / 388
+    tachometer   1.6 / 114    1.2 / 128    1.5 / 258    2.8 / 403
+
+Time grows about linearly with the rows read (the readers parse in C; the time-series fits see at
+most 50 000 block means); memory grows linearly, about 100–190 bytes per row at 2M rows above the
+115 MiB of imports (the tables' analyses keep a dozen n-long arrays). Before: identify 42 s and
+3.0 GB, lcr 5.9 GB, terminal 2.6 GB, pulse 203 s on 2M rows (the issue's figures).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+SIZES = (10_000, 100_000, 1_000_000, 2_000_000)
+CPR = 1120
+
+_RUN = """
+import resource, sys, time, io, contextlib
+t0 = time.perf_counter()
+from motorlab.cli import main
+out = io.StringIO()
+with contextlib.redirect_stdout(out):
+    code = main(sys.argv[1:])
+elapsed = time.perf_counter() - t0
+# VmHWM: this process's own peak (ru_maxrss would carry the parent's peak across fork and exec).
+try:
+    status = open("/proc/self/status").read()
+    peak = int(status.split("VmHWM:")[1].split()[0]) / 1024
+except (OSError, IndexError, ValueError):
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+print(f"{elapsed:.3f} {peak:.1f} {code}", file=sys.stderr)
+"""
+
+
+def _ftc(path: Path, n: int, *, coast: bool, rng: np.random.Generator) -> None:
+    from motorlab.io import write_ftc_log
+    from motorlab.model import MotorParams
+    from motorlab.simulate import BenchSupply, CurrentDrive, OpenCircuit, simulate
+
+    motor = MotorParams(K=0.35, R=2.0, L=0.6e-3, J=2e-4, b=1e-4, Tf=0.02).with_load(1.5e-3, ratio=25)
+    duration = n * 1e-3
+    if coast:
+        drive = [(0.0, BenchSupply(12.0, 4.0)), (min(30.0, duration / 4), OpenCircuit())]
+    else:
+        drive = [(0.0, CurrentDrive(0.5))]
+    sim = simulate(motor, drive, duration=duration, dt=1e-3)
+    t = sim.time[:n]
+    counts = np.floor(sim.position[:n] * CPR / (2 * math.pi))
+    volts = sim.voltage[:n] + 0.004 * rng.standard_normal(t.size)
+    amps = sim.current[:n] + 0.001 * rng.standard_normal(t.size)
+    write_ftc_log(path, t, counts, volts, amps)
+
+
+def _table(path: Path, n: int, columns: dict[str, np.ndarray]) -> None:
+    from motorlab.io import write_csv
+
+    write_csv(path, {k: np.round(v, 6) for k, v in columns.items()}, metadata={"cpr": CPR})
+
+
+def _sysid(path: Path, n: int, rng: np.random.Generator) -> None:
+    ks, kv, ka = 0.4, 1.0, 0.2  # V, V·s/rot, V·s²/rot
+    quasi, dyn = int(0.35 * n), n // 2 - int(0.35 * n)
+    doc: dict[str, object] = {}
+    for name, rows, sign, kind in (("slow-forward", quasi, 1, "q"), ("slow-backward", quasi, -1, "q"),
+                                   ("fast-forward", dyn, 1, "d"), ("fast-backward", dyn, -1, "d")):
+        t = np.arange(rows) * 0.01
+        if kind == "q":
+            rate = 7.0 / max(t[-1], 1.0)
+            volts = rate * t
+            speed = np.maximum((volts - ks) / kv - rate * ka / kv**2, 0.0)
+        else:
+            volts = np.full(rows, 7.0)
+            speed = (7.0 - ks) / kv * (1 - np.exp(-kv * t / ka))
+        position = np.concatenate([[0.0], np.cumsum(0.5 * (speed[1:] + speed[:-1]) * 0.01)])
+        speed = speed + 0.002 * rng.standard_normal(rows)
+        doc[name] = np.column_stack([t + 10.0, sign * volts, sign * position, sign * speed]).round(6).tolist()
+    doc.update({"sysid": True, "test": "Simple", "units": "Rotations", "unitsPerRotation": 1.0})
+    path.write_text(json.dumps(doc))
+
+
+def _edges(path: Path, n: int) -> None:
+    from motorlab.io import write_csv
+
+    gamma, accel = 0.5, 40.0  # 1/s, rad/s² of the free motor at the chosen current
+    edge = 2 * math.pi / (CPR / 4)
+    theta = np.arange(1, n + 1) * edge
+    # θ(t) = (A/γ)·t − (A/γ²)(1 − e^{−γt}): solve for t by Newton from the late-time asymptote.
+    t = theta * gamma / accel + 1.0 / gamma
+    t = np.sqrt(2 * theta / accel) * (theta < accel / gamma**2) + t * (theta >= accel / gamma**2)
+    for _ in range(30):
+        f = accel / gamma * t - accel / gamma**2 * (1 - np.exp(-gamma * t)) - theta
+        t -= f / (accel / gamma * (1 - np.exp(-gamma * t)))
+    write_csv(path, {"time_ms": np.round(t * 1e3, 6)})
+
+
+def write_inputs(folder: Path, n: int) -> dict[str, tuple[list[str], list[str]]]:
+    """Every analysis's file of ``n`` rows: experiment -> (paths, extra options)."""
+    from motorlab.rig import VirtualRig
+
+    rng = np.random.default_rng(n)
+    rig = VirtualRig("neverest40", unit_seed=1, noise_seed=2)
+    out: dict[str, tuple[list[str], list[str]]] = {}
+    _ftc(folder / "spindown.txt", n, coast=True, rng=rng)
+    out["spindown"] = ([str(folder / "spindown.txt")], ["--cpr", str(CPR)])
+    _ftc(folder / "spinup.txt", n, coast=False, rng=rng)
+    out["spinup"] = ([str(folder / "spinup.txt")], ["--cpr", str(CPR), "--inertia", "0.95"])
+    rig.run("transient", folder / "transient.csv", duration=n / 1000.0, rate=1000.0)
+    out["identify"] = ([str(folder / "transient.csv")], ["--cpr", str(CPR)])
+    # A scope capture: four periods, n samples (a longer trace is a finer one, as on a real scope).
+    rig.run("pulse", folder / "pulse.csv", period=2.0, periods=4, sample_interval=8.0 / n)
+    out["pulse"] = ([str(folder / "pulse.csv")], ["--Ka", "1.96", "--K", "0.7"])
+    _edges(folder / "edges.csv", n)
+    out["free-spinup"] = ([str(folder / "edges.csv")], ["--K", "0.7", "--current", "0.5 A", "--cpr", str(CPR)])
+    _sysid(folder / "sysid.json", n, rng)
+    out["feedforward"] = ([str(folder / "sysid.json")], [])
+    x = np.linspace(0.25, 1.0, n)
+    noise = rng.standard_normal(n)
+    _table(folder / "terminal.csv", n, {"current_A": 0.2 + 0.3 * x + 0.002 * noise, "frequency_Hz": 900 * x})
+    out["terminal"] = ([str(folder / "terminal.csv")], ["--K", "0.7"])
+    _table(folder / "lcr.csv", n, {"L_uH": 700 + 40 * np.sin(7 * x) + 3 * noise, "Q": 3.2 + 0.01 * noise,
+                                    "DCR_ohm": 1.1 + 0.01 * noise})
+    out["lcr"] = ([str(folder / "lcr.csv")], [])
+    _table(folder / "torque.csv", n, {"current_A": 4 * x, "mass_kg": 0.45 * 4 * x + 0.003 * noise})
+    out["torque"] = ([str(folder / "torque.csv")], ["--arm", "0.15 m"])
+    _table(folder / "amplifier.csv", n, {"command_V": 5 * x, "current_A": 1.96 * 5 * x + 0.005 * noise})
+    out["amplifier"] = ([str(folder / "amplifier.csv")], [])
+    _table(folder / "tachometer.csv", n, {"speed_rpm": 300 * x, "tach_voltage_V": 0.003 * 300 * x + 0.001 * noise})
+    out["tachometer"] = ([str(folder / "tachometer.csv")], [])
+    return out
+
+
+def measure(experiment: str, paths: list[str], options: list[str]) -> tuple[float, float, int]:
+    """Seconds, peak MiB and exit code of ``motorlab analyze EXPERIMENT PATHS OPTIONS --json``."""
+    env = {**os.environ, "MPLBACKEND": "Agg"}
+    argv = [sys.executable, "-c", _RUN, "analyze", experiment, *paths, *options, "--json"]
+    done = subprocess.run(argv, capture_output=True, text=True, env=env, timeout=1800, check=False)
+    last = (done.stderr.strip().splitlines() or ["nan nan -1"])[-1].split()
+    try:
+        return float(last[0]), float(last[1]), int(last[2])
+    except (ValueError, IndexError):
+        return math.nan, math.nan, done.returncode
+
+
+def main() -> None:
+    args = [a for a in sys.argv[1:] if not a.startswith("--only")]
+    only = next((a.split("=", 1)[1].split(",") for a in sys.argv[1:] if a.startswith("--only=")), None)
+    sizes = [int(float(a)) for a in args] or list(SIZES)
+    print("analysis      rows        seconds   peak MiB  exit   (targets at 2M rows: <= 10 s, <= 500 MB)")
+    for n in sizes:
+        with tempfile.TemporaryDirectory() as tmp:
+            t0 = time.perf_counter()
+            inputs = write_inputs(Path(tmp), n)
+            print(f"# {n} rows: inputs written in {time.perf_counter() - t0:.1f} s")
+            for experiment, (paths, options) in inputs.items():
+                if only and experiment not in only:
+                    continue
+                seconds, peak, code = measure(experiment, paths, options)
+                print(f"{experiment:12s} {n:>9,d}   {seconds:9.2f}  {peak:9.1f}  {code:4d}", flush=True)
+
+
+if __name__ == "__main__":
+    main()
