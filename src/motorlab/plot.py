@@ -75,20 +75,10 @@ def _draw_panel(fig: Figure, spec: Any, panel: Panel) -> list[Axes]:
     else:
         ax = fig.add_subplot(spec)
         ax_res = None
-    if panel.data is not None:
-        _draw_series(ax, panel.data, main=True)
-    if panel.model is not None:
-        _draw_series(ax, panel.model, main=True)
-    for series in panel.extra:
-        _draw_series(ax, series, main=False)
-    ax.set_title(panel.title, fontsize=10)
-    ax.set_ylabel(panel.y_label)
-    ax.grid(True, alpha=0.3)
-    if ax.get_legend_handles_labels()[0]:
-        ax.legend(fontsize=8, loc="best")
+    plot_panel(panel, ax)
     if ax_res is None:
-        ax.set_xlabel(panel.x_label)
         return [ax]
+    ax.set_xlabel("")  # the residual axis beneath carries the x label
     assert panel.data is not None
     assert panel.model is not None
     x = np.asarray(panel.data.x, dtype=float)

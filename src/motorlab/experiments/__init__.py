@@ -1,7 +1,8 @@
 """One declarative description per experiment: what it reads, its options, what it reports.
 
 Every module of this package (``motorlab/experiments/<name>.py``) defines ``EXPERIMENT``, an
-:class:`Experiment`; adding an experiment is adding one module. From these descriptions come:
+:class:`Experiment` (or ``EXPERIMENTS``, a tuple, for related ones: ``gains.py`` describes the
+amplifier and the tachometer); adding an experiment is adding one module. From these descriptions come:
 
 * the ``motorlab analyze`` sub-commands and their options (:mod:`motorlab.cli.analyze`),
 * the notebook functions ``ml.<name>(files, **options)`` (:mod:`motorlab.notebook`),
@@ -284,7 +285,7 @@ def all_experiments() -> dict[str, Experiment]:
             if info.name.startswith("_"):
                 continue
             module = importlib.import_module(f"{__name__}.{info.name}")
-            found.extend(getattr(module, "EXPERIMENTS", (module.EXPERIMENT,)))
+            found.extend(getattr(module, "EXPERIMENTS", None) or (module.EXPERIMENT,))
         for exp in sorted(found, key=lambda e: (e.order, e.name)):
             _REGISTRY[exp.name] = exp
     return dict(_REGISTRY)
