@@ -13,8 +13,8 @@ import time
 
 import numpy as np
 
-from motorlab.feedforward import feedforward, gains_from_params, sysid_ols
-from motorlab.model import MotorParams
+from motorlab.feedforward import feedforward, sysid_ols
+from motorlab.model import MotorParams, feedforward_from_params
 from motorlab.recording import Recording
 from motorlab.simulate import VoltageDrive, simulate
 
@@ -39,7 +39,7 @@ def sysid_tests(seed: int) -> list[Recording]:
 
 
 def main() -> None:
-    truth = gains_from_params(MOTOR)
+    truth = feedforward_from_params(MOTOR)
     print("feedforward on FTC-like SysId data: error of each method [%] (output error ± its 1σ)")
     header = " | ".join(f"{n + ' OE':>14} {n + ' OLS':>8}" for n in truth)
     print(f"{'seed':>4} | {header} | time")

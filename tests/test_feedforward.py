@@ -12,18 +12,17 @@ from motorlab.cli.analyze import add_arguments, from_cli
 from motorlab.errors import OptionError
 from motorlab.feedforward import (
     feedforward,
-    gains_from_params,
     motor_estimates,
     params_from_gains,
     sysid_ols,
 )
-from motorlab.model import MotorParams
+from motorlab.model import MotorParams, feedforward_from_params
 from motorlab.recording import Recording
 from motorlab.simulate import VoltageDrive, simulate
 
 # An FTC-like gearmotor with a flywheel, at the output shaft: τm = kA/kV ≈ 0.1 s
 MOTOR = MotorParams(K=0.35, R=2.5, L=7e-4, J=5e-3, b=2e-3, Tf=0.03)
-GAINS = gains_from_params(MOTOR)
+GAINS = feedforward_from_params(MOTOR)
 CPR = 560
 
 
@@ -61,7 +60,7 @@ def sysid_tests(seed: int, *, params: MotorParams = MOTOR, gravity: float = 0.0,
 
 
 def test_gain_conversions_round_trip():
-    gains = gains_from_params(MOTOR)
+    gains = feedforward_from_params(MOTOR)
     assert gains["kS"] == pytest.approx(MOTOR.R * MOTOR.Tf / MOTOR.K)
     back = params_from_gains(gains["kS"], gains["kV"], gains["kA"], resistance=MOTOR.R, torque_constant=MOTOR.K)
     for name in ("K", "R", "J", "b", "Tf"):

@@ -36,7 +36,7 @@ _MIN_CHUNK = 64
 
 
 @dataclass(frozen=True)
-class Plant:
+class StatePlant:
     """Continuous-time plant ``x' = A·x + b_V·V + b_F·sgn(ω)``.
 
     Parameters
@@ -77,18 +77,18 @@ class _Discrete:
     hc: float
 
 
-def motor_plant(K: float, R: float, L: float, J: float, b: float, Tf: float) -> Plant:
+def motor_plant(K: float, R: float, L: float, J: float, b: float, Tf: float) -> StatePlant:
     """The full model ``L·di/dt = V − R·i − K·ω``, ``J·dω/dt = K·i − b·ω − Tf·sgn(ω)``; state (i, ω)."""
     a = np.array([[-R / L, -K / L], [K / J, -b / J]])
-    return Plant(a, np.array([1.0 / L, 0.0]), np.array([0.0, -Tf / J]), 1)
+    return StatePlant(a, np.array([1.0 / L, 0.0]), np.array([0.0, -Tf / J]), 1)
 
 
-def feedforward_plant(kS: float, kV: float, kA: float) -> Plant:
+def feedforward_plant(kS: float, kV: float, kA: float) -> StatePlant:
     """The feedforward model ``V = kS·sgn(ω) + kV·ω + kA·α``; state (ω)."""
-    return Plant(np.array([[-kV / kA]]), np.array([1.0 / kA]), np.array([-kS / kA]), 0)
+    return StatePlant(np.array([[-kV / kA]]), np.array([1.0 / kA]), np.array([-kS / kA]), 0)
 
 
-def _regime(plant: Plant, s: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _regime(plant: StatePlant, s: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(A, b_V, const) of regime s: moving with sign s = ±1, or stuck (s = 0: ω frozen at 0)."""
     if s != 0:
         return plant.a, plant.b_drive, s * plant.b_friction
@@ -109,7 +109,7 @@ class _Modal:
     damping, where P is ill-conditioned) fall back to :func:`scipy.linalg.expm`.
     """
 
-    def __init__(self, plant: Plant, s: int):
+    def __init__(self, plant: StatePlant, s: int):
         self.plant = plant
         self.s = s
         a, self.bv, self.c = _regime(plant, s)
@@ -146,7 +146,7 @@ class _Modal:
         return _Discrete(ad, bv, c, hx, hv, hc)
 
 
-def _discretise_expm(plant: Plant, s: int, tau: float) -> _Discrete:
+def _discretise_expm(plant: StatePlant, s: int, tau: float) -> _Discrete:
     n = plant.n
     a, bv, c = _regime(plant, s)
     m = np.zeros((n + 3, n + 3))
@@ -232,7 +232,7 @@ def _locate(fun: Callable[[float], float], f0: float, f1: float, *, iterations: 
 
 
 def simulate(
-    plant: Plant,
+    plant: StatePlant,
     voltage: np.ndarray,
     dt: float,
     *,
@@ -618,7 +618,7 @@ class OEModel:
         """
         return None
 
-    def plant(self, p: np.ndarray) -> Plant:  # pragma: no cover - abstract
+    def plant(self, p: np.ndarray) -> StatePlant:  # pragma: no cover - abstract
         raise NotImplementedError
 
     def drive(self, p: np.ndarray, log: Log) -> np.ndarray:
@@ -1184,7 +1184,7 @@ def noise_propagation_covariance(
     return h_inv @ score @ h_inv, expected_square / max(n, 1)
 
 
-def input_noise_gain(plant: Plant, dt: float) -> np.ndarray:
+def input_noise_gain(plant: StatePlant, dt: float) -> np.ndarray:
     """Stationary covariance of the state per unit variance of white noise on the held voltage [state²/V²].
 
     P = Ad·P·Adᵀ + bv·bvᵀ (discrete Lyapunov equation of the moving regime): the current the model

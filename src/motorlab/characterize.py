@@ -53,7 +53,7 @@ from motorlab.experiments import all_experiments
 from motorlab.experiments import stderr_or_none as _stderr
 from motorlab.fleet import DEFAULT_THRESHOLD, FleetSummary, fleet_summary
 from motorlab.io._output import atomic_path
-from motorlab.results import Estimate, FitResult
+from motorlab.results import Estimate, FitResult, json_float, jsonable
 from motorlab.session import LOADED_EXPERIMENTS, ExperimentSpec, Session, UnitSpec, read_truth
 from motorlab.units import SI_UNITS
 
@@ -158,7 +158,7 @@ class UnitResult:
                 {
                     "parameter": d.parameter,
                     "sources": [d.first, d.second],
-                    "sigmas": _json_float(d.sigmas),
+                    "sigmas": json_float(d.sigmas),
                     "message": d.message(),
                 }
                 for d in self.disagreements
@@ -202,7 +202,7 @@ class Characterization:
             "notes": list(self.notes),
         }
         if self.gains is not None:
-            out["gains"] = _jsonable({k: v for k, v in self.gains.items() if k != "figure"})
+            out["gains"] = jsonable({k: v for k, v in self.gains.items() if k != "figure"})
         return out
 
 
@@ -528,11 +528,3 @@ def _csv_float(x: float) -> str:
     return f"{x:.6g}" if math.isfinite(x) else ""
 
 
-def _json_float(x: float) -> float | None:
-    return float(x) if math.isfinite(x) else None
-
-
-def _jsonable(obj: Any) -> Any:
-    from motorlab.results import _jsonable as convert
-
-    return convert(obj)

@@ -35,7 +35,7 @@ from motorlab import _oe
 from motorlab.decimate import block_mean
 from motorlab.errors import FitError, OptionError
 from motorlab.fitting import MAX_RELATIVE_STDERR
-from motorlab.model import MotorParams, feedforward_from_params, params_from_feedforward
+from motorlab.model import MotorParams, params_from_feedforward
 from motorlab.oe_runs import (
     _prepare,
     _result,
@@ -50,11 +50,6 @@ from motorlab.results import Estimate, FitResult
 from motorlab.units import SI_UNITS
 
 MECHANISMS = ("simple", "elevator", "arm")
-
-
-def gains_from_params(params: MotorParams) -> dict[str, float]:
-    """(kS [V], kV [V·s/rad], kA [V·s²/rad]) of a motor: kS = R·Tf/K, kV = K + R·b/K, kA = R·J/K."""
-    return feedforward_from_params(params)
 
 
 def params_from_gains(
@@ -81,7 +76,7 @@ def params_from_gains(
 
     Notes
     -----
-    Tf = kS·K/R, b = (kV − K)·K/R, J = kA·K/R (inverse of :func:`gains_from_params`).
+    Tf = kS·K/R, b = (kV − K)·K/R, J = kA·K/R (inverse of :func:`motorlab.model.feedforward_from_params`).
     """
     if not resistance > 0:
         raise OptionError(f"resistance must be positive, got {resistance}")
@@ -99,7 +94,7 @@ class FeedforwardModel(_oe.OEModel):
         self.names = ("kS", "kV", "kA", *extra)
         self.lag = lag
 
-    def plant(self, p: np.ndarray) -> _oe.Plant:
+    def plant(self, p: np.ndarray) -> _oe.StatePlant:
         return _oe.feedforward_plant(float(p[0]), float(p[1]), float(p[2]))
 
     def drive(self, p: np.ndarray, log: _oe.Log) -> np.ndarray:

@@ -162,7 +162,7 @@ class HeldMotorModel(_oe.OEModel):
                     return k, max(int(self.held[k].first[seg]) - 1, 0)
         return None
 
-    def plant(self, p: np.ndarray) -> _oe.Plant:
+    def plant(self, p: np.ndarray) -> _oe.StatePlant:
         return _oe.motor_plant(*(float(v) for v in p[:6]))
 
     def initial(self, p: np.ndarray, log: _oe.Log, speed: float) -> np.ndarray:

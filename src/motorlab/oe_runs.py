@@ -251,7 +251,7 @@ class MotorModel(_oe.OEModel):
     names = MOTOR_NAMES
     uses_current = True
 
-    def plant(self, p: np.ndarray) -> _oe.Plant:
+    def plant(self, p: np.ndarray) -> _oe.StatePlant:
         return _oe.motor_plant(*(float(v) for v in p))
 
     def initial(self, p: np.ndarray, log: _oe.Log, speed: float) -> np.ndarray:

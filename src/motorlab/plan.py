@@ -67,8 +67,8 @@ RPM = 2.0 * math.pi / 60.0
 
 
 # ---- plain physics ------------------------------------------------------------------------------
-def disc_inertia(radius: float, thickness: float, density: float) -> float:
-    """Moment of inertia of a uniform solid disc about its axis.
+def disc_inertia(radius: float, thickness: float, density: float, *, ratio: float = 1.0) -> float:
+    """Moment of inertia of a uniform solid disc about its axis, reflected through a gear ratio.
 
     Parameters
     ----------
@@ -78,20 +78,24 @@ def disc_inertia(radius: float, thickness: float, density: float) -> float:
         Disc thickness h [m].
     density
         Material density ρ [kg/m³].
+    ratio
+        Disc speed / speed of the shaft the inertia is wanted at, N (25 for the seed's step-up
+        gearbox, seen from the encoder shaft) [-].
 
     Returns
     -------
     float
-        J = ½·m·r² = ½·π·r⁴·ρ·h [kg·m²].
+        J = ½·m·r² = ½·π·r⁴·ρ·h at the disc, times N² at the other shaft [kg·m²] (the gears and the
+        motor's own armature not included).
 
     References
     ----------
     Seed 1, "First Experiment": r = 0.075 m, h = 0.05 m of steel gives 0.0195 kg·m² (the seed writes
     0.0124, which is r⁴·ρ·h without the ½·π of its own formula).
     """
-    _positive(radius=radius, thickness=thickness, density=density)
+    _positive(radius=radius, thickness=thickness, density=density, ratio=ratio)
     r2 = radius * radius  # products, not powers: float ** raises OverflowError where * gives inf
-    return 0.5 * math.pi * r2 * r2 * density * thickness
+    return 0.5 * math.pi * r2 * r2 * density * thickness * ratio * ratio
 
 
 def disc_mass(radius: float, thickness: float, density: float) -> float:

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from pathlib import PurePath
 from typing import Any, ClassVar
 
 import numpy as np
@@ -59,8 +60,8 @@ class Estimate:
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dict ``{"value", "stderr", "unit"}`` (plus ``determined``/``note`` when relevant)."""
         out: dict[str, Any] = {
-            "value": _json_float(self.value) if self.determined else None,
-            "stderr": _json_float(self.stderr),
+            "value": json_float(self.value) if self.determined else None,
+            "stderr": json_float(self.stderr),
             "unit": self.unit,
         }
         if not self.determined:
@@ -299,15 +300,15 @@ class FitResult:
     def to_dict(self) -> dict[str, Any]:
         """The JSON object of ``motorlab analyze --json`` (SI units)."""
         fit: dict[str, Any] = {
-            "rmse": _json_float(self.rmse),
+            "rmse": json_float(self.rmse),
             "rmse_unit": self.rmse_unit,
-            "r2": _json_float(self.r2),
+            "r2": json_float(self.r2),
             "n_points": self.n_points,
         }
         if self.correlation is not None:
             fit["correlation"] = {
                 "names": list(self.correlation_names),
-                "matrix": [[_json_float(v) for v in row] for row in np.asarray(self.correlation)],
+                "matrix": [[json_float(v) for v in row] for row in np.asarray(self.correlation)],
             }
         out: dict[str, Any] = {
             "experiment": self.experiment,
@@ -316,7 +317,7 @@ class FitResult:
             "warnings": list(self.warnings),
         }
         if self.details:
-            out["details"] = _jsonable(self.details)
+            out["details"] = jsonable(self.details)
         if self.sources:
             out["sources"] = list(self.sources)
         return out
@@ -331,20 +332,24 @@ def _html_row(est: Estimate) -> tuple[str, ...]:
     return est.name, f"{est.value:.6g}", stderr, unit, f"{100 * rel:.2f} %" if math.isfinite(rel) else "?", est.note
 
 
-def _json_float(x: float) -> float | None:
+def json_float(x: float) -> float | None:
     x = float(x)
     return x if math.isfinite(x) else None
 
 
-def _jsonable(obj: Any) -> Any:
+def jsonable(obj: Any) -> Any:
+    """``obj`` ready for ``json.dump``: numpy scalars and arrays, tuples and paths converted, NaN and
+    infinities as None (the one converter: results, the characterisation, the rig's truth files)."""
     if isinstance(obj, dict):
-        return {str(k): _jsonable(v) for k, v in obj.items()}
+        return {str(k): jsonable(v) for k, v in obj.items()}
     if isinstance(obj, list | tuple):
-        return [_jsonable(v) for v in obj]
+        return [jsonable(v) for v in obj]
     if isinstance(obj, np.ndarray):
-        return [_jsonable(v) for v in obj.tolist()]
+        return [jsonable(v) for v in obj.tolist()]
     if isinstance(obj, np.generic):
-        return _jsonable(obj.item())
+        return jsonable(obj.item())
     if isinstance(obj, float):
-        return _json_float(obj)
+        return json_float(obj)
+    if isinstance(obj, PurePath):
+        return str(obj)
     return obj

@@ -13,6 +13,7 @@ from motorlab.analyses.spindown import spindown
 from motorlab.cli.analyze import add_arguments, from_cli
 from motorlab.errors import FitError, LogFormatError, OptionError
 from motorlab.model import MotorParams
+from motorlab.plan import disc_inertia
 from motorlab.recording import Recording
 from motorlab.simulate import BenchSupply, OpenCircuit, simulate
 
@@ -149,10 +150,10 @@ def test_bad_logs() -> None:
 def test_disc_inertia_matches_the_seed() -> None:
     # Seed 1's disc, r = 0.075 m, h = 0.05 m of steel: ½·π·r⁴·ρ·h = 0.0195 kg·m² (the seed prints
     # 0.0124, which is 2/π of it: an arithmetic slip). The 25:1 step-up multiplies by 625.
-    j = common.disc_inertia(0.075, 0.05, density=common.MATERIAL_DENSITY["steel"])
+    j = disc_inertia(0.075, 0.05, density=common.MATERIAL_DENSITY["steel"])
     assert j == pytest.approx(0.5 * math.pi * 0.075**4 * 7850 * 0.05)
     assert j == pytest.approx(0.0195, rel=0.01)
-    assert common.disc_inertia(0.075, 0.05, density=7850.0, ratio=25) == pytest.approx(625 * j)
+    assert disc_inertia(0.075, 0.05, density=7850.0, ratio=25) == pytest.approx(625 * j)
 
 
 def test_closed_forms_are_continuous_at_zero_gamma() -> None:

@@ -10,7 +10,6 @@ Small on purpose; every analysis module may use it.
   J·dω/dt = J·(A − γ·ω) (viscous drag γ = b/J and constant torque A = (K·i − Tf)/J), safe at γ → 0.
 - :func:`speed_noise_sigma`: per-sample standard deviation σ² = σ_q² + (σ_t·ω)² of an encoder
   position (quantisation plus timing jitter), estimated from fit residuals.
-- :func:`disc_inertia`: J = ½·π·r⁴·ρ·h·N² of the seed's flywheel, reflected through a gear ratio N.
 - :func:`read_tables`, :func:`finite_rows`, :func:`concatenate`, :func:`metadata_quantity`,
   :func:`sources_of`, :func:`fit_straight_line`: headed-CSV tables of the bench analyses (``lcr``,
   ``torque``, ``pulse``, ``gains``).
@@ -34,7 +33,6 @@ from scipy import optimize
 from motorlab.errors import FitError, LogFormatError, OptionError
 from motorlab.fitting import LeastSquares, fit_least_squares, fit_linear, r_squared
 from motorlab.plan import MATERIALS
-from motorlab.plan import disc_inertia as plan_disc_inertia
 from motorlab.recording import Recording
 
 #: Mass densities of flywheel materials [kg/m³] (the one table, :data:`motorlab.plan.MATERIALS`).
@@ -338,33 +336,7 @@ def speed_noise_sigma(residuals: np.ndarray, speed: np.ndarray, *, dof: int) -> 
     return np.sqrt(var)
 
 
-# ---- flywheel -----------------------------------------------------------------------------------
-def disc_inertia(radius: float, thickness: float, *, density: float, ratio: float = 1.0) -> float:
-    """Inertia of a uniform disc reflected to the encoder shaft [kg·m²].
-
-    Parameters
-    ----------
-    radius
-        Disc radius r [m].
-    thickness
-        Disc thickness h [m].
-    density
-        Mass density ρ [kg/m³] (see :data:`MATERIAL_DENSITY`).
-    ratio
-        Flywheel speed / encoder-shaft speed N (25 for the seed's step-up gearbox) [-].
-
-    Notes
-    -----
-    J = ½·m·r² = ½·π·r⁴·ρ·h at the disc (:func:`motorlab.plan.disc_inertia`), times N² at the encoder
-    shaft (seed 1, "First Experiment": r = 0.075 m, h = 0.05 m of steel gives 0.0195 kg·m²; the seed
-    writes 0.0124, dropping the ½·π). The motor's own armature and the gearbox are not included.
-    """
-    for value, name in ((radius, "disc radius"), (thickness, "disc thickness"), (density, "density"),
-                        (ratio, "gear ratio")):
-        check_positive(value, name, allow_none=False)
-    return plan_disc_inertia(radius, thickness, density) * ratio**2
-
-
+# ---- reading position logs ----------------------------------------------------------------------
 def read_position_log(paths: list[str], *, cpr: float | None, current_unit: str | None = None) -> Recording:
     """Read one run: FTC OpMode log(s) (possibly split over several files) or one CSV file.
 
@@ -413,14 +385,20 @@ def finite_rows(recording: Recording, names: Sequence[str]) -> None:
             )
 
 
-def concatenate(recordings: Sequence[Recording], names: Sequence[str]) -> Recording:
+def concatenate(recordings: Sequence[Recording], names: Sequence[str] | None = None) -> Recording:
     """Join the rows of several recordings, keeping the named signals (checked finite first).
 
+    ``names=None`` keeps every signal, which every recording must then have (the same columns).
     Metadata come from the first recording, except the readers' ``warnings``, which are every
     file's; ``source`` lists every file.
     """
     if not recordings:
         raise OptionError("no input file given")
+    if names is None:
+        names = sorted(recordings[0].signals)
+        for rec in recordings[1:]:
+            if set(rec.signals) != set(names):
+                raise OptionError(f"{rec.source}: its columns differ from those of {recordings[0].source}")
     for rec in recordings:
         finite_rows(rec, names)
     if len(recordings) == 1:

@@ -282,20 +282,3 @@ def _one_operating_point(
         return b, math.nan
     reading_var = ((K * i_se) ** 2 + (b * omega_se) ** 2) / w_mean**2 / n
     return b, math.sqrt(reading_var + common_var)
-
-
-# ---- reading the files -------------------------------------------------------------------------
-def _concatenate(recordings: list[Recording]) -> Recording:
-    """Rows of several tables with the same columns, one after the other."""
-    names = set(recordings[0].signals)
-    for rec in recordings[1:]:
-        if set(rec.signals) != names:
-            raise OptionError(f"{rec.source}: its columns differ from those of {recordings[0].source}")
-    metadata = dict(recordings[0].metadata)
-    metadata["warnings"] = common.reader_warnings(recordings)
-    return Recording(
-        time=np.arange(sum(len(r) for r in recordings), dtype=float),
-        signals={n: np.concatenate([r.signals[n] for r in recordings]) for n in names},
-        metadata=metadata,
-        source=" + ".join(r.source for r in recordings),
-    )

@@ -7,7 +7,7 @@ from typing import Any
 
 from motorlab.errors import OptionError
 from motorlab.experiments import Option
-from motorlab.plan import MATERIALS
+from motorlab.plan import MATERIALS, disc_inertia
 
 CPR = Option(
     "cpr", "count", positive=True,
@@ -34,8 +34,6 @@ INERTIA = (
 
 def inertia_of(values: Mapping[str, Any]) -> tuple[float | None, float | None]:
     """The inertia [kg·m²] and its standard error from ``inertia`` or the disc options (or None)."""
-    from motorlab.analyses._common import disc_inertia
-
     disc = values.get("disc_radius") is not None or values.get("disc_thickness") is not None
     if values.get("inertia") is not None and disc:
         raise OptionError("give either --inertia or the flywheel disc (--disc-radius, --disc-thickness), not both")

@@ -10,11 +10,11 @@ from motorlab.experiments._shared import CPR
 
 
 def _read(paths: list[str], cpr: float | None) -> Any:
-    from motorlab.analyses.terminal import _concatenate
+    from motorlab.analyses._common import concatenate
     from motorlab.io.csv_table import read_csv
 
     recordings = [read_csv(p, cpr=cpr) for p in paths]
-    return recordings[0] if len(recordings) == 1 else _concatenate(recordings)
+    return recordings[0] if len(recordings) == 1 else concatenate(recordings)
 
 
 def run(paths: list[str], v: dict[str, Any]) -> Any:

@@ -16,9 +16,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Protocol, runtime_checkable
 
-import numpy as np
-
 from motorlab.errors import InputError, OptionError, RigError
+from motorlab.results import jsonable
 
 #: Most simulator steps or logged samples one run may produce. Ten million steps take ~80 MB per
 #: float array (the simulator keeps six) and minutes to compute; a real log is far shorter (seed 1's
@@ -99,26 +98,6 @@ def check_size(count: float, what: str, *, limit: int = MAX_SAMPLES, hint: str =
         )
 
 
-def _jsonable(value: Any) -> Any:
-    """Convert numpy scalars/arrays, tuples and paths for ``json.dump``; non-finite floats become None."""
-    if isinstance(value, dict):
-        return {str(k): _jsonable(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [_jsonable(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return [_jsonable(v) for v in value.tolist()]
-    if isinstance(value, np.bool_ | bool):
-        return bool(value)
-    if isinstance(value, np.integer):
-        return int(value)
-    if isinstance(value, float | np.floating):
-        f = float(value)
-        return f if math.isfinite(f) else None
-    if isinstance(value, Path):
-        return str(value)
-    return value
-
-
 def truth_path_for(data_path: PathArg) -> Path:
     """The ``truth.json`` beside ``data_path``."""
     return Path(data_path).with_name(TRUTH_NAME)
@@ -154,7 +133,7 @@ def write_truth(data_path: PathArg, entry: dict[str, Any]) -> Path:
         if not isinstance(old, dict) or old.get("format") != TRUTH_FORMAT:
             raise RigError(f"{path} exists and is not a motorlab truth file; not overwriting it")
         doc["runs"] = dict(old.get("runs", {}))
-    doc["runs"][Path(data_path).name] = _jsonable(entry)
+    doc["runs"][Path(data_path).name] = jsonable(entry)
     tmp = path.with_name(path.name + ".tmp")
     tmp.write_text(json.dumps(doc, indent=2, allow_nan=False) + "\n", encoding="utf-8")
     tmp.replace(path)

@@ -41,7 +41,8 @@ from motorlab.io._output import write_text_atomic
 from motorlab.io.csv_table import write_csv
 from motorlab.io.ftc import write_ftc_log
 from motorlab.model import MotorParams, feedforward_from_params
-from motorlab.rig.base import MAX_READINGS, PathArg, RigRun, _jsonable, check_size, write_truth
+from motorlab.results import jsonable
+from motorlab.rig.base import MAX_READINGS, PathArg, RigRun, check_size, write_truth
 from motorlab.rig.flywheel import Flywheel
 from motorlab.rig.instruments import Encoder, Instruments, quantize
 from motorlab.rig.profiles import voltage_profile
@@ -256,7 +257,7 @@ class VirtualRig:
             "instruments": instruments,
         }
         truth_path = write_truth(paths[0], entry)
-        return RigRun(experiment, tuple(paths), truth_path, json.loads(json.dumps(_plain(entry))))
+        return RigRun(experiment, tuple(paths), truth_path, json.loads(json.dumps(jsonable(entry))))
 
     def _simulate(
         self, params: MotorParams | Drivetrain, schedule: Sequence[tuple[float, Drive]], *, duration: float, dt: float,
@@ -1231,11 +1232,6 @@ class VirtualRig:
         return self._finish("sysid", [path], settings=settings, expected=expected,
                             instruments={"controller": ctrl.settings(), "encoder": self.encoder.settings()},
                             flywheel=flywheel)
-
-
-# ---- helpers --------------------------------------------------------------------------------------
-def _plain(value: Any) -> Any:
-    return _jsonable(value)
 
 
 def _stop_time(sim: Simulation, after: float) -> float | None:
