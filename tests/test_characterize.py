@@ -15,7 +15,8 @@ from motorlab.characterize import PARAMETERS, characterize, combine
 from motorlab.report import write_outputs
 from motorlab.results import Estimate
 from motorlab.rig.units import UnitSpread
-from motorlab.session import load_session, write_simulated_session
+from motorlab.session import load_session
+from motorlab.simulated_session import write_simulated_session
 
 #: A production batch (tighter than the rig's default spread) so that a doubled b must stand out.
 BATCH = UnitSpread(K=0.02, R=0.04, L=0.04, J=0.03, b=0.06, Tf=0.06)

@@ -9,7 +9,8 @@ import pytest
 
 from motorlab.characterize import characterize
 from motorlab.report import write_outputs
-from motorlab.session import load_session, write_simulated_session
+from motorlab.session import load_session
+from motorlab.simulated_session import write_simulated_session
 
 
 @pytest.fixture(scope="module")

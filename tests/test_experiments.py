@@ -96,7 +96,8 @@ def test_option_values_convert_units_and_check_signs() -> None:
 
 def test_session_and_characterize_tables_come_from_the_descriptions() -> None:
     from motorlab.characterize import ADAPTERS, CONTRIBUTIONS, ORDER, SHAFTS
-    from motorlab.session import EXPERIMENT_SETTINGS, LOADED_EXPERIMENTS, REQUIRED_SETTINGS, SIMULATED_EXPERIMENTS
+    from motorlab.session import EXPERIMENT_SETTINGS, LOADED_EXPERIMENTS, REQUIRED_SETTINGS
+    from motorlab.simulated_session import SIMULATED_EXPERIMENTS
 
     experiments = all_experiments()
     assert ORDER[:2] == ("lcr", "spindown")  # sources of K first

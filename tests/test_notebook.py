@@ -12,7 +12,7 @@ from matplotlib.figure import Figure
 import motorlab as ml
 from motorlab.cli import main
 from motorlab.errors import OptionError
-from motorlab.session import write_simulated_session
+from motorlab.simulated_session import write_simulated_session
 
 FLYWHEEL = 0.019527634 * 25**2  # kg·m², the simulated session's flywheel J·N² at the encoder shaft
 

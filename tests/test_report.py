@@ -12,7 +12,8 @@ import pytest
 
 from motorlab.characterize import characterize
 from motorlab.report import format_value, image_sources, render_report, write_report
-from motorlab.session import load_session, write_simulated_session
+from motorlab.session import load_session
+from motorlab.simulated_session import write_simulated_session
 
 ROOT = Path(__file__).resolve().parents[1]
 CHROMIUM = shutil.which("chromium") or ("/usr/bin/chromium" if Path("/usr/bin/chromium").exists() else None)

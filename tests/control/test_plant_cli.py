@@ -129,7 +129,8 @@ def test_results_json_of_characterize_uses_one_units_motor_parameters(tmp_path, 
 
     from motorlab.characterize import characterize
     from motorlab.report import write_outputs
-    from motorlab.session import load_session, write_simulated_session
+    from motorlab.session import load_session
+    from motorlab.simulated_session import write_simulated_session
 
     toml = write_simulated_session(
         "neverest40", out_dir=tmp_path / "s", units=2, experiments=("lcr", "spindown", "identify", "feedforward")

@@ -160,7 +160,8 @@ def run(args: argparse.Namespace) -> int:
 
     from motorlab.cli.characterize import print_table, report_failures, run_with_progress
     from motorlab.report import write_outputs
-    from motorlab.session import load_session, write_simulated_session
+    from motorlab.session import load_session
+    from motorlab.simulated_session import write_simulated_session
 
     check_option(args.units <= 26, f"--units must be at most 26, got {args.units}")
     check_output_dir(args.output)

@@ -307,7 +307,7 @@ def run(args: argparse.Namespace) -> int:
 
 def run_session(args: argparse.Namespace) -> int:
     """Write a simulated session with :func:`motorlab.session.write_simulated_session`."""
-    from motorlab.session import write_simulated_session
+    from motorlab.simulated_session import write_simulated_session
 
     degrade = {args.worn: {"b": args.wear, "efficiency": args.worn_efficiency}} if args.worn else None
     result = write_simulated_session(args.motor, units=args.units, out_dir=args.output, seed=args.seed,
