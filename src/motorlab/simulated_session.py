@@ -79,17 +79,34 @@ def write_simulated_session(
     """
     from motorlab.catalog import Motor
     from motorlab.rig.flywheel import Flywheel
-    from motorlab.rig.units import draw_unit, unit_name
-    from motorlab.rig.virtual import VirtualRig
 
     motor = Motor.from_catalog(motor_key)
+    names, degrade, plan = _checked_request(units, seed, degrade, experiments)
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    flywheel = Flywheel()
+    lines = _session_lines(motor, units, seed, degrade, flywheel, spread)
+    for k, name in enumerate(names):
+        lines += _unit_lines(motor, k, name, seed=seed, degrade=degrade, spread=spread, gearbox=gearbox,
+                             flywheel=flywheel, plan=plan, out=out)
+    path = out / "session.toml"
+    write_text_atomic(path, "\n".join(lines) + "\n")
+    return path
+
+
+def _checked_request(
+    units: int, seed: int, degrade: Mapping[str, Mapping[str, float]] | None, experiments: Iterable[str] | None
+) -> tuple[list[str], dict[str, dict[str, float]], list[tuple[str, str, str, dict[str, Any]]]]:
+    """The unit names, the degrade factors and the experiments to run, each checked."""
+    from motorlab.rig.units import unit_name
+
     if not (isinstance(units, int) and 1 <= units <= 26):
         raise OptionError(f"units must be a whole number from 1 to 26, got {units!r}")
     if not (isinstance(seed, int) and seed >= 0):
         raise OptionError(f"seed must be a whole number ≥ 0, got {seed!r}")
     names = [unit_name(k) for k in range(units)]
-    degrade = {k: dict(v) for k, v in (degrade or {}).items()}
-    for unit, factors in degrade.items():
+    factors_by_unit = {k: dict(v) for k, v in (degrade or {}).items()}
+    for unit, factors in factors_by_unit.items():
         if unit not in names:
             raise OptionError(f"degrade: no unit {unit!r} in a session of {units} unit(s)")
         for name, factor in factors.items():
@@ -97,17 +114,21 @@ def write_simulated_session(
                 raise OptionError(f"degrade: unknown parameter {name!r} (K, R, L, J, b, Tf, efficiency)")
             if not (isinstance(factor, int | float) and math.isfinite(factor) and factor > 0):
                 raise OptionError(f"degrade: factor of {unit}.{name} must be positive, got {factor!r}")
-    chosen = [e[0] for e in SIMULATED_EXPERIMENTS] if experiments is None else list(experiments)
     known = [e[0] for e in SIMULATED_EXPERIMENTS]
+    chosen = known if experiments is None else list(experiments)
     for name in chosen:
         if name not in known:
             raise OptionError(f"unknown simulated experiment {name!r}; known: {', '.join(known)}")
-    plan = [e for e in SIMULATED_EXPERIMENTS if e[0] in chosen]
+    return names, factors_by_unit, [e for e in SIMULATED_EXPERIMENTS if e[0] in chosen]
 
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    flywheel = Flywheel()
-    arm = 0.15
+
+#: The simulated scale's lever arm [m].
+LEVER_ARM = 0.15
+
+
+def _session_lines(motor: Any, units: int, seed: int, degrade: Mapping[str, Mapping[str, float]], flywheel: Any,
+                   spread: Any) -> list[str]:
+    """The session file's tables before the units: session, motor, rig (flywheel, supply), fleet."""
     lines = [
         "# motorlab session: simulated on the virtual dynamometer (motorlab simulate session).",
         "# Relative file names are resolved against this file's folder; see docs/session.md.",
@@ -120,7 +141,7 @@ def write_simulated_session(
         f"catalog = {toml_string(motor.key)}",
         "",
         "[rig]",
-        f'lever_arm = "{arm:g} m"',
+        f'lever_arm = "{LEVER_ARM:g} m"',
         "",
         "[rig.flywheel]",
         f"# steel disc r = {1e3 * flywheel.disc.radius:g} mm, h = {1e3 * flywheel.disc.thickness:g} mm "
@@ -134,32 +155,41 @@ def write_simulated_session(
     ]
     if spread is not None:
         lines += ["", "[fleet.spread]"] + [f"{k} = {v:g}" for k, v in spread.to_dict().items()]
-    for k, name in enumerate(names):
-        params = draw_unit(motor, 1000 * seed + k, spread=spread)  # type: ignore[arg-type]  # rig protocol wants a settable key
-        factors = dict(degrade.get(name, {}))
-        box = _unit_gearbox(motor, gearbox, 1000 * seed + k, factors.pop("efficiency", 1.0))
-        if factors:
-            params = params.scaled(**{p: getattr(params, p) * f for p, f in factors.items()})
-        if box.loss_torque > 0:  # the drawn unit runs free at the catalogue's current, gearbox drag included
-            params = params.scaled(Tf=max(params.Tf - box.loss_torque / box.efficiency, 0.0))
-        rig = VirtualRig(motor, unit_seed=k, noise_seed=seed, params=params, flywheel=flywheel, gearbox=box)
-        folder = out / name
-        folder.mkdir(exist_ok=True)
-        truth = folder / "truth.json"
-        if truth.exists():
-            truth.unlink()  # a fresh session: the rig adds runs to an existing truth file
-        lines += ["", f"[units.{name}]", f'truth = "{name}/truth.json"']
-        if name in degrade:
-            lines.append(f"notes = {toml_string(_degrade_note({name: degrade[name]}))}")
-        for key, experiment, filename, settings in plan:
-            run = rig.run(experiment, folder / filename, **settings)
-            files = ", ".join(toml_string(f"{name}/{p.name}") for p in run.paths)
-            lines += ["", f"[units.{name}.{key}]", f"files = [{files}]"]
-            if key == "free-spinup":
-                lines.append(f'current = "{settings["current"]:g} A"')
-    path = out / "session.toml"
-    write_text_atomic(path, "\n".join(lines) + "\n")
-    return path
+    return lines
+
+
+Plan = list[tuple[str, str, str, dict[str, Any]]]
+
+
+def _unit_lines(motor: Any, k: int, name: str, *, seed: int, degrade: Mapping[str, Mapping[str, float]],
+                spread: Any, gearbox: str | float | None, flywheel: Any, plan: Plan, out: Path) -> list[str]:
+    """Draw unit ``k``, run the planned experiments on it into ``out/name`` and return its tables."""
+    from motorlab.rig.units import draw_unit
+    from motorlab.rig.virtual import VirtualRig
+
+    params = draw_unit(motor, 1000 * seed + k, spread=spread)  # type: ignore[arg-type]  # rig protocol wants a settable key
+    factors = dict(degrade.get(name, {}))
+    box = _unit_gearbox(motor, gearbox, 1000 * seed + k, factors.pop("efficiency", 1.0))
+    if factors:
+        params = params.scaled(**{p: getattr(params, p) * f for p, f in factors.items()})
+    if box.loss_torque > 0:  # the drawn unit runs free at the catalogue's current, gearbox drag included
+        params = params.scaled(Tf=max(params.Tf - box.loss_torque / box.efficiency, 0.0))
+    rig = VirtualRig(motor, unit_seed=k, noise_seed=seed, params=params, flywheel=flywheel, gearbox=box)
+    folder = out / name
+    folder.mkdir(exist_ok=True)
+    truth = folder / "truth.json"
+    if truth.exists():
+        truth.unlink()  # a fresh session: the rig adds runs to an existing truth file
+    lines = ["", f"[units.{name}]", f'truth = "{name}/truth.json"']
+    if name in degrade:
+        lines.append(f"notes = {toml_string(_degrade_note({name: degrade[name]}))}")
+    for key, experiment, filename, settings in plan:
+        run = rig.run(experiment, folder / filename, **settings)
+        files = ", ".join(toml_string(f"{name}/{p.name}") for p in run.paths)
+        lines += ["", f"[units.{name}.{key}]", f"files = [{files}]"]
+        if key == "free-spinup":
+            lines.append(f'current = "{settings["current"]:g} A"')
+    return lines
 
 
 def _unit_gearbox(motor: Any, gearbox: str | float | None, unit_seed: int, factor: float) -> Any:
