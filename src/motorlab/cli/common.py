@@ -6,12 +6,13 @@ import argparse
 import os
 import re
 import sys
+from collections.abc import Callable
 from typing import Any, NoReturn
 
 import numpy as np
 
 from motorlab.errors import OptionError
-from motorlab.options import quantity  # noqa: F401  (the CLI's option type; defined in the library)
+from motorlab.units import parse_quantity
 
 #: Exit codes of ``motorlab`` (see :func:`motorlab.cli.main`).
 EXIT_INTERNAL = 1
@@ -40,6 +41,28 @@ class Parser(argparse.ArgumentParser):
     def error(self, message: str) -> NoReturn:
         print(f"{self.prog}: error: {message}", file=sys.stderr)
         raise SystemExit(EXIT_INPUT)
+
+
+def quantity(unit: str, *, positive: bool = False, nonnegative: bool = False) -> Callable[[str], float]:
+    """A converter that parses numbers or pint quantities into ``unit`` (SI).
+
+    ``--inertia "0.0124 kg*m^2"`` and ``--inertia 0.0124`` both give 0.0124. Bad text raises
+    :class:`argparse.ArgumentTypeError` (which argparse reports as one line).
+    """
+
+    def convert(text: str) -> float:
+        try:
+            value = parse_quantity(text, unit, name="value")
+        except OptionError as exc:
+            raise argparse.ArgumentTypeError(exc.message.removeprefix("value: ")) from None
+        if positive and value <= 0:
+            raise argparse.ArgumentTypeError(f"{text!r} must be positive")
+        if nonnegative and value < 0:
+            raise argparse.ArgumentTypeError(f"{text!r} must not be negative")
+        return value
+
+    convert.__name__ = f"quantity in {unit}"
+    return convert
 
 
 def nonnegative_int(text: str) -> int:
