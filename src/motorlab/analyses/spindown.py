@@ -16,6 +16,8 @@ that neither quantisation nor the voltage noise biases K.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -130,6 +132,158 @@ def _initial_guess(tau: np.ndarray, theta: np.ndarray) -> list[tuple[float, floa
     return guesses
 
 
+def _find_coast(
+    recording: Recording, theta_all: np.ndarray, *, cutoff: float | None, guard: float, tick_log: bool,
+    has_current: bool, warnings: list[str],
+) -> tuple[np.ndarray, float, bool]:
+    """The coast's sample indices (after the relay opened plus ``guard``, until the count last
+    changed), the cut-off instant [s] and whether the shaft stopped before the log ended."""
+    source = recording.source or "log"
+    t_all = recording.time
+    n_all = t_all.size
+    if cutoff is not None:
+        t_off = float(cutoff)
+        first = int(np.searchsorted(t_all, t_off, side="left"))
+        if has_current:
+            _check_no_current_after(t_all, recording.signals["current"], t_off + guard, cutoff,
+                                    path=recording.source or None)
+    elif has_current:
+        first_or_none, t_off = find_cutoff(t_all, recording.signals["current"], source=source)
+        if first_or_none is None:
+            first = 0
+            warnings.append("the current is zero throughout: the whole log is taken as the coast")
+        else:
+            first = first_or_none
+    else:
+        raise FitError(f"{source}: the log has no current to find the relay-off instant: give --cutoff")
+    start = int(np.searchsorted(t_all, t_all[min(first, n_all - 1)] + guard, side="left")) if first < n_all else n_all
+    if start >= n_all - 1:
+        raise FitError(f"{source}: no coast found: the log ends at the cut-off ({t_off:.3f} s)")
+    moving = np.flatnonzero(np.abs(np.diff(theta_all[start:])) > 0) + start + 1
+    if moving.size == 0:
+        raise FitError(f"{source}: no coast found: the shaft does not turn after the cut-off ({t_off:.3f} s)")
+    stop = int(moving[-1])  # last sample at which the count still changed
+    stopped = stop < n_all - 1 and not tick_log
+    idx = np.arange(start, stop + 1)
+    if idx.size < _MIN_SAMPLES:
+        raise FitError(f"{source}: only {idx.size} samples in the coast: too few for a spin-down fit")
+    if idx.size < _FEW_SAMPLES:
+        warnings.append(f"only {idx.size} samples in the coast: the estimates are fragile")
+    if not stopped:
+        warnings.append("the shaft had not stopped at the end of the log (fine: the whole coast is used)")
+    if has_current:
+        coast_current = float(np.mean(np.abs(recording.signals["current"][idx])))
+        i_on = float(np.percentile(np.abs(recording.signals["current"]), 95))
+        if coast_current > max(0.05 * i_on, 0.02):
+            warnings.append(f"the mean current during the coast is {coast_current:.3g} A, not zero")
+    return idx, t_off, stopped
+
+
+@dataclass
+class _Coast:
+    """The joint fit of the coast (position and bus voltage, each in units of its noise)."""
+
+    joint: LeastSquares
+    sigma_theta: np.ndarray
+    sigma_v: float
+    run: Callable[[dict[int, float], np.ndarray], LeastSquares]
+    n_names: int
+
+    def compare_nested(self) -> dict[str, Any]:
+        """F-tests and AIC of the fits without the Coulomb (viscous_only) or viscous (coulomb_only) term."""
+        chi2_full = float(self.joint.residuals @ self.joint.residuals)
+        n_res = self.joint.residuals.size
+        p_full = self.n_names
+        comparison: dict[str, Any] = {}
+        for label, k_fixed in (("viscous_only", 3), ("coulomb_only", 2)):
+            x0 = self.joint.values.copy()
+            x0[k_fixed] = 0.0
+            nested = self.run({k_fixed: 0.0}, x0)
+            chi2 = float(nested.residuals @ nested.residuals)
+            f_stat = max(chi2 - chi2_full, 0.0) / (chi2_full / max(n_res - p_full, 1))
+            comparison[label] = {
+                "chi2": chi2,
+                "F": f_stat,
+                "p_value": float(stats.f.sf(f_stat, 1, max(n_res - p_full, 1))),
+                "delta_AIC": _aic(chi2, n_res, p_full - 1) - _aic(chi2_full, n_res, p_full),
+            }
+        comparison["both"] = {"chi2": chi2_full, "AIC": _aic(chi2_full, n_res, p_full)}
+        return comparison
+
+
+def _fit_coast(tau: np.ndarray, theta: np.ndarray, voltage: np.ndarray | None, source: str) -> _Coast:
+    """Stage 1 fits the position alone, stage 2 K from the bus voltage against its model speed; then
+    both jointly, weighted by their noise (refined once from the joint fit's own residuals)."""
+
+    def position_model(x: np.ndarray) -> np.ndarray:
+        return x[0] + common.coast_position(tau, x[1], x[2], x[3])
+
+    def speed_model(x: np.ndarray) -> np.ndarray:
+        return common.coast_speed(tau, x[1], x[2], x[3])
+
+    best: LeastSquares | None = None
+    for omega0, gamma0, decel0 in _initial_guess(tau, theta):
+        try:
+            fit = fit_least_squares(
+                lambda x: position_model(x) - theta, [0.0, omega0, gamma0, decel0],
+                ["theta0", "omega0", "gamma", "Tf_over_J"],
+            )
+        except FitError as exc:
+            raise common.in_file(exc, source) from None
+        if best is None or float(fit.residuals @ fit.residuals) < float(best.residuals @ best.residuals):
+            best = fit
+    assert best is not None
+    x_pos = best.values
+    sigma_theta = common.speed_noise_sigma(best.residuals, speed_model(x_pos), dof=best.dof)
+
+    # ---- stage 2: the bus voltage against the model speed; then the joint weighted fit -------------
+    if voltage is not None:
+        k_fit = fit_linear(speed_model(x_pos)[:, None], voltage, ["K"])
+        sigma_v = max(float(np.sqrt(np.sum(k_fit.residuals**2) / k_fit.dof)), 1e-12)
+        x_start = np.append(x_pos, k_fit.values[0])
+    else:
+        sigma_v = math.nan
+        x_start = x_pos
+    names = ["theta0", "omega0", "gamma", "Tf_over_J"] + (["K"] if voltage is not None else [])
+
+    def make_residual(fixed: dict[int, float]) -> Any:
+        free = [k for k in range(len(names)) if k not in fixed]
+
+        def full(xf: np.ndarray) -> np.ndarray:
+            x = np.empty(len(names))
+            x[free] = xf
+            for k, v in fixed.items():
+                x[k] = v
+            return x
+
+        def residual(xf: np.ndarray) -> np.ndarray:
+            x = full(xf)
+            r = (position_model(x) - theta) / sigma_theta
+            if voltage is not None:
+                r = np.concatenate([r, (x[4] * speed_model(x) - voltage) / sigma_v])
+            return r
+
+        return residual, free
+
+    def run(fixed: dict[int, float], x0: np.ndarray) -> LeastSquares:
+        residual, free = make_residual(fixed)
+        try:
+            return fit_least_squares(residual, x0[free], [names[k] for k in free], sigma_known=True)
+        except FitError as exc:
+            raise common.in_file(exc, source) from None
+
+    joint = run({}, x_start)
+    # Refine the σ's once from the joint fit's own residuals, then refit.
+    n_pos = tau.size
+    pos_res = joint.residuals[:n_pos] * sigma_theta
+    sigma_theta = common.speed_noise_sigma(pos_res, speed_model(joint.values), dof=max(n_pos - 4, 1))
+    if voltage is not None:
+        v_res = joint.residuals[n_pos:] * sigma_v
+        sigma_v = max(float(np.sqrt(np.sum(v_res**2) / max(v_res.size - 1, 1))), 1e-12)
+    joint = run({}, joint.values)
+    return _Coast(joint, sigma_theta, sigma_v, run, len(names))
+
+
 def spindown(
     recording: Recording,
     *,
@@ -219,34 +373,9 @@ def spindown(
         )
 
     # ---- the coast: after the relay opened (plus a guard), until the shaft stopped -----------------
-    if cutoff is not None:
-        t_off = float(cutoff)
-        first = int(np.searchsorted(t_all, t_off, side="left"))
-        if has_current:
-            _check_no_current_after(t_all, recording.signals["current"], t_off + guard, cutoff,
-                                    path=recording.source or None)
-    elif has_current:
-        first_or_none, t_off = find_cutoff(t_all, recording.signals["current"], source=source)
-        if first_or_none is None:
-            first = 0
-            warnings.append("the current is zero throughout: the whole log is taken as the coast")
-        else:
-            first = first_or_none
-    else:
-        raise FitError(f"{source}: the log has no current to find the relay-off instant: give --cutoff")
-    start = int(np.searchsorted(t_all, t_all[min(first, n_all - 1)] + guard, side="left")) if first < n_all else n_all
-    if start >= n_all - 1:
-        raise FitError(f"{source}: no coast found: the log ends at the cut-off ({t_off:.3f} s)")
-    moving = np.flatnonzero(np.abs(np.diff(theta_all[start:])) > 0) + start + 1
-    if moving.size == 0:
-        raise FitError(f"{source}: no coast found: the shaft does not turn after the cut-off ({t_off:.3f} s)")
-    stop = int(moving[-1])  # last sample at which the count still changed
-    stopped = stop < n_all - 1 and not tick_log
-    idx = np.arange(start, stop + 1)
-    if idx.size < _MIN_SAMPLES:
-        raise FitError(f"{source}: only {idx.size} samples in the coast: too few for a spin-down fit")
-    if idx.size < _FEW_SAMPLES:
-        warnings.append(f"only {idx.size} samples in the coast: the estimates are fragile")
+    idx, t_off, stopped = _find_coast(recording, theta_all, cutoff=cutoff, guard=guard, tick_log=tick_log,
+                                      has_current=has_current, warnings=warnings)
+    start, stop = int(idx[0]), int(idx[-1])
     t = t_all[idx]
     tau = t - t[0]
     direction = 1.0 if theta_all[stop] >= theta_all[start] else -1.0
@@ -256,107 +385,17 @@ def spindown(
         raise FitError(
             f"{source}: no coast found: the shaft turns only {span / quantum:.0f} counts after the cut-off"
         )
-    if not stopped:
-        warnings.append("the shaft had not stopped at the end of the log (fine: the whole coast is used)")
-    if has_current:
-        coast_current = float(np.mean(np.abs(recording.signals["current"][idx])))
-        i_on = float(np.percentile(np.abs(recording.signals["current"]), 95))
-        if coast_current > max(0.05 * i_on, 0.02):
-            warnings.append(f"the mean current during the coast is {coast_current:.3g} A, not zero")
 
-    # ---- stage 1: position only ---------------------------------------------------------------------
-    def position_model(x: np.ndarray) -> np.ndarray:
-        return x[0] + common.coast_position(tau, x[1], x[2], x[3])
-
-    def speed_model(x: np.ndarray) -> np.ndarray:
-        return common.coast_speed(tau, x[1], x[2], x[3])
-
-    best: LeastSquares | None = None
-    for omega0, gamma0, decel0 in _initial_guess(tau, theta):
-        try:
-            fit = fit_least_squares(
-                lambda x: position_model(x) - theta, [0.0, omega0, gamma0, decel0],
-                ["theta0", "omega0", "gamma", "Tf_over_J"],
-            )
-        except FitError as exc:
-            raise common.in_file(exc, source) from None
-        if best is None or float(fit.residuals @ fit.residuals) < float(best.residuals @ best.residuals):
-            best = fit
-    assert best is not None
-    x_pos = best.values
-    sigma_theta = common.speed_noise_sigma(best.residuals, speed_model(x_pos), dof=best.dof)
-
-    # ---- stage 2: the bus voltage against the model speed; then the joint weighted fit -------------
+    # ---- stages 1 and 2: position only, then the bus voltage; then the joint weighted fit ----------
     voltage = None
     if has_voltage:
         raw_v = recording.signals["voltage"][idx]
-        v_sign = 1.0 if float(np.sum(raw_v)) >= 0 else -1.0
-        voltage = v_sign * raw_v
-        k_fit = fit_linear(speed_model(x_pos)[:, None], voltage, ["K"])
-        sigma_v = max(float(np.sqrt(np.sum(k_fit.residuals**2) / k_fit.dof)), 1e-12)
-        x_start = np.append(x_pos, k_fit.values[0])
+        voltage = (1.0 if float(np.sum(raw_v)) >= 0 else -1.0) * raw_v
     else:
         warnings.append("the log has no bus voltage: K is not estimated")
-        sigma_v = math.nan
-        x_start = x_pos
-    names = ["theta0", "omega0", "gamma", "Tf_over_J"] + (["K"] if voltage is not None else [])
-
-    def make_residual(fixed: dict[int, float]) -> Any:
-        free = [k for k in range(len(names)) if k not in fixed]
-
-        def full(xf: np.ndarray) -> np.ndarray:
-            x = np.empty(len(names))
-            x[free] = xf
-            for k, v in fixed.items():
-                x[k] = v
-            return x
-
-        def residual(xf: np.ndarray) -> np.ndarray:
-            x = full(xf)
-            r = (position_model(x) - theta) / sigma_theta
-            if voltage is not None:
-                r = np.concatenate([r, (x[4] * speed_model(x) - voltage) / sigma_v])
-            return r
-
-        return residual, free
-
-    def run(fixed: dict[int, float], x0: np.ndarray) -> LeastSquares:
-        residual, free = make_residual(fixed)
-        try:
-            return fit_least_squares(residual, x0[free], [names[k] for k in free], sigma_known=True)
-        except FitError as exc:
-            raise common.in_file(exc, source) from None
-
-    joint = run({}, x_start)
-    # Refine the σ's once from the joint fit's own residuals, then refit.
-    n_pos = tau.size
-    pos_res = joint.residuals[:n_pos] * sigma_theta
-    sigma_theta = common.speed_noise_sigma(pos_res, speed_model(joint.values), dof=max(n_pos - 4, 1))
-    if voltage is not None:
-        v_res = joint.residuals[n_pos:] * sigma_v
-        sigma_v = max(float(np.sqrt(np.sum(v_res**2) / max(v_res.size - 1, 1))), 1e-12)
-    joint = run({}, joint.values)
-    x = joint.values
-
-    # ---- nested models: is the Coulomb (or viscous) term supported? -------------------------------
-    chi2_full = float(joint.residuals @ joint.residuals)
-    n_res = joint.residuals.size
-    p_full = len(names)
-    comparison: dict[str, Any] = {}
-    for label, k_fixed in (("viscous_only", 3), ("coulomb_only", 2)):
-        x0 = x.copy()
-        x0[k_fixed] = 0.0
-        nested = run({k_fixed: 0.0}, x0)
-        chi2 = float(nested.residuals @ nested.residuals)
-        f_stat = max(chi2 - chi2_full, 0.0) / (chi2_full / max(n_res - p_full, 1))
-        comparison[label] = {
-            "chi2": chi2,
-            "F": f_stat,
-            "p_value": float(stats.f.sf(f_stat, 1, max(n_res - p_full, 1))),
-            "delta_AIC": _aic(chi2, n_res, p_full - 1) - _aic(chi2_full, n_res, p_full),
-        }
-    comparison["both"] = {"chi2": chi2_full, "AIC": _aic(chi2_full, n_res, p_full)}
-
+    coast = _fit_coast(tau, theta, voltage, source)
+    joint, x, sigma_theta, sigma_v = coast.joint, coast.joint.values, coast.sigma_theta, coast.sigma_v
+    comparison = coast.compare_nested()
     estimates = joint.estimates(_UNITS)
     decel = estimates["Tf_over_J"]
     z_decel = decel.value / decel.stderr if decel.stderr > 0 else math.inf
@@ -376,7 +415,7 @@ def spindown(
             f"{comparison['coulomb_only']['p_value']:.2g}, gamma = {z_gamma:.1f} standard errors)"
         )
 
-    omega = speed_model(x)
+    omega = common.coast_speed(tau, x[1], x[2], x[3])
     if omega[-1] > 0.8 * x[1]:
         warnings.append(
             f"coast too short: the speed fell by only {100 * (1 - omega[-1] / x[1]):.0f} %; "
@@ -392,41 +431,8 @@ def spindown(
         parameters.update(_friction_from_inertia(joint, inertia, inertia_se))
 
     # ---- curves -----------------------------------------------------------------------------------
-    model_theta = position_model(x)
-    panels = [
-        Panel(
-            "Coast: position", "time [s]", "position since the coast began [rad]",
-            data=Series(t, theta, "encoder"), model=Series(t, model_theta, "model", kind="model"),
-        )
-    ]
-    mid = 0.5 * (t[1:] + t[:-1])
-    dt = np.diff(t)
-    ok = dt > 0
-    fd_speed = np.diff(theta)[ok] / dt[ok]
-    panels.append(
-        Panel(
-            "Coast: speed", "time [s]", "speed [rad/s]",
-            data=Series(mid[ok], fd_speed, "finite-difference speed (display only; not fitted)"),
-            model=Series(mid[ok], common.coast_speed(mid[ok] - t[0], x[1], x[2], x[3]), "model", kind="model"),
-        )
-    )
-    if voltage is not None:
-        k = x[4]
-        panels.append(
-            Panel(
-                "Coast: bus voltage", "time [s]", "bus voltage [V]",
-                data=Series(t, voltage, "INA219 bus voltage"), model=Series(t, k * omega, "K·ω", kind="model"),
-            )
-        )
-        order = np.argsort(omega)
-        panels.append(
-            Panel(
-                "Back-EMF", "model speed [rad/s]", "bus voltage [V]",
-                data=Series(omega[order], voltage[order], "INA219 bus voltage"),
-                model=Series(omega[order], k * omega[order], "V = K·ω", kind="model"),
-            )
-        )
-
+    model_theta = x[0] + common.coast_position(tau, x[1], x[2], x[3])
+    panels = _panels(t, theta, model_theta, x, omega, voltage)
     residual_theta = theta - model_theta
     details: dict[str, Any] = {
         "cutoff_s": t_off,
@@ -461,6 +467,46 @@ def spindown(
         details=details,
         sources=[recording.source] if recording.source else [],
     )
+
+
+def _panels(t: np.ndarray, theta: np.ndarray, model_theta: np.ndarray, x: np.ndarray, omega: np.ndarray,
+            voltage: np.ndarray | None) -> list[Panel]:
+    """Position, speed (display only), bus voltage and back-EMF against the fitted coast."""
+    panels = [
+        Panel(
+            "Coast: position", "time [s]", "position since the coast began [rad]",
+            data=Series(t, theta, "encoder"), model=Series(t, model_theta, "model", kind="model"),
+        )
+    ]
+    mid = 0.5 * (t[1:] + t[:-1])
+    dt = np.diff(t)
+    ok = dt > 0
+    fd_speed = np.diff(theta)[ok] / dt[ok]
+    panels.append(
+        Panel(
+            "Coast: speed", "time [s]", "speed [rad/s]",
+            data=Series(mid[ok], fd_speed, "finite-difference speed (display only; not fitted)"),
+            model=Series(mid[ok], common.coast_speed(mid[ok] - t[0], x[1], x[2], x[3]), "model", kind="model"),
+        )
+    )
+    if voltage is not None:
+        k = x[4]
+        panels.append(
+            Panel(
+                "Coast: bus voltage", "time [s]", "bus voltage [V]",
+                data=Series(t, voltage, "INA219 bus voltage"), model=Series(t, k * omega, "K·ω", kind="model"),
+            )
+        )
+        order = np.argsort(omega)
+        panels.append(
+            Panel(
+                "Back-EMF", "model speed [rad/s]", "bus voltage [V]",
+                data=Series(omega[order], voltage[order], "INA219 bus voltage"),
+                model=Series(omega[order], k * omega[order], "V = K·ω", kind="model"),
+            )
+        )
+
+    return panels
 
 
 def _aic(chi2: float, n: int, p: int) -> float:
