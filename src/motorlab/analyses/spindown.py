@@ -397,23 +397,8 @@ def spindown(
     joint, x, sigma_theta, sigma_v = coast.joint, coast.joint.values, coast.sigma_theta, coast.sigma_v
     comparison = coast.compare_nested()
     estimates = joint.estimates(_UNITS)
-    decel = estimates["Tf_over_J"]
-    z_decel = decel.value / decel.stderr if decel.stderr > 0 else math.inf
-    coulomb_supported = comparison["viscous_only"]["p_value"] < 0.01 and z_decel > 3.0
-    gamma_est = estimates["gamma"]
-    z_gamma = gamma_est.value / gamma_est.stderr if gamma_est.stderr > 0 else math.inf
-    viscous_supported = comparison["coulomb_only"]["p_value"] < 0.01 and z_gamma > 3.0
-    if not coulomb_supported:
-        warnings.append(
-            f"the data do not support a Coulomb friction term (F-test p = "
-            f"{comparison['viscous_only']['p_value']:.2g}, Tf/J = {z_decel:.1f} standard errors): "
-            "the seed's pure exponential fits as well"
-        )
-    if not viscous_supported:
-        warnings.append(
-            f"the data do not support a viscous friction term (F-test p = "
-            f"{comparison['coulomb_only']['p_value']:.2g}, gamma = {z_gamma:.1f} standard errors)"
-        )
+    decel, gamma_est = estimates["Tf_over_J"], estimates["gamma"]
+    coulomb_supported, viscous_supported = _friction_support(decel, gamma_est, comparison, warnings)
 
     omega = common.coast_speed(tau, x[1], x[2], x[3])
     if omega[-1] > 0.8 * x[1]:
@@ -434,21 +419,8 @@ def spindown(
     model_theta = x[0] + common.coast_position(tau, x[1], x[2], x[3])
     panels = _panels(t, theta, model_theta, x, omega, voltage)
     residual_theta = theta - model_theta
-    details: dict[str, Any] = {
-        "cutoff_s": t_off,
-        "coast_start_s": float(t[0]),
-        "coast_end_s": float(t[-1]),
-        "stopped": bool(stopped),
-        "omega0_rad_per_s": float(x[1]),
-        "stop_time_s": float(t[0] + common.stop_time(x[1], x[2], x[3])),
-        "direction": int(direction),
-        "tick_log": bool(tick_log),
-        "model_comparison": comparison,
-        "coulomb_supported": bool(coulomb_supported),
-        "viscous_supported": bool(viscous_supported),
-        "sigma_position_rad": [float(sigma_theta.min()), float(sigma_theta.max())],
-        "quantum_rad": quantum,
-    }
+    details = _details(t, x, t_off, stopped, direction, tick_log, comparison, (coulomb_supported, viscous_supported),
+                       sigma_theta, quantum)
     if voltage is not None:
         details["sigma_voltage_V"] = sigma_v
         details["voltage_rmse_V"] = float(np.sqrt(np.mean((voltage - x[4] * omega) ** 2)))
@@ -467,6 +439,49 @@ def spindown(
         details=details,
         sources=[recording.source] if recording.source else [],
     )
+
+
+def _friction_support(decel: Estimate, gamma_est: Estimate, comparison: dict[str, Any],
+                      warnings: list[str]) -> tuple[bool, bool]:
+    """Whether the Coulomb and the viscous terms are supported (F-test p < 0.01 and over 3 standard
+    errors); a warning for each that is not."""
+    z_decel = decel.value / decel.stderr if decel.stderr > 0 else math.inf
+    coulomb_supported = comparison["viscous_only"]["p_value"] < 0.01 and z_decel > 3.0
+    z_gamma = gamma_est.value / gamma_est.stderr if gamma_est.stderr > 0 else math.inf
+    viscous_supported = comparison["coulomb_only"]["p_value"] < 0.01 and z_gamma > 3.0
+    if not coulomb_supported:
+        warnings.append(
+            f"the data do not support a Coulomb friction term (F-test p = "
+            f"{comparison['viscous_only']['p_value']:.2g}, Tf/J = {z_decel:.1f} standard errors): "
+            "the seed's pure exponential fits as well"
+        )
+    if not viscous_supported:
+        warnings.append(
+            f"the data do not support a viscous friction term (F-test p = "
+            f"{comparison['coulomb_only']['p_value']:.2g}, gamma = {z_gamma:.1f} standard errors)"
+        )
+    return bool(coulomb_supported), bool(viscous_supported)
+
+
+def _details(t: np.ndarray, x: np.ndarray, t_off: float, stopped: bool, direction: float, tick_log: bool,
+             comparison: dict[str, Any], support: tuple[bool, bool], sigma_theta: np.ndarray,
+             quantum: float) -> dict[str, Any]:
+    """The spin-down's ``details`` (the coast, its initial speed and stop, the model comparison)."""
+    return {
+        "cutoff_s": t_off,
+        "coast_start_s": float(t[0]),
+        "coast_end_s": float(t[-1]),
+        "stopped": bool(stopped),
+        "omega0_rad_per_s": float(x[1]),
+        "stop_time_s": float(t[0] + common.stop_time(x[1], x[2], x[3])),
+        "direction": int(direction),
+        "tick_log": bool(tick_log),
+        "model_comparison": comparison,
+        "coulomb_supported": support[0],
+        "viscous_supported": support[1],
+        "sigma_position_rad": [float(sigma_theta.min()), float(sigma_theta.max())],
+        "quantum_rad": quantum,
+    }
 
 
 def _panels(t: np.ndarray, theta: np.ndarray, model_theta: np.ndarray, x: np.ndarray, omega: np.ndarray,
