@@ -1,0 +1,418 @@
+"""The fast simulator of the output-error fits (:mod:`motorlab._oe`): a linear plant with Coulomb friction and stiction.
+
+The optimisers of :mod:`motorlab.identify` and :mod:`motorlab.feedforward` simulate the same log
+hundreds of times with changing parameters, so the simulator must take a few milliseconds for 30 000
+samples. :mod:`motorlab.simulate` is general (several drives, crossovers); this one handles only what
+the fits need: a voltage held over each sample (zero-order hold) driving a linear plant
+
+    x' = A·x + b_V·V + b_F·s,      θ' = ω = x[w],      s = sgn(ω)
+
+where ``x`` is (i, ω) for the full motor model or (ω) for the feedforward model, and s is the
+friction sign. At rest the shaft stays at rest while the drive acceleration |(A·x + b_V·V)[w]| does not
+exceed the friction level F = −b_F[w] (stiction at the Coulomb level).
+
+Method
+------
+Between events (speed reaching zero, break-away) the plant is linear time-invariant with a held input,
+so a stretch of samples is propagated exactly (matrix exponential of the augmented system) as a second-
+order recursion run by :func:`scipy.signal.lfilter`. An event is detected on the grid, its time inside
+the step found by linear interpolation of the speed (or of the drive margin for a break-away), and the
+step finished in the new regime with two fractional-step propagations. The located event time varies
+continuously with the parameters, so the simulated outputs do too, which finite-difference Jacobians
+need; no smoothing of sgn(ω) is required.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from scipy import linalg, signal
+
+_MIN_CHUNK = 64
+
+
+@dataclass(frozen=True)
+class StatePlant:
+    """Continuous-time plant ``x' = A·x + b_V·V + b_F·sgn(ω)``.
+
+    Parameters
+    ----------
+    a
+        State matrix (n × n), n = 1 (ω) or 2 (i, ω) [1/s and mixed SI].
+    b_drive
+        Input vector of the applied voltage (n,).
+    b_friction
+        Input vector of the friction sign (n,); ``-b_friction[w]`` is the friction level F [rad/s²].
+    w
+        Index of the speed ω in the state.
+    """
+
+    a: np.ndarray
+    b_drive: np.ndarray
+    b_friction: np.ndarray
+    w: int
+
+    @property
+    def n(self) -> int:
+        return int(self.a.shape[0])
+
+    @property
+    def friction(self) -> float:
+        return float(-self.b_friction[self.w])
+
+
+@dataclass(frozen=True)
+class _Discrete:
+    """ZOH discretisation of one regime over one step: x⁺ = Ad·x + bv·V + c, θ⁺ = θ + hx·x + hv·V + hc."""
+
+    ad: np.ndarray
+    bv: np.ndarray
+    c: np.ndarray
+    hx: np.ndarray
+    hv: float
+    hc: float
+
+
+def motor_plant(K: float, R: float, L: float, J: float, b: float, Tf: float) -> StatePlant:
+    """The full model ``L·di/dt = V − R·i − K·ω``, ``J·dω/dt = K·i − b·ω − Tf·sgn(ω)``; state (i, ω)."""
+    a = np.array([[-R / L, -K / L], [K / J, -b / J]])
+    return StatePlant(a, np.array([1.0 / L, 0.0]), np.array([0.0, -Tf / J]), 1)
+
+
+def feedforward_plant(kS: float, kV: float, kA: float) -> StatePlant:
+    """The feedforward model ``V = kS·sgn(ω) + kV·ω + kA·α``; state (ω)."""
+    return StatePlant(np.array([[-kV / kA]]), np.array([1.0 / kA]), np.array([-kS / kA]), 0)
+
+
+def _regime(plant: StatePlant, s: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(A, b_V, const) of regime s: moving with sign s = ±1, or stuck (s = 0: ω frozen at 0)."""
+    if s != 0:
+        return plant.a, plant.b_drive, s * plant.b_friction
+    a = plant.a.copy()
+    a[plant.w, :] = 0.0
+    a[:, plant.w] = 0.0
+    bv = plant.b_drive.copy()
+    bv[plant.w] = 0.0
+    return a, bv, np.zeros(plant.n)
+
+
+class _Modal:
+    """Eigen-decomposition of one regime's A for fast ZOH matrices at any step length.
+
+    e^{Aτ} = P·e^{Λτ}·P⁻¹, ∫₀^τ e^{As} ds = P·τφ₁(Λτ)·P⁻¹ and ∫₀^τ∫₀^s e^{Ar} dr ds = P·τ²φ₂(Λτ)·P⁻¹ with
+    φ₁(z) = (e^z − 1)/z, φ₂(z) = (e^z − 1 − z)/z²: a few small numpy operations instead of a general
+    matrix exponential (which dominated the run time at events). Near-repeated eigenvalues (critical
+    damping, where P is ill-conditioned) fall back to :func:`scipy.linalg.expm`.
+    """
+
+    def __init__(self, plant: StatePlant, s: int):
+        self.plant = plant
+        self.s = s
+        a, self.bv, self.c = _regime(plant, s)
+        self.a = a
+        lam, vec = np.linalg.eig(a)
+        spread = float(np.max(np.abs(lam))) if lam.size else 0.0
+        self.ok = lam.size < 2 or bool(abs(lam[0] - lam[1]) > 1e-6 * spread)
+        if self.ok:
+            self.lam = lam
+            self.vec = vec
+            inv = np.linalg.inv(vec)
+            self.pb = inv @ self.bv
+            self.pc = inv @ self.c
+            self.inv = inv
+            self.row = vec[plant.w]
+
+    def discrete(self, tau: float) -> _Discrete:
+        if not self.ok:
+            return _discretise_expm(self.plant, self.s, tau)
+        z = self.lam * tau
+        small = np.abs(z) < 1e-4
+        zs = np.where(small, 1.0, z)
+        e = np.exp(z)
+        phi1 = np.where(small, 1.0 + z / 2.0 + z * z / 6.0, np.expm1(zs) / zs)
+        phi2 = np.where(small, 0.5 + z / 6.0 + z * z / 24.0, (np.expm1(zs) - zs) / (zs * zs))
+        vec, inv = self.vec, self.inv
+        ad = ((vec * e) @ inv).real
+        bv = (vec @ (tau * phi1 * self.pb)).real
+        c = (vec @ (tau * phi1 * self.pc)).real
+        moving = 1.0 if self.s != 0 else 0.0
+        hx = moving * ((self.row * (tau * phi1)) @ inv).real
+        hv = moving * float((self.row @ (tau * tau * phi2 * self.pb)).real)
+        hc = moving * float((self.row @ (tau * tau * phi2 * self.pc)).real)
+        return _Discrete(ad, bv, c, hx, hv, hc)
+
+
+def _discretise_expm(plant: StatePlant, s: int, tau: float) -> _Discrete:
+    n = plant.n
+    a, bv, c = _regime(plant, s)
+    m = np.zeros((n + 3, n + 3))
+    m[:n, :n] = a
+    m[:n, n + 1] = bv
+    m[:n, n + 2] = c
+    if s != 0:  # θ' = ω (in the stuck regime ω = 0 and θ stays)
+        m[n, plant.w] = 1.0
+    phi = linalg.expm(m * tau)
+    return _Discrete(
+        phi[:n, :n], phi[:n, n + 1], phi[:n, n + 2], phi[n, :n], float(phi[n, n + 1]), float(phi[n, n + 2])
+    )
+
+
+def _propagate(d: _Discrete, x0: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """States x_0..x_M and θ increments for held inputs v_0..v_{M-1}, starting from x0.
+
+    The recursion x⁺ = Ad·x + e with e = bv·v + c is run as a rational filter in z⁻¹ (one or two
+    poles); the initial state enters as an input at step −1, so every call starts exactly at x0.
+    """
+    n = x0.size
+    m = v.size
+    e = np.empty((n, m + 2))
+    e[:, 0] = x0
+    e[:, 1 : m + 1] = d.bv[:, None] * v[None, :] + d.c[:, None]
+    e[:, m + 1] = 0.0
+    if n == 1:
+        x = signal.lfilter([0.0, 1.0], [1.0, -d.ad[0, 0]], e[0])[1:, None]
+    else:
+        (a11, a12), (a21, a22) = d.ad
+        den = [1.0, -(a11 + a22), a11 * a22 - a12 * a21]
+        e0, e1 = e
+        u0 = np.zeros(m + 2)
+        u1 = np.zeros(m + 2)
+        # X0 = z⁻¹[(1 − a22 z⁻¹)E0 + a12 z⁻¹ E1]/det,  X1 = z⁻¹[a21 z⁻¹ E0 + (1 − a11 z⁻¹)E1]/det
+        u0[1:] = e0[:-1]
+        u0[2:] += -a22 * e0[:-2] + a12 * e1[:-2]
+        u1[1:] = e1[:-1]
+        u1[2:] += -a11 * e1[:-2] + a21 * e0[:-2]
+        x = np.empty((m + 1, 2))
+        x[:, 0] = signal.lfilter([1.0], den, u0)[1:]
+        x[:, 1] = signal.lfilter([1.0], den, u1)[1:]
+    dtheta = x[:-1] @ d.hx + d.hv * v + d.hc
+    return x, dtheta
+
+
+def _flow(d: _Discrete, x: np.ndarray, v: float) -> tuple[np.ndarray, float]:
+    """One (fractional) step."""
+    return d.ad @ x + d.bv * v + d.c, float(d.hx @ x + d.hv * v + d.hc)
+
+
+def _locate(fun: Callable[[float], float], f0: float, f1: float, *, iterations: int = 10) -> float:
+    """Fraction of a step where ``fun`` (value f0 at 0, f1 at 1, opposite signs) crosses zero.
+
+    Regula falsi with the Illinois modification: the first guess is the linear interpolation, and a
+    few refinements on the continuous solution make the event time exact to far below a step, so the
+    speed set to zero at a stop is not off by α·(interpolation error).
+    """
+    a, b, fa, fb = 0.0, 1.0, f0, f1
+    if fa == 0.0:
+        return 0.0
+    if fb == fa or fa * fb > 0:
+        return 1.0 if fa * fb > 0 else 0.0
+    c = a
+    side = 0
+    tol = 1e-12 * (abs(f0) + abs(f1))
+    for _ in range(iterations):
+        c = (a * fb - b * fa) / (fb - fa)
+        fc = fun(c)
+        if fc == 0.0:
+            return c
+        if fc * fb < 0:
+            a, fa = b, fb
+            side_new = 1
+        else:
+            side_new = -1
+            fa = 0.5 * fa if side == -1 else fa
+        b, fb = c, fc
+        side = side_new
+        if abs(fc) < tol:
+            break
+    return min(max(c, 0.0), 1.0)
+
+
+def simulate(
+    plant: StatePlant,
+    voltage: np.ndarray,
+    dt: float,
+    *,
+    x0: np.ndarray | None = None,
+    theta0: float = 0.0,
+    switches: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Simulate the plant on a uniform grid.
+
+    Parameters
+    ----------
+    plant
+        The linear plant with friction.
+    voltage
+        Applied voltage held over each step, N values [V].
+    dt
+        Grid step [s].
+    x0
+        Initial state (default: at rest).
+    theta0
+        Initial angle [rad].
+    switches
+        Drive switches inside steps: (step indices k, increasing; fractions f in [0, 1]; voltage
+        before). Step k holds the voltage before for f·dt, then ``voltage[k]`` (a drive switching
+        between the logger's samples); each such step is propagated exactly in two parts.
+
+    Returns
+    -------
+    states, theta
+        States at the N + 1 grid points (shape (N + 1, n)) and the angle [rad] (N + 1,).
+    """
+    voltage = np.asarray(voltage, dtype=float)
+    n_steps = voltage.size
+    n = plant.n
+    w = plant.w
+    f_level = plant.friction
+    x = np.zeros(n) if x0 is None else np.asarray(x0, dtype=float).copy()
+    states = np.empty((n_steps + 1, n))
+    theta = np.empty(n_steps + 1)
+    states[0] = x
+    theta[0] = theta0
+    cache: dict[int, _Discrete] = {}
+    modal: dict[int, _Modal] = {}
+
+    def mdl(s: int) -> _Modal:
+        if s not in modal:
+            modal[s] = _Modal(plant, s)
+        return modal[s]
+
+    def disc(s: int) -> _Discrete:
+        if s not in cache:
+            cache[s] = mdl(s).discrete(dt)
+        return cache[s]
+
+    def drive(xs: np.ndarray, v: np.ndarray | float) -> np.ndarray | float:
+        # acceleration the drive would give at rest (ω = 0): row w of A·x + b_V·V without the ω term
+        acc = xs @ plant.a[w] - (xs[..., w] * plant.a[w, w]) + plant.b_drive[w] * v
+        return acc
+
+    def new_mode(xs: np.ndarray, v: float) -> int:
+        acc = float(drive(xs, v))
+        return 0 if abs(acc) <= f_level else (1 if acc > 0 else -1)
+
+    k = 0
+    th = float(theta0)
+    mode = int(np.sign(x[w])) if x[w] != 0 else (new_mode(x, voltage[0]) if n_steps else 0)
+    chunk = _MIN_CHUNK
+    sw_steps, sw_frac, sw_before = switches if switches is not None else (np.zeros(0, int), (), ())
+    sw = 0
+    while k < n_steps:
+        while sw < len(sw_steps) and sw_steps[sw] < k:
+            sw += 1
+        if sw < len(sw_steps) and sw_steps[sw] == k:
+            frac_sw = float(sw_frac[sw])
+            x, dth1, mode = _advance(x, mode, float(sw_before[sw]), frac_sw * dt, mdl, drive, new_mode, f_level, w)
+            x, dth2, mode = _advance(x, mode, float(voltage[k]), (1.0 - frac_sw) * dt, mdl, drive, new_mode,
+                                     f_level, w)
+            th += dth1 + dth2
+            k += 1
+            states[k] = x
+            theta[k] = th
+            chunk = _MIN_CHUNK
+            continue
+        stop = min(n_steps, k + chunk, int(sw_steps[sw]) if sw < len(sw_steps) else n_steps)
+        v = voltage[k:stop]
+        d = disc(mode)
+        xs, dth = _propagate(d, x, v)
+        if mode != 0:
+            bad = np.flatnonzero(mode * xs[1:, w] <= 0.0)
+        else:
+            # break-away at the start of a step (input change) or inside it (current rising)
+            margin_start = np.abs(drive(xs[:-1], v)) - f_level
+            margin_end = np.abs(drive(xs[1:], v)) - f_level
+            bad = np.flatnonzero((margin_start > 0) | (margin_end > 0))
+        if bad.size == 0:
+            states[k + 1 : stop + 1] = xs[1:]
+            theta[k + 1 : stop + 1] = th + np.cumsum(dth)
+            th = float(theta[stop])
+            x = xs[-1].copy()
+            k = stop
+            chunk = min(2 * chunk, 1 << 16)
+            continue
+        j = int(bad[0])  # the event happens inside step k + j
+        if j:
+            states[k + 1 : k + j + 1] = xs[1 : j + 1]
+            theta[k + 1 : k + j + 1] = th + np.cumsum(dth[:j])
+            th = float(theta[k + j])
+            x = xs[j].copy()
+        k += j
+        vk = float(voltage[k])
+        x_start = x
+
+        def event_value(frac: float, _mode: int = mode, _x: np.ndarray = x_start, _v: float = vk) -> float:
+            xm, _ = _flow(mdl(_mode).discrete(frac * dt), _x, _v)
+            if _mode != 0:
+                return float(xm[w])
+            return abs(float(drive(xm, _v))) - f_level
+
+        if mode != 0:
+            frac = _locate(event_value, float(x[w]), float(xs[j + 1, w]))
+        else:
+            m0 = float(margin_start[j])
+            frac = 0.0 if m0 > 0 else _locate(event_value, m0, float(margin_end[j]))
+        frac = min(max(frac, 0.0), 1.0)
+        x_mid, dth_mid = _flow(mdl(mode).discrete(frac * dt), x, vk) if frac > 0 else (x, 0.0)
+        if mode != 0:
+            x_mid = x_mid.copy()
+            x_mid[w] = 0.0
+        if mode == 0:  # break-away located: move in the direction of the drive (its margin is ~0 here)
+            nxt = 1 if float(drive(x_mid, vk)) > 0 else -1
+        else:
+            nxt = new_mode(x_mid, vk)
+        if nxt == mode:  # interpolation put the event at the very end: finish the step in the old regime
+            nxt = 0 if mode != 0 else nxt
+        x_end, dth_end = _flow(mdl(nxt).discrete((1.0 - frac) * dt), x_mid, vk) if frac < 1 else (x_mid, 0.0)
+        if nxt != 0 and nxt * x_end[w] < 0:  # numerically impossible reversal: hold at rest
+            x_end = x_mid
+            dth_end = 0.0
+            nxt = 0
+        th += dth_mid + dth_end
+        x = np.asarray(x_end, dtype=float).copy()
+        k += 1
+        states[k] = x
+        theta[k] = th
+        mode = nxt
+        chunk = _MIN_CHUNK
+    return states, theta
+
+
+def _advance(x: np.ndarray, mode: int, v: float, tau: float, mdl: Callable[[int], _Modal],
+             drive: Callable[..., Any], new_mode: Callable[[np.ndarray, float], int], f_level: float,
+             w: int) -> tuple[np.ndarray, float, int]:
+    """Propagate a part of a step (length τ, voltage v held) exactly, with at most one friction event."""
+    if tau <= 0.0:
+        return x, 0.0, mode
+    if mode == 0 and abs(float(drive(x, v))) > f_level:  # break-away at once (the drive just changed)
+        mode = 1 if float(drive(x, v)) > 0 else -1
+    x1, d1 = _flow(mdl(mode).discrete(tau), x, v)
+    if mode != 0:
+        if mode * x1[w] > 0:
+            return x1, d1, mode
+        f0, f1 = float(x[w]), float(x1[w])
+    else:
+        f1 = abs(float(drive(x1, v))) - f_level
+        if f1 <= 0:
+            return x1, d1, 0
+        f0 = abs(float(drive(x, v))) - f_level
+
+    def event_value(frac: float) -> float:
+        xm, _ = _flow(mdl(mode).discrete(frac * tau), x, v)
+        return float(xm[w]) if mode != 0 else abs(float(drive(xm, v))) - f_level
+
+    frac = _locate(event_value, f0, f1)
+    x_mid, d_mid = _flow(mdl(mode).discrete(frac * tau), x, v) if frac > 0 else (x, 0.0)
+    if mode != 0:
+        x_mid = x_mid.copy()
+        x_mid[w] = 0.0
+        nxt = new_mode(x_mid, v)
+    else:
+        nxt = 1 if float(drive(x_mid, v)) > 0 else -1
+    x_end, d_end = _flow(mdl(nxt).discrete((1.0 - frac) * tau), x_mid, v) if frac < 1 else (x_mid, 0.0)
+    if nxt != 0 and nxt * x_end[w] < 0:  # numerically impossible reversal: hold at rest
+        return x_mid, d_mid, 0
+    return np.asarray(x_end, dtype=float), d_mid + d_end, nxt
