@@ -33,3 +33,7 @@ def test_python_control_is_for_tests_only(measures: tuple) -> None:
 
 def test_no_import_circles(measures: tuple) -> None:
     assert measures.cycles == []
+
+
+def test_no_module_over_800_lines(measures: tuple) -> None:
+    assert measures.long_modules == []
