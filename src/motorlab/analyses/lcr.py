@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -137,6 +138,204 @@ def _only_one(what: str, recs: list[Recording], rows: list[np.ndarray]) -> LogFo
     )
 
 
+@dataclass
+class _Rows:
+    """The readings of every file: L/Q with their test frequencies, and DC resistances."""
+
+    l_rows: list[np.ndarray]
+    q_rows: list[np.ndarray]
+    f_rows: list[np.ndarray]
+    dcr_rows: list[np.ndarray]
+    freq_origin: set[str]
+    circuit: str
+    l_recs: list[Recording]
+    dcr_recs: list[Recording]
+
+
+@dataclass
+class _Fit:
+    """What the L/Q and the DC-resistance parts add to the result."""
+
+    parameters: dict[str, Estimate] = field(default_factory=dict)
+    details: dict[str, object] = field(default_factory=dict)
+    panels: list[Panel] = field(default_factory=list)
+    rmse: float = math.nan
+    correlation: np.ndarray | None = None
+    correlation_names: list[str] = field(default_factory=list)
+    n_points: int = 0
+
+
+def _collect(recs: list[Recording], frequency: float | None, circuit: str | None) -> _Rows:
+    """Check every file's readings and gather them (frequency and circuit from options or metadata)."""
+    l_rows: list[np.ndarray] = []
+    q_rows: list[np.ndarray] = []
+    f_rows: list[np.ndarray] = []
+    dcr_rows: list[np.ndarray] = []
+    freq_origin = set()
+    circuits = set()
+    l_recs: list[Recording] = []
+    dcr_recs: list[Recording] = []
+    for rec in recs:
+        has_lq = rec.has("inductance", "quality_factor")
+        has_dcr = "dc_resistance" in rec
+        if not (has_lq or has_dcr):
+            have = ", ".join(sorted(rec.signals)) or "none"
+            raise LogFormatError(
+                f"no LCR readings: expected L_uH and Q columns and/or DCR_ohm (this file has: {have})",
+                path=rec.source or None,
+            )
+        if has_lq:
+            finite_rows(rec, ["inductance", "quality_factor"])
+            _positive(rec, "inductance")
+            _positive(rec, "quality_factor")
+            f, origin = _frequency_of(rec, frequency)
+            freq_origin.add(origin)
+            l_rows.append(rec["inductance"])
+            q_rows.append(rec["quality_factor"])
+            f_rows.append(f)
+            l_recs.append(rec)
+            circuits.add(_circuit_of(rec, circuit))
+        if has_dcr:
+            finite_rows(rec, ["dc_resistance"])
+            _positive(rec, "dc_resistance")
+            dcr_rows.append(rec["dc_resistance"])
+            dcr_recs.append(rec)
+    if len(circuits) > 1:
+        raise OptionError("the files disagree on the meter's equivalent circuit (series/parallel): give --circuit")
+    return _Rows(l_rows, q_rows, f_rows, dcr_rows, freq_origin, circuits.pop() if circuits else "series",
+                 l_recs, dcr_recs)
+
+
+
+def _fit_lq(rows: _Rows, threshold: float, fit: _Fit, warnings: list[str]) -> None:
+    """R = 2πfL/Q (outliers excluded) and L from the L/Q readings, with their panels."""
+    l_rows, q_rows, f_rows, l_recs = rows.l_rows, rows.q_rows, rows.f_rows, rows.l_recs
+    circ, freq_origin, parameters, details = rows.circuit, rows.freq_origin, fit.parameters, fit.details
+    inductance = np.concatenate(l_rows)
+    q = np.concatenate(q_rows)
+    f = np.concatenate(f_rows)
+    if inductance.size < 2:
+        raise _only_one("L/Q", l_recs, l_rows)
+    low, high = FREQUENCY_USUAL
+    if np.any((f < low) | (f > high)):
+        warnings.append(
+            f"test frequency {_freq_text(f)} is outside the {low:g} Hz–{high / 1e6:g} MHz of common LCR "
+            "meters: check its unit"
+        )
+    if circ == "parallel":
+        # Parallel Lp with Q = Rp/(ωLp) is the same impedance as Ls = Lp·Q²/(1+Q²) in series with Rs.
+        inductance = inductance * q**2 / (1 + q**2)
+    r_rows = 2 * math.pi * f * inductance / q
+    r_out = robust_outliers(r_rows, threshold=threshold)
+    kept = ~r_out
+    parameters["R"] = _mean_estimate(
+        "R", r_rows[kept], SI_UNITS["R"], f"2πfL/Q at {_freq_text(f)} (includes AC losses)"
+    )
+    l_note = "mean over shaft positions" + (" (series equivalent)" if circ == "parallel" else "")
+    parameters["L"] = _mean_estimate("L", inductance, SI_UNITS["L"], l_note)
+    r_mean = parameters["R"].value
+    fit.rmse = float(np.sqrt(np.mean((r_rows[kept] - r_mean) ** 2)))
+    fit.n_points += int(inductance.size)
+    if int(np.count_nonzero(kept)) > 2 and np.ptp(r_rows[kept]) > 0 and np.ptp(inductance[kept]) > 0:
+        c = float(np.corrcoef(r_rows[kept], inductance[kept])[0, 1])
+        fit.correlation = np.array([[1.0, c], [c, 1.0]])
+        fit.correlation_names = ["R", "L"]
+    if np.any(r_out):
+        warnings.append(
+            f"{int(np.count_nonzero(r_out))} of {r_rows.size} L/Q readings give an outlying R "
+            f"({', '.join(f'{v:.3g} Ω' for v in r_rows[r_out])}; median {np.median(r_rows):.3g} Ω): "
+            "excluded from R (poor probe or brush contact?)"
+        )
+    details["frequency_Hz"] = float(f[0]) if np.ptp(f) == 0 else [float(v) for v in f]
+    details["frequency_from"] = "+".join(sorted(freq_origin))
+    details["circuit"] = circ
+    details["L_min"] = float(np.min(inductance))
+    details["L_max"] = float(np.max(inductance))
+    details["L_relative_spread"] = float(np.std(inductance, ddof=1) / np.mean(inductance))
+    details["lq_readings"] = common.listed_rows(
+        inductance.size,
+        lambda k: {"reading": k + 1, "L_H": float(inductance[k]), "Q": float(q[k]), "R_ohm": float(r_rows[k]),
+                   "outlier": bool(r_out[k])},
+    )
+    x = np.arange(1, r_rows.size + 1, dtype=float)
+    extra = []
+    if np.any(r_out):
+        extra.append(Series(x[r_out], r_rows[r_out], "outlier (excluded)", "data"))
+    fit.panels.append(
+        Panel(
+            title="Series resistance 2πfL/Q per reading",
+            x_label="reading (shaft position) [-]",
+            y_label="R [Ω]",
+            data=Series(x[kept], r_rows[kept], "2πfL/Q", "data"),
+            model=Series(x[kept], np.full(x[kept].size, r_mean), f"mean R = {r_mean:.4g} Ω", "model"),
+            extra=extra,
+        )
+    )
+    mean_uh = 1e6 * parameters["L"].value
+    fit.panels.append(
+        Panel(
+            title="Inductance per reading (varies with the commutator position)",
+            x_label="reading (shaft position) [-]",
+            y_label="L [µH]",
+            data=Series(x, 1e6 * inductance, "L", "data"),
+            model=Series(x, np.full(x.size, mean_uh), f"mean L = {mean_uh:.4g} µH", "model"),
+        )
+    )
+
+
+def _fit_dcr(rows: _Rows, threshold: float, fit: _Fit, warnings: list[str]) -> None:
+    """R_dc from the DC-resistance readings (outliers excluded), with its panel."""
+    dcr_rows, dcr_recs, parameters, details = rows.dcr_rows, rows.dcr_recs, fit.parameters, fit.details
+    dcr = np.concatenate(dcr_rows)
+    if dcr.size < 2:
+        raise _only_one("DC resistance", dcr_recs, dcr_rows)
+    d_out = robust_outliers(dcr, threshold=threshold)
+    d_kept = ~d_out
+    parameters["R_dc"] = _mean_estimate(
+        "R_dc", dcr[d_kept], SI_UNITS["R_dc"], "DC resistance (winding + brushes), outliers excluded"
+    )
+    fit.n_points += int(dcr.size)
+    if np.any(d_out):
+        warnings.append(
+            f"{int(np.count_nonzero(d_out))} of {dcr.size} DC resistance readings are outliers "
+            f"({', '.join(f'{v:.3g} Ω' for v in dcr[d_out])}; median {np.median(dcr):.3g} Ω): "
+            "excluded from R_dc (poor brush contact at that shaft position?)"
+        )
+    details["dcr_readings"] = common.listed_rows(
+        dcr.size, lambda k: {"reading": k + 1, "DCR_ohm": float(dcr[k]), "outlier": bool(d_out[k])}
+    )
+    x = np.arange(1, dcr.size + 1, dtype=float)
+    rdc = parameters["R_dc"].value
+    dc_panel = Panel(
+        title="DC resistance per reading",
+        x_label="reading (shaft position) [-]",
+        y_label="R_dc [Ω]",
+        data=Series(x[d_kept], dcr[d_kept], "DCR", "data"),
+        model=Series(x[d_kept], np.full(x[d_kept].size, rdc), f"mean R_dc = {rdc:.4g} Ω", "model"),
+        extra=[Series(x[d_out], dcr[d_out], "outlier (excluded)", "data")] if np.any(d_out) else [],
+    )
+    fit.panels.insert(1 if rows.l_rows else 0, dc_panel)
+    if not rows.l_rows:
+        fit.rmse = float(np.sqrt(np.mean((dcr[d_kept] - rdc) ** 2)))
+
+
+def _compare_resistances(parameters: dict[str, Estimate], details: dict[str, object], warnings: list[str]) -> None:
+    """Say how far the AC resistance 2πfL/Q is from the DC one, or that the DC one is missing."""
+    if "R" in parameters and "R_dc" in parameters:
+        ratio = parameters["R"].value / parameters["R_dc"].value
+        details["R_over_R_dc"] = ratio
+        warnings.append(
+            f"R from 2πfL/Q ({parameters['R'].value:.3g} Ω) is {100 * (ratio - 1):+.0f} % from the DC "
+            f"resistance R_dc ({parameters['R_dc'].value:.3g} Ω): the 1 kHz value includes AC losses "
+            "(eddy currents, commutation); use R_dc as the model's winding resistance R"
+        )
+    elif "R" in parameters:
+        warnings.append(
+            "no DC resistance readings: R from 2πfL/Q at 1 kHz includes AC losses and overstates the DC "
+            "winding resistance the motor model needs; add DCR readings"
+        )
+
+
 def lcr(
     recordings: Recording | Sequence[Recording],
     *,
@@ -207,178 +406,25 @@ def lcr(
             f"{threshold!r} (below it ordinary readings are set aside; {OUTLIER_Z} is the usual choice)"
         )
     warnings: list[str] = reader_warnings(recs)
-    l_rows: list[np.ndarray] = []
-    q_rows: list[np.ndarray] = []
-    f_rows: list[np.ndarray] = []
-    dcr_rows: list[np.ndarray] = []
-    freq_origin = set()
-    circuits = set()
-    l_recs: list[Recording] = []
-    dcr_recs: list[Recording] = []
-    for rec in recs:
-        has_lq = rec.has("inductance", "quality_factor")
-        has_dcr = "dc_resistance" in rec
-        if not (has_lq or has_dcr):
-            have = ", ".join(sorted(rec.signals)) or "none"
-            raise LogFormatError(
-                f"no LCR readings: expected L_uH and Q columns and/or DCR_ohm (this file has: {have})",
-                path=rec.source or None,
-            )
-        if has_lq:
-            finite_rows(rec, ["inductance", "quality_factor"])
-            _positive(rec, "inductance")
-            _positive(rec, "quality_factor")
-            f, origin = _frequency_of(rec, frequency)
-            freq_origin.add(origin)
-            l_rows.append(rec["inductance"])
-            q_rows.append(rec["quality_factor"])
-            f_rows.append(f)
-            l_recs.append(rec)
-            circuits.add(_circuit_of(rec, circuit))
-        if has_dcr:
-            finite_rows(rec, ["dc_resistance"])
-            _positive(rec, "dc_resistance")
-            dcr_rows.append(rec["dc_resistance"])
-            dcr_recs.append(rec)
+    rows = _collect(recs, frequency, circuit)
+    fit = _Fit()
+    if rows.l_rows:
+        _fit_lq(rows, threshold, fit, warnings)
+    if rows.dcr_rows:
+        _fit_dcr(rows, threshold, fit, warnings)
+    parameters, details = fit.parameters, fit.details
     sources = sources_of(recs)
-    if len(circuits) > 1:
-        raise OptionError("the files disagree on the meter's equivalent circuit (series/parallel): give --circuit")
-    circ = circuits.pop() if circuits else "series"
-
-    parameters: dict[str, Estimate] = {}
-    details: dict[str, object] = {}
-    panels: list[Panel] = []
-    rmse = math.nan
-    correlation = None
-    corr_names: list[str] = []
-    n_points = 0
-    r_mean = math.nan
-    if l_rows:
-        inductance = np.concatenate(l_rows)
-        q = np.concatenate(q_rows)
-        f = np.concatenate(f_rows)
-        if inductance.size < 2:
-            raise _only_one("L/Q", l_recs, l_rows)
-        low, high = FREQUENCY_USUAL
-        if np.any((f < low) | (f > high)):
-            warnings.append(
-                f"test frequency {_freq_text(f)} is outside the {low:g} Hz–{high / 1e6:g} MHz of common LCR "
-                "meters: check its unit"
-            )
-        if circ == "parallel":
-            # Parallel Lp with Q = Rp/(ωLp) is the same impedance as Ls = Lp·Q²/(1+Q²) in series with Rs.
-            inductance = inductance * q**2 / (1 + q**2)
-        r_rows = 2 * math.pi * f * inductance / q
-        r_out = robust_outliers(r_rows, threshold=threshold)
-        kept = ~r_out
-        parameters["R"] = _mean_estimate(
-            "R", r_rows[kept], SI_UNITS["R"], f"2πfL/Q at {_freq_text(f)} (includes AC losses)"
-        )
-        l_note = "mean over shaft positions" + (" (series equivalent)" if circ == "parallel" else "")
-        parameters["L"] = _mean_estimate("L", inductance, SI_UNITS["L"], l_note)
-        r_mean = parameters["R"].value
-        rmse = float(np.sqrt(np.mean((r_rows[kept] - r_mean) ** 2)))
-        n_points += int(inductance.size)
-        if int(np.count_nonzero(kept)) > 2 and np.ptp(r_rows[kept]) > 0 and np.ptp(inductance[kept]) > 0:
-            c = float(np.corrcoef(r_rows[kept], inductance[kept])[0, 1])
-            correlation = np.array([[1.0, c], [c, 1.0]])
-            corr_names = ["R", "L"]
-        if np.any(r_out):
-            warnings.append(
-                f"{int(np.count_nonzero(r_out))} of {r_rows.size} L/Q readings give an outlying R "
-                f"({', '.join(f'{v:.3g} Ω' for v in r_rows[r_out])}; median {np.median(r_rows):.3g} Ω): "
-                "excluded from R (poor probe or brush contact?)"
-            )
-        details["frequency_Hz"] = float(f[0]) if np.ptp(f) == 0 else [float(v) for v in f]
-        details["frequency_from"] = "+".join(sorted(freq_origin))
-        details["circuit"] = circ
-        details["L_min"] = float(np.min(inductance))
-        details["L_max"] = float(np.max(inductance))
-        details["L_relative_spread"] = float(np.std(inductance, ddof=1) / np.mean(inductance))
-        details["lq_readings"] = common.listed_rows(
-            inductance.size,
-            lambda k: {"reading": k + 1, "L_H": float(inductance[k]), "Q": float(q[k]), "R_ohm": float(r_rows[k]),
-                       "outlier": bool(r_out[k])},
-        )
-        x = np.arange(1, r_rows.size + 1, dtype=float)
-        extra = []
-        if np.any(r_out):
-            extra.append(Series(x[r_out], r_rows[r_out], "outlier (excluded)", "data"))
-        panels.append(
-            Panel(
-                title="Series resistance 2πfL/Q per reading",
-                x_label="reading (shaft position) [-]",
-                y_label="R [Ω]",
-                data=Series(x[kept], r_rows[kept], "2πfL/Q", "data"),
-                model=Series(x[kept], np.full(x[kept].size, r_mean), f"mean R = {r_mean:.4g} Ω", "model"),
-                extra=extra,
-            )
-        )
-        mean_uh = 1e6 * parameters["L"].value
-        panels.append(
-            Panel(
-                title="Inductance per reading (varies with the commutator position)",
-                x_label="reading (shaft position) [-]",
-                y_label="L [µH]",
-                data=Series(x, 1e6 * inductance, "L", "data"),
-                model=Series(x, np.full(x.size, mean_uh), f"mean L = {mean_uh:.4g} µH", "model"),
-            )
-        )
-    if dcr_rows:
-        dcr = np.concatenate(dcr_rows)
-        if dcr.size < 2:
-            raise _only_one("DC resistance", dcr_recs, dcr_rows)
-        d_out = robust_outliers(dcr, threshold=threshold)
-        d_kept = ~d_out
-        parameters["R_dc"] = _mean_estimate(
-            "R_dc", dcr[d_kept], SI_UNITS["R_dc"], "DC resistance (winding + brushes), outliers excluded"
-        )
-        n_points += int(dcr.size)
-        if np.any(d_out):
-            warnings.append(
-                f"{int(np.count_nonzero(d_out))} of {dcr.size} DC resistance readings are outliers "
-                f"({', '.join(f'{v:.3g} Ω' for v in dcr[d_out])}; median {np.median(dcr):.3g} Ω): "
-                "excluded from R_dc (poor brush contact at that shaft position?)"
-            )
-        details["dcr_readings"] = common.listed_rows(
-            dcr.size, lambda k: {"reading": k + 1, "DCR_ohm": float(dcr[k]), "outlier": bool(d_out[k])}
-        )
-        x = np.arange(1, dcr.size + 1, dtype=float)
-        rdc = parameters["R_dc"].value
-        dc_panel = Panel(
-            title="DC resistance per reading",
-            x_label="reading (shaft position) [-]",
-            y_label="R_dc [Ω]",
-            data=Series(x[d_kept], dcr[d_kept], "DCR", "data"),
-            model=Series(x[d_kept], np.full(x[d_kept].size, rdc), f"mean R_dc = {rdc:.4g} Ω", "model"),
-            extra=[Series(x[d_out], dcr[d_out], "outlier (excluded)", "data")] if np.any(d_out) else [],
-        )
-        panels.insert(1 if l_rows else 0, dc_panel)
-        if not l_rows:
-            rmse = float(np.sqrt(np.mean((dcr[d_kept] - rdc) ** 2)))
-    if "R" in parameters and "R_dc" in parameters:
-        ratio = parameters["R"].value / parameters["R_dc"].value
-        details["R_over_R_dc"] = ratio
-        warnings.append(
-            f"R from 2πfL/Q ({parameters['R'].value:.3g} Ω) is {100 * (ratio - 1):+.0f} % from the DC "
-            f"resistance R_dc ({parameters['R_dc'].value:.3g} Ω): the 1 kHz value includes AC losses "
-            "(eddy currents, commutation); use R_dc as the model's winding resistance R"
-        )
-    elif "R" in parameters:
-        warnings.append(
-            "no DC resistance readings: R from 2πfL/Q at 1 kHz includes AC losses and overstates the DC "
-            "winding resistance the motor model needs; add DCR readings"
-        )
+    _compare_resistances(parameters, details, warnings)
     return FitResult(
         experiment="lcr",
         parameters=parameters,
-        correlation=correlation,
-        correlation_names=corr_names,
-        rmse=rmse,
+        correlation=fit.correlation,
+        correlation_names=fit.correlation_names,
+        rmse=fit.rmse,
         rmse_unit="ohm",
         r2=math.nan,
-        n_points=n_points,
-        panels=panels,
+        n_points=fit.n_points,
+        panels=fit.panels,
         warnings=warnings,
         details=details,
         sources=sources,
