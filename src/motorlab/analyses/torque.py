@@ -39,6 +39,60 @@ from motorlab.units import SI_UNITS, STANDARD_GRAVITY
 INTERCEPT_WARNING_FRACTION = 0.03
 
 
+def _torque_rows(recs: list[Recording], arm: float | None, arm_stderr: float,
+                 gearbox: tuple[float, float | None, float]) -> tuple[Recording, np.ndarray, float | None]:
+    """The rows joined, their torque [N·m] (a torque column, or scale mass × g × arm) and the arm used [m].
+
+    The options are checked in this order: the arm, its standard error, the gearbox's (``gearbox`` =
+    ratio, motor K, its standard error), the arm's range."""
+    has_torque = all("torque" in r for r in recs)
+    if has_torque:
+        rec = concatenate(recs, ["current", "torque"])
+        tau = rec["torque"]
+        arm_used = None
+    else:
+        for r in recs:
+            if "mass" not in r:
+                raise LogFormatError(
+                    "this file has no scale reading (a mass_kg or mass_g column) nor torque_Nm",
+                    path=r.source or None,
+                )
+        rec = concatenate(recs, ["current", "mass"])
+        arm_used = arm if arm is not None else metadata_quantity(recs[0], ["arm_m", "arm"], "m")
+        if arm_used is None:
+            raise OptionError("the lever arm length is needed to turn scale readings into torque: give --arm")
+        if not arm_used > 0:
+            raise OptionError(f"the lever arm must be positive, got {arm_used} m")
+        tau = rec["mass"] * STANDARD_GRAVITY * arm_used
+    if arm_stderr < 0:
+        raise OptionError("the arm length uncertainty must not be negative")
+    _check_gearbox_options(*gearbox)
+    try:
+        check_limits(arm_used, "arm", "the lever arm (--arm)")
+    except OptionError as exc:
+        if arm is not None:
+            raise
+        raise LogFormatError(f"the '# arm_m:' line: {exc.message}", path=recs[0].source or None) from None
+    check_stderr_limit(arm_stderr, "arm", "the lever arm's standard error (--arm-stderr)")
+    return rec, tau, arm_used
+
+
+def _offset_warning(intercept: Estimate, tau: np.ndarray) -> list[str]:
+    """A warning when the torque at zero current is significant (friction, or an untared scale)."""
+    tau_span = float(np.max(np.abs(tau)))
+    if (
+        math.isfinite(intercept.stderr)
+        and abs(intercept.value) > 3 * intercept.stderr
+        and abs(intercept.value) > INTERCEPT_WARNING_FRACTION * tau_span
+    ):
+        return [
+            f"the torque offset tau0 = {intercept.value:.3g} N·m ({100 * abs(intercept.value) / tau_span:.1f} % "
+            "of the largest torque) is significant: friction/stiction holding part of the torque, or a scale "
+            "not tared with the arm resting on it"
+        ]
+    return []
+
+
 def torque(
     recordings: Recording | Sequence[Recording],
     *,
@@ -112,35 +166,7 @@ def torque(
     if not recs:
         raise OptionError("no recording given")
     warnings: list[str] = []
-    has_torque = all("torque" in r for r in recs)
-    if has_torque:
-        rec = concatenate(recs, ["current", "torque"])
-        tau = rec["torque"]
-        arm_used = None
-    else:
-        for r in recs:
-            if "mass" not in r:
-                raise LogFormatError(
-                    "this file has no scale reading (a mass_kg or mass_g column) nor torque_Nm",
-                    path=r.source or None,
-                )
-        rec = concatenate(recs, ["current", "mass"])
-        arm_used = arm if arm is not None else metadata_quantity(recs[0], ["arm_m", "arm"], "m")
-        if arm_used is None:
-            raise OptionError("the lever arm length is needed to turn scale readings into torque: give --arm")
-        if not arm_used > 0:
-            raise OptionError(f"the lever arm must be positive, got {arm_used} m")
-        tau = rec["mass"] * STANDARD_GRAVITY * arm_used
-    if arm_stderr < 0:
-        raise OptionError("the arm length uncertainty must not be negative")
-    _check_gearbox_options(ratio, motor_constant, motor_constant_stderr)
-    try:
-        check_limits(arm_used, "arm", "the lever arm (--arm)")
-    except OptionError as exc:
-        if arm is not None:
-            raise
-        raise LogFormatError(f"the '# arm_m:' line: {exc.message}", path=recs[0].source or None) from None
-    check_stderr_limit(arm_stderr, "arm", "the lever arm's standard error (--arm-stderr)")
+    rec, tau, arm_used = _torque_rows(recs, arm, arm_stderr, (ratio, motor_constant, motor_constant_stderr))
     current = rec["current"]
     sources = sources_of(recs)
     if motor_constant is not None and np.unique(np.abs(current)).size == 1:
@@ -190,17 +216,7 @@ def torque(
         warnings.append("only two rows: the line passes through both, so no uncertainty can be estimated")
     elif line.exact:
         warnings.append(EXACT_LINE_WARNING)
-    tau_span = float(np.max(np.abs(tau)))
-    if (
-        math.isfinite(intercept.stderr)
-        and abs(intercept.value) > 3 * intercept.stderr
-        and abs(intercept.value) > INTERCEPT_WARNING_FRACTION * tau_span
-    ):
-        warnings.append(
-            f"the torque offset tau0 = {intercept.value:.3g} N·m ({100 * abs(intercept.value) / tau_span:.1f} % "
-            "of the largest torque) is significant: friction/stiction holding part of the torque, or a scale "
-            "not tared with the arm resting on it"
-        )
+    warnings.extend(_offset_warning(intercept, tau))
     details: dict[str, object] = {"g": STANDARD_GRAVITY, "approach": [int(d) for d in approach],
                                   "hysteresis_fitted": hysteresis}
     if motor_constant is not None:
