@@ -287,6 +287,8 @@ def test_digit_separators_are_not_numbers(rig, tmp_path: Path, capsys) -> None:
     err = refused(capsys, "analyze", "terminal", path, "--K", "0.7", mentions="'1_0' is not a number")
     assert f"{path.name}:{line}" in err
     refused(capsys, "analyze", "terminal", rig["terminal"], "--K", "0_7", mentions="--K")
+    refused(capsys, "demo", "--seed", "1_0", "-o", tmp_path / "demo",
+            mentions="'1_0' is not a whole number")
 
 
 def test_unknown_sysid_test_names_are_reported(rig, tmp_path: Path, capsys) -> None:

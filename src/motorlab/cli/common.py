@@ -65,12 +65,17 @@ def quantity(unit: str, *, positive: bool = False, nonnegative: bool = False) ->
     return convert
 
 
+def _whole_number(text: str) -> int:
+    """Digits with an optional sign, nothing else: Python's ``int`` would also take "1_0" as 10."""
+    stripped = text.strip()
+    if not stripped.lstrip("+-").isdigit() or not stripped.isascii():
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number")
+    return int(stripped)
+
+
 def nonnegative_int(text: str) -> int:
     """An argparse ``type`` for a whole number ≥ 0 (seeds)."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+    value = _whole_number(text)
     if value < 0:
         raise argparse.ArgumentTypeError(f"{text!r} must not be negative")
     return value
@@ -78,10 +83,7 @@ def nonnegative_int(text: str) -> int:
 
 def positive_int(text: str) -> int:
     """An argparse ``type`` for a whole number > 0."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+    value = _whole_number(text)
     if value <= 0:
         raise argparse.ArgumentTypeError(f"{text!r} must be positive")
     return value
