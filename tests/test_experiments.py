@@ -106,3 +106,16 @@ def test_session_and_characterize_tables_come_from_the_descriptions() -> None:
     assert LOADED_EXPERIMENTS == {"spindown", "spinup", "torque"}
     assert REQUIRED_SETTINGS == {"free-spinup": ("current",)}
     assert [e[0] for e in SIMULATED_EXPERIMENTS][:3] == ["lcr", "spindown", "torque"]
+
+
+def test_whole_number_options_take_digits_only() -> None:
+    from motorlab.experiments import Option
+
+    count = Option("count", kind="int", positive=True)
+    assert count.convert("12") == 12
+    assert count.convert(4.0) == 4
+    for bad in ("1_0", "x", 2.5, True, float("inf")):
+        with pytest.raises(OptionError, match="not a whole number"):
+            count.convert(bad)
+    with pytest.raises(OptionError, match="must be positive"):
+        count.convert("-1")

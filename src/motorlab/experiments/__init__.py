@@ -115,13 +115,13 @@ class Option:
             items = [value] if isinstance(value, str) or hasattr(value, "__fspath__") else list(value)
             return [str(item) for item in items]
         if self.kind == "int":
-            try:
-                number = int(value)
-            except (TypeError, ValueError):
-                raise OptionError(f"{label}: {value!r} is not a whole number") from None
-            if number != value and not isinstance(value, str):
+            text = value.strip() if isinstance(value, str) else None
+            if text is not None and not (text.lstrip("+-").isdigit() and text.isascii()):
+                raise OptionError(f"{label}: {value!r} is not a whole number")  # int() would take "1_0"
+            if text is None and (isinstance(value, bool) or not isinstance(value, int | float)
+                                 or not math.isfinite(value) or value != int(value)):
                 raise OptionError(f"{label}: {value!r} is not a whole number")
-            return self._check_sign(number, value, label)
+            return self._check_sign(int(text if text is not None else value), value, label)
         assert self.unit is not None
         return self._check_sign(parse_quantity(value, self.unit, name=label), value, label)
 
