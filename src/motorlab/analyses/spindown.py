@@ -366,11 +366,8 @@ def spindown(
     if cutoff is not None and not float(t_all[0]) <= cutoff <= float(t_all[-1]):
         # Before the log starts the powered run would be fitted as a coast (K = 1.30 against 0.70
         # and Tf/J < 0 in the QA run); after it ends there is nothing to fit.
-        raise OptionError(
-            f"the cut-off (--cutoff) {cutoff:g} s lies outside the log's time span "
-            f"{float(t_all[0]):g} s to {float(t_all[-1]):g} s",
-            path=recording.source or None,
-        )
+        raise OptionError(f"the cut-off (--cutoff) {cutoff:g} s lies outside the log's time span "
+                          f"{float(t_all[0]):g} s to {float(t_all[-1]):g} s", path=recording.source or None)
 
     # ---- the coast: after the relay opened (plus a guard), until the shaft stopped -----------------
     idx, t_off, stopped = _find_coast(recording, theta_all, cutoff=cutoff, guard=guard, tick_log=tick_log,
@@ -407,11 +404,7 @@ def spindown(
             "gamma and Tf/J are poorly separated"
         )
 
-    parameters: dict[str, Estimate] = {}
-    if voltage is not None:
-        parameters["K"] = estimates["K"]
-    parameters["gamma"] = gamma_est
-    parameters["Tf_over_J"] = decel
+    parameters = {name: estimates[name] for name in (["K"] if voltage is not None else []) + ["gamma", "Tf_over_J"]}
     if inertia is not None:
         parameters.update(_friction_from_inertia(joint, inertia, inertia_se))
 
