@@ -313,18 +313,7 @@ def feedforward(
     cov = fit.covariance[:m, :m].copy()
     names = list(model.names[:m])
     if mechanism == "arm":  # report kG = hypot(a, c) and φ = atan2(c, a) (delta method)
-        a, c = values[3], values[4]
-        k_g = math.hypot(a, c)
-        grad = np.zeros((m, m))
-        grad[:3, :3] = np.eye(3)
-        if k_g > 0:
-            grad[3, 3:5] = [a / k_g, c / k_g]
-            grad[4, 3:5] = [-c / k_g**2, a / k_g**2]
-        values[3], values[4] = k_g, math.atan2(c, a)
-        cov = grad @ cov @ grad.T
-        # The counted angle is the shaft's to within one count, with an unknown quantiser phase shared
-        # by all tests (one encoder): φ, relative to the shaft's angle, is uncertain by q/√12 more.
-        cov[4, 4] += max(log.resolution for log in logs) ** 2 / 12.0
+        values, cov = _arm_gravity(values, cov, max(log.resolution for log in logs))
         names[3:5] = ["kG", "offset"]
     stderr = np.sqrt(np.clip(np.diag(cov), 0.0, None))
     params: dict[str, Estimate] = {}
@@ -366,6 +355,26 @@ def feedforward(
     if mechanism == "simple" and fit.noise_model.startswith("Newey") and all("velocity" in rec for rec in recs):
         _report_open_loop(result, recs, length=result.rmse_unit)  # real logs: docs/real-logs.md
     return result
+
+
+def _arm_gravity(values: np.ndarray, cov: np.ndarray, resolution: float) -> tuple[np.ndarray, np.ndarray]:
+    """(a, c) of kG·cos(θ + φ) = a·cos θ − c·sin θ as kG = hypot(a, c) and φ = atan2(c, a), with their
+    covariance by the delta method; φ's variance gains q²/12 for the encoder's quantiser phase."""
+    m = values.size
+    a, c = values[3], values[4]
+    k_g = math.hypot(a, c)
+    grad = np.zeros((m, m))
+    grad[:3, :3] = np.eye(3)
+    if k_g > 0:
+        grad[3, 3:5] = [a / k_g, c / k_g]
+        grad[4, 3:5] = [-c / k_g**2, a / k_g**2]
+    values = values.copy()
+    values[3], values[4] = k_g, math.atan2(c, a)
+    cov = grad @ cov @ grad.T
+    # The counted angle is the shaft's to within one count, with an unknown quantiser phase shared
+    # by all tests (one encoder): φ, relative to the shaft's angle, is uncertain by q/√12 more.
+    cov[4, 4] += resolution**2 / 12.0
+    return values, cov
 
 
 def _report_open_loop(result: FitResult, recs: list[Recording], *, length: str) -> None:
