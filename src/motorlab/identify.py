@@ -166,22 +166,7 @@ def identify(
     values = fit.values[:6]
     cov = fit.covariance[:6, :6]
     stderr = np.sqrt(np.clip(np.diag(cov), 0.0, None))
-    params: dict[str, Estimate] = {}
-    for k, name in enumerate(MOTOR_NAMES):
-        determined = not fit.null[k] and stderr[k] <= MAX_RELATIVE_STDERR * abs(values[k])
-        note = ""
-        if name == "L" and (values[k] <= 1.01 * lower[2] or values[k] < 3.0 * stderr[k]):
-            # L ≥ 0 is seen only through the current rise (and its small delay of the torque): an
-            # estimate within 3σ of zero says only "τe is too short to see", not a value
-            determined = False
-        if not determined:
-            note = "the data carry (almost) no information on it"
-            if name == "L":
-                note = (
-                    f"τe = L/R is too short for samples every {1e3 * dt:.3g} ms to see the current rise "
-                    f"(L < {values[k] + 2 * stderr[k]:.2g} H)"
-                )
-        params[name] = _estimate(name, values[k], stderr[k], determined=determined, note=note)
+    params = _motor_estimates(fit, values, stderr, l_floor=lower[2], dt=dt)
     if not fit.success:
         warnings.append(f"the optimiser stopped early: {fit.message}")
     warnings.extend(_oe.noise_warning(fit, rms_text=f"{fit.residual_rms['position']:.3g} rad"))
@@ -220,6 +205,29 @@ def identify(
     }
     _bound_details(fit, logs, params, details, weight_current=sigma["current"], current_noise=current_noise)
     return _result("identify", params, corr, list(MOTOR_NAMES), logs, fit, warnings, details)
+
+
+def _motor_estimates(fit: _oe.Fit, values: np.ndarray, stderr: np.ndarray, *, l_floor: float,
+                     dt: float) -> dict[str, Estimate]:
+    """K, R, L, J, b, Tf with their standard errors; "not determined" on a null direction, beyond the
+    relative-error bound, or (L) within 3σ of zero or at its lower bound ``l_floor`` [H]."""
+    params: dict[str, Estimate] = {}
+    for k, name in enumerate(MOTOR_NAMES):
+        determined = not fit.null[k] and stderr[k] <= MAX_RELATIVE_STDERR * abs(values[k])
+        note = ""
+        if name == "L" and (values[k] <= 1.01 * l_floor or values[k] < 3.0 * stderr[k]):
+            # L ≥ 0 is seen only through the current rise (and its small delay of the torque): an
+            # estimate within 3σ of zero says only "τe is too short to see", not a value
+            determined = False
+        if not determined:
+            note = "the data carry (almost) no information on it"
+            if name == "L":
+                note = (
+                    f"τe = L/R is too short for samples every {1e3 * dt:.3g} ms to see the current rise "
+                    f"(L < {values[k] + 2 * stderr[k]:.2g} H)"
+                )
+        params[name] = _estimate(name, values[k], stderr[k], determined=determined, note=note)
+    return params
 
 
 def _input_model(
