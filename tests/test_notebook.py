@@ -91,3 +91,13 @@ def test_read_gives_a_short_repr(unit: Path) -> None:
     assert "position" in rec.signals
     assert repr(rec).startswith("Recording(")
     assert len(repr(rec)) < 300
+
+
+def test_from_motorlab_import_gives_the_submodule() -> None:
+    import subprocess
+    import sys
+
+    code = ("from motorlab import feedforward, identify; import motorlab as ml; "
+            "print(type(feedforward).__name__, hasattr(feedforward, 'motor_estimates'), callable(ml.identify))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
+    assert out == ["CallableModule", "True", "True"]

@@ -19,6 +19,7 @@ Everything inside is SI; see ``docs/glossary.md``.
 from __future__ import annotations
 
 import importlib
+import importlib.util
 import types
 from typing import Any
 
@@ -28,6 +29,10 @@ def __getattr__(name: str) -> Any:
     """``analyze``, ``read``, ``describe`` and one function per experiment, from :mod:`motorlab.notebook`."""
     if name.startswith("__"):
         raise AttributeError(f"module 'motorlab' has no attribute {name!r}")
+    if importlib.util.find_spec(f"{__name__}.{name}") is not None:
+        # A submodule (``from motorlab import feedforward`` wants the module): identify and
+        # feedforward are CallableModules, so ml.identify(...) still runs the experiment.
+        return importlib.import_module(f"{__name__}.{name}")
     try:
         return getattr(importlib.import_module("motorlab.notebook"), name)
     except AttributeError:
