@@ -125,17 +125,8 @@ def terminal(
     Seed 1, "Terminal Velocity Experiment", "Data Analysis" steps 1–3.
     """
     source = recording.source or "rows"
-    common.check_positive(torque_constant, "K (torque constant)", allow_none=False)
-    common.check_positive(cpr, "cpr (encoder counts per revolution)")
-    common.check_cpr(cpr)
-    common.check_torque_constant(torque_constant)
-    k_se = common.check_stderr_limit(torque_constant_stderr, "K", "the standard error of K (--K-stderr)")
-    common.check_nonnegative(coulomb_friction, "Coulomb friction Tf")
-    common.check_limits(coulomb_friction, "Tf", "the Coulomb friction Tf (--Tf)")
-    tf_se = common.check_stderr_limit(coulomb_friction_stderr, "Tf", "the standard error of Tf (--Tf-stderr)")
-    common.check_nonnegative(current_stderr, "standard error of the current")
-    common.check_stderr_limit(current_stderr, "I", "the standard error of the current (--current-stderr)")
-    f_se = common.check_stderr_limit(frequency_stderr, "f", "the standard error of the frequency (--frequency-stderr)")
+    k_se, tf_se, f_se = _checked_options(torque_constant, cpr, torque_constant_stderr, coulomb_friction,
+                                         coulomb_friction_stderr, current_stderr, frequency_stderr)
     common.check_finite_signals(recording, ["current", "frequency", "speed", "velocity"])
     current = np.abs(recording.require("current"))
     omega = np.abs(speeds_of(recording, cpr=cpr))
@@ -170,28 +161,8 @@ def terminal(
     correlation = None
     correlation_names: list[str] = []
     if several and coulomb_friction is None:
-        # I = β1·ω + β0 with β1 = b/K, β0 = Tf/K.
-        line = common.fit_straight_line(omega, current, source=source, what="speed", response="current")
-        fit = line.fit
-        (beta1, beta0), cov = fit.values, fit.covariance
-        if current.size == 2:
-            warnings.append("two rows determine b and Tf exactly: their uncertainty cannot be estimated")
-            cov = np.full((2, 2), np.nan)
-        elif line.exact:
-            warnings.append(common.EXACT_LINE_WARNING)
-        b = K * beta1
-        tf = K * beta0
-        b_se = math.sqrt(K**2 * cov[0, 0] + beta1**2 * k_se**2)
-        tf_se_out = math.sqrt(K**2 * cov[1, 1] + beta0**2 * k_se**2)
-        cov_bt = K**2 * cov[0, 1] + beta1 * beta0 * k_se**2
-        parameters["b"] = Estimate("b", b, b_se, SI_UNITS["b"], bool(fit.determined[0]))
-        parameters["Tf"] = Estimate("Tf", tf, tf_se_out, SI_UNITS["Tf"], bool(fit.determined[1]))
-        rho = cov_bt / (b_se * tf_se_out) if b_se > 0 and tf_se_out > 0 else math.nan
-        correlation = np.array([[1.0, rho], [rho, 1.0]])
-        correlation_names = ["b", "Tf"]
-        if tf < 0:
-            warnings.append(f"the fitted Coulomb friction is negative ({tf:.3g} N·m): check the rows")
-        model_current = beta1 * omega + beta0
+        parameters, correlation, correlation_names, model_current = _fit_b_and_tf(
+            omega, current, K=K, k_se=k_se, source=source, warnings=warnings)
     else:
         tf = coulomb_friction or 0.0
         if several:
@@ -212,22 +183,8 @@ def terminal(
                 current, omega, K=K, tf=tf, k_se=k_se, tf_se=tf_se, i_se=current_stderr, omega_se=omega_se,
                 warnings=warnings,
             )
-            if one_current and spread >= _MIN_SPREAD:
-                warnings.append(
-                    f"every row reads the same current ({current[0]:.4g} A) while the speeds differ by "
-                    f"{100 * spread:.2g} %: b and Tf cannot be separated; rows treated as repeats of one "
-                    "operating point (measure at several currents)"
-                )
-            elif current.size >= 2:
-                warnings.append(
-                    f"the rows span only {100 * spread:.2g} % in speed: b and Tf cannot be separated; "
-                    "rows treated as repeats of one operating point"
-                )
-            if coulomb_friction is None:
-                warnings.append(
-                    "one operating point: Coulomb friction is folded into b (b = K·I/ω); "
-                    "measure at several currents to separate b and Tf"
-                )
+            warnings.extend(_one_point_warnings(current, spread, one_current=one_current,
+                                                given_tf=coulomb_friction is not None))
         parameters["b"] = Estimate("b", b, b_se, SI_UNITS["b"])
         if coulomb_friction is not None:
             parameters["Tf"] = Estimate("Tf", tf, tf_se, SI_UNITS["Tf"], note="given")
@@ -252,6 +209,74 @@ def terminal(
         details=details,
         sources=[recording.source] if recording.source else [],
     )
+
+
+def _checked_options(torque_constant: float, cpr: float | None, torque_constant_stderr: float | None,
+                     coulomb_friction: float | None, coulomb_friction_stderr: float | None,
+                     current_stderr: float | None, frequency_stderr: float | None) -> tuple[float, float, float]:
+    """Refuse impossible options; the standard errors of K, Tf and one frequency reading (0 if not given)."""
+    common.check_positive(torque_constant, "K (torque constant)", allow_none=False)
+    common.check_positive(cpr, "cpr (encoder counts per revolution)")
+    common.check_cpr(cpr)
+    common.check_torque_constant(torque_constant)
+    k_se = common.check_stderr_limit(torque_constant_stderr, "K", "the standard error of K (--K-stderr)")
+    common.check_nonnegative(coulomb_friction, "Coulomb friction Tf")
+    common.check_limits(coulomb_friction, "Tf", "the Coulomb friction Tf (--Tf)")
+    tf_se = common.check_stderr_limit(coulomb_friction_stderr, "Tf", "the standard error of Tf (--Tf-stderr)")
+    common.check_nonnegative(current_stderr, "standard error of the current")
+    common.check_stderr_limit(current_stderr, "I", "the standard error of the current (--current-stderr)")
+    f_se = common.check_stderr_limit(frequency_stderr, "f", "the standard error of the frequency (--frequency-stderr)")
+    return k_se, tf_se, f_se
+
+
+def _fit_b_and_tf(omega: np.ndarray, current: np.ndarray, *, K: float, k_se: float, source: str,
+                  warnings: list[str]) -> tuple[dict[str, Estimate], np.ndarray, list[str], np.ndarray]:
+    """b and Tf from the straight line I = (b/K)·ω + Tf/K, K's uncertainty propagated; the model current."""
+    # I = β1·ω + β0 with β1 = b/K, β0 = Tf/K.
+    line = common.fit_straight_line(omega, current, source=source, what="speed", response="current")
+    fit = line.fit
+    (beta1, beta0), cov = fit.values, fit.covariance
+    if current.size == 2:
+        warnings.append("two rows determine b and Tf exactly: their uncertainty cannot be estimated")
+        cov = np.full((2, 2), np.nan)
+    elif line.exact:
+        warnings.append(common.EXACT_LINE_WARNING)
+    b = K * beta1
+    tf = K * beta0
+    b_se = math.sqrt(K**2 * cov[0, 0] + beta1**2 * k_se**2)
+    tf_se_out = math.sqrt(K**2 * cov[1, 1] + beta0**2 * k_se**2)
+    cov_bt = K**2 * cov[0, 1] + beta1 * beta0 * k_se**2
+    parameters: dict[str, Estimate] = {}
+    parameters["b"] = Estimate("b", b, b_se, SI_UNITS["b"], bool(fit.determined[0]))
+    parameters["Tf"] = Estimate("Tf", tf, tf_se_out, SI_UNITS["Tf"], bool(fit.determined[1]))
+    rho = cov_bt / (b_se * tf_se_out) if b_se > 0 and tf_se_out > 0 else math.nan
+    correlation = np.array([[1.0, rho], [rho, 1.0]])
+    if tf < 0:
+        warnings.append(f"the fitted Coulomb friction is negative ({tf:.3g} N·m): check the rows")
+    model_current = beta1 * omega + beta0
+    return parameters, correlation, ["b", "Tf"], model_current
+
+
+def _one_point_warnings(current: np.ndarray, spread: float, *, one_current: bool, given_tf: bool) -> list[str]:
+    """Why b and Tf cannot be separated from these rows (one operating point)."""
+    out: list[str] = []
+    if one_current and spread >= _MIN_SPREAD:
+        out.append(
+            f"every row reads the same current ({current[0]:.4g} A) while the speeds differ by "
+            f"{100 * spread:.2g} %: b and Tf cannot be separated; rows treated as repeats of one "
+            "operating point (measure at several currents)"
+        )
+    elif current.size >= 2:
+        out.append(
+            f"the rows span only {100 * spread:.2g} % in speed: b and Tf cannot be separated; "
+            "rows treated as repeats of one operating point"
+        )
+    if not given_tf:
+        out.append(
+            "one operating point: Coulomb friction is folded into b (b = K·I/ω); "
+            "measure at several currents to separate b and Tf"
+        )
+    return out
 
 
 def _one_operating_point(
