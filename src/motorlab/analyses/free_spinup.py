@@ -26,6 +26,85 @@ _UNITS = {"P0": "rad", "omega0": "rad/s", "J": SI_UNITS["J"], "K": SI_UNITS["K"]
           "Tf": SI_UNITS["Tf"], "b": SI_UNITS["b"]}
 
 
+def _checked_options(
+    edges: Recording, *, torque_constant: float, current: float, cpr: float | None,
+    edges_per_revolution: float | None, viscous_friction: float | None, coulomb_friction: float | None,
+    stderrs: tuple[float | None, float | None, float | None, float | None],
+) -> tuple[dict[str, float], float | None, float]:
+    """Refuse impossible options; the standard errors of K, I, b, Tf, the cpr (an option or the file's
+    ``# cpr:`` line) and the rising edges per revolution."""
+    source = edges.source or "edge times"
+    torque_constant_stderr, current_stderr, viscous_friction_stderr, coulomb_friction_stderr = stderrs
+    common.check_positive(torque_constant, "K (torque constant)", allow_none=False)
+    common.check_positive(current, "current", allow_none=False)
+    common.check_positive(cpr, "cpr (encoder counts per revolution)")
+    common.check_positive(edges_per_revolution, "edges per revolution")
+    # Generous physical limits, checked before K·I or 2π/n_e can overflow into a non-finite fit.
+    common.check_torque_constant(torque_constant)
+    common.check_current(current)
+    common.check_cpr(cpr)
+    common.check_range(edges_per_revolution, "the edges per revolution (--edges-per-rev)", 0.25, 2.0**30, "",
+                       why="one channel of an encoder has at least a quarter of a rising edge per turn")
+    common.check_nonnegative(viscous_friction, "viscous friction b")
+    common.check_nonnegative(coulomb_friction, "Coulomb friction Tf")
+    common.check_limits(viscous_friction, "b", "the viscous friction b (--b)")
+    common.check_limits(coulomb_friction, "Tf", "the Coulomb friction Tf (--Tf)")
+    se = {
+        "K": common.check_stderr_limit(torque_constant_stderr, "K", "the standard error of K (--K-stderr)"),
+        "I": common.check_stderr_limit(current_stderr, "I", "the standard error of the current (--current-stderr)"),
+        "b": common.check_stderr_limit(viscous_friction_stderr, "b", "the standard error of b (--b-stderr)"),
+        "Tf": common.check_stderr_limit(coulomb_friction_stderr, "Tf", "the standard error of Tf (--Tf-stderr)"),
+    }
+    if cpr is None and edges.metadata.get("cpr") is not None:  # a "# cpr: 1120" line of the CSV
+        try:
+            cpr = float(edges.metadata["cpr"])
+        except (TypeError, ValueError):
+            raise OptionError(f"{source}: the file's cpr {edges.metadata['cpr']!r} is not a number") from None
+        common.check_positive(cpr, "cpr (encoder counts per revolution)")
+        try:
+            common.check_cpr(cpr)
+        except OptionError as exc:
+            raise OptionError(f"the file's '# cpr:' line: {exc.message}", path=edges.source or None) from None
+    if edges_per_revolution is None:
+        if cpr is None:
+            raise OptionError("give the encoder's counts per revolution (--cpr) or --edges-per-rev")
+        edges_per_revolution = cpr / 4.0
+    return se, cpr, edges_per_revolution
+
+
+def _fragility_warnings(n_edges: int, viscous_friction: float | None, coulomb_friction: float | None,
+                        drive: float) -> list[str]:
+    """Few edges; friction not given (folded into J), with how much J is then overestimated."""
+    out: list[str] = []
+    if n_edges < 10:
+        out.append(f"only {n_edges} edges: the estimate is fragile")
+    if viscous_friction is None:
+        out.append("no viscous friction given (--b): the drag b·ω is folded into J (J is overestimated)")
+    if coulomb_friction is None:
+        # J = (K·I − Tf)/α: taking Tf = 0 overestimates J by the factor K·I/(K·I − Tf).
+        out.append(
+            f"no Coulomb friction given (--Tf): Tf was taken as 0, which overestimates J by Tf/(K·I − Tf); "
+            f"with the drive torque K·I = {drive:.3g} N·m here, Tf = {0.1 * drive:.2g} N·m would make J "
+            f"11 % too high and Tf = {0.5 * drive:.2g} N·m 100 % too high: give --Tf (from a spin-down)"
+        )
+    return out
+
+
+def _panels(t_edges: np.ndarray, theta: np.ndarray, model_theta: np.ndarray, ramp_speed: Any, omega0: float,
+            rates: tuple[float, float]) -> list[Panel]:
+    """Position and (display-only) edge-to-edge speed against the fitted spin-up."""
+    mid = 0.5 * (t_edges[1:] + t_edges[:-1])
+    panels = [
+        Panel("Free spin-up: position", "time [s]", "position since the first edge [rad]",
+              data=Series(t_edges, theta, "edges"), model=Series(t_edges, model_theta, "model", kind="model")),
+        Panel("Free spin-up: speed", "time [s]", "speed [rad/s]",
+              data=Series(mid, np.diff(theta) / np.diff(t_edges), "edge-to-edge speed (display only)"),
+              model=Series(mid, ramp_speed(mid - t_edges[0], omega0, *rates), "model",
+                           kind="model")),
+    ]
+    return panels
+
+
 def free_spinup(
     edges: Recording,
     *,
@@ -98,40 +177,10 @@ def free_spinup(
     """
     edges = block_mean(edges)  # two million edge times: block means
     source = edges.source or "edge times"
-    common.check_positive(torque_constant, "K (torque constant)", allow_none=False)
-    common.check_positive(current, "current", allow_none=False)
-    common.check_positive(cpr, "cpr (encoder counts per revolution)")
-    common.check_positive(edges_per_revolution, "edges per revolution")
-    # Generous physical limits, checked before K·I or 2π/n_e can overflow into a non-finite fit.
-    common.check_torque_constant(torque_constant)
-    common.check_current(current)
-    common.check_cpr(cpr)
-    common.check_range(edges_per_revolution, "the edges per revolution (--edges-per-rev)", 0.25, 2.0**30, "",
-                       why="one channel of an encoder has at least a quarter of a rising edge per turn")
-    common.check_nonnegative(viscous_friction, "viscous friction b")
-    common.check_nonnegative(coulomb_friction, "Coulomb friction Tf")
-    common.check_limits(viscous_friction, "b", "the viscous friction b (--b)")
-    common.check_limits(coulomb_friction, "Tf", "the Coulomb friction Tf (--Tf)")
-    se = {
-        "K": common.check_stderr_limit(torque_constant_stderr, "K", "the standard error of K (--K-stderr)"),
-        "I": common.check_stderr_limit(current_stderr, "I", "the standard error of the current (--current-stderr)"),
-        "b": common.check_stderr_limit(viscous_friction_stderr, "b", "the standard error of b (--b-stderr)"),
-        "Tf": common.check_stderr_limit(coulomb_friction_stderr, "Tf", "the standard error of Tf (--Tf-stderr)"),
-    }
-    if cpr is None and edges.metadata.get("cpr") is not None:  # a "# cpr: 1120" line of the CSV
-        try:
-            cpr = float(edges.metadata["cpr"])
-        except (TypeError, ValueError):
-            raise OptionError(f"{source}: the file's cpr {edges.metadata['cpr']!r} is not a number") from None
-        common.check_positive(cpr, "cpr (encoder counts per revolution)")
-        try:
-            common.check_cpr(cpr)
-        except OptionError as exc:
-            raise OptionError(f"the file's '# cpr:' line: {exc.message}", path=edges.source or None) from None
-    if edges_per_revolution is None:
-        if cpr is None:
-            raise OptionError("give the encoder's counts per revolution (--cpr) or --edges-per-rev")
-        edges_per_revolution = cpr / 4.0
+    se, cpr, edges_per_revolution = _checked_options(
+        edges, torque_constant=torque_constant, current=current, cpr=cpr, edges_per_revolution=edges_per_revolution,
+        viscous_friction=viscous_friction, coulomb_friction=coulomb_friction,
+        stderrs=(torque_constant_stderr, current_stderr, viscous_friction_stderr, coulomb_friction_stderr))
     common.check_finite_signals(edges, [])
     t_edges = np.asarray(edges.time, dtype=float)
     if t_edges.size < _MIN_EDGES:
@@ -188,34 +237,14 @@ def free_spinup(
         "J": est["J"],
         "alpha": Estimate("alpha", alpha, alpha_se, "rad/s^2", note="acceleration at zero speed, (K·I − Tf)/J"),
     }
-    if t_edges.size < 10:
-        warnings.append(f"only {t_edges.size} edges: the estimate is fragile")
-    if viscous_friction is None:
-        warnings.append("no viscous friction given (--b): the drag b·ω is folded into J (J is overestimated)")
-    if coulomb_friction is None:
-        # J = (K·I − Tf)/α: taking Tf = 0 overestimates J by the factor K·I/(K·I − Tf).
-        drive = torque_constant * current
-        warnings.append(
-            f"no Coulomb friction given (--Tf): Tf was taken as 0, which overestimates J by Tf/(K·I − Tf); "
-            f"with the drive torque K·I = {drive:.3g} N·m here, Tf = {0.1 * drive:.2g} N·m would make J "
-            f"11 % too high and Tf = {0.5 * drive:.2g} N·m 100 % too high: give --Tf (from a spin-down)"
-        )
+    warnings.extend(_fragility_warnings(t_edges.size, viscous_friction, coulomb_friction,
+                                        torque_constant * current))
     model_theta = position(x_full)
     model_speed = speed(x_full)
-    mid = 0.5 * (t_edges[1:] + t_edges[:-1])
-    panels = [
-        Panel("Free spin-up: position", "time [s]", "position since the first edge [rad]",
-              data=Series(t_edges, theta, "edges"), model=Series(t_edges, model_theta, "model", kind="model")),
-        Panel("Free spin-up: speed", "time [s]", "speed [rad/s]",
-              data=Series(mid, np.diff(theta) / np.diff(t_edges), "edge-to-edge speed (display only)"),
-              model=Series(mid, common.ramp_speed(mid - t_edges[0], x_full[1], *rates(x_full)), "model",
-                           kind="model")),
-    ]
+    panels = _panels(t_edges, theta, model_theta, common.ramp_speed, x_full[1], rates(x_full))
     details: dict[str, Any] = {
-        "t0_s": float(t_edges[0]),
-        "edges_per_revolution": float(edges_per_revolution),
-        "omega0_rad_per_s": float(x_full[1]),
-        "omega_end_rad_per_s": float(model_speed[-1]),
+        "t0_s": float(t_edges[0]), "edges_per_revolution": float(edges_per_revolution),
+        "omega0_rad_per_s": float(x_full[1]), "omega_end_rad_per_s": float(model_speed[-1]),
         "model": "viscous drag (exact solution)" if b_given > 0 else "constant acceleration",
     }
     return FitResult(
