@@ -34,7 +34,7 @@ def _unit(action: argparse.Action) -> str:
     name = getattr(action.type, "__name__", "")
     if name.startswith("quantity in "):
         return name.removeprefix("quantity in ")
-    found = _UNIT_IN_HELP.findall(action.help or "")
+    found = _UNIT_IN_HELP.findall((action.help or "").replace("%%", "%"))
     return found[-1] if found else ""
 
 

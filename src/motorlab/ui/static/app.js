@@ -36,7 +36,7 @@ function fieldInput(f, prefix) {
     input = el("input", { type: "checkbox", id, name: f.name, value: "true" });
   } else if (f.kind === "choice") {
     input = el("select", { id, name: f.name });
-    if (f.default === null || f.default === undefined) input.append(el("option", { value: "", text: "(default)" }));
+    if ((f.default === null || f.default === undefined) && !f.required) input.append(el("option", { value: "", text: "(default)" }));
     for (const c of f.choices) {
       const opt = el("option", { value: String(c), text: String(c) });
       if (String(c) === String(f.default)) opt.selected = true;
@@ -84,7 +84,8 @@ function applyMotor() {
   if (!motor) return;
   for (const prefix of ["opt", "tune"]) {
     const cpr = $(`${prefix}-cpr`); if (cpr) cpr.value = String(motor.cpr);
-    for (const name of ["ratio", "gear-ratio"]) { const r = $(`${prefix}-${name}`); if (r) r.value = String(motor.gear_ratio); }
+    // Only an option that IS the gearbox ratio: spindown's --ratio is the flywheel's step-up, not this.
+    const gear = $(`${prefix}-gear-ratio`); if (gear) gear.value = String(motor.gear_ratio);
   }
 }
 
@@ -180,10 +181,12 @@ function plotPanels(panels) {
     const layout = { title: { text: p.title }, height: 420, margin: { t: 40, r: 20 }, xaxis: { title: { text: p.x_label } }, yaxis: { title: { text: p.y_label } } };
     if (p.same_x && p.data && p.model) {
       const res = p.data.y.map((y, k) => (y === null || p.model.y[k] === null ? null : y - p.model.y[k]));
-      traces.push({ x: p.data.x, y: res, name: "residual", mode: "markers", marker: { size: 3 }, xaxis: "x", yaxis: "y2" });
+      traces.push({ x: p.data.x, y: res, name: "residual", mode: "markers", marker: { size: 3 }, xaxis: "x2", yaxis: "y2" });
       layout.height = 560;
+      layout.xaxis = { anchor: "y", showticklabels: false };
       layout.yaxis.domain = [0.32, 1];
-      layout.yaxis2 = { domain: [0, 0.24], title: { text: "residual" }, anchor: "x" };
+      layout.xaxis2 = { matches: "x", anchor: "y2", title: { text: p.x_label } };
+      layout.yaxis2 = { domain: [0, 0.26], title: { text: "residual" }, anchor: "x2" };
     }
     Plotly.react(div, traces, layout, { responsive: true, displaylogo: false });
   }
@@ -249,8 +252,11 @@ async function runTune() {
   try {
     const languages = ["java", "kotlin", "python"];
     const withEmit = (lang) => { const d = tuneForm(); d.append("emit", lang); return d; };
-    const results = await Promise.all(languages.map((lang) => postForm("api/tune", withEmit(lang))));
-    showTune(results[0], languages.map((lang, k) => [lang, results[k].snippet]));
+    // One call per language the CLI can emit; a target refuses some (FTC OpModes: no Python): those are left out.
+    const settled = await Promise.allSettled(languages.map((lang) => postForm("api/tune", withEmit(lang))));
+    const made = settled.map((s, k) => [languages[k], s]).filter(([, s]) => s.status === "fulfilled");
+    if (!made.length) throw settled[0].reason;
+    showTune(made[0][1].value, made.map(([lang, s]) => [lang, s.value.snippet]));
     const figure = await fetch("api/tune/figure", { method: "POST", body: tuneForm() });
     if (figure.ok) $("step-figure").src = URL.createObjectURL(await figure.blob());
     $("tune-status").textContent = "done";
@@ -295,7 +301,7 @@ async function start() {
   drop.addEventListener("drop", (e) => { e.preventDefault(); drop.classList.remove("over"); onFiles(e.dataTransfer.files); });
   for (const form of document.querySelectorAll("form")) form.addEventListener("submit", (e) => e.preventDefault());
   $("run").addEventListener("click", runAnalysis);
-  $("to-gains").addEventListener("click", () => { selectTab("gains"); $("gains-source").textContent = `plant: the ${state.lastExperiment} result`; });
+  $("to-gains").addEventListener("click", () => { selectTab("gains"); $("gains-source").textContent = `plant: the ${state.lastExperiment} result (unless --kv/--ka or --params are given below)`; });
   $("download-json").addEventListener("click", () => download(`${state.lastExperiment}.json`, JSON.stringify(state.lastResult, null, 2), "application/json"));
   $("run-session").addEventListener("click", runSession);
   $("dl-json").addEventListener("click", () => download("results.json", JSON.stringify(state.session.results, null, 2), "application/json"));
