@@ -119,6 +119,15 @@ def test_upload_run_read_copy(browser: Any, server: Any, sim_session: Path, trut
     wait.until(lambda d: d.find_element(By.ID, "step-figure").get_attribute("naturalWidth") not in (None, "0"), "the step figure")
     _screenshot(browser, tmp_path, "ui-gains.png")
 
+    archive = Path(shutil.make_archive(str(tmp_path / "bench"), "zip", sim_session))  # a whole session, zipped
+    browser.find_element(By.ID, "tab-session").click()
+    browser.find_element(By.ID, "session-files").send_keys(str(archive))
+    browser.find_element(By.ID, "run-session").click()
+    wait.until(ec.visibility_of_element_located((By.CSS_SELECTOR, "#session-table tbody tr")), "the session table")
+    assert browser.find_element(By.CSS_SELECTOR, "#session-table tbody td:nth-child(2)").text == "ok"
+    assert browser.find_elements(By.CSS_SELECTOR, "#fleet-table tbody tr")
+    _screenshot(browser, tmp_path, "ui-session.png")
+
     loaded = browser.execute_script(
         "return [location.href, ...performance.getEntriesByType('resource').map(e => e.name)]"
     )
