@@ -8,6 +8,8 @@ import io
 import json
 import os
 import shutil
+import subprocess
+import sys
 import time
 import zipfile
 from pathlib import Path
@@ -214,3 +216,80 @@ def test_schema_is_the_cli_parsers() -> None:
     assert "json" not in tune
     assert "plot" not in spindown
     json.dumps(s)
+
+
+def test_time_limit_ends_the_command(server: Any, sim_session: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    from motorlab.ui import runner
+
+    monkeypatch.setattr(runner, "TIME_LIMIT", 0.2)  # shorter than Python's own start-up
+    with open(sim_session / "A" / "lcr.csv", "rb") as handle:
+        response = httpx.post(f"{server.url}/api/analyze/lcr", files=[("file", ("lcr.csv", handle))], timeout=60)
+    assert response.status_code == 422
+    assert "0.2 s" in response.json()["error"]
+    monkeypatch.undo()
+    _alive(server)
+
+
+def _start_ui(*args: str) -> tuple[subprocess.Popen[str], str]:
+    """``motorlab ui --no-browser ARGS`` in a child process: the process and the line with its URL."""
+    port = socket_port()
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "motorlab", "ui", "--no-browser", "--port", str(port), *args],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )
+    assert proc.stdout is not None
+    line = proc.stdout.readline()
+    return proc, line
+
+
+def socket_port() -> int:
+    import socket
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def test_ui_command_prints_its_url_and_serves() -> None:
+    proc, line = _start_ui()
+    try:
+        url = line.split()[2]
+        assert url.startswith("http://127.0.0.1:")
+        deadline = time.monotonic() + 30
+        while True:
+            try:
+                page = httpx.get(url, timeout=5)
+                break
+            except httpx.ConnectError:
+                assert time.monotonic() < deadline
+                time.sleep(0.1)
+        assert page.status_code == 200
+        assert 'id="files"' in page.text
+    finally:
+        proc.terminate()
+        proc.communicate(timeout=20)  # closes the pipes too
+
+
+def test_ui_beyond_loopback_warns_and_wants_the_token() -> None:
+    proc, line = _start_ui("--host", "0.0.0.0")
+    try:
+        url = line.split()[2]
+        assert "?token=" in url
+        assert proc.stderr is not None
+        assert "warning" in proc.stderr.readline()
+        port = url.split(":")[2].split("/")[0]
+        deadline = time.monotonic() + 30
+        while True:
+            try:
+                refused = httpx.get(f"http://127.0.0.1:{port}/", headers={"Host": f"0.0.0.0:{port}"}, timeout=5)
+                break
+            except httpx.ConnectError:
+                assert time.monotonic() < deadline
+                time.sleep(0.1)
+        assert refused.status_code == 403
+        token = url.split("?token=")[1]
+        ok = httpx.get(f"http://127.0.0.1:{port}/?token={token}", headers={"Host": f"0.0.0.0:{port}"}, timeout=5)
+        assert ok.status_code == 200
+    finally:
+        proc.terminate()
+        proc.communicate(timeout=20)  # closes the pipes too

@@ -83,8 +83,9 @@ def _semaphore() -> asyncio.Semaphore:
     return _slots
 
 
-async def run_module(module: str, argv: Sequence[str], *, cwd: str, time_limit: float = TIME_LIMIT) -> Outcome:
-    """Run ``python -m module argv...`` in ``cwd``; end it after ``time_limit`` seconds."""
+async def run_module(module: str, argv: Sequence[str], *, cwd: str, time_limit: float | None = None) -> Outcome:
+    """Run ``python -m module argv...`` in ``cwd``; end it after ``time_limit`` (default :data:`TIME_LIMIT`) seconds."""
+    limit = TIME_LIMIT if time_limit is None else time_limit
     env = {**os.environ, "MPLBACKEND": "Agg", "PYTHONIOENCODING": "utf-8"}
     env.pop("MOTORLAB_TRACEBACK", None)
     async with _semaphore():
@@ -93,14 +94,14 @@ async def run_module(module: str, argv: Sequence[str], *, cwd: str, time_limit: 
             stdin=asyncio.subprocess.DEVNULL, stdout=asyncio.subprocess.PIPE, stderr=asyncio.subprocess.PIPE,
         )
         try:
-            out, err = await asyncio.wait_for(proc.communicate(), timeout=time_limit)
+            out, err = await asyncio.wait_for(proc.communicate(), timeout=limit)
         except TimeoutError:
             proc.kill()
             await proc.wait()
-            return Outcome(124, "", f"motorlab: error: the command took longer than {time_limit:g} s and was stopped")
+            return Outcome(124, "", f"motorlab: error: the command took longer than {limit:g} s and was stopped")
     return Outcome(int(proc.returncode or 0), out.decode("utf-8", "replace"), err.decode("utf-8", "replace"))
 
 
-async def run_cli(argv: Sequence[str], *, cwd: str, time_limit: float = TIME_LIMIT) -> Outcome:
+async def run_cli(argv: Sequence[str], *, cwd: str, time_limit: float | None = None) -> Outcome:
     """Run ``motorlab argv...`` (the CLI's own entry, :func:`motorlab.cli.main`) in a child process."""
     return await run_module("motorlab", argv, cwd=cwd, time_limit=time_limit)
