@@ -113,10 +113,13 @@ def test_upload_run_read_copy(browser: Any, server: Any, sim_session: Path, trut
     copy.click()
     wait.until(lambda d: copy.text == "Copied", "the copy button's answer")
     snippet = browser.find_element(By.CSS_SELECTOR, ".snippet pre").text
-    pasted = browser.execute_async_script("navigator.clipboard.readText().then(arguments[0], e => arguments[0](String(e)))")
+    pasted = browser.execute_async_script(
+        "navigator.clipboard.readText().then(arguments[0], e => arguments[0](String(e)))"
+    )
     assert pasted.strip() == snippet.strip()
     assert "setVelocityPIDFCoefficients" in pasted
-    wait.until(lambda d: d.find_element(By.ID, "step-figure").get_attribute("naturalWidth") not in (None, "0"), "the step figure")
+    figure = browser.find_element(By.ID, "step-figure")
+    wait.until(lambda d: figure.get_attribute("naturalWidth") not in (None, "0"), "the step figure")
     _screenshot(browser, tmp_path, "ui-gains.png")
 
     archive = Path(shutil.make_archive(str(tmp_path / "bench"), "zip", sim_session))  # a whole session, zipped
