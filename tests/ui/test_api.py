@@ -137,7 +137,10 @@ def test_host_header_guard(server: Any) -> None:
         assert response.status_code == 403, host
         assert "Host" in response.json()["error"]
     for host in (f"127.0.0.1:{server.port}", f"localhost:{server.port}"):
-        assert httpx.get(f"{server.url}/", headers={"Host": host}, timeout=10).status_code == 200
+        page = httpx.get(f"{server.url}/", headers={"Host": host}, timeout=10)
+        assert page.status_code == 200
+        assert "default-src 'self'" in page.headers["content-security-policy"]  # nothing from another host
+        assert "http" not in page.text.split("<body>")[0]  # scripts and styles by relative URLs
 
 
 def test_token_when_served_beyond_loopback(start_server: Any) -> None:
