@@ -82,26 +82,39 @@ def _file_options(fields: list[dict[str, Any]], values: dict[str, list[str]], fi
             values[f["name"]] = files[f["name"]]
 
 
+async def _argv(request: Request, folder: Path, head: list[str], fields: list[dict[str, Any]]) -> list[str] | Response:
+    """The command line a form asks for (uploads saved in ``folder``), or the error response."""
+    try:
+        values, files = await _save_form(request, folder)
+        refused = sorted(set(values) & _REFUSED_FIELDS)
+        if refused:
+            return _error(f"--{refused[0]}: the app sets this option itself")
+        _file_options(fields, values, files)
+    except uploads.UploadError as exc:
+        return _error(str(exc))
+    return runner.build_argv(head, fields, values, files.get("file", []))
+
+
 async def _run_command(request: Request, head: list[str], fields: list[dict[str, Any]], extra: list[str]) -> Response:
     with uploads.private_folder() as folder:
-        try:
-            values, files = await _save_form(request, folder)
-            refused = sorted(set(values) & _REFUSED_FIELDS)
-            if refused:
-                return _error(f"--{refused[0]}: the app sets this option itself")
-            _file_options(fields, values, files)
-        except uploads.UploadError as exc:
-            return _error(str(exc))
-        argv = runner.build_argv(head, fields, values, files.get("file", []))
+        argv = await _argv(request, folder, head, fields)
+        if isinstance(argv, Response):
+            return argv
         return _outcome_response(await runner.run_cli([*argv, *extra], cwd=str(folder)))
 
 
-async def analyze(request: Request) -> Response:
+def _experiment_fields(request: Request) -> list[dict[str, Any]] | Response:
     experiment = request.path_params["experiment"]
     if experiment not in schema.schema()["analyze"]:
         return _error(f"unknown experiment {experiment!r}", 404)
-    fields = schema.command_fields("analyze", experiment)
-    return await _run_command(request, ["analyze", experiment], fields, ["--json"])
+    return schema.command_fields("analyze", experiment)
+
+
+async def analyze(request: Request) -> Response:
+    fields = _experiment_fields(request)
+    if isinstance(fields, Response):
+        return fields
+    return await _run_command(request, ["analyze", request.path_params["experiment"]], fields, ["--json"])
 
 
 async def tune(request: Request) -> Response:
@@ -111,14 +124,9 @@ async def tune(request: Request) -> Response:
 async def tune_figure(request: Request) -> Response:
     """The step and profile responses as the CLI's own ``--plot`` figure (SVG)."""
     with uploads.private_folder() as folder:
-        try:
-            values, files = await _save_form(request, folder)
-            fields = schema.command_fields("tune")
-            _file_options(fields, values, files)
-        except uploads.UploadError as exc:
-            return _error(str(exc))
-        values = {k: v for k, v in values.items() if k not in _REFUSED_FIELDS}
-        argv = runner.build_argv(["tune"], fields, values, [])
+        argv = await _argv(request, folder, ["tune"], schema.command_fields("tune"))
+        if isinstance(argv, Response):
+            return argv
         outcome = await runner.run_cli([*argv, "--plot=step.svg"], cwd=str(folder))
         if outcome.code != 0:
             return _outcome_response(outcome)
@@ -127,17 +135,13 @@ async def tune_figure(request: Request) -> Response:
 
 async def panels(request: Request) -> Response:
     """Data against model of one analysis (the curves of ``--plot``), for the interactive plot."""
-    experiment = request.path_params["experiment"]
-    if experiment not in schema.schema()["analyze"]:
-        return _error(f"unknown experiment {experiment!r}", 404)
+    fields = _experiment_fields(request)
+    if isinstance(fields, Response):
+        return fields
     with uploads.private_folder() as folder:
-        try:
-            values, files = await _save_form(request, folder)
-        except uploads.UploadError as exc:
-            return _error(str(exc))
-        values = {k: v for k, v in values.items() if k not in _REFUSED_FIELDS}
-        fields = schema.command_fields("analyze", experiment)
-        argv = runner.build_argv([experiment], fields, values, files.get("file", []))
+        argv = await _argv(request, folder, [request.path_params["experiment"]], fields)
+        if isinstance(argv, Response):
+            return argv
         return _outcome_response(await runner.run_module("motorlab.ui.worker", ["panels", *argv], cwd=str(folder)))
 
 
