@@ -12,6 +12,7 @@ from __future__ import annotations
 import asyncio
 import os
 import sys
+import weakref
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -73,14 +74,15 @@ def build_argv(
     return argv
 
 
-_slots: asyncio.Semaphore | None = None
+_slots: weakref.WeakKeyDictionary[asyncio.AbstractEventLoop, asyncio.Semaphore] = weakref.WeakKeyDictionary()
 
 
 def _semaphore() -> asyncio.Semaphore:
-    global _slots
-    if _slots is None:
-        _slots = asyncio.Semaphore(CONCURRENCY)
-    return _slots
+    """The slots of the running event loop (a semaphore belongs to one loop; tests run several servers)."""
+    loop = asyncio.get_running_loop()
+    if loop not in _slots:
+        _slots[loop] = asyncio.Semaphore(CONCURRENCY)
+    return _slots[loop]
 
 
 async def run_module(module: str, argv: Sequence[str], *, cwd: str, time_limit: float | None = None) -> Outcome:
