@@ -296,3 +296,22 @@ def test_ui_beyond_loopback_warns_and_wants_the_token() -> None:
     finally:
         proc.terminate()
         proc.communicate(timeout=20)  # closes the pipes too
+
+
+def test_the_cli_hostile_cases_through_the_api(server: Any) -> None:
+    """Cases of tests/cli/test_hostile_input.py, posted: the CLI's refusal comes back as 400 JSON."""
+    deep = b"[" * 100_000 + b"]" * 100_000
+    nested = httpx.post(f"{server.url}/api/analyze/feedforward", files=[("file", ("deep.json", deep))], timeout=120)
+    assert nested.status_code == 400
+    assert "nested too deeply" in nested.json()["error"]
+    params = httpx.post(f"{server.url}/api/tune", data={"loop": "velocity"},
+                        files=[("params", ("deep.json", deep))], timeout=120)
+    assert params.status_code == 400
+    assert "nested too deeply" in params.json()["error"]
+    typed_path = httpx.post(f"{server.url}/api/tune", data={"loop": "velocity", "params": "/etc/passwd"}, timeout=60)
+    assert typed_path.status_code == 400  # file options take uploads, never a path on the server
+    assert "upload" in typed_path.json()["error"]
+    for kv, ka in [("1", "1e308"), ("1e-300", "1"), ("1e300", "1e300")]:
+        absurd = httpx.post(f"{server.url}/api/tune", data={"loop": "velocity", "kv": kv, "ka": ka}, timeout=120)
+        assert absurd.status_code == 400, absurd.text
+    _alive(server)
