@@ -1,0 +1,349 @@
+"""The ``motorlab ui`` web app: the page, its static files and the HTTP API (docs/ui.md).
+
+``POST /api/analyze/<experiment>``, ``POST /api/tune`` and ``POST /api/characterize`` take a multipart
+form whose fields are named as the CLI's long options and run the CLI itself
+(:mod:`motorlab.ui.runner`): 200 with exactly what ``--json`` prints, or 4xx with
+``{"error": "<the CLI's one-line message>"}``.
+"""
+
+from __future__ import annotations
+
+import json
+import secrets
+from collections.abc import Awaitable, Callable, MutableMapping
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+from starlette.applications import Starlette
+from starlette.datastructures import UploadFile
+from starlette.requests import Request
+from starlette.responses import FileResponse, JSONResponse, Response
+from starlette.routing import Mount, Route
+from starlette.staticfiles import StaticFiles
+
+from motorlab.ui import runner, schema, uploads
+
+#: Options the page never passes on from a client (they name output paths; the app sets them).
+_REFUSED_FIELDS = {"plot", "output", "o", "json", "emit-file"}
+
+#: CLI exit code -> HTTP status.
+_STATUS = {2: 400, 124: 422}
+
+Scope = MutableMapping[str, Any]
+ASGIApp = Callable[[Scope, Callable[[], Awaitable[Any]], Callable[[Any], Awaitable[None]]], Awaitable[None]]
+
+
+def _error(message: str, status: int = 400) -> JSONResponse:
+    return JSONResponse({"error": message}, status_code=status)
+
+
+def _outcome_response(outcome: runner.Outcome, *, json_body: bool = True) -> Response:
+    if outcome.code != 0:
+        return _error(outcome.error_line(), _STATUS.get(outcome.code, 500))
+    return Response(outcome.stdout, media_type="application/json" if json_body else "text/plain")
+
+
+async def _save_form(request: Request, folder: Path) -> tuple[dict[str, list[str]], dict[str, list[str]]]:
+    """Text fields and uploaded files (saved under ``folder``, sanitised names) of a multipart request."""
+    form = await request.form(max_files=500, max_fields=200)
+    values: dict[str, list[str]] = {}
+    files: dict[str, list[str]] = {}
+    try:
+        for key, item in form.multi_items():
+            if isinstance(item, UploadFile):
+                target = uploads.place(folder, item.filename or "upload")
+                with open(target, "wb") as out:
+                    while chunk := await item.read(1 << 20):
+                        out.write(chunk)
+                # Paths relative to the folder (the child's working folder): the CLI's messages and its
+                # JSON's "sources" then name the file as the user named it, not a temporary path.
+                if target.suffix.lower() == ".zip":
+                    unpacked = uploads.unpack_zip(target, folder)
+                    target.unlink()
+                else:
+                    unpacked = [target]
+                files.setdefault(key, []).extend(str(p.relative_to(folder.resolve())) for p in unpacked)
+            else:
+                values.setdefault(key, []).append(item)
+    finally:
+        await form.close()
+    return values, files
+
+
+def _file_options(fields: list[dict[str, Any]], values: dict[str, list[str]], files: dict[str, list[str]]) -> None:
+    """Put uploaded files of file options (``--params FILE.json``) into ``values``; refuse typed paths."""
+    for f in fields:
+        if f["kind"] != "file" or f["positional"]:
+            continue
+        if f["name"] in values:
+            raise uploads.UploadError(f"--{f['name']}: upload the file (a part named {f['name']!r}), not a path")
+        if f["name"] in files:
+            values[f["name"]] = files[f["name"]]
+
+
+async def _argv(request: Request, folder: Path, head: list[str], fields: list[dict[str, Any]]) -> list[str] | Response:
+    """The command line a form asks for (uploads saved in ``folder``), or the error response."""
+    try:
+        values, files = await _save_form(request, folder)
+        refused = sorted(set(values) & _REFUSED_FIELDS)
+        if refused:
+            return _error(f"--{refused[0]}: the app sets this option itself")
+        _file_options(fields, values, files)
+    except uploads.UploadError as exc:
+        return _error(str(exc))
+    return runner.build_argv(head, fields, values, files.get("file", []))
+
+
+async def _run_command(request: Request, head: list[str], fields: list[dict[str, Any]], extra: list[str]) -> Response:
+    with uploads.private_folder() as folder:
+        argv = await _argv(request, folder, head, fields)
+        if isinstance(argv, Response):
+            return argv
+        return _outcome_response(await runner.run_cli([*argv, *extra], cwd=str(folder)))
+
+
+def _experiment_fields(request: Request) -> list[dict[str, Any]] | Response:
+    experiment = request.path_params["experiment"]
+    if experiment not in schema.schema()["analyze"]:
+        return _error(f"unknown experiment {experiment!r}", 404)
+    return schema.command_fields("analyze", experiment)
+
+
+async def analyze(request: Request) -> Response:
+    fields = _experiment_fields(request)
+    if isinstance(fields, Response):
+        return fields
+    return await _run_command(request, ["analyze", request.path_params["experiment"]], fields, ["--json"])
+
+
+async def tune(request: Request) -> Response:
+    return await _run_command(request, ["tune"], schema.command_fields("tune"), ["--json"])
+
+
+async def tune_figure(request: Request) -> Response:
+    """The step and profile responses as the CLI's own ``--plot`` figure (SVG)."""
+    with uploads.private_folder() as folder:
+        argv = await _argv(request, folder, ["tune"], schema.command_fields("tune"))
+        if isinstance(argv, Response):
+            return argv
+        outcome = await runner.run_cli([*argv, "--plot=step.svg"], cwd=str(folder))
+        if outcome.code != 0:
+            return _outcome_response(outcome)
+        return Response((folder / "step.svg").read_bytes(), media_type="image/svg+xml")
+
+
+async def panels(request: Request) -> Response:
+    """Data against model of one analysis (the curves of ``--plot``), for the interactive plot."""
+    fields = _experiment_fields(request)
+    if isinstance(fields, Response):
+        return fields
+    with uploads.private_folder() as folder:
+        argv = await _argv(request, folder, [request.path_params["experiment"]], fields)
+        if isinstance(argv, Response):
+            return argv
+        return _outcome_response(await runner.run_module("motorlab.ui.worker", ["panels", *argv], cwd=str(folder)))
+
+
+async def detect(request: Request) -> Response:
+    """Format, proposed experiment and raw signals of each uploaded file."""
+    with uploads.private_folder() as folder:
+        try:
+            _values, files = await _save_form(request, folder)
+        except uploads.UploadError as exc:
+            return _error(str(exc))
+        paths = [p for key in files for p in files[key]]
+        outcome = await runner.run_module("motorlab.ui.worker", ["detect", *paths], cwd=str(folder))
+        return _outcome_response(outcome)
+
+
+def _session_file(files: list[str], values: dict[str, list[str]]) -> str | None:
+    """The uploaded session description: the one named by the ``session`` field, else the only ``.toml``."""
+    wanted = values.pop("session", [""])[0]
+    tomls = [p for p in files if p.lower().endswith(".toml")]
+    named = [p for p in tomls if Path(p).name == uploads.safe_relative(wanted).name] if wanted else []
+    found = named or (tomls if len(tomls) == 1 else [])
+    return found[0] if found else None
+
+
+async def characterize(request: Request) -> Response:
+    """A whole session (its TOML and logs, or one zip) → results.json, results.csv and report.html."""
+    with uploads.private_folder() as folder:
+        try:
+            values, files = await _save_form(request, folder)
+        except uploads.UploadError as exc:
+            return _error(str(exc))
+        all_files = [p for key in files for p in files[key]]
+        session = _session_file(all_files, values)
+        if session is None:
+            return _error("upload the session description (one .toml file, or name it in the 'session' field)")
+        fields = schema.command_fields("characterize")
+        refused = sorted(set(values) & _REFUSED_FIELDS)
+        if refused:
+            return _error(f"--{refused[0]}: the app sets this option itself")
+        out = folder / "_results"
+        argv = [*runner.build_argv(["characterize"], fields, values, [session]), "--quiet", f"--output={out}"]
+        outcome = await runner.run_cli(argv, cwd=str(folder))
+        if outcome.code not in (0, 3):
+            return _outcome_response(outcome)
+        body = {
+            "exit_code": outcome.code,
+            "message": outcome.error_line() if outcome.code else "",
+            "results": json.loads((out / "results.json").read_text(encoding="utf-8")),
+            "csv": (out / "results.csv").read_text(encoding="utf-8"),
+            "report_html": (out / "report.html").read_text(encoding="utf-8"),
+        }
+        return JSONResponse(body)
+
+
+async def api_schema(request: Request) -> Response:
+    return JSONResponse(schema.schema())
+
+
+async def motors(request: Request) -> Response:
+    from motorlab.catalog import list_motors
+
+    return JSONResponse(
+        [{"key": m.key, "name": m.name, "cpr": m.cpr, "gear_ratio": m.gear_ratio} for m in list_motors()]
+    )
+
+
+def _static_dir() -> Path:
+    return Path(str(resources.files("motorlab.ui") / "static"))
+
+
+def _plotly_js() -> Path:
+    import plotly
+
+    return Path(plotly.__file__).parent / "package_data" / "plotly.min.js"
+
+
+async def plotly_js(request: Request) -> Response:
+    return FileResponse(_plotly_js(), media_type="text/javascript")
+
+
+async def index(request: Request) -> Response:
+    return FileResponse(_static_dir() / "index.html", media_type="text/html")
+
+
+#: Content-Security-Policy of every response: the page may load nothing from another host.
+CSP = (
+    "default-src 'self'; script-src 'self'; style-src 'self' 'unsafe-inline'; img-src 'self' data: blob:; "
+    "font-src 'self' data:; connect-src 'self'; frame-src 'self' blob: data:; object-src 'none'; base-uri 'none'"
+)
+
+
+class Guard:
+    """ASGI middleware: the Host header must be the served address; the token when one is set; a body limit.
+
+    A foreign Host means a page elsewhere reached this app through DNS rebinding (Jupyter and Vite
+    refuse such requests too). With a token (``--host`` other than loopback), a request carries it as
+    ``?token=`` or in the cookie the page gets with it.
+    """
+
+    def __init__(self, app: ASGIApp, *, hosts: set[str], token: str | None, max_body: int) -> None:
+        self.app, self.hosts, self.token, self.max_body = app, hosts, token, max_body
+
+    async def _refuse(self, send: Callable[[Any], Awaitable[None]], status: int, message: str) -> None:
+        body = json.dumps({"error": message}).encode()
+        headers = [(b"content-type", b"application/json"), (b"content-length", str(len(body)).encode())]
+        await send({"type": "http.response.start", "status": status, "headers": headers})
+        await send({"type": "http.response.body", "body": body})
+
+    def _token_ok(self, scope: Scope, headers: dict[bytes, bytes]) -> bool:
+        if self.token is None:
+            return True
+        from urllib.parse import parse_qs
+
+        given = parse_qs(scope.get("query_string", b"").decode("latin-1")).get("token", [""])[0]
+        cookies = headers.get(b"cookie", b"").decode("latin-1")
+        cookie = next((c.split("=", 1)[1] for c in cookies.split("; ") if c.startswith("motorlab_token=")), "")
+        return any(secrets.compare_digest(t.encode(), self.token.encode()) for t in (given, cookie) if t)
+
+    async def __call__(
+        self, scope: Scope, receive: Callable[[], Awaitable[Any]], send: Callable[[Any], Awaitable[None]]
+    ) -> None:
+        if scope["type"] != "http":
+            await self.app(scope, receive, send)
+            return
+        headers = dict(scope.get("headers", []))
+        host = headers.get(b"host", b"").decode("latin-1").lower()
+        if host not in self.hosts:
+            await self._refuse(send, 403, f"Host {host!r} is not this app's address (DNS rebinding guard)")
+            return
+        if not self._token_ok(scope, headers):
+            await self._refuse(send, 403, "this app needs its token: open the URL it printed")
+            return
+        if scope["method"] == "POST":
+            length = headers.get(b"content-length", b"")
+            if not length.isdigit():
+                await self._refuse(send, 411, "the request must state its length")
+                return
+            if int(length) > self.max_body:
+                await self._refuse(send, 413, f"the upload is larger than {self.max_body // 2**20} MB")
+                return
+
+        async def send_with_headers(message: Any) -> None:
+            if message["type"] == "http.response.start":
+                extra = [(b"content-security-policy", CSP.encode()), (b"x-content-type-options", b"nosniff"),
+                         (b"referrer-policy", b"no-referrer")]
+                if self.token is not None and scope["path"] == "/":
+                    cookie = f"motorlab_token={self.token}; HttpOnly; SameSite=Strict; Path=/"
+                    extra.append((b"set-cookie", cookie.encode()))
+                message = {**message, "headers": [*message.get("headers", []), *extra]}
+            await send(message)
+
+        await self.app(scope, receive, send_with_headers)
+
+
+def allowed_hosts(host: str, port: int) -> set[str]:
+    """Host header values that name this app: ``host:port`` (and ``localhost:port`` on loopback)."""
+    names = {host.lower()}
+    if host in ("127.0.0.1", "localhost", "::1"):
+        names |= {"127.0.0.1", "localhost", "[::1]"}
+    names = {f"[{n}]" if ":" in n and not n.startswith("[") else n for n in names}
+    return {f"{n}:{port}" for n in names} | ({*names} if port == 80 else set())
+
+
+def create_app(*, host: str = "127.0.0.1", port: int = 8765, token: str | None = None,
+               max_body: int = uploads.MAX_UPLOAD) -> ASGIApp:
+    """The app, guarded for ``host:port`` (and ``token`` when given)."""
+    routes = [
+        Route("/", index),
+        Route("/static/plotly.min.js", plotly_js),
+        Mount("/static", app=StaticFiles(directory=_static_dir()), name="static"),
+        Route("/api/schema", api_schema),
+        Route("/api/motors", motors),
+        Route("/api/detect", detect, methods=["POST"]),
+        Route("/api/analyze/{experiment}", analyze, methods=["POST"]),
+        Route("/api/panels/{experiment}", panels, methods=["POST"]),
+        Route("/api/tune", tune, methods=["POST"]),
+        Route("/api/tune/figure", tune_figure, methods=["POST"]),
+        Route("/api/characterize", characterize, methods=["POST"]),
+    ]
+    return Guard(Starlette(routes=routes), hosts=allowed_hosts(host, port), token=token, max_body=max_body)
+
+
+def is_loopback(host: str) -> bool:
+    return host in ("127.0.0.1", "localhost", "::1") or host.startswith("127.")
+
+
+def serve(*, host: str = "127.0.0.1", port: int = 8765, open_browser: bool = True) -> None:
+    """Run the app until interrupted: print its URL, open the browser (unless told not to)."""
+    import sys
+    import webbrowser
+
+    import uvicorn
+
+    token = None if is_loopback(host) else secrets.token_urlsafe(24)
+    shown = f"[{host}]" if ":" in host else host
+    url = f"http://{shown}:{port}/" + (f"?token={token}" if token else "")
+    if token:
+        print(
+            f"motorlab: warning: serving on {host}, reachable from other machines; anyone with the URL "
+            "(it carries the token) can run analyses here", file=sys.stderr,
+        )
+    print(f"motorlab ui: {url}  (Ctrl+C stops it)", flush=True)
+    if open_browser:
+        webbrowser.open(url)
+    uvicorn.run(create_app(host=host, port=port, token=token), host=host, port=port, log_level="warning")

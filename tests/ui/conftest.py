@@ -1,0 +1,77 @@
+"""A live ``motorlab ui`` server (uvicorn in a thread) on a free loopback port, and simulated logs."""
+
+from __future__ import annotations
+
+import json
+import socket
+import threading
+import time
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import pytest
+import uvicorn
+
+from motorlab.ui.app import create_app
+
+#: Upload limit of the test servers (small, so the 413 test is quick).
+TEST_MAX_BODY = 2 * 1024 * 1024
+
+
+@dataclass
+class Served:
+    url: str
+    host: str
+    port: int
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+@pytest.fixture(scope="session")
+def start_server() -> Iterator[Any]:
+    """A factory of live servers; all stopped at the end of the session."""
+    servers: list[tuple[uvicorn.Server, threading.Thread]] = []
+
+    def start(token: str | None = None) -> Served:
+        port = _free_port()
+        app = create_app(host="127.0.0.1", port=port, token=token, max_body=TEST_MAX_BODY)
+        server = uvicorn.Server(uvicorn.Config(app, host="127.0.0.1", port=port, log_level="warning", lifespan="off"))
+        thread = threading.Thread(target=server.run, daemon=True)
+        thread.start()
+        deadline = time.monotonic() + 20
+        while not server.started:
+            assert time.monotonic() < deadline, "the server did not start"
+            time.sleep(0.02)
+        servers.append((server, thread))
+        return Served(f"http://127.0.0.1:{port}", "127.0.0.1", port)
+
+    yield start
+    for server, thread in servers:
+        server.should_exit = True
+        thread.join(timeout=10)
+
+
+@pytest.fixture(scope="session")
+def server(start_server: Any) -> Served:
+    return start_server()
+
+
+@pytest.fixture(scope="session")
+def sim_session(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """One simulated unit (spin-down and LCR logs, truth.json) and its session.toml."""
+    from motorlab.session import write_simulated_session
+
+    folder = tmp_path_factory.mktemp("ui-session")
+    write_simulated_session("neverest40", out_dir=folder, units=1, seed=5, experiments=("lcr", "spindown"))
+    return folder
+
+
+@pytest.fixture(scope="session")
+def truth(sim_session: Path) -> dict[str, Any]:
+    return dict(json.loads((sim_session / "A" / "truth.json").read_text()))
