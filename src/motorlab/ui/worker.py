@@ -3,7 +3,7 @@
 ``python -m motorlab.ui.worker detect FILE...`` prints, per file, its format
 (:func:`motorlab.io.detect_format`), the proposed experiment and its signals to plot;
 ``python -m motorlab.ui.worker panels EXPERIMENT ARG...`` parses ``motorlab analyze EXPERIMENT
-ARG...`` with the CLI's own parser, runs the analysis's own ``from_cli`` and prints the result's
+ARG...`` with the CLI's own parser, runs ``motorlab.cli.analyze.from_cli`` and prints the result's
 data-against-model panels (the curves :func:`motorlab.plot.plot_fit` draws). Errors go through the
 one line on stderr, exit code 2, as the CLI's.
 """
@@ -93,13 +93,11 @@ def _series(series: Any) -> dict[str, Any] | None:
 
 def panels(argv: Sequence[str]) -> list[dict[str, Any]]:
     """The data-against-model panels of ``motorlab analyze EXPERIMENT ARG...`` (first file group)."""
-    import importlib
-
     from motorlab.cli import build_parser
+    from motorlab.cli.analyze import from_cli
 
     args = build_parser().parse_args(["analyze", *argv])
-    module = importlib.import_module(args.analysis_module)
-    result = module.from_cli(args.experiment, list(args.files), args)
+    result = from_cli(args.experiment, list(args.files), args)
     return [
         {
             "title": p.title,
