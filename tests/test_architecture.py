@@ -24,7 +24,11 @@ def measures() -> tuple:
 
 
 def test_no_library_module_imports_the_cli(measures: tuple) -> None:
-    assert measures.cli_imports == []
+    assert measures.cli_imports == []  # nor the browser app, the other front end
+
+
+def test_no_function_over_100_lines(measures: tuple) -> None:
+    assert measures.long_functions == []  # counted from ``def`` to the last line, docstring included
 
 
 def test_python_control_is_for_tests_only(measures: tuple) -> None:
