@@ -33,9 +33,11 @@ import numpy as np
 
 from motorlab.analyses.torque import approach_direction
 from motorlab.errors import OptionError, RigError
+from motorlab.gearbox import Drivetrain
 from motorlab.io._output import write_text_atomic
 from motorlab.io.csv_table import write_csv
 from motorlab.io.ftc import write_ftc_log
+from motorlab.model import MotorParams
 from motorlab.rig.base import MAX_READINGS, PathArg, RigRun, check_size
 from motorlab.rig.instruments import quantize
 from motorlab.rig.virtual_core import (  # noqa: F401 - re-exported: the rig's names before the split
@@ -172,42 +174,10 @@ class VirtualRig(Seed2Experiments, LogExperiments):
         train = self._drivetrain(True)
         sim = self._simulate(train, schedule, duration=duration + 0.01, dt=FLYWHEEL_DT)
         times, counts, bus, current = self._log_ftc(sim, duration, rng)
-        path = Path(path)
-        paths = [path]
-        if split:
-            first = times < t_command_off
-            second_path = path.with_name(f"{path.stem}2{path.suffix}")
-            paths.append(second_path)
-            blanks = 2 if blank_lines is None else blank_lines
-            placeholders = 10 if placeholder_rows is None else placeholder_rows
-            write_ftc_log(path, times[first], counts[first], bus[first], current[first], header=header,
-                          placeholder_rows=placeholders, crlf=crlf, blank_lines=blanks)
-            write_ftc_log(second_path, times[~first], counts[~first], bus[~first], current[~first], header=header,
-                          crlf=crlf, blank_lines=blanks)
-        else:
-            write_ftc_log(path, times, counts, bus, current, header=header,
-                          placeholder_rows=placeholder_rows or 0, crlf=crlf, blank_lines=blank_lines or 0)
-        on = (sim.time >= t_close) & (sim.time < t_open)
-        speed_off = float(np.interp(t_open, sim.time, sim.speed))
-        # The coast is seen through the gearbox in the direction the power flows at its start: a
-        # flywheel drives the motor's friction (back-driven), so J, b, Tf are physical figures at the
-        # output shaft for that direction (= the totals with an ideal gearbox).
-        back = train.switches and float(train.flow(0.0, speed_off, 1.0)) < 0
-        coast = train.output_figures(back_driven=back)
-        expected = {
-            "K": self.params.K,
-            "J": coast["J"],
-            "b": coast["b"],
-            "Tf": coast["Tf"],
-            "gamma": coast["b"] / coast["J"],
-            "Tf_over_J": coast["Tf"] / coast["J"],
-            "gearbox_flow": "back-driven" if back else "forward",
-            "coast_start": t_open,
-            "speed_at_coast_start": speed_off,
-            "supply_current_limited": bool(np.any(sim.mode[on] == 1)),
-            "current_clipped": bool(np.max(np.abs(sim.current)) > ins.ina219.current_range),
-            "stop_time": _stop_time(sim, t_open),
-        }
+        log = (times, counts, bus, current)
+        paths = _write_spindown_logs(Path(path), log, t_command_off, split=split, header=header, crlf=crlf,
+                                     placeholder_rows=placeholder_rows, blank_lines=blank_lines)
+        expected = self._spindown_expected(sim, train, t_close, t_open)
         settings = {
             "voltage": voltage, "current_limit": current_limit, "on_time": on_time, "coast_time": coast_time,
             "relay_delay": relay_delay, "relay_closed": t_close, "relay_opened": t_open, "split": split,
@@ -219,6 +189,30 @@ class VirtualRig(Seed2Experiments, LogExperiments):
         }
         return self._finish("spindown", paths, settings=settings, expected=expected, instruments=instruments,
                             flywheel=True)
+
+    def _spindown_expected(self, sim: Simulation, train: Drivetrain, t_close: float, t_open: float) -> dict[str, Any]:
+        """The truth of a spin-down run: the coast's J, b, Tf through the gearbox and the run's flags."""
+        on = (sim.time >= t_close) & (sim.time < t_open)
+        speed_off = float(np.interp(t_open, sim.time, sim.speed))
+        # The coast is seen through the gearbox in the direction the power flows at its start: a
+        # flywheel drives the motor's friction (back-driven), so J, b, Tf are physical figures at the
+        # output shaft for that direction (= the totals with an ideal gearbox).
+        back = train.switches and float(train.flow(0.0, speed_off, 1.0)) < 0
+        coast = train.output_figures(back_driven=back)
+        return {
+            "K": self.params.K,
+            "J": coast["J"],
+            "b": coast["b"],
+            "Tf": coast["Tf"],
+            "gamma": coast["b"] / coast["J"],
+            "Tf_over_J": coast["Tf"] / coast["J"],
+            "gearbox_flow": "back-driven" if back else "forward",
+            "coast_start": t_open,
+            "speed_at_coast_start": speed_off,
+            "supply_current_limited": bool(np.any(sim.mode[on] == 1)),
+            "current_clipped": bool(np.max(np.abs(sim.current)) > self.instruments.ina219.current_range),
+            "stop_time": _stop_time(sim, t_open),
+        }
 
     def _log_ftc(
         self, sim: Simulation, duration: float, rng: np.random.Generator
@@ -390,30 +384,12 @@ class VirtualRig(Seed2Experiments, LogExperiments):
         _positive(dt, "dt", "s")
         rng = self._rng("free-spinup")
         p = self._loaded(False)
-        w0 = 0.05 * self.motor.free_speed if hand_speed is None else float(hand_speed)
-        if not 0 <= w0 <= 2 * self.motor.free_speed:  # a hand does not spin it past its own free speed
-            raise OptionError(f"the hand-start speed (--hand-speed) must lie between 0 and twice the free speed "
-                              f"({2 * self.motor.free_speed:.3g} rad/s), got {w0:g} rad/s")
+        w0 = self._hand_start_speed(hand_speed)
         step = 2 * math.pi / self.motor.cpr
         theta0 = float(rng.uniform(0.0, 4 * step))
         needed = theta0 + (edges + 2) * 4 * step
-        drive = [(0.0, BenchSupply(voltage, current))]
-        guess = max(self.motor.free_speed * 0.5, 1e-3)
-        duration = max(4 * needed / guess, 0.05)
-        for _ in range(12):
-            sim = self._simulate(self._drivetrain(False), drive, duration=duration, dt=dt, initial_speed=w0,
-                                 initial_position=theta0)
-            if sim.position[-1] >= needed or sim.speed[-1] <= 0:
-                break
-            duration *= 2
-        angles = self.encoder.channel_b_rising_angles(theta0, float(sim.position[-1]))
-        if angles.size < edges + 1:
-            raise RigError(
-                f"the motor stopped after {angles.size} rising edges at {current:g} A; "
-                "raise the current or the hand-start speed"
-            )
-        angles = angles[: edges + 1]
-        true_times = np.interp(angles, sim.position, sim.time)
+        sim = self._spin_free(BenchSupply(voltage, current), w0, theta0, needed, dt)
+        true_times = self._rising_edge_times(sim, theta0, edges, current)
         t_trigger = true_times[0]
         relative = true_times[1:] - t_trigger
         scope = ins.scope
@@ -433,24 +409,55 @@ class VirtualRig(Seed2Experiments, LogExperiments):
             wpath = Path(waveform)
             self._write_waveform(wpath, sim, t_trigger, scope, rng)
             paths.append(wpath)
-        state = sim.sample(np.array([t_trigger]))
-        w_trig = float(state["speed"][0])
-        expected = {
-            "J": p.J, "K": p.K, "Tf": p.Tf, "b": p.b, "current": current,
-            "edge_times": relative,
-            "speed_at_trigger": w_trig,
-            "acceleration_at_trigger": (p.K * current - p.Tf - p.b * w_trig) / p.J,
-            "hand_speed": w0,
-            # After the winding current has risen (5·L/R), the supply must hold constant current.
-            "constant_current_throughout": bool(np.all(
-                sim.mode[(sim.time >= 5 * p.L / p.R) & (sim.time <= true_times[-1])] == 1)),
-        }
+        expected = _free_spinup_expected(sim, p, current, true_times, w0)
         settings = {"current": current, "voltage": voltage, "hand_speed": w0, "edges": edges,
                     "timebase": timebase, "dt": dt, "initial_position": theta0}
         instruments = {"scope": scope.settings(), "supply": ins.supply.settings(),
                        "encoder": self.encoder.settings()}
         return self._finish("free-spinup", paths, settings=settings, expected=expected, instruments=instruments,
                             flywheel=False)
+
+    def _hand_start_speed(self, hand_speed: float | None) -> float:
+        """The speed the hand start gives the shaft [rad/s] (default 5 % of the free speed), checked."""
+        w0 = 0.05 * self.motor.free_speed if hand_speed is None else float(hand_speed)
+        if not 0 <= w0 <= 2 * self.motor.free_speed:  # a hand does not spin it past its own free speed
+            raise OptionError(f"the hand-start speed (--hand-speed) must lie between 0 and twice the free speed "
+                              f"({2 * self.motor.free_speed:.3g} rad/s), got {w0:g} rad/s")
+        return w0
+
+    def _spin_free(self, supply: BenchSupply, w0: float, theta0: float, needed: float, dt: float) -> Simulation:
+        """Simulate the bare motor from the hand start until it has turned to ``needed`` [rad] (or stopped).
+
+        The run starts at twice the time the shaft would take at half the free speed and is doubled
+        (at most 12 times) until the shaft reaches ``needed`` or comes to rest.
+        """
+        drive = [(0.0, supply)]
+        guess = max(self.motor.free_speed * 0.5, 1e-3)
+        duration = max(4 * needed / guess, 0.05)
+        for _ in range(12):
+            sim = self._simulate(self._drivetrain(False), drive, duration=duration, dt=dt, initial_speed=w0,
+                                 initial_position=theta0)
+            if sim.position[-1] >= needed or sim.speed[-1] <= 0:
+                break
+            duration *= 2
+        return sim
+
+    def _rising_edge_times(self, sim: Simulation, theta0: float, edges: int, current: float) -> np.ndarray:
+        """True times [s] of the trigger edge and the ``edges`` rising edges of channel B after it.
+
+        Raises
+        ------
+        RigError
+            If the motor stopped before the last edge.
+        """
+        angles = self.encoder.channel_b_rising_angles(theta0, float(sim.position[-1]))
+        if angles.size < edges + 1:
+            raise RigError(
+                f"the motor stopped after {angles.size} rising edges at {current:g} A; "
+                "raise the current or the hand-start speed"
+            )
+        angles = angles[: edges + 1]
+        return np.interp(angles, sim.position, sim.time)
 
     def _write_waveform(self, path: Path, sim: Simulation, t_trigger: float, scope: Any,
                         rng: np.random.Generator) -> None:
@@ -660,3 +667,57 @@ class VirtualRig(Seed2Experiments, LogExperiments):
         instruments = {"scale": ins.scale.settings(), "multimeter": ins.multimeter.settings()}
         return self._finish("torque", [path], settings={"currents": amps, "arm": arm, "dither": dither},
                             expected=expected, instruments=instruments, flywheel=False)
+
+
+def _write_spindown_logs(
+    path: Path,
+    log: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    t_command_off: float,
+    *,
+    split: bool,
+    header: bool,
+    crlf: bool,
+    placeholder_rows: int | None,
+    blank_lines: int | None,
+) -> list[Path]:
+    """Write a spin-down's FTC log rows (times, counts, bus, current), split in two as the OpMode does if asked.
+
+    With ``split`` the powered part (before the relay is commanded open) goes to ``path`` followed by
+    placeholder zero rows and the coast to ``<stem>2<suffix>``, both after blank lines. Returns the
+    paths written.
+    """
+    times, counts, bus, current = log
+    paths = [path]
+    if split:
+        first = times < t_command_off
+        second_path = path.with_name(f"{path.stem}2{path.suffix}")
+        paths.append(second_path)
+        blanks = 2 if blank_lines is None else blank_lines
+        placeholders = 10 if placeholder_rows is None else placeholder_rows
+        write_ftc_log(path, times[first], counts[first], bus[first], current[first], header=header,
+                      placeholder_rows=placeholders, crlf=crlf, blank_lines=blanks)
+        write_ftc_log(second_path, times[~first], counts[~first], bus[~first], current[~first], header=header,
+                      crlf=crlf, blank_lines=blanks)
+    else:
+        write_ftc_log(path, times, counts, bus, current, header=header,
+                      placeholder_rows=placeholder_rows or 0, crlf=crlf, blank_lines=blank_lines or 0)
+    return paths
+
+
+def _free_spinup_expected(
+    sim: Simulation, p: MotorParams, current: float, true_times: np.ndarray, w0: float
+) -> dict[str, Any]:
+    """The truth of a free spin-up: parameters, edge times after the trigger, speed and acceleration there."""
+    t_trigger = true_times[0]
+    state = sim.sample(np.array([t_trigger]))
+    w_trig = float(state["speed"][0])
+    return {
+        "J": p.J, "K": p.K, "Tf": p.Tf, "b": p.b, "current": current,
+        "edge_times": true_times[1:] - t_trigger,
+        "speed_at_trigger": w_trig,
+        "acceleration_at_trigger": (p.K * current - p.Tf - p.b * w_trig) / p.J,
+        "hand_speed": w0,
+        # After the winding current has risen (5·L/R), the supply must hold constant current.
+        "constant_current_throughout": bool(np.all(
+            sim.mode[(sim.time >= 5 * p.L / p.R) & (sim.time <= true_times[-1])] == 1)),
+    }

@@ -13,7 +13,7 @@ import numpy as np
 from motorlab.errors import OptionError
 from motorlab.io._output import write_text_atomic
 from motorlab.io.csv_table import write_csv
-from motorlab.model import feedforward_from_params
+from motorlab.model import MotorParams, feedforward_from_params
 from motorlab.rig.base import PathArg, RigRun
 from motorlab.rig.instruments import quantize
 from motorlab.rig.profiles import voltage_profile
@@ -168,7 +168,6 @@ class LogExperiments(RigCore):
         rng = self._rng("sysid")
         loaded = self._loaded(flywheel)
         dt = FLYWHEEL_DT if flywheel else 2e-4
-        cpr = self.motor.cpr
         tests: list[tuple[str, Callable[[np.ndarray], np.ndarray], float]] = [
             ("slow-forward", lambda t: ramp_rate * t, quasistatic_duration),
             ("slow-backward", lambda t: -ramp_rate * t, quasistatic_duration),
@@ -179,58 +178,82 @@ class LogExperiments(RigCore):
         position0 = 0.0
         clock = start_time
         for name, command, length in tests:
-            # The command starts one log period after the test's first row (that row logs 0 V).
-            lead = ctrl.log_period
-
-            def applied(t: np.ndarray, command: Callable[[np.ndarray], np.ndarray] = command,
-                        lead: float = lead) -> np.ndarray:
-                return np.where(t >= lead, command(np.asarray(t) - lead), 0.0)
-
-            n = int(length / ctrl.log_period) + 1
-            t_rows = np.arange(n) * ctrl.log_period + rng.normal(0.0, ctrl.log_jitter, n)
-            t_rows[0] = 0.0
-            t_rows = np.clip(np.maximum.accumulate(t_rows), 0.0, length + lead)
-            # The robot loop computes the command, sends it and logs it in the same iteration: the
-            # controller holds each row's voltage until the next row (a ramp is a staircase, a step
-            # starts at a row), as in a real SysId run. The simulation holds its drive over grid steps,
-            # so each change goes to the grid point nearest its row (no systematic delay).
-            held = applied(t_rows)
-
-            def staircase(t: np.ndarray, held: np.ndarray = held, t_rows: np.ndarray = t_rows,
-                          half: float = 0.5 * dt) -> np.ndarray:
-                k = np.searchsorted(t_rows, np.asarray(t) + half, side="right") - 1
-                return held[np.clip(k, 0, held.size - 1)]
-
-            sim = self._simulate(self._drivetrain(flywheel), [(0.0, VoltageDrive(staircase))],
-                                 duration=length + lead + dt, dt=dt,
-                                 initial_position=position0)
-            volts = held + rng.normal(0.0, ctrl.voltage_noise, n)
-            # Status frames: the value logged at t is the one refreshed at the last frame ≤ t. The
-            # controller's clock runs apart from the robot loop's: the frames have a phase of their
-            # own (frames locked to the rows would make the staleness hinge on the sign of the jitter).
-            phase = rng.uniform(0.0, ctrl.status_period)
-            frame = np.maximum(np.floor((t_rows + phase) / ctrl.status_period) * ctrl.status_period - phase, 0.0)
-            counts_now = self.encoder.counts(sim.sample(frame)["position"])
-            counts_then = self.encoder.counts(sim.sample(np.maximum(frame - ctrl.velocity_window, 0.0))["position"])
-            window = np.maximum(np.minimum(frame, ctrl.velocity_window), ctrl.velocity_window)
-            velocity = (counts_now - counts_then) / window / cpr
-            rows = np.column_stack([clock + t_rows, np.round(volts, 6), counts_now / cpr, velocity])
-            doc[name] = [[round(float(x), 6) for x in row] for row in rows]
-            position0 = float(sim.position[-1])
-            clock += t_rows[-1] + gap
+            doc[name], position0, elapsed = self._sysid_test(command, length, rng, flywheel=flywheel, dt=dt,
+                                                             position0=position0, clock=clock)
+            clock += elapsed + gap
         doc.update({"sysid": True, "test": "Simple", "units": "Rotations", "unitsPerRotation": 1.0})
         path = Path(path)
         write_text_atomic(path, json.dumps(doc) + "\n")
-        ff = feedforward_from_params(loaded)
-        two_pi = 2 * math.pi
-        expected = {
-            **ff,
-            "kS_per_rotation": ff["kS"], "kV_per_rotation": ff["kV"] * two_pi, "kA_per_rotation": ff["kA"] * two_pi,
-            **dict(loaded.to_dict().items()),
-        }
+        expected = _sysid_expected(loaded)
         settings = {"ramp_rate": ramp_rate, "step_voltage": step_voltage,
                     "quasistatic_duration": quasistatic_duration, "dynamic_duration": dynamic_duration,
                     "start_time": start_time, "gap": gap, "dt": dt}
         return self._finish("sysid", [path], settings=settings, expected=expected,
                             instruments={"controller": ctrl.settings(), "encoder": self.encoder.settings()},
                             flywheel=flywheel)
+
+    def _sysid_test(
+        self,
+        command: Callable[[np.ndarray], np.ndarray],
+        length: float,
+        rng: np.random.Generator,
+        *,
+        flywheel: bool,
+        dt: float,
+        position0: float,
+        clock: float,
+    ) -> tuple[list[list[float]], float, float]:
+        """Run one SysId test of ``length`` [s] from rest at ``position0`` [rad], logged from ``clock`` [s].
+
+        Returns the SysId rows ``[timestamp s, voltage V, position rot, velocity rot/s]``, the final
+        shaft position [rad] and the time from the first row to the last [s].
+        """
+        ctrl = self.instruments.controller
+        cpr = self.motor.cpr
+        # The command starts one log period after the test's first row (that row logs 0 V).
+        lead = ctrl.log_period
+
+        def applied(t: np.ndarray) -> np.ndarray:
+            return np.where(t >= lead, command(np.asarray(t) - lead), 0.0)
+
+        n = int(length / ctrl.log_period) + 1
+        t_rows = np.arange(n) * ctrl.log_period + rng.normal(0.0, ctrl.log_jitter, n)
+        t_rows[0] = 0.0
+        t_rows = np.clip(np.maximum.accumulate(t_rows), 0.0, length + lead)
+        # The robot loop computes the command, sends it and logs it in the same iteration: the
+        # controller holds each row's voltage until the next row (a ramp is a staircase, a step
+        # starts at a row), as in a real SysId run. The simulation holds its drive over grid steps,
+        # so each change goes to the grid point nearest its row (no systematic delay).
+        held = applied(t_rows)
+        half = 0.5 * dt
+
+        def staircase(t: np.ndarray) -> np.ndarray:
+            k = np.searchsorted(t_rows, np.asarray(t) + half, side="right") - 1
+            return held[np.clip(k, 0, held.size - 1)]
+
+        sim = self._simulate(self._drivetrain(flywheel), [(0.0, VoltageDrive(staircase))],
+                             duration=length + lead + dt, dt=dt,
+                             initial_position=position0)
+        volts = held + rng.normal(0.0, ctrl.voltage_noise, n)
+        # Status frames: the value logged at t is the one refreshed at the last frame ≤ t. The
+        # controller's clock runs apart from the robot loop's: the frames have a phase of their
+        # own (frames locked to the rows would make the staleness hinge on the sign of the jitter).
+        phase = rng.uniform(0.0, ctrl.status_period)
+        frame = np.maximum(np.floor((t_rows + phase) / ctrl.status_period) * ctrl.status_period - phase, 0.0)
+        counts_now = self.encoder.counts(sim.sample(frame)["position"])
+        counts_then = self.encoder.counts(sim.sample(np.maximum(frame - ctrl.velocity_window, 0.0))["position"])
+        window = np.maximum(np.minimum(frame, ctrl.velocity_window), ctrl.velocity_window)
+        velocity = (counts_now - counts_then) / window / cpr
+        rows = np.column_stack([clock + t_rows, np.round(volts, 6), counts_now / cpr, velocity])
+        return [[round(float(x), 6) for x in row] for row in rows], float(sim.position[-1]), float(t_rows[-1])
+
+
+def _sysid_expected(loaded: MotorParams) -> dict[str, Any]:
+    """SysId's kS [V], kV [V·s/rad], kA [V·s²/rad] (and per rotation) of ``loaded``, with its parameters."""
+    ff = feedforward_from_params(loaded)
+    two_pi = 2 * math.pi
+    return {
+        **ff,
+        "kS_per_rotation": ff["kS"], "kV_per_rotation": ff["kV"] * two_pi, "kA_per_rotation": ff["kA"] * two_pi,
+        **dict(loaded.to_dict().items()),
+    }
