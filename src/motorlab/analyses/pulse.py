@@ -21,13 +21,20 @@ from motorlab.analyses._common import (
     check_range,
     check_stderr_limit,
     check_torque_constant,
-    ramp_speed,
     reader_warnings,
     sources_of,
 )
+from motorlab.analyses._pulse_fit import (
+    CoastFit,
+    Region,
+    compare_friction_models,
+    joint_fit,
+    model_sentence,
+    propagate_inputs,
+)
 from motorlab.decimate import block_mean
 from motorlab.errors import FitError, LogFormatError, OptionError
-from motorlab.fitting import LeastSquares, fit_least_squares, fit_linear, r_squared
+from motorlab.fitting import LeastSquares, fit_linear, r_squared
 from motorlab.recording import Recording
 from motorlab.results import Estimate, FitResult, Panel, Series
 from motorlab.units import SI_UNITS
@@ -39,25 +46,6 @@ MIN_REGION_SAMPLES = 8
 #: Friction models compared on the coast-downs, in the order of the table.
 FRICTION_MODELS = ("viscous", "coulomb", "both")
 _MODEL_LABELS = {"viscous": "viscous", "coulomb": "Coulomb", "both": "viscous + Coulomb"}
-
-
-@dataclass
-class _Region:
-    """One accelerate or coast stretch: samples, held command and the torque it gives."""
-
-    kind: str  # "accelerate" or "coast"
-    pulse: int
-    time: np.ndarray  # absolute [s]
-    speed: np.ndarray  # [rad/s], mirrored so that pulses drive it positive
-    command: float  # held command level [V]
-    edge_time: float  # time of the edge that starts the region [s]
-    source: str
-    command_stderr: float = 0.0  # standard error of the held level read from the noisy trace [V]
-
-    @property
-    def s(self) -> np.ndarray:
-        """Time since the first fitted sample [s]."""
-        return self.time - self.time[0]
 
 
 def _noise_sigma(speed: np.ndarray) -> float:
@@ -88,7 +76,7 @@ def _levels(command: np.ndarray, *, source: str = "") -> tuple[np.ndarray, float
 
 def _regions(
     rec: Recording, speed_name: str, *, skip: float, tach_gain: float | None
-) -> tuple[list[_Region], list[str], float, np.ndarray, np.ndarray]:
+) -> tuple[list[Region], list[str], float, np.ndarray, np.ndarray]:
     """Cut one recording into accelerate and coast regions; returns regions, warnings, σ, t, ω."""
     t = rec.time
     command = rec.require("command")
@@ -136,7 +124,7 @@ def _regions(
     # (the median's efficiency for Gaussian noise) is propagated into J, b and Tf.
     sigma_command = _noise_sigma(command)
     stop_level = max(5.0 * sigma, 0.02 * float(np.max(speed)))
-    regions: list[_Region] = []
+    regions: list[Region] = []
     not_at_rest = 0
     for n, r in enumerate(rises):
         f = next((f for f in falls if f > r), None)
@@ -156,98 +144,15 @@ def _regions(
         if below.size:
             c = c[: below[0]]
         if a.size >= MIN_REGION_SAMPLES and float(np.max(speed[a])) > stop_level:
-            regions.append(_Region("accelerate", n + 1, t[a], speed[a], level_hi, float(t[r]), rec.source, se_hi))
+            regions.append(Region("accelerate", n + 1, t[a], speed[a], level_hi, float(t[r]), rec.source, se_hi))
         if c.size >= MIN_REGION_SAMPLES:
-            regions.append(_Region("coast", n + 1, t[c], speed[c], level_lo, float(t[f]), rec.source, se_lo))
+            regions.append(Region("coast", n + 1, t[c], speed[c], level_lo, float(t[f]), rec.source, se_lo))
     if not_at_rest:
         warnings.append(
             f"{rec.source or 'recording'}: in {not_at_rest} pulse(s) the shaft was still turning at the rising "
             "edge (the seed lowers the duty cycle so that it comes to rest); the fit allows for it"
         )
     return regions, warnings, sigma, t, speed
-
-
-# ---- coast-down friction models ------------------------------------------------------------------
-
-
-@dataclass
-class _CoastFit:
-    model: str
-    fit: LeastSquares
-    gamma: float  # b/J [1/s]
-    decel: float  # (Tf − τ2)/J [rad/s²]
-    ssr: float
-    n: int
-    k: int
-
-    @property
-    def aic(self) -> float:
-        return self.n * math.log(self.ssr / self.n) + 2 * self.k
-
-    @property
-    def bic(self) -> float:
-        return self.n * math.log(self.ssr / self.n) + self.k * math.log(self.n)
-
-
-def _fit_coasts(coasts: list[_Region], model: str, decel0: float, gamma0: float) -> _CoastFit:
-    """Fit dω/dt = −decel − γ·ω to every coast (shared γ, decel; one start speed per coast)."""
-    n_c = len(coasts)
-    w0 = [float(c.speed[0]) for c in coasts]
-    use_gamma = model in ("viscous", "both")
-    use_decel = model in ("coulomb", "both")
-
-    def unpack(x: np.ndarray) -> tuple[float, float, np.ndarray]:
-        j = 0
-        gamma = decel = 0.0
-        if use_gamma:
-            gamma, j = x[j], j + 1
-        if use_decel:
-            decel, j = x[j], j + 1
-        return gamma, decel, x[j:]
-
-    def residual(x: np.ndarray) -> np.ndarray:
-        gamma, decel, starts = unpack(x)
-        return np.concatenate(
-            [ramp_speed(c.s, starts[i], gamma, -decel) - c.speed for i, c in enumerate(coasts)]
-        )
-
-    x0: list[float] = []
-    lo: list[float] = []
-    names: list[str] = []
-    if use_gamma:
-        x0.append(gamma0 if model == "both" else max(gamma0, 0.1 * decel0 / max(float(np.mean(w0)), 1e-9) + gamma0))
-        lo.append(0.0)
-        names.append("gamma")
-    if use_decel:
-        x0.append(decel0)
-        lo.append(-np.inf)
-        names.append("decel")
-    x0 += w0
-    lo += [-np.inf] * n_c
-    names += [f"w0_{i}" for i in range(n_c)]
-    fit = fit_least_squares(residual, x0, names, bounds=(lo, [np.inf] * len(x0)))
-    gamma, decel, _ = unpack(fit.values)
-    ssr = float(fit.residuals @ fit.residuals)
-    n = int(fit.residuals.size)
-    return _CoastFit(model, fit, float(gamma), float(decel), max(ssr, 1e-300), n, len(x0))
-
-
-def _model_sentence(table: dict[str, _CoastFit], best: str) -> str:
-    ordered = sorted(table.values(), key=lambda m: m.bic)
-    runner_up = ordered[1]
-    delta = runner_up.bic - table[best].bic
-    strength = "decisively" if delta > 10 else "clearly" if delta > 6 else "weakly"
-    names = {"viscous": "viscous only", "coulomb": "Coulomb only", "both": "viscous + Coulomb"}
-    if best == "coulomb":
-        answer = "No: the coast-downs are straight lines, the friction is Coulomb (constant torque)"
-    elif best == "viscous":
-        answer = "Yes: the coast-downs decay exponentially, the friction is viscous"
-    else:
-        answer = "Partly: the coast-downs need both viscous and Coulomb friction"
-    return (
-        f"Is the shaft friction viscous? {answer} (BIC {strength} favours {names[best]} over "
-        f"{names[runner_up.model]}, ΔBIC = {delta:.1f})"
-    )
 
 
 # ---- the analysis -----------------------------------------------------------------------------------
@@ -340,6 +245,63 @@ def pulse(
     Seed 2 (MIT 2.010 Lab 2), "Motor Mechanical Properties (Shaft Inertia and Friction)", eqs. (1)–(5).
     """
     recordings = [block_mean(r) for r in ([recordings] if isinstance(recordings, Recording) else recordings)]
+    calibration = _Calibration(amplifier_gain, amplifier_gain_stderr, amplifier_offset, amplifier_offset_stderr,
+                               gain_offset_correlation, torque_constant, torque_constant_stderr)
+    _check_options(recordings, calibration, skip=skip, tach_gain=tach_gain, friction=friction)
+    gain = amplifier_gain * torque_constant  # torque per command volt [N·m/V]
+    # An amplifier offset I0 acts as a command offset I0/Ka: τ = Ka·Km·(V + I0/Ka).
+    cut = _cut_recordings(recordings, amplifier_offset / amplifier_gain, skip=skip, tach_gain=tach_gain)
+    start = _slope_method(cut.accel, cut.coasts, gain)
+    table, best = compare_friction_models(cut.coasts, start.a2)
+    return _final_fit(cut, start, table, best, gain=gain, friction=friction, calibration=calibration)
+
+
+@dataclass(frozen=True)
+class _Calibration:
+    """Amplifier and motor constants given to :func:`pulse`, with their standard errors."""
+
+    gain: float  # Ka [A/V]
+    gain_stderr: float
+    offset: float  # I0 [A]
+    offset_stderr: float
+    correlation: float  # C(Ka, I0) [-]
+    torque_constant: float  # Km [N·m/A]
+    torque_constant_stderr: float
+
+
+@dataclass
+class _Cut:
+    """Every recording cut into regions, with the traces, noise levels and warnings met on the way."""
+
+    recordings: list[Recording]
+    regions: list[Region]
+    accel: list[Region]
+    coasts: list[Region]
+    traces: list[tuple[Recording, np.ndarray, np.ndarray]]
+    sigmas: list[float]  # speed noise σ of each recording [rad/s]
+    read_warnings: list[str]  # the readers' warnings, first in the result
+    cut_warnings: list[str]  # what cutting the recordings noted
+
+
+@dataclass
+class _SlopeStart:
+    """The seed's slope method (eqs. (3)–(5)): per-pulse table, median slopes and levels, J and Tf."""
+
+    slopes: list[dict[str, float]]
+    a1: float  # accelerate slope Ω̇1 [rad/s²]
+    a2: float  # coast slope Ω̇2 [rad/s²]
+    v1: float  # held command during the pulses [V]
+    v2: float  # held command between them [V]
+    j0: float  # [kg·m²]
+    tf0: float  # [N·m]
+
+
+def _check_options(
+    recordings: list[Recording], calibration: _Calibration, *, skip: float, tach_gain: float | None, friction: str
+) -> None:
+    """Raise :class:`OptionError` for impossible options or no recording, in the order the CLI's user reads them."""
+    amplifier_gain, torque_constant = calibration.gain, calibration.torque_constant
+    amplifier_offset, gain_offset_correlation = calibration.offset, calibration.correlation
     if not (math.isfinite(amplifier_gain) and amplifier_gain > 0):
         raise OptionError(f"the amplifier gain Ka must be positive, got {amplifier_gain} A/V")
     if not (math.isfinite(torque_constant) and torque_constant > 0):
@@ -354,28 +316,28 @@ def pulse(
         raise OptionError(f"friction model must be auto, viscous, coulomb or both, got {friction!r}")
     if tach_gain is not None and not (math.isfinite(tach_gain) and tach_gain > 0):
         raise OptionError(f"the tachometer gain must be positive, got {tach_gain} V·s/rad")
-    recs = [recordings] if isinstance(recordings, Recording) else list(recordings)
-    if not recs:
+    if not recordings:
         raise OptionError("no recording given")
     if not math.isfinite(amplifier_offset):
         raise OptionError(f"the amplifier offset must be a finite current, got {amplifier_offset} A")
-    for value, what in ((amplifier_gain_stderr, "Ka"), (amplifier_offset_stderr, "I0"),
-                        (torque_constant_stderr, "Km")):
+    for value, what in ((calibration.gain_stderr, "Ka"), (calibration.offset_stderr, "I0"),
+                        (calibration.torque_constant_stderr, "Km")):
         if not (math.isfinite(value) and value >= 0):
             raise OptionError(f"the standard error of {what} must be a finite number ≥ 0, got {value}")
     check_range(abs(amplifier_offset), "the amplifier offset (--I0) in magnitude", 0.0, LIMITS["I"][1], "A",
                 why="beyond any servo amplifier")
-    check_stderr_limit(amplifier_gain_stderr, "Ka", "the standard error of Ka (--Ka-stderr)")
-    check_stderr_limit(amplifier_offset_stderr, "I", "the standard error of I0 (--I0-stderr)")
-    check_stderr_limit(torque_constant_stderr, "K", "the standard error of Km (--Km-stderr)")
+    check_stderr_limit(calibration.gain_stderr, "Ka", "the standard error of Ka (--Ka-stderr)")
+    check_stderr_limit(calibration.offset_stderr, "I", "the standard error of I0 (--I0-stderr)")
+    check_stderr_limit(calibration.torque_constant_stderr, "K", "the standard error of Km (--Km-stderr)")
     if not (math.isfinite(gain_offset_correlation) and abs(gain_offset_correlation) <= 1):
         raise OptionError(f"the Ka-I0 correlation must lie in [-1, 1], got {gain_offset_correlation}")
-    gain = amplifier_gain * torque_constant  # torque per command volt [N·m/V]
-    # An amplifier offset I0 acts as a command offset I0/Ka: τ = Ka·Km·(V + I0/Ka).
-    command_offset = amplifier_offset / amplifier_gain
-    regions: list[_Region] = []
-    warnings: list[str] = reader_warnings(recs)
-    n_read = len(warnings)  # the friction-model sentence goes right after what the readers noted
+
+
+def _cut_recordings(recs: list[Recording], command_offset: float, *, skip: float, tach_gain: float | None) -> _Cut:
+    """Cut every recording into accelerate and coast regions, the command shifted by ``command_offset`` [V]."""
+    regions: list[Region] = []
+    read_warnings = reader_warnings(recs)
+    warnings: list[str] = []
     traces = []
     sigmas = []
     for rec in recs:
@@ -394,8 +356,11 @@ def pulse(
             "no usable accelerate and coast regions (pulses too short, or the shaft never moves: is Ka·Km·V "
             "above the friction torque?)"
         )
+    return _Cut(recs, regions, accel, coasts, traces, sigmas, read_warnings, warnings)
 
-    # The seed's slope method, pulse by pulse (also the starting point of the fit).
+
+def _slope_method(accel: list[Region], coasts: list[Region], gain: float) -> _SlopeStart:
+    """The seed's slope method, pulse by pulse (also the starting point of the fit)."""
     slopes = _slope_table(accel, coasts, gain)
     a1 = float(np.median([s["accel_slope"] for s in slopes])) if slopes else _slope(accel[0])
     a2 = float(np.median([s["coast_slope"] for s in slopes])) if slopes else _slope(coasts[0])
@@ -405,30 +370,63 @@ def pulse(
         raise FitError("the shaft does not accelerate faster during the pulses than between them")
     j0 = gain * (v1 - v2) / (a1 - a2)
     tf0 = gain * v2 - j0 * a2
+    return _SlopeStart(slopes, a1, a2, v1, v2, j0, tf0)
 
-    # Friction models on the coast-downs.
-    decel0 = max(-a2, 1e-6)
-    coulomb = _fit_coasts(coasts, "coulomb", decel0, 0.0)
-    gamma0 = _gamma_guess(coasts)
-    viscous = _fit_coasts(coasts, "viscous", decel0, gamma0)
-    both_start = min(gamma0, 0.5 * decel0 / max(float(np.mean([c.speed[0] for c in coasts])), 1e-9))
-    both = _fit_coasts(coasts, "both", coulomb.decel, max(both_start, 1e-3))
-    both_alt = _fit_coasts(coasts, "both", max(decel0 * 0.1, 1e-6), gamma0)
-    if both_alt.ssr < both.ssr:
-        both = both_alt
-    table = {"viscous": viscous, "coulomb": coulomb, "both": both}
-    best = min(table, key=lambda m: table[m].bic)
-    sentence = _model_sentence(table, best)
+
+def _final_fit(
+    cut: _Cut,
+    start: _SlopeStart,
+    table: dict[str, CoastFit],
+    best: str,
+    *,
+    gain: float,
+    friction: str,
+    calibration: _Calibration,
+) -> FitResult:
+    """Fit every region with the chosen friction model and gather the result."""
+    sentence = model_sentence(table, best)
     chosen = best if friction == "auto" else friction
     if friction != "auto" and friction != best:
         sentence += f"; the final fit uses {friction} friction as asked"
-
-    # Final fit of every region with the chosen friction model.
     with_b = chosen in ("viscous", "both")
     # Tf stays free unless viscous-only friction was asked for: when the data prefer the viscous model
     # the fitted Tf is then small, with its standard error, rather than a bare 0.
     with_tf = friction != "viscous"
-    fit = _joint_fit(regions, gain, j0, tf0, max(both.gamma * j0, 0.0), with_b, with_tf)
+    fit = joint_fit(cut.regions, gain, start.j0, start.tf0, max(table["both"].gamma * start.j0, 0.0), with_b, with_tf)
+    parameters, fitted_names, correlation = _estimates(
+        fit, with_b, with_tf, calibration, _level_errors(cut.accel, cut.coasts)
+    )
+    all_t = np.concatenate([r.time for r in cut.regions])
+    all_w = np.concatenate([r.speed for r in cut.regions])
+    model_w = all_w + fit.residuals
+    # The friction-model sentence goes right after what the readers noted.
+    warnings = [*cut.read_warnings, sentence, *cut.cut_warnings]
+    if chosen == "coulomb" and best != "coulomb":
+        warnings.append("viscous friction is left out of the final fit as asked: J and Tf are biased")
+    return FitResult(
+        experiment="pulse",
+        parameters=parameters,
+        correlation=correlation,
+        correlation_names=fitted_names,
+        rmse=fit.rmse,
+        rmse_unit="rad/s",
+        r2=r_squared(all_w, model_w),
+        n_points=int(all_t.size),
+        panels=_panels(cut.traces, cut.regions, model_w, table, best, cut.coasts, chosen),
+        warnings=warnings,
+        details=_details(cut, start, table, best, chosen, gain),
+        sources=sources_of(cut.recordings),
+    )
+
+
+def _estimates(
+    fit: LeastSquares,
+    with_b: bool,
+    with_tf: bool,
+    calibration: _Calibration,
+    levels: tuple[float, float, float, float],
+) -> tuple[dict[str, Estimate], list[str], np.ndarray]:
+    """J, Tf (and b, γ) of the final fit, with the inputs' uncertainties added; their names and correlation."""
     units = {"J": SI_UNITS["J"], "Tf": SI_UNITS["Tf"], "b": SI_UNITS["b"]}
     est = fit.estimates({n: units.get(n, "rad/s") for n in fit.names})
     parameters: dict[str, Estimate] = {"J": est["J"]}
@@ -446,11 +444,11 @@ def pulse(
         parameters["gamma"] = Estimate("gamma", bv / jv, g_err, SI_UNITS["gamma"], bool(est["b"].determined), "b/J")
     fitted_names = ["J"] + (["b"] if with_b else []) + (["Tf"] if with_tf else [])
     idx = [fit.names.index(n) for n in fitted_names]
-    cov_out = _propagate_inputs(
+    cov_out = propagate_inputs(
         fit.covariance[np.ix_(idx, idx)], fitted_names, fit.values[idx],
-        gain=(amplifier_gain, amplifier_gain_stderr), offset=(amplifier_offset, amplifier_offset_stderr),
-        correlation=gain_offset_correlation, torque_constant=(torque_constant, torque_constant_stderr),
-        levels=_level_errors(accel, coasts),
+        gain=(calibration.gain, calibration.gain_stderr), offset=(calibration.offset, calibration.offset_stderr),
+        correlation=calibration.correlation,
+        torque_constant=(calibration.torque_constant, calibration.torque_constant_stderr), levels=levels,
     )
     for k, name in enumerate(fitted_names):
         old_est = parameters[name]
@@ -460,14 +458,14 @@ def pulse(
         sd = np.sqrt(np.clip(np.diag(cov_out), 0.0, None))
         correlation = cov_out / np.outer(sd, sd)
     np.fill_diagonal(correlation, 1.0)
-    all_t = np.concatenate([r.time for r in regions])
-    all_w = np.concatenate([r.speed for r in regions])
-    model_w = all_w + fit.residuals
-    warnings.insert(n_read, sentence)
-    if chosen == "coulomb" and best != "coulomb":
-        warnings.append("viscous friction is left out of the final fit as asked: J and Tf are biased")
+    return parameters, fitted_names, correlation
 
-    details: dict[str, object] = {
+
+def _details(
+    cut: _Cut, start: _SlopeStart, table: dict[str, CoastFit], best: str, chosen: str, gain: float
+) -> dict[str, object]:
+    """``details`` of the result: the friction-model table, the slope method and the trace's figures."""
+    return {
         "friction_model": chosen,
         "friction_models": [
             {
@@ -480,78 +478,22 @@ def pulse(
                 "dAIC": table[m].aic - min(x.aic for x in table.values()),
                 "dBIC": table[m].bic - table[best].bic,
                 "gamma_per_s": table[m].gamma,
-                "Tf_over_J_rad_per_s2": table[m].decel + (gain * v2 / j0),
+                "Tf_over_J_rad_per_s2": table[m].decel + (gain * start.v2 / start.j0),
             }
             for m in FRICTION_MODELS
         ],
-        "slopes": slopes,
-        "slope_method": {"J": j0, "Tf": tf0, "accel_slope": a1, "coast_slope": a2},
+        "slopes": start.slopes,
+        "slope_method": {"J": start.j0, "Tf": start.tf0, "accel_slope": start.a1, "coast_slope": start.a2},
         "torque_per_volt": gain,
-        "command_high_V": v1,
-        "command_low_V": v2,
-        "speed_noise_rad_per_s": float(np.median(sigmas)),
-        "pulses": len(accel),
-        "coasts": len(coasts),
+        "command_high_V": start.v1,
+        "command_low_V": start.v2,
+        "speed_noise_rad_per_s": float(np.median(cut.sigmas)),
+        "pulses": len(cut.accel),
+        "coasts": len(cut.coasts),
     }
-    panels = _panels(traces, regions, model_w, table, best, coasts, chosen)
-    return FitResult(
-        experiment="pulse",
-        parameters=parameters,
-        correlation=correlation,
-        correlation_names=fitted_names,
-        rmse=fit.rmse,
-        rmse_unit="rad/s",
-        r2=r_squared(all_w, model_w),
-        n_points=int(all_t.size),
-        panels=panels,
-        warnings=warnings,
-        details=details,
-        sources=sources_of(recs),
-    )
 
 
-def _propagate_inputs(
-    cov: np.ndarray,
-    names: list[str],
-    values: np.ndarray,
-    *,
-    gain: tuple[float, float],
-    offset: tuple[float, float],
-    correlation: float,
-    torque_constant: tuple[float, float],
-    levels: tuple[float, float, float, float],
-) -> np.ndarray:
-    """Add the uncertainty of Ka, I0, Km and the held levels to the covariance of (J[, b][, Tf]).
-
-    First order. The data fix the accelerations A1,2 = (u·V1,2 + c − Tf)/J and γ = b/J, with
-    u = Ka·Km, c = Km·I0 and V1, V2 the held command levels. Hence J = u·(V1 − V2)/(A1 − A2) and
-    b = γ·J are proportional to u and to V1 − V2, and Tf = u·V2 + c − J·A2:
-    ∂J/∂Ka = J/Ka, ∂J/∂Km = J/Km, ∂J/∂V1 = −∂J/∂V2 = J/(V1 − V2) (b alike);
-    ∂Tf/∂Ka = (Tf − Km·I0)/Ka, ∂Tf/∂I0 = Km, ∂Tf/∂Km = Tf/Km, ∂Tf/∂V1 = −A2·J/(V1 − V2),
-    ∂Tf/∂V2 = u + A2·J/(V1 − V2).
-    """
-    (ka, ka_se), (i0, i0_se), (km, km_se) = gain, offset, torque_constant
-    v1, v1_se, v2, v2_se = levels
-    u = ka * km
-    inputs = np.diag([ka_se**2, i0_se**2, km_se**2, v1_se**2, v2_se**2])
-    inputs[0, 1] = inputs[1, 0] = correlation * ka_se * i0_se
-    if not inputs.any():
-        return cov
-    j = float(values[names.index("J")])
-    tf = float(values[names.index("Tf")]) if "Tf" in names else 0.0
-    a2 = (u * v2 - tf) / j  # the coast's acceleration at zero speed
-    dv = v1 - v2
-    grad = np.zeros((len(names), 5))
-    for k, name in enumerate(names):
-        v = float(values[k])
-        if name in ("J", "b"):
-            grad[k] = [v / ka, 0.0, v / km, v / dv, -v / dv]
-        elif name == "Tf":
-            grad[k] = [(v - km * i0) / ka, km, v / km, -a2 * j / dv, u + a2 * j / dv]
-    return cov + grad @ inputs @ grad.T
-
-
-def _level_errors(accel: list[_Region], coasts: list[_Region]) -> tuple[float, float, float, float]:
+def _level_errors(accel: list[Region], coasts: list[Region]) -> tuple[float, float, float, float]:
     """Mean held levels V1 (pulses) and V2 (coasts) [V] and the standard errors of those means."""
     v1 = float(np.mean([r.command for r in accel]))
     v2 = float(np.mean([r.command for r in coasts]))
@@ -578,12 +520,12 @@ def _speed_signal(rec: Recording, tach_gain: float | None) -> str:
     )
 
 
-def _slope(region: _Region) -> float:
+def _slope(region: Region) -> float:
     design = np.column_stack([region.s, np.ones_like(region.s)])
     return float(fit_linear(design, region.speed, ["slope", "start"]).values[0])
 
 
-def _slope_table(accel: list[_Region], coasts: list[_Region], gain: float) -> list[dict[str, float]]:
+def _slope_table(accel: list[Region], coasts: list[Region], gain: float) -> list[dict[str, float]]:
     rows = []
     by_pulse = {(c.source, c.pulse): c for c in coasts}
     for a in accel:
@@ -600,68 +542,13 @@ def _slope_table(accel: list[_Region], coasts: list[_Region], gain: float) -> li
     return rows
 
 
-def _gamma_guess(coasts: list[_Region]) -> float:
-    """γ from a straight line through ln ω of each coast (viscous start value) [1/s]."""
-    rates = []
-    for c in coasts:
-        keep = c.speed > 0.05 * np.max(c.speed)
-        if np.count_nonzero(keep) > 3:
-            design = np.column_stack([c.s[keep], np.ones(np.count_nonzero(keep))])
-            rates.append(-fit_linear(design, np.log(c.speed[keep]), ["rate", "log0"]).values[0])
-    return max(float(np.median(rates)), 1e-3) if rates else 1.0
-
-
-def _joint_fit(
-    regions: list[_Region], gain: float, j0: float, tf0: float, b0: float, with_b: bool, with_tf: bool
-) -> LeastSquares:
-    """One fit of every region: shared J (and b, Tf), one start speed per region."""
-    names = ["J"] + (["b"] if with_b else []) + (["Tf"] if with_tf else [])
-    scale = np.array([j0] + ([max(b0, j0 * 0.1)] if with_b else []) + ([max(abs(tf0), gain * 0.01)] if with_tf else []))
-
-    def unpack(x: np.ndarray) -> tuple[float, float, float, np.ndarray]:
-        j = x[0] * scale[0]
-        k = 1
-        b = tf = 0.0
-        if with_b:
-            b, k = x[k] * scale[k], k + 1
-        if with_tf:
-            tf, k = x[k] * scale[k], k + 1
-        return j, b, tf, x[k:]
-
-    def model(x: np.ndarray) -> np.ndarray:
-        j, b, tf, starts = unpack(x)
-        return np.concatenate(
-            [ramp_speed(r.s, starts[i], b / j, (gain * r.command - tf) / j) for i, r in enumerate(regions)]
-        )
-
-    data = np.concatenate([r.speed for r in regions])
-    x0 = [1.0] + ([max(b0, 1e-6 * j0) / scale[1]] if with_b else []) + ([tf0 / scale[-1]] if with_tf else [])
-    x0 += [float(r.speed[0]) for r in regions]
-    lo = [1e-9] + ([0.0] if with_b else []) + ([-np.inf] if with_tf else []) + [-np.inf] * len(regions)
-    hi = [np.inf] * len(x0)
-    # The tachometer's commutator ripple (seed 2's trace shows it) makes neighbouring residuals
-    # alike: independent-residual standard errors would be several times too small, so the
-    # covariance is the Newey–West sandwich, with lags kept within each region.
-    groups = np.concatenate([np.full(r.time.size, i) for i, r in enumerate(regions)])
-    fit = fit_least_squares(
-        lambda x: model(x) - data, x0, names + [f"w0_{i}" for i in range(len(regions))], bounds=(lo, hi),
-        covariance="hac", groups=groups,
-    )
-    # Back to physical units: values, standard errors and covariance of the scaled parameters.
-    full_scale = np.concatenate([scale, np.ones(len(regions))])
-    fit.values = fit.values * full_scale
-    fit.stderr = fit.stderr * full_scale
-    fit.covariance = fit.covariance * np.outer(full_scale, full_scale)
-    return fit
-
-
 def _panels(
     traces: list[tuple[Recording, np.ndarray, np.ndarray]],
-    regions: list[_Region],
+    regions: list[Region],
     model_w: np.ndarray,
-    table: dict[str, _CoastFit],
+    table: dict[str, CoastFit],
     best: str,
-    coasts: list[_Region],
+    coasts: list[Region],
     chosen: str,
 ) -> list[Panel]:
     panels = []

@@ -14,6 +14,7 @@ and Tf are propagated into K.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -21,7 +22,7 @@ import numpy as np
 from motorlab.analyses import _common as common
 from motorlab.decimate import block_mean
 from motorlab.errors import FitError, OptionError
-from motorlab.fitting import r_squared
+from motorlab.fitting import LeastSquares, r_squared
 from motorlab.recording import Recording
 from motorlab.results import Estimate, FitResult, Panel, Series
 from motorlab.units import SI_UNITS, format_percent
@@ -127,6 +128,67 @@ def spinup(
     """
     recording = block_mean(recording)  # a 2M-row log: block means, not 2M-point fits
     source = recording.source or "log"
+    inertia_se, b_se, tf_se = _check_options(
+        inertia=inertia, inertia_stderr=inertia_stderr, viscous_friction=viscous_friction,
+        viscous_friction_stderr=viscous_friction_stderr, coulomb_friction=coulomb_friction,
+        coulomb_friction_stderr=coulomb_friction_stderr, spindown_result=spindown_result, start=start, end=end,
+    )
+    warnings: list[str] = common.reader_warnings(recording)
+    phase = _phase(recording, cpr=cpr, start=start, end=end, source=source)
+    if phase.i_std > _CURRENT_TOLERANCE * phase.i_mean:
+        warnings.append(
+            f"the current was not constant during the spin-up: {phase.i_mean:.4g} A ± "
+            f"{format_percent(phase.i_std / phase.i_mean, '.1f')}"
+        )
+    # Friction: priors on (b, Tf), or on (gamma, Tf/J) from a spin-down.
+    if spindown_result is not None:
+        mode = "gamma"
+        f_mean, f_cov = _spindown_prior(spindown_result)
+    else:
+        mode = "b"
+        f_mean = np.array([viscous_friction or 0.0, coulomb_friction or 0.0])
+        f_cov = np.diag([b_se**2, tf_se**2])
+        if viscous_friction is None and coulomb_friction is None:
+            warnings.append(
+                "no friction given (--b, --Tf or --spindown): K = J·α/i ignores friction and is biased low"
+            )
+    fit, x_full = _fit(phase, mode, f_mean, f_cov, inertia=inertia, inertia_se=inertia_se, source=source)
+    return _result(recording, phase, fit, x_full, mode=mode, f_mean=f_mean, warnings=warnings)
+
+
+_UNITS = {"theta0": "rad", "omega0": "rad/s", "K": SI_UNITS["K"], "J": SI_UNITS["J"], "f1": "", "f2": "", "i": "A"}
+#: Parameters of the spin-up fit, in the order of its parameter vector x.
+_PARAMETERS = ("theta0", "omega0", "K", "J", "f1", "f2", "i")
+
+
+@dataclass
+class _Phase:
+    """The constant-current phase of a spin-up, signed so that the shaft turns forward."""
+
+    t: np.ndarray  # [s]
+    tau: np.ndarray  # time since the phase began [s]
+    theta: np.ndarray  # position since the phase began [rad]
+    i_samples: np.ndarray  # current [A]
+    i_mean: float  # mean current less the sensor's zero offset [A]
+    i_se: float  # its standard error [A]
+    i_std: float  # scatter of the current [A]
+    offset: float  # the sensor's zero offset [A]
+    offset_samples: int  # samples (relay open) it was read from
+
+
+def _check_options(
+    *,
+    inertia: float,
+    inertia_stderr: float | None,
+    viscous_friction: float | None,
+    viscous_friction_stderr: float | None,
+    coulomb_friction: float | None,
+    coulomb_friction_stderr: float | None,
+    spindown_result: FitResult | None,
+    start: float | None,
+    end: float | None,
+) -> tuple[float, float, float]:
+    """Raise :class:`OptionError` for impossible options; returns the standard errors of J, b and Tf."""
     common.check_positive(inertia, "inertia", allow_none=False)
     common.check_limits(inertia, "J", "the inertia (--inertia)")
     inertia_se = common.check_stderr_limit(inertia_stderr, "J", "the inertia's standard error (--inertia-stderr)")
@@ -144,11 +206,15 @@ def spinup(
     if start is not None and end is not None and not start < end:
         raise OptionError(f"the start (--start {start:g} s) is not before the end (--end {end:g} s) of the "
                           "constant-current phase")
+    return inertia_se, b_se, tf_se
+
+
+def _phase(recording: Recording, *, cpr: float | None, start: float | None, end: float | None, source: str) -> _Phase:
+    """The constant-current phase (found from the current, or between ``start`` and ``end`` [s]) and its current."""
     common.check_finite_signals(recording, ["counts", "position", "current"])
     theta_all, _quantum = common.position_of(recording, cpr=cpr)
     current_all = recording.require("current")
     t_all = recording.time
-    warnings: list[str] = common.reader_warnings(recording)
     span = f"{float(t_all[0]):g} s to {float(t_all[-1]):g} s" if t_all.size else "empty"
     for value, name in ((start, "start (--start)"), (end, "end (--end)")):
         if value is not None and t_all.size and not float(t_all[0]) <= value <= float(t_all[-1]):
@@ -183,92 +249,87 @@ def spinup(
     i_se = math.hypot(i_std / math.sqrt(i_samples.size), offset_se)
     if i_mean <= 0:
         raise FitError(f"{source}: the current and the motion have opposite signs: not a spin-up")
-    if i_std > _CURRENT_TOLERANCE * i_mean:
-        warnings.append(
-            f"the current was not constant during the spin-up: {i_mean:.4g} A ± {format_percent(i_std / i_mean, '.1f')}"
-        )
+    return _Phase(t, tau, theta, i_samples, i_mean, i_se, i_std, offset, int(off.sum()))
 
-    # ---- friction: priors on (b, Tf) or on (gamma, Tf/J) from a spin-down ---------------------------
-    names = ["theta0", "omega0", "K", "J", "f1", "f2", "i"]
-    if spindown_result is not None:
-        mode = "gamma"
-        f_mean, f_cov = _spindown_prior(spindown_result)
-    else:
-        mode = "b"
-        f_mean = np.array([viscous_friction or 0.0, coulomb_friction or 0.0])
-        f_cov = np.diag([b_se**2, tf_se**2])
-        if viscous_friction is None and coulomb_friction is None:
-            warnings.append(
-                "no friction given (--b, --Tf or --spindown): K = J·α/i ignores friction and is biased low"
-            )
 
-    def rates(x: np.ndarray) -> tuple[float, float]:
-        """γ [1/s] and A = (K·i − Tf)/J [rad/s²] of parameter vector x."""
-        k, j, f1, f2, i = x[2], x[3], x[4], x[5], x[6]
-        if mode == "gamma":
-            return f1, k * i / j - f2
-        return f1 / j, (k * i - f2) / j
+def _rates(x: np.ndarray, mode: str) -> tuple[float, float]:
+    """γ [1/s] and A = (K·i − Tf)/J [rad/s²] of parameter vector x, friction as (b, Tf) or (γ, Tf/J) (``mode``)."""
+    k, j, f1, f2, i = x[2], x[3], x[4], x[5], x[6]
+    if mode == "gamma":
+        return f1, k * i / j - f2
+    return f1 / j, (k * i - f2) / j
 
-    def position(x: np.ndarray) -> np.ndarray:
-        gamma, accel = rates(x)
-        return x[0] + common.ramp_position(tau, x[1], gamma, accel)
 
+def _position(x: np.ndarray, tau: np.ndarray, mode: str) -> np.ndarray:
+    """Model position θ(τ) [rad] of parameter vector x."""
+    gamma, accel = _rates(x, mode)
+    return x[0] + common.ramp_position(tau, x[1], gamma, accel)
+
+
+def _fit(
+    phase: _Phase, mode: str, f_mean: np.ndarray, f_cov: np.ndarray, *, inertia: float, inertia_se: float, source: str
+) -> tuple[LeastSquares, np.ndarray]:
+    """Fit θ(τ) to the phase with J, the friction and i as priors; returns the fit and the full parameter vector."""
+    tau, theta, i_mean = phase.tau, phase.theta, phase.i_mean
+    names = list(_PARAMETERS)
     # Starting values: a quadratic fit gives α, hence K.
     quad = np.polyfit(tau, theta, 2)
     alpha0 = 2.0 * quad[0]
     x0 = np.array([quad[2], quad[1], 0.0, inertia, f_mean[0], f_mean[1], i_mean])
-    gamma0, _ = rates(np.concatenate([x0[:2], [1.0], x0[3:]]))
+    gamma0, _ = _rates(np.concatenate([x0[:2], [1.0], x0[3:]]), mode)
     tf_over_j = f_mean[1] if mode == "gamma" else f_mean[1] / inertia
     x0[2] = max(inertia * (alpha0 + gamma0 * quad[1] + tf_over_j) / i_mean, 1e-9)
     priors = [
         common.Prior(["J"], np.array([inertia]), np.array([[inertia_se**2]])),
         common.Prior(["f1", "f2"], f_mean, f_cov),
-        common.Prior(["i"], np.array([i_mean]), np.array([[i_se**2]])),
+        common.Prior(["i"], np.array([i_mean]), np.array([[phase.i_se**2]])),
     ]
     # Stage 1 with unit weights gives the residuals from which the position σ's are estimated.
     sigma = np.ones_like(theta)
     try:
-        fit, x_full = common.fit_with_priors(lambda x: (position(x) - theta) / sigma, x0, names, priors)
-        res = position(x_full) - theta
-        speed = common.ramp_speed(tau, x_full[1], *rates(x_full))
+        fit, x_full = common.fit_with_priors(lambda x: (_position(x, tau, mode) - theta) / sigma, x0, names, priors)
+        res = _position(x_full, tau, mode) - theta
+        speed = common.ramp_speed(tau, x_full[1], *_rates(x_full, mode))
         sigma = common.speed_noise_sigma(res, speed, dof=max(theta.size - 3, 1))
-        fit, x_full = common.fit_with_priors(lambda x: (position(x) - theta) / sigma, x_full, names, priors)
+        fit, x_full = common.fit_with_priors(lambda x: (_position(x, tau, mode) - theta) / sigma, x_full, names,
+                                             priors)
     except FitError as exc:
         raise common.in_file(exc, source) from None
+    return fit, x_full
 
+
+def _result(
+    recording: Recording,
+    phase: _Phase,
+    fit: LeastSquares,
+    x_full: np.ndarray,
+    *,
+    mode: str,
+    f_mean: np.ndarray,
+    warnings: list[str],
+) -> FitResult:
+    """K, α and i of the fitted spin-up, with its panels and details."""
+    t, theta, i_mean = phase.t, phase.theta, phase.i_mean
     est = fit.estimates({n: _UNITS[n] for n in fit.names})
-    alpha = rates(x_full)[1]
-    alpha_se = common.derived_stderr(fit, x_full, names, lambda x: rates(x)[1])
+    alpha = _rates(x_full, mode)[1]
+    alpha_se = common.derived_stderr(fit, x_full, list(_PARAMETERS), lambda x: _rates(x, mode)[1])
     parameters: dict[str, Estimate] = {
         "K": est["K"],
         "alpha": Estimate("alpha", alpha, alpha_se, "rad/s^2", note="acceleration at zero speed, (K·i − Tf)/J"),
-        "i": Estimate("i", i_mean, i_se, "A", note="mean current during the spin-up"),
+        "i": Estimate("i", i_mean, phase.i_se, "A", note="mean current during the spin-up"),
     }
-    model_theta = position(x_full)
-    model_speed = common.ramp_speed(tau, x_full[1], *rates(x_full))
-    mid = 0.5 * (t[1:] + t[:-1])
-    dt = np.diff(t)
-    ok = dt > 0
-    panels = [
-        Panel("Spin-up: position", "time [s]", "position since the spin-up began [rad]",
-              data=Series(t, theta, "encoder"), model=Series(t, model_theta, "model", kind="model")),
-        Panel("Spin-up: speed", "time [s]", "speed [rad/s]",
-              data=Series(mid[ok], np.diff(theta)[ok] / dt[ok], "finite-difference speed (display only)"),
-              model=Series(mid[ok], common.ramp_speed(mid[ok] - t[0], x_full[1], *rates(x_full)), "model",
-                           kind="model")),
-        Panel("Spin-up: current", "time [s]", "current [A]", data=Series(t, i_samples, "shunt current"),
-              model=Series(t, np.full_like(t, i_mean), "mean", kind="model")),
-    ]
+    model_theta = _position(x_full, phase.tau, mode)
+    model_speed = common.ramp_speed(phase.tau, x_full[1], *_rates(x_full, mode))
     details: dict[str, Any] = {
         "start_s": float(t[0]),
         "end_s": float(t[-1]),
         "current_mean_A": i_mean,
-        "current_offset_A": offset,
-        "current_offset_samples": int(off.sum()),
-        "current_std_A": i_std,
-        "current_relative_scatter": i_std / i_mean,
+        "current_offset_A": phase.offset,
+        "current_offset_samples": phase.offset_samples,
+        "current_std_A": phase.i_std,
+        "current_relative_scatter": phase.i_std / i_mean,
         "friction_from": "spindown" if mode == "gamma" else ("given" if f_mean.any() else "none"),
-        "gamma_1_per_s": float(rates(x_full)[0]),
+        "gamma_1_per_s": float(_rates(x_full, mode)[0]),
         "omega_end_rad_per_s": float(model_speed[-1]),
     }
     return FitResult(
@@ -280,14 +341,29 @@ def spinup(
         rmse_unit="rad",
         r2=r_squared(theta, model_theta),
         n_points=int(theta.size),
-        panels=panels,
+        panels=_panels(phase, model_theta, x_full, mode),
         warnings=warnings,
         details=details,
         sources=[recording.source] if recording.source else [],
     )
 
 
-_UNITS = {"theta0": "rad", "omega0": "rad/s", "K": SI_UNITS["K"], "J": SI_UNITS["J"], "f1": "", "f2": "", "i": "A"}
+def _panels(phase: _Phase, model_theta: np.ndarray, x_full: np.ndarray, mode: str) -> list[Panel]:
+    """Position, speed and current of the phase against the model."""
+    t, theta = phase.t, phase.theta
+    mid = 0.5 * (t[1:] + t[:-1])
+    dt = np.diff(t)
+    ok = dt > 0
+    return [
+        Panel("Spin-up: position", "time [s]", "position since the spin-up began [rad]",
+              data=Series(t, theta, "encoder"), model=Series(t, model_theta, "model", kind="model")),
+        Panel("Spin-up: speed", "time [s]", "speed [rad/s]",
+              data=Series(mid[ok], np.diff(theta)[ok] / dt[ok], "finite-difference speed (display only)"),
+              model=Series(mid[ok], common.ramp_speed(mid[ok] - t[0], x_full[1], *_rates(x_full, mode)), "model",
+                           kind="model")),
+        Panel("Spin-up: current", "time [s]", "current [A]", data=Series(t, phase.i_samples, "shunt current"),
+              model=Series(t, np.full_like(t, phase.i_mean), "mean", kind="model")),
+    ]
 
 
 def _spindown_prior(result: FitResult) -> tuple[np.ndarray, np.ndarray]:
