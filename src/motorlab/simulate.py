@@ -551,6 +551,30 @@ def _drive_values(drive: Drive, t: np.ndarray) -> np.ndarray:
     return np.zeros(t.shape)
 
 
+@dataclass
+class _Grid:
+    """Output arrays on the grid ``k·dt`` (``n + 1`` points), filled in as the run advances."""
+
+    time: np.ndarray
+    current: np.ndarray
+    speed: np.ndarray
+    position: np.ndarray
+    voltage: np.ndarray
+    mode: np.ndarray
+
+    @classmethod
+    def empty(cls, n: int, dt: float) -> _Grid:
+        """``time`` = k·dt [s] for k = 0 … n; the other arrays allocated, not yet filled."""
+        return cls(
+            np.arange(n + 1) * dt,
+            np.empty(n + 1),
+            np.empty(n + 1),
+            np.empty(n + 1),
+            np.empty(n + 1),
+            np.empty(n + 1, dtype=np.int8),
+        )
+
+
 def simulate(
     params: MotorParams | Drivetrain,
     drive: Drive | Sequence[tuple[float, Drive]],
@@ -600,76 +624,87 @@ def simulate(
     motor: MotorParams = params.forward() if isinstance(params, Drivetrain) else params
     items = _schedule(drive)
     n = round(duration / dt)
-    t = np.arange(n + 1) * dt
-    cur = np.empty(n + 1)
-    spd = np.empty(n + 1)
-    pos = np.empty(n + 1)
-    volt = np.empty(n + 1)
-    mode = np.empty(n + 1, dtype=np.int8)
+    grid = _Grid.empty(n, dt)
     runner = _Runner(motor, dt, drivetrain)
-    i, w, theta = float(initial.current), float(initial.speed), float(initial.position)
-    cur[0], spd[0], pos[0] = i, w, theta
+    state = (float(initial.current), float(initial.speed), float(initial.position))
+    grid.current[0], grid.speed[0], grid.position[0] = state
 
     starts = [min(max(round(ts / dt), 0), n) for ts, _ in items]
     starts[0] = 0
     bounds = [*starts[1:], n]
     for (_, drv), k0, k1 in zip(items, starts, bounds, strict=True):
-        if k1 <= k0:
-            continue
-        d_all = _drive_values(drv, t[k0:k1])
-        k = k0
-        chunk = 256
-        while k < k1:
-            reg, d = runner.regime_for(drv, float(d_all[k - k0]), (i, w))
-            lin = _discretise(runner.params_for(reg), reg, dt)
-            # How far can this regime run on the grid? Constant-valued drives (bench supply) keep d.
-            m = min(chunk, k1 - k)
-            dvals = d_all[k - k0 : k - k0 + m].copy()
-            if isinstance(drv, BenchSupply) or reg.kind == "O":
-                dvals[:] = d
-            u = np.column_stack([dvals, np.ones(m)])
-            x0 = runner.to_local(reg, lin, i, w)
-            x, dtheta = _propagate_chunk(lin, x0, u)
-            # Event on the grid?  The value at grid k+j+1 belongs to the step from k+j; the drive for
-            # the check at the end of step j is the one held during step j.
-            first = m
-            for g, _ in runner.event_values(reg, drv, lin, x, dvals):
-                hits = np.flatnonzero(g > 0)
-                if hits.size:
-                    first = min(first, int(hits[0]))
-            good = first  # steps fully accepted
-            if good:
-                ws = x[:good, lin.names.index("w")] if "w" in lin.names else np.zeros(good)
-                if reg.s == 0:
-                    ws = np.zeros(good)
-                if "i" in lin.names:
-                    is_ = x[:good, lin.names.index("i")]
-                elif reg.kind == "O":
-                    is_ = np.zeros(good)
-                elif reg.kind == "I":
-                    is_ = dvals[:good]  # the held current of the step just finished
-                else:
-                    is_ = (dvals[:good] - motor.K * ws) / motor.R
-                sl = slice(k + 1, k + good + 1)
-                spd[sl] = ws
-                cur[sl] = is_
-                pos[sl] = theta + np.cumsum(dtheta[:good])
-                mode[k : k + good] = _MODE[reg.kind]
-                i, w, theta = float(cur[k + good]), float(spd[k + good]), float(pos[k + good])
-                k += good
-                chunk = min(chunk * 2, 8192)
-            if first < m and k < k1:
-                # The event step: from grid k to k+1, located exactly.
-                d_step = float(d_all[k - k0])
-                mode[k] = _MODE[runner.regime_for(drv, d_step, (i, w))[0].kind]
-                i, w, theta = runner.exact_step(drv, d_step, t[k], dt, i, w, theta)
-                k += 1
-                cur[k], spd[k], pos[k] = i, w, theta
-                chunk = 256
-        # Current and terminal voltage at the segment's grid points are those of the held regime.
+        if k1 > k0:
+            state = _run_drive(runner, drv, grid, k0, k1, state)
+    mode = grid.mode
     mode[n] = mode[n - 1] if n > 0 else MODE_VOLTAGE
-    _fill_outputs(runner, items, starts, bounds, t, cur, spd, volt, mode, motor)
-    return Simulation(t, cur, spd, pos, volt, mode, motor, runner.events)
+    # Current and terminal voltage at the segment's grid points are those of the held regime.
+    _fill_outputs(runner, items, starts, bounds, grid.time, grid.current, grid.speed, grid.voltage, mode, motor)
+    return Simulation(grid.time, grid.current, grid.speed, grid.position, grid.voltage, mode, motor, runner.events)
+
+
+def _run_drive(
+    runner: _Runner, drv: Drive, grid: _Grid, k0: int, k1: int, state: tuple[float, float, float]
+) -> tuple[float, float, float]:
+    """Advance (i, ω, θ) from grid point ``k0`` to ``k1`` under one drive, filling ``grid``.
+
+    Event-free stretches are propagated a chunk at a time (256 steps, doubling up to 8192 while no
+    event fires); the step in which an event fires is redone by :meth:`_Runner.exact_step`, which
+    locates the event inside it. Returns the state at grid point ``k1``.
+    """
+    motor, dt, t = runner.p, runner.dt, grid.time
+    cur, spd, pos, mode = grid.current, grid.speed, grid.position, grid.mode
+    i, w, theta = state
+    d_all = _drive_values(drv, t[k0:k1])
+    k = k0
+    chunk = 256
+    while k < k1:
+        reg, d = runner.regime_for(drv, float(d_all[k - k0]), (i, w))
+        lin = _discretise(runner.params_for(reg), reg, dt)
+        # How far can this regime run on the grid? Constant-valued drives (bench supply) keep d.
+        m = min(chunk, k1 - k)
+        dvals = d_all[k - k0 : k - k0 + m].copy()
+        if isinstance(drv, BenchSupply) or reg.kind == "O":
+            dvals[:] = d
+        u = np.column_stack([dvals, np.ones(m)])
+        x0 = runner.to_local(reg, lin, i, w)
+        x, dtheta = _propagate_chunk(lin, x0, u)
+        # Event on the grid?  The value at grid k+j+1 belongs to the step from k+j; the drive for
+        # the check at the end of step j is the one held during step j.
+        first = m
+        for g, _ in runner.event_values(reg, drv, lin, x, dvals):
+            hits = np.flatnonzero(g > 0)
+            if hits.size:
+                first = min(first, int(hits[0]))
+        good = first  # steps fully accepted
+        if good:
+            ws = x[:good, lin.names.index("w")] if "w" in lin.names else np.zeros(good)
+            if reg.s == 0:
+                ws = np.zeros(good)
+            if "i" in lin.names:
+                is_ = x[:good, lin.names.index("i")]
+            elif reg.kind == "O":
+                is_ = np.zeros(good)
+            elif reg.kind == "I":
+                is_ = dvals[:good]  # the held current of the step just finished
+            else:
+                is_ = (dvals[:good] - motor.K * ws) / motor.R
+            sl = slice(k + 1, k + good + 1)
+            spd[sl] = ws
+            cur[sl] = is_
+            pos[sl] = theta + np.cumsum(dtheta[:good])
+            mode[k : k + good] = _MODE[reg.kind]
+            i, w, theta = float(cur[k + good]), float(spd[k + good]), float(pos[k + good])
+            k += good
+            chunk = min(chunk * 2, 8192)
+        if first < m and k < k1:
+            # The event step: from grid k to k+1, located exactly.
+            d_step = float(d_all[k - k0])
+            mode[k] = _MODE[runner.regime_for(drv, d_step, (i, w))[0].kind]
+            i, w, theta = runner.exact_step(drv, d_step, t[k], dt, i, w, theta)
+            k += 1
+            cur[k], spd[k], pos[k] = i, w, theta
+            chunk = 256
+    return i, w, theta
 
 
 _MODE = {"V": MODE_VOLTAGE, "I": MODE_CURRENT, "O": MODE_OPEN}

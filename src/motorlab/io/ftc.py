@@ -120,53 +120,22 @@ def read_ftc_log(
     cpr = check_cpr(cpr)
     if time_restart not in _TIME_RESTART_CHOICES:
         raise OptionError(f"time_restart must be one of {', '.join(_TIME_RESTART_CHOICES)}, got {time_restart!r}")
-    if isinstance(paths, str | os.PathLike):
-        path_list: list[PathArg] = [paths]
-    else:
-        path_list = list(paths)
-    if not path_list:
-        raise OptionError("read_ftc_log needs at least one file")
-    check_distinct(path_list)
-    parts = [_read_part(p) for p in path_list]
+    parts = [_read_part(p) for p in _path_list(paths)]
     fields = {k: v for p in reversed(parts) for k, v in p.fields.items()}  # the first file's win
     if cpr is None and "cpr" in fields:
         try:
             cpr = check_cpr(fields["cpr"])
         except OptionError as exc:
             raise LogFormatError(f"# cpr: {exc.message.removeprefix('cpr: ')}", path=parts[0].path) from None
-    ncol = parts[0].rows.shape[1]
-    for part in parts[1:]:
-        if part.rows.shape[1] != ncol:
-            raise LogFormatError(
-                f"has {part.rows.shape[1]} columns but {parts[0].path} has {ncol}: not the same run",
-                path=part.path,
-                line=int(part.lines[0]),
-            )
+    ncol = _column_count(parts)
     times, offsets = _join_times(parts, time_restart)
-    if ncol == 4 and times.size > 2:
-        # The OpMode logs milliseconds; a loop that reads an INA219 over I²C cannot run faster than
-        # ~1 kHz. Steps far below a millisecond mean the time column is in seconds (getRuntime()).
-        step_ms = float(np.median(np.diff(times))) * 1e3
-        if 0 < step_ms < 0.2:
-            raise LogFormatError(
-                f"the time column steps by {step_ms:.3g} ms (median): it looks like seconds, but this "
-                "format's first column is milliseconds (time_ms); convert it, or write a CSV with a time_s column",
-                path=parts[0].path,
-                line=int(parts[0].lines[0]),
-            )
+    if ncol == 4:
+        _check_milliseconds(times, parts[0])
     rows = parts[0].rows if len(parts) == 1 else np.concatenate([p.rows for p in parts])
     header = next((p.header for p in parts if p.header is not None), None)
     # Each file's own header decides its current unit (unless the caller says).
     units = [_current_unit(current_unit, p.header) for p in parts]
-
-    signals: dict[str, np.ndarray] = {"counts": rows[:, 1]}
-    if cpr is not None:
-        signals["position"] = rows[:, 1] * (2.0 * math.pi / cpr)
-    if ncol == 4:
-        signals["voltage"] = rows[:, 2]
-        pairs = zip(parts, units, strict=True)
-        factors = np.concatenate([np.full(p.rows.shape[0], unit_factor(u, "A")) for p, u in pairs])
-        signals["current"] = rows[:, 3] * factors
+    signals = _signals(rows, parts, units, cpr)
     starts = np.cumsum([0] + [p.rows.shape[0] for p in parts[:-1]])
     metadata = {
         **fields,
@@ -190,6 +159,63 @@ def read_ftc_log(
         lines=np.concatenate([p.lines for p in parts]),
     )
     return screen_glitches(recording)
+
+
+def _path_list(paths: PathArg | Sequence[PathArg]) -> list[PathArg]:
+    """The files of the run as a list: at least one, no file twice."""
+    if isinstance(paths, str | os.PathLike):
+        path_list: list[PathArg] = [paths]
+    else:
+        path_list = list(paths)
+    if not path_list:
+        raise OptionError("read_ftc_log needs at least one file")
+    check_distinct(path_list)
+    return path_list
+
+
+def _column_count(parts: list[_Part]) -> int:
+    """The number of columns, the same in every file of the run."""
+    ncol = parts[0].rows.shape[1]
+    for part in parts[1:]:
+        if part.rows.shape[1] != ncol:
+            raise LogFormatError(
+                f"has {part.rows.shape[1]} columns but {parts[0].path} has {ncol}: not the same run",
+                path=part.path,
+                line=int(part.lines[0]),
+            )
+    return ncol
+
+
+def _check_milliseconds(times: np.ndarray, first: _Part) -> None:
+    """Refuse a four-column log whose time column is evidently in seconds (``first``: its first file)."""
+    if times.size > 2:
+        # The OpMode logs milliseconds; a loop that reads an INA219 over I²C cannot run faster than
+        # ~1 kHz. Steps far below a millisecond mean the time column is in seconds (getRuntime()).
+        step_ms = float(np.median(np.diff(times))) * 1e3
+        if 0 < step_ms < 0.2:
+            raise LogFormatError(
+                f"the time column steps by {step_ms:.3g} ms (median): it looks like seconds, but this "
+                "format's first column is milliseconds (time_ms); convert it, or write a CSV with a time_s column",
+                path=first.path,
+                line=int(first.lines[0]),
+            )
+
+
+def _signals(rows: np.ndarray, parts: list[_Part], units: list[str], cpr: float | None) -> dict[str, np.ndarray]:
+    """Signals in SI from the joined rows: counts, position (with ``cpr``), voltage and current.
+
+    ``units`` is the current unit of each file in ``parts``; the current column is scaled file by
+    file.
+    """
+    signals: dict[str, np.ndarray] = {"counts": rows[:, 1]}
+    if cpr is not None:
+        signals["position"] = rows[:, 1] * (2.0 * math.pi / cpr)
+    if rows.shape[1] == 4:
+        signals["voltage"] = rows[:, 2]
+        pairs = zip(parts, units, strict=True)
+        factors = np.concatenate([np.full(p.rows.shape[0], unit_factor(u, "A")) for p, u in pairs])
+        signals["current"] = rows[:, 3] * factors
+    return signals
 
 
 def _read_part(path: PathArg) -> _Part:

@@ -148,6 +148,43 @@ def read_waveform_samples(path: PathArg, *, channel: str | None = None) -> Wavef
         raise LogFormatError("too short for a waveform (needs a header and samples)", path=name)
     header_no, header_line = numbered[0]
     header = split_fields(header_line, ",")
+    layout, channels, rows, (start, increment, time_factor) = _waveform_layout(header, numbered, name)
+    if not channels:
+        raise LogFormatError("no channel column in the header", path=name, line=header_no)
+    if channel is None:
+        column = 1
+    else:
+        wanted = channel.lower()
+        matches = [i for i, c in enumerate(channels) if c.lower() in (wanted, f"{wanted}_v")]
+        if not matches:
+            raise OptionError(f"channel {channel!r} is not in {name} (it has: {', '.join(channels)})")
+        column = matches[0] + 1
+    label = header[column]
+    xs, ys, lines = _waveform_rows(text, rows, column, header[0], label)
+    if len(xs) < 2:
+        raise LogFormatError("fewer than two samples", path=name)
+    x_arr = np.asarray(xs)
+    time = start + x_arr * increment if start is not None and increment is not None else x_arr * time_factor
+    if np.any(np.diff(time) <= 0):
+        i = int(np.flatnonzero(np.diff(time) <= 0)[0]) + 1
+        raise LogFormatError("sample times must increase", path=name, line=lines[i])
+    return Waveform(time, np.asarray(ys), np.asarray(lines, dtype=int), label, layout)
+
+
+_Timing = tuple[float | None, float | None, float]
+
+
+def _waveform_layout(
+    header: list[str], numbered: list[tuple[int, str]], name: str
+) -> tuple[str, list[str], list[tuple[int, str]], _Timing]:
+    """Layout, channel names, sample rows and timing of a waveform file from its header line(s).
+
+    ``numbered`` holds the (line number, line) pairs of the file without comments, the header
+    first. The timing is ``(start, increment, time_factor)``: a Rigol ``Sequence`` export gives the
+    time of sample ``x`` as start + x·increment, other layouts as x·time_factor (start and increment
+    then None).
+    """
+    header_no, header_line = numbered[0]
     lower = [h.lower() for h in header]
     rows = numbered[1:]
     start = increment = None
@@ -187,17 +224,18 @@ def read_waveform_samples(path: PathArg, *, channel: str | None = None) -> Wavef
             path=name,
             line=header_no,
         )
-    if not channels:
-        raise LogFormatError("no channel column in the header", path=name, line=header_no)
-    if channel is None:
-        column = 1
-    else:
-        wanted = channel.lower()
-        matches = [i for i, c in enumerate(channels) if c.lower() in (wanted, f"{wanted}_v")]
-        if not matches:
-            raise OptionError(f"channel {channel!r} is not in {name} (it has: {', '.join(channels)})")
-        column = matches[0] + 1
-    label = header[column]
+    return layout, channels, rows, (start, increment, time_factor)
+
+
+def _waveform_rows(
+    text: TextFile, rows: list[tuple[int, str]], column: int, x_label: str, label: str
+) -> tuple[list[float], list[float], list[int]]:
+    """First-column values, ``column`` values and line numbers of the sample rows.
+
+    A short or non-numeric last line without a line terminator (the writer was cut off) ends the
+    samples quietly; anywhere else it is an error naming the line.
+    """
+    name = text.path
     xs: list[float] = []
     ys: list[float] = []
     lines: list[int] = []
@@ -208,7 +246,7 @@ def read_waveform_samples(path: PathArg, *, channel: str | None = None) -> Wavef
                 break
             raise LogFormatError(f"row has no {label} value", path=name, line=number)
         try:
-            x = parse_number(fields[0], path=name, line=number, column=header[0])
+            x = parse_number(fields[0], path=name, line=number, column=x_label)
             y = parse_number(fields[column], path=name, line=number, column=label)
         except LogFormatError:
             if text.may_be_truncated(number):
@@ -217,14 +255,7 @@ def read_waveform_samples(path: PathArg, *, channel: str | None = None) -> Wavef
         xs.append(x)
         ys.append(y)
         lines.append(number)
-    if len(xs) < 2:
-        raise LogFormatError("fewer than two samples", path=name)
-    x_arr = np.asarray(xs)
-    time = start + x_arr * increment if start is not None and increment is not None else x_arr * time_factor
-    if np.any(np.diff(time) <= 0):
-        i = int(np.flatnonzero(np.diff(time) <= 0)[0]) + 1
-        raise LogFormatError("sample times must increase", path=name, line=lines[i])
-    return Waveform(time, np.asarray(ys), np.asarray(lines, dtype=int), label, layout)
+    return xs, ys, lines
 
 
 def find_rising_edges(

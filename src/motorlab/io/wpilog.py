@@ -433,46 +433,11 @@ def read_wpilog(
     voltage = entries[roles["voltage"]]
     position = entries[roles["position"]]
     velocity = entries[roles["velocity"]]
-    for role, entry in (("voltage", voltage), ("position", position), ("velocity", velocity)):
-        bad = np.flatnonzero(~np.isfinite(entry.values))
-        if bad.size:
-            raise LogFormatError(
-                f"{role} entry {entry.name!r} has a non-finite value at t = {entry.timestamps[bad[0]]:.6f} s", path=name
-            )
-        if len(entry) == 0:
-            raise LogFormatError(f"{role} entry {entry.name!r} has no samples", path=name)
-
-    pos_unit = position_unit or _pint_unit(position.metadata)
-    if pos_unit is None:
-        raise LogFormatError(
-            f"position entry {position.name!r} does not say its unit (metadata {position.metadata!r}); "
-            "give position_unit= (e.g. 'rotation', 'rad', 'm')",
-            path=name,
-        )
-    pos_factor, pos_si = _si_factor(pos_unit, per_time=False)
-    # The velocity entry's own metadata wins over "position unit per second" (a log may give rpm).
-    vel_unit = velocity_unit or _pint_unit(velocity.metadata) or f"({pos_unit})/s"
-    vel_factor, vel_si = _si_factor(vel_unit, per_time=True)
-    if vel_si != f"{pos_si}/s":
-        raise OptionError(f"velocity unit {vel_unit!r} does not match position unit {pos_unit!r}")
-    volt_unit = _pint_unit(voltage.metadata)
-    volt_factor = 1.0
-    if volt_unit is not None:
-        try:
-            volt_factor = float(registry().Quantity(1.0, volt_unit).to("V").magnitude)
-        except Exception:  # not a voltage unit in the metadata: the name said voltage, take volts
-            warnings.append(f"voltage metadata {voltage.metadata!r} is not a voltage unit; taken as volts")
-
-    t = voltage.timestamps
-    step = float(np.median(np.diff(t))) if t.size > 1 else 0.0
-    steps = [step] + [float(np.median(np.diff(e.timestamps))) for e in (position, velocity) if len(e) > 1]
-    tolerance = 2.0 * max(steps)
-    first = max(position.timestamps[0], velocity.timestamps[0]) - tolerance
-    last = min(position.timestamps[-1], velocity.timestamps[-1]) + tolerance
-    keep = (t >= first) & (t <= last)
-    t = t[keep]
-    if t.size == 0:
-        raise LogFormatError("the voltage and position/velocity entries do not overlap in time", path=name)
+    _check_samples({"voltage": voltage, "position": position, "velocity": velocity}, name)
+    volt_factor, pos_factor, vel_factor, pos_si, vel_si = _unit_factors(
+        voltage, position, velocity, position_unit, velocity_unit, name, warnings
+    )
+    t, keep, step = _overlap(voltage, position, velocity, name)
     signals = {
         "voltage": voltage.values[keep] * volt_factor,
         "position": position.values[_nearest(position.timestamps, t)] * pos_factor,
@@ -500,6 +465,76 @@ def read_wpilog(
         "warnings": warnings,
     }
     return Recording(time=t, signals=signals, metadata=metadata, source=name, segments=segments)
+
+
+def _check_samples(signals: dict[str, WpilogEntry], path: str) -> None:
+    """Each signal entry (by role) holds samples, all of them finite."""
+    for role, entry in signals.items():
+        bad = np.flatnonzero(~np.isfinite(entry.values))
+        if bad.size:
+            raise LogFormatError(
+                f"{role} entry {entry.name!r} has a non-finite value at t = {entry.timestamps[bad[0]]:.6f} s", path=path
+            )
+        if len(entry) == 0:
+            raise LogFormatError(f"{role} entry {entry.name!r} has no samples", path=path)
+
+
+def _unit_factors(
+    voltage: WpilogEntry,
+    position: WpilogEntry,
+    velocity: WpilogEntry,
+    position_unit: str | None,
+    velocity_unit: str | None,
+    path: str,
+    warnings: list[str],
+) -> tuple[float, float, float, str, str]:
+    """Factors to SI of the voltage, position and velocity entries, then the SI position and velocity units.
+
+    The units given by the caller win over the entries' metadata; a voltage metadata that is not a
+    voltage unit is taken as volts with a warning appended to ``warnings``.
+    """
+    pos_unit = position_unit or _pint_unit(position.metadata)
+    if pos_unit is None:
+        raise LogFormatError(
+            f"position entry {position.name!r} does not say its unit (metadata {position.metadata!r}); "
+            "give position_unit= (e.g. 'rotation', 'rad', 'm')",
+            path=path,
+        )
+    pos_factor, pos_si = _si_factor(pos_unit, per_time=False)
+    # The velocity entry's own metadata wins over "position unit per second" (a log may give rpm).
+    vel_unit = velocity_unit or _pint_unit(velocity.metadata) or f"({pos_unit})/s"
+    vel_factor, vel_si = _si_factor(vel_unit, per_time=True)
+    if vel_si != f"{pos_si}/s":
+        raise OptionError(f"velocity unit {vel_unit!r} does not match position unit {pos_unit!r}")
+    volt_unit = _pint_unit(voltage.metadata)
+    volt_factor = 1.0
+    if volt_unit is not None:
+        try:
+            volt_factor = float(registry().Quantity(1.0, volt_unit).to("V").magnitude)
+        except Exception:  # not a voltage unit in the metadata: the name said voltage, take volts
+            warnings.append(f"voltage metadata {voltage.metadata!r} is not a voltage unit; taken as volts")
+    return volt_factor, pos_factor, vel_factor, pos_si, vel_si
+
+
+def _overlap(
+    voltage: WpilogEntry, position: WpilogEntry, velocity: WpilogEntry, path: str
+) -> tuple[np.ndarray, np.ndarray, float]:
+    """Voltage timestamps [s] kept, the mask keeping them, and the voltage sample interval [s].
+
+    A voltage sample is kept when it lies no more than two (largest median) sample intervals outside
+    the span that both the position and the velocity records cover.
+    """
+    t = voltage.timestamps
+    step = float(np.median(np.diff(t))) if t.size > 1 else 0.0
+    steps = [step] + [float(np.median(np.diff(e.timestamps))) for e in (position, velocity) if len(e) > 1]
+    tolerance = 2.0 * max(steps)
+    first = max(position.timestamps[0], velocity.timestamps[0]) - tolerance
+    last = min(position.timestamps[-1], velocity.timestamps[-1]) + tolerance
+    keep = (t >= first) & (t <= last)
+    t = t[keep]
+    if t.size == 0:
+        raise LogFormatError("the voltage and position/velocity entries do not overlap in time", path=path)
+    return t, keep, step
 
 
 def _segments(labels: Sequence[str]) -> dict[str, tuple[int, int]]:
