@@ -15,7 +15,7 @@ import numpy as np
 from motorlab.analyses import _common as common
 from motorlab.decimate import block_mean
 from motorlab.errors import FitError, OptionError
-from motorlab.fitting import r_squared
+from motorlab.fitting import LeastSquares, r_squared
 from motorlab.recording import Recording
 from motorlab.results import Estimate, FitResult, Panel, Series
 from motorlab.units import SI_UNITS
@@ -181,6 +181,41 @@ def free_spinup(
         edges, torque_constant=torque_constant, current=current, cpr=cpr, edges_per_revolution=edges_per_revolution,
         viscous_friction=viscous_friction, coulomb_friction=coulomb_friction,
         stderrs=(torque_constant_stderr, current_stderr, viscous_friction_stderr, coulomb_friction_stderr))
+    t_edges, tau, theta = _edge_angles(edges, edges_per_revolution, source)
+    b_given = viscous_friction or 0.0
+    warnings: list[str] = common.reader_warnings(edges)
+    x0 = _initial_guess(tau, theta, torque_constant=torque_constant, current=current, b_given=b_given,
+                        tf_given=coulomb_friction or 0.0, source=source)
+    fit, x_full = _fit_spinup(tau, theta, x0, se, source)
+    warnings.extend(_fragility_warnings(t_edges.size, viscous_friction, coulomb_friction,
+                                        torque_constant * current))
+    model_theta = _position(x_full, tau)
+    return FitResult(
+        experiment="free-spinup",
+        parameters=_parameters(fit, x_full),
+        correlation=fit.correlation,
+        correlation_names=list(fit.names),
+        rmse=float(np.sqrt(np.mean((theta - model_theta) ** 2))),
+        rmse_unit="rad",
+        r2=r_squared(theta, model_theta),
+        n_points=int(theta.size),
+        panels=_panels(t_edges, theta, model_theta, common.ramp_speed, x_full[1], _rates(x_full)),
+        warnings=warnings,
+        details=_details(t_edges, x_full, edges_per_revolution, b_given),
+        sources=[edges.source] if edges.source else [],
+    )
+
+
+def _edge_angles(edges: Recording, edges_per_revolution: float,
+                 source: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The edge times [s], the times since the first edge τ [s] and the shaft angle at each edge since
+    the first [rad].
+
+    Raises
+    ------
+    FitError
+        Too few edges, or edge times that do not increase.
+    """
     common.check_finite_signals(edges, [])
     t_edges = np.asarray(edges.time, dtype=float)
     if t_edges.size < _MIN_EDGES:
@@ -189,11 +224,20 @@ def free_spinup(
         raise FitError(f"{source}: the edge times do not increase")
     index = edges.signals.get("counts", np.arange(t_edges.size, dtype=float))
     theta = (index - index[0]) * (2.0 * math.pi / edges_per_revolution)
-    tau = t_edges - t_edges[0]
-    b_given = viscous_friction or 0.0
-    tf_given = coulomb_friction or 0.0
-    warnings: list[str] = common.reader_warnings(edges)
+    return t_edges, t_edges - t_edges[0], theta
 
+
+def _initial_guess(tau: np.ndarray, theta: np.ndarray, *, torque_constant: float, current: float, b_given: float,
+                   tf_given: float, source: str) -> np.ndarray:
+    """Starting values of (P0, ω0, J, K, I, Tf, b) from a parabola through the angles.
+
+    Raises
+    ------
+    FitError
+        A motor that does not accelerate.
+    OptionError
+        K·I not above the given Tf.
+    """
     quad = np.polyfit(tau, theta, 2)
     alpha0 = 2.0 * quad[0]
     if alpha0 <= 0:
@@ -203,64 +247,68 @@ def free_spinup(
         raise OptionError(f"K·I = {torque_constant * current:.3g} N·m does not exceed Tf = {tf_given:.3g} N·m")
     mean_speed = float(theta[-1] / tau[-1])
     j0 = max(torque - b_given * mean_speed, 0.1 * torque) / alpha0
+    return np.array([quad[2], quad[1], j0, torque_constant, current, tf_given, b_given])
 
-    def rates(x: np.ndarray) -> tuple[float, float]:
-        """γ = b/J [1/s] and A = (K·I − Tf)/J [rad/s²]."""
-        j, k, i, tf, b = x[2], x[3], x[4], x[5], x[6]
-        return b / j, (k * i - tf) / j
 
-    def position(x: np.ndarray) -> np.ndarray:
-        gamma, accel = rates(x)
-        return x[0] + common.ramp_position(tau, x[1], gamma, accel)
+def _rates(x: np.ndarray) -> tuple[float, float]:
+    """γ = b/J [1/s] and A = (K·I − Tf)/J [rad/s²]."""
+    j, k, i, tf, b = x[2], x[3], x[4], x[5], x[6]
+    return b / j, (k * i - tf) / j
 
-    def speed(x: np.ndarray) -> np.ndarray:
-        return common.ramp_speed(tau, x[1], *rates(x))
 
-    x0 = np.array([quad[2], quad[1], j0, torque_constant, current, tf_given, b_given])
+def _position(x: np.ndarray, tau: np.ndarray) -> np.ndarray:
+    """Model angle [rad] at the times τ since the first edge."""
+    gamma, accel = _rates(x)
+    return x[0] + common.ramp_position(tau, x[1], gamma, accel)
+
+
+def _speed(x: np.ndarray, tau: np.ndarray) -> np.ndarray:
+    """Model speed [rad/s] at the times τ since the first edge."""
+    return common.ramp_speed(tau, x[1], *_rates(x))
+
+
+def _fit_spinup(tau: np.ndarray, theta: np.ndarray, x0: np.ndarray, se: dict[str, float],
+                source: str) -> tuple[LeastSquares, np.ndarray]:
+    """The weighted fit of the angles, K, I, Tf and b entering as priors; the fit and all its parameters.
+
+    A first unweighted fit gives the residuals from which the weights 1/σ are estimated, then the fit
+    is repeated with them.
+    """
     priors = [
         common.Prior([name], np.array([x0[_NAMES.index(name)]]), np.array([[se[name] ** 2]]))
         for name in ("K", "I", "Tf", "b")
     ]
     sigma = np.ones_like(theta)
     try:
-        fit, x_full = common.fit_with_priors(lambda x: (position(x) - theta) / sigma, x0, _NAMES, priors)
+        fit, x_full = common.fit_with_priors(lambda x: (_position(x, tau) - theta) / sigma, x0, _NAMES, priors)
         # Cursor errors are errors in time: a position error ω·δt (plus a constant part).
-        sigma = common.speed_noise_sigma(position(x_full) - theta, speed(x_full), dof=max(theta.size - 3, 1))
-        fit, x_full = common.fit_with_priors(lambda x: (position(x) - theta) / sigma, x_full, _NAMES, priors)
+        sigma = common.speed_noise_sigma(_position(x_full, tau) - theta, _speed(x_full, tau),
+                                         dof=max(theta.size - 3, 1))
+        fit, x_full = common.fit_with_priors(lambda x: (_position(x, tau) - theta) / sigma, x_full, _NAMES, priors)
     except FitError as exc:
         raise common.in_file(exc, source) from None
+    return fit, x_full
 
+
+def _parameters(fit: LeastSquares, x_full: np.ndarray) -> dict[str, Estimate]:
+    """J and the acceleration at zero speed α = (K·I − Tf)/J, with their standard errors."""
     est = fit.estimates({n: _UNITS[n] for n in fit.names})
-    alpha = rates(x_full)[1]
-    alpha_se = common.derived_stderr(fit, x_full, _NAMES, lambda x: rates(x)[1])
-    parameters: dict[str, Estimate] = {
+    alpha = _rates(x_full)[1]
+    alpha_se = common.derived_stderr(fit, x_full, _NAMES, lambda x: _rates(x)[1])
+    return {
         "J": est["J"],
         "alpha": Estimate("alpha", alpha, alpha_se, "rad/s^2", note="acceleration at zero speed, (K·I − Tf)/J"),
     }
-    warnings.extend(_fragility_warnings(t_edges.size, viscous_friction, coulomb_friction,
-                                        torque_constant * current))
-    model_theta = position(x_full)
-    model_speed = speed(x_full)
-    panels = _panels(t_edges, theta, model_theta, common.ramp_speed, x_full[1], rates(x_full))
-    details: dict[str, Any] = {
+
+
+def _details(t_edges: np.ndarray, x_full: np.ndarray, edges_per_revolution: float, b_given: float) -> dict[str, Any]:
+    """The free spin-up's ``details``: the first edge, the edges per revolution, the speed range, the model."""
+    model_speed = _speed(x_full, t_edges - t_edges[0])
+    return {
         "t0_s": float(t_edges[0]), "edges_per_revolution": float(edges_per_revolution),
         "omega0_rad_per_s": float(x_full[1]), "omega_end_rad_per_s": float(model_speed[-1]),
         "model": "viscous drag (exact solution)" if b_given > 0 else "constant acceleration",
     }
-    return FitResult(
-        experiment="free-spinup",
-        parameters=parameters,
-        correlation=fit.correlation,
-        correlation_names=list(fit.names),
-        rmse=float(np.sqrt(np.mean((theta - model_theta) ** 2))),
-        rmse_unit="rad",
-        r2=r_squared(theta, model_theta),
-        n_points=int(theta.size),
-        panels=panels,
-        warnings=warnings,
-        details=details,
-        sources=[edges.source] if edges.source else [],
-    )
 
 
 # ---- reading the files -------------------------------------------------------------------------

@@ -347,31 +347,93 @@ def spindown(
     """
     recording = block_mean(recording)  # a 2M-row log: block means, not 2M-point fits
     source = recording.source or "log"
+    inertia_se = _checked_options(guard=guard, inertia=inertia, inertia_stderr=inertia_stderr, cutoff=cutoff)
+    theta_all, quantum = _encoder_angles(recording, cpr=cpr, cutoff=cutoff, source=source)
+    warnings: list[str] = common.reader_warnings(recording)
+    tick_log = common.is_tick_log(recording)
+    has_current = "current" in recording.signals and not tick_log
+
+    # ---- the coast: after the relay opened (plus a guard), until the shaft stopped -----------------
+    idx, t_off, stopped = _find_coast(recording, theta_all, cutoff=cutoff, guard=guard, tick_log=tick_log,
+                                      has_current=has_current, warnings=warnings)
+    t, tau, theta, direction = _coast_angles(recording.time, theta_all, idx, quantum, source)
+    voltage = _coast_voltage(recording, idx, tick_log=tick_log, warnings=warnings)
+
+    # ---- stages 1 and 2: position only, then the bus voltage; then the joint weighted fit ----------
+    coast = _fit_coast(tau, theta, voltage, source)
+    joint, x = coast.joint, coast.joint.values
+    comparison = coast.compare_nested()
+    estimates = joint.estimates(_UNITS)
+    support = _friction_support(estimates["Tf_over_J"], estimates["gamma"], comparison, warnings)
+    omega = common.coast_speed(tau, x[1], x[2], x[3])
+    warnings.extend(_short_coast_warning(omega, x))
+    model_theta = x[0] + common.coast_position(tau, x[1], x[2], x[3])
+    details = _details(t, x, t_off, stopped, direction, tick_log, comparison, support, coast.sigma_theta, quantum)
+    return FitResult(
+        experiment="spindown",
+        parameters=_parameters(estimates, joint, voltage is not None, inertia, inertia_se),
+        correlation=joint.correlation,
+        correlation_names=list(joint.names),
+        rmse=float(np.sqrt(np.mean((theta - model_theta) ** 2))),
+        rmse_unit="rad",
+        r2=r_squared(theta, model_theta),
+        n_points=int(tau.size),
+        panels=_panels(t, theta, model_theta, x, omega, voltage),
+        warnings=warnings,
+        details={**details, **_voltage_details(voltage, coast.sigma_v, x, omega)},
+        sources=[recording.source] if recording.source else [],
+    )
+
+
+def _checked_options(*, guard: float, inertia: float | None, inertia_stderr: float | None,
+                     cutoff: float | None) -> float:
+    """Refuse an impossible guard, inertia, inertia standard error or cut-off; the inertia's standard
+    error (0 if not given)."""
     common.check_nonnegative(guard, "guard")
     common.check_positive(inertia, "inertia")
     common.check_limits(inertia, "J", "the inertia (--inertia)")
     inertia_se = common.check_stderr_limit(inertia_stderr, "J", "the inertia's standard error (--inertia-stderr)")
     if cutoff is not None and not math.isfinite(cutoff):
         raise OptionError(f"cutoff must be a finite time in seconds, got {cutoff!r}")
+    return inertia_se
+
+
+def _encoder_angles(recording: Recording, *, cpr: float | None, cutoff: float | None,
+                    source: str) -> tuple[np.ndarray, float]:
+    """The encoder angle of every sample [rad] and one count [rad] (NaN when unknown).
+
+    Raises
+    ------
+    LogFormatError
+        NaN in the log, or no encoder signal.
+    FitError
+        Too few samples.
+    OptionError
+        Impossible ``cpr``; a ``cutoff`` outside the log's time span.
+    """
     common.check_finite_signals(recording, ["counts", "position", "voltage", "current"])
     theta_all, quantum = common.position_of(recording, cpr=cpr)
     t_all = recording.time
-    n_all = t_all.size
-    if n_all < _MIN_SAMPLES:
-        raise FitError(f"{source}: {n_all} samples are too few for a spin-down fit")
-    warnings: list[str] = common.reader_warnings(recording)
-    tick_log = common.is_tick_log(recording)
-    has_current = "current" in recording.signals and not tick_log
-    has_voltage = "voltage" in recording.signals and not tick_log
+    if t_all.size < _MIN_SAMPLES:
+        raise FitError(f"{source}: {t_all.size} samples are too few for a spin-down fit")
     if cutoff is not None and not float(t_all[0]) <= cutoff <= float(t_all[-1]):
         # Before the log starts the powered run would be fitted as a coast (K = 1.30 against 0.70
         # and Tf/J < 0 in the QA run); after it ends there is nothing to fit.
         raise OptionError(f"the cut-off (--cutoff) {cutoff:g} s lies outside the log's time span "
                           f"{float(t_all[0]):g} s to {float(t_all[-1]):g} s", path=recording.source or None)
+    return theta_all, quantum
 
-    # ---- the coast: after the relay opened (plus a guard), until the shaft stopped -----------------
-    idx, t_off, stopped = _find_coast(recording, theta_all, cutoff=cutoff, guard=guard, tick_log=tick_log,
-                                      has_current=has_current, warnings=warnings)
+
+def _coast_angles(t_all: np.ndarray, theta_all: np.ndarray, idx: np.ndarray, quantum: float,
+                  source: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+    """The coast's times [s], times since its start τ [s], angle turned since its start [rad] (positive
+    in the direction of the coast) and that direction (±1).
+
+    Raises
+    ------
+    FitError
+        A coast turning fewer than ``_MIN_COUNTS`` encoder counts.
+    """
     start, stop = int(idx[0]), int(idx[-1])
     t = t_all[idx]
     tau = t - t[0]
@@ -382,56 +444,48 @@ def spindown(
         raise FitError(
             f"{source}: no coast found: the shaft turns only {span / quantum:.0f} counts after the cut-off"
         )
+    return t, tau, theta, direction
 
-    # ---- stages 1 and 2: position only, then the bus voltage; then the joint weighted fit ----------
-    voltage = None
-    if has_voltage:
-        raw_v = recording.signals["voltage"][idx]
-        voltage = (1.0 if float(np.sum(raw_v)) >= 0 else -1.0) * raw_v
-    else:
+
+def _coast_voltage(recording: Recording, idx: np.ndarray, *, tick_log: bool,
+                   warnings: list[str]) -> np.ndarray | None:
+    """The bus voltage during the coast, signed to be positive on the whole [V]; None (with a warning)
+    when the log has none (a tick-timestamp log never has)."""
+    if "voltage" not in recording.signals or tick_log:
         warnings.append("the log has no bus voltage: K is not estimated")
-    coast = _fit_coast(tau, theta, voltage, source)
-    joint, x, sigma_theta, sigma_v = coast.joint, coast.joint.values, coast.sigma_theta, coast.sigma_v
-    comparison = coast.compare_nested()
-    estimates = joint.estimates(_UNITS)
-    decel, gamma_est = estimates["Tf_over_J"], estimates["gamma"]
-    coulomb_supported, viscous_supported = _friction_support(decel, gamma_est, comparison, warnings)
+        return None
+    raw_v = recording.signals["voltage"][idx]
+    return (1.0 if float(np.sum(raw_v)) >= 0 else -1.0) * raw_v
 
-    omega = common.coast_speed(tau, x[1], x[2], x[3])
+
+def _short_coast_warning(omega: np.ndarray, x: np.ndarray) -> list[str]:
+    """A warning when the speed fell by less than 20 % during the coast."""
     if omega[-1] > 0.8 * x[1]:
-        warnings.append(
+        return [
             f"coast too short: the speed fell by only {100 * (1 - omega[-1] / x[1]):.0f} %; "
             "gamma and Tf/J are poorly separated"
-        )
+        ]
+    return []
 
-    parameters = {name: estimates[name] for name in (["K"] if voltage is not None else []) + ["gamma", "Tf_over_J"]}
+
+def _parameters(estimates: dict[str, Estimate], joint: LeastSquares, has_voltage: bool, inertia: float | None,
+                inertia_se: float) -> dict[str, Estimate]:
+    """K (with a bus voltage), γ and Tf/J; with the inertia also J, b and Tf."""
+    parameters = {name: estimates[name] for name in (["K"] if has_voltage else []) + ["gamma", "Tf_over_J"]}
     if inertia is not None:
         parameters.update(_friction_from_inertia(joint, inertia, inertia_se))
+    return parameters
 
-    # ---- curves -----------------------------------------------------------------------------------
-    model_theta = x[0] + common.coast_position(tau, x[1], x[2], x[3])
-    panels = _panels(t, theta, model_theta, x, omega, voltage)
-    residual_theta = theta - model_theta
-    details = _details(t, x, t_off, stopped, direction, tick_log, comparison, (coulomb_supported, viscous_supported),
-                       sigma_theta, quantum)
-    if voltage is not None:
-        details["sigma_voltage_V"] = sigma_v
-        details["voltage_rmse_V"] = float(np.sqrt(np.mean((voltage - x[4] * omega) ** 2)))
-        details["n_voltage"] = int(voltage.size)
-    return FitResult(
-        experiment="spindown",
-        parameters=parameters,
-        correlation=joint.correlation,
-        correlation_names=list(joint.names),
-        rmse=float(np.sqrt(np.mean(residual_theta**2))),
-        rmse_unit="rad",
-        r2=r_squared(theta, model_theta),
-        n_points=int(tau.size),
-        panels=panels,
-        warnings=warnings,
-        details=details,
-        sources=[recording.source] if recording.source else [],
-    )
+
+def _voltage_details(voltage: np.ndarray | None, sigma_v: float, x: np.ndarray, omega: np.ndarray) -> dict[str, Any]:
+    """The bus voltage's σ, the rms of its residuals and its sample count (none without a voltage)."""
+    if voltage is None:
+        return {}
+    return {
+        "sigma_voltage_V": sigma_v,
+        "voltage_rmse_V": float(np.sqrt(np.mean((voltage - x[4] * omega) ** 2))),
+        "n_voltage": int(voltage.size),
+    }
 
 
 def _friction_support(decel: Estimate, gamma_est: Estimate, comparison: dict[str, Any],

@@ -130,17 +130,53 @@ def terminal(
     common.check_finite_signals(recording, ["current", "frequency", "speed", "velocity"])
     current = np.abs(recording.require("current"))
     omega = np.abs(speeds_of(recording, cpr=cpr))
-    if frequency_stderr is not None and "frequency" not in recording.signals:
+    omega_se = _frequency_stderr_as_speed(recording, cpr, f_se, given=frequency_stderr is not None, source=source)
+    if current.size == 0:
+        raise FitError(f"{source}: no rows")
+    K = torque_constant
+    warnings: list[str] = common.reader_warnings(recording)
+    current, omega = _turning_rows(current, omega, source, warnings)
+    spread, one_current, several = _operating_points(current, omega)
+    if several and coulomb_friction is None:
+        parameters, correlation, correlation_names, model_current = _fit_b_and_tf(
+            omega, current, K=K, k_se=k_se, source=source, warnings=warnings)
+    else:
+        parameters, model_current = _fit_b(
+            current, omega, K=K, coulomb_friction=coulomb_friction, k_se=k_se, tf_se=tf_se, i_se=current_stderr,
+            omega_se=omega_se, points=(spread, one_current, several), warnings=warnings,
+        )
+        correlation, correlation_names = None, []
+    return _result(recording, current, omega, model_current, parameters, correlation, correlation_names, warnings)
+
+
+def _frequency_stderr_as_speed(recording: Recording, cpr: float | None, f_se: float, *, given: bool,
+                               source: str) -> float:
+    """One frequency reading's standard error as a speed [rad/s] (0 when not given).
+
+    Raises
+    ------
+    OptionError
+        A frequency standard error ``given`` for rows that hold speeds.
+    """
+    if given and "frequency" not in recording.signals:
         raise OptionError(f"{source}: the rows hold speeds, not frequencies: the frequency's standard error "
                           "does not apply")
     # One frequency reading's standard error as a speed [rad/s]: ω = 2π·4·f/cpr (speeds_of).
     omega_se = 0.0
     if f_se > 0:
         omega_se = 2.0 * math.pi * 4.0 * f_se / float(cpr if cpr is not None else recording.metadata["cpr"])
-    if current.size == 0:
-        raise FitError(f"{source}: no rows")
-    K = torque_constant
-    warnings: list[str] = common.reader_warnings(recording)
+    return omega_se
+
+
+def _turning_rows(current: np.ndarray, omega: np.ndarray, source: str,
+                  warnings: list[str]) -> tuple[np.ndarray, np.ndarray]:
+    """The rows where the motor turned (a warning names those left out).
+
+    Raises
+    ------
+    FitError
+        When the motor turned in no row.
+    """
     at_rest = omega <= 0
     if np.all(at_rest):
         raise FitError(f"{source}: the motor did not turn in any row (zero speed): raise the current")
@@ -149,46 +185,27 @@ def terminal(
         rows = ", ".join(f"{k + 1} ({current[k]:.3g} A)" for k in np.flatnonzero(at_rest))
         warnings.append(f"rows {rows} have zero speed (stiction held the shaft, K·I ≤ Tf): left out")
         current, omega = current[~at_rest], omega[~at_rest]
+    return current, omega
+
+
+def _operating_points(current: np.ndarray, omega: np.ndarray) -> tuple[float, bool, bool]:
+    """The relative spread of the speeds, whether every row reads one current, and whether the rows
+    span several operating points (so that b and Tf can be separated)."""
     spread = float(np.ptp(omega) / np.mean(omega))
     one_current = current.size >= 2 and float(np.ptp(current)) == 0.0
     several = current.size >= 2 and spread >= _MIN_SPREAD and not one_current
+    return spread, one_current, several
+
+
+def _result(recording: Recording, current: np.ndarray, omega: np.ndarray, model_current: np.ndarray,
+            parameters: dict[str, Estimate], correlation: np.ndarray | None, correlation_names: list[str],
+            warnings: list[str]) -> FitResult:
+    """The terminal analysis's result: the rows in ``details`` and the current-vs-speed panel."""
     details: dict[str, Any] = {
         "rows": common.listed_rows(
             current.size, lambda k: {"current_A": float(current[k]), "speed_rad_per_s": float(omega[k])}
         )
     }
-    parameters: dict[str, Estimate] = {}
-    correlation = None
-    correlation_names: list[str] = []
-    if several and coulomb_friction is None:
-        parameters, correlation, correlation_names, model_current = _fit_b_and_tf(
-            omega, current, K=K, k_se=k_se, source=source, warnings=warnings)
-    else:
-        tf = coulomb_friction or 0.0
-        if several:
-            # (K·I − Tf) = b·ω through the origin.
-            fit = fit_linear(omega[:, None], K * current - tf, ["b"])
-            b = float(fit.values[0])
-            var_fit = float(fit.covariance[0, 0])
-            if common.no_scatter(K * current - tf, b * omega):
-                var_fit = math.nan
-                warnings.append(common.EXACT_LINE_WARNING)
-            # K and Tf errors move every row alike: propagate them through b = (K·Ī − Tf)·ω̄/ω̄².
-            w2 = float(np.sum(omega**2))
-            db_dk = float(np.sum(current * omega)) / w2
-            db_dtf = -float(np.sum(omega)) / w2
-            b_se = math.sqrt(var_fit + db_dk**2 * k_se**2 + db_dtf**2 * tf_se**2)
-        else:
-            b, b_se = _one_operating_point(
-                current, omega, K=K, tf=tf, k_se=k_se, tf_se=tf_se, i_se=current_stderr, omega_se=omega_se,
-                warnings=warnings,
-            )
-            warnings.extend(_one_point_warnings(current, spread, one_current=one_current,
-                                                given_tf=coulomb_friction is not None))
-        parameters["b"] = Estimate("b", b, b_se, SI_UNITS["b"])
-        if coulomb_friction is not None:
-            parameters["Tf"] = Estimate("Tf", tf, tf_se, SI_UNITS["Tf"], note="given")
-        model_current = (b * omega + tf) / K
     order = np.argsort(omega)
     panels = [
         Panel("Terminal speed: friction", "speed [rad/s]", "current [A]",
@@ -255,6 +272,47 @@ def _fit_b_and_tf(omega: np.ndarray, current: np.ndarray, *, K: float, k_se: flo
         warnings.append(f"the fitted Coulomb friction is negative ({tf:.3g} N·m): check the rows")
     model_current = beta1 * omega + beta0
     return parameters, correlation, ["b", "Tf"], model_current
+
+def _fit_b(
+    current: np.ndarray, omega: np.ndarray, *, K: float, coulomb_friction: float | None, k_se: float, tf_se: float,
+    i_se: float | None, omega_se: float, points: tuple[float, bool, bool], warnings: list[str],
+) -> tuple[dict[str, Estimate], np.ndarray]:
+    """b with Tf given (taken as 0 when not, at one operating point) and the model current.
+
+    ``points`` is the speeds' spread, whether the rows read one current and whether they span
+    several operating points (:func:`_operating_points`).
+    """
+    spread, one_current, several = points
+    tf = coulomb_friction or 0.0
+    if several:
+        b, b_se = _b_through_origin(current, omega, K=K, tf=tf, k_se=k_se, tf_se=tf_se, warnings=warnings)
+    else:
+        b, b_se = _one_operating_point(
+            current, omega, K=K, tf=tf, k_se=k_se, tf_se=tf_se, i_se=i_se, omega_se=omega_se,
+            warnings=warnings,
+        )
+        warnings.extend(_one_point_warnings(current, spread, one_current=one_current,
+                                            given_tf=coulomb_friction is not None))
+    parameters: dict[str, Estimate] = {"b": Estimate("b", b, b_se, SI_UNITS["b"])}
+    if coulomb_friction is not None:
+        parameters["Tf"] = Estimate("Tf", tf, tf_se, SI_UNITS["Tf"], note="given")
+    return parameters, (b * omega + tf) / K
+
+
+def _b_through_origin(current: np.ndarray, omega: np.ndarray, *, K: float, tf: float, k_se: float, tf_se: float,
+                      warnings: list[str]) -> tuple[float, float]:
+    """b from (K·I − Tf) = b·ω through the origin over several operating points, and its standard error."""
+    fit = fit_linear(omega[:, None], K * current - tf, ["b"])
+    b = float(fit.values[0])
+    var_fit = float(fit.covariance[0, 0])
+    if common.no_scatter(K * current - tf, b * omega):
+        var_fit = math.nan
+        warnings.append(common.EXACT_LINE_WARNING)
+    # K and Tf errors move every row alike: propagate them through b = (K·Ī − Tf)·ω̄/ω̄².
+    w2 = float(np.sum(omega**2))
+    db_dk = float(np.sum(current * omega)) / w2
+    db_dtf = -float(np.sum(omega)) / w2
+    return b, math.sqrt(var_fit + db_dk**2 * k_se**2 + db_dtf**2 * tf_se**2)
 
 
 def _one_point_warnings(current: np.ndarray, spread: float, *, one_current: bool, given_tf: bool) -> list[str]:

@@ -20,6 +20,7 @@ import numpy as np
 
 from motorlab.analyses._common import (
     EXACT_LINE_WARNING,
+    StraightLine,
     check_limits,
     check_stderr_limit,
     concatenate,
@@ -29,7 +30,7 @@ from motorlab.analyses._common import (
     sources_of,
 )
 from motorlab.errors import LogFormatError, OptionError
-from motorlab.fitting import fit_linear, r_squared
+from motorlab.fitting import LeastSquares, fit_linear, r_squared
 from motorlab.gearbox import efficiency_estimate
 from motorlab.recording import Recording
 from motorlab.results import Estimate, FitResult, Panel, Series
@@ -165,8 +166,8 @@ def torque(
     recs = [recordings] if isinstance(recordings, Recording) else list(recordings)
     if not recs:
         raise OptionError("no recording given")
-    warnings: list[str] = []
-    rec, tau, arm_used = _torque_rows(recs, arm, arm_stderr, (ratio, motor_constant, motor_constant_stderr))
+    gearbox = (ratio, motor_constant, motor_constant_stderr)
+    rec, tau, arm_used = _torque_rows(recs, arm, arm_stderr, gearbox)
     current = rec["current"]
     sources = sources_of(recs)
     if motor_constant is not None and np.unique(np.abs(current)).size == 1:
@@ -174,16 +175,52 @@ def torque(
     line = fit_straight_line(current, tau, source=" + ".join(sources), what="current",
                              response="scale reading" if arm_used is not None else "torque")
     approach = np.concatenate([approach_direction(r["current"]) for r in recs])
+    fit, model_tau, r2, hysteresis = _fit_line(current, tau, approach, line)
+    est = fit.estimates({"slope": "N*m/A", "intercept": "N*m", "tau_h": "N*m"})
+    parameters, warnings = _parameters(est, hysteresis, arm_used, arm_stderr, gearbox)
+    warnings.extend(_fit_warnings(int(current.size), line.exact, est["intercept"], tau))
+    return FitResult(
+        experiment="torque",
+        parameters=parameters,
+        correlation=fit.correlation,
+        correlation_names=["K", "tau0", "tau_h"] if hysteresis else ["K", "tau0"],
+        rmse=float(np.sqrt(np.mean((tau - model_tau) ** 2))),
+        rmse_unit="N*m",
+        r2=r2,
+        n_points=int(current.size),
+        panels=[_panel(current, tau, model_tau, parameters["K"].value, arm_used)],
+        warnings=reader_warnings(recs) + warnings,
+        details=_details(approach, hysteresis, arm_used, gearbox),
+        sources=sources,
+    )
+
+
+def _fit_line(
+    current: np.ndarray, tau: np.ndarray, approach: np.ndarray, line: StraightLine
+) -> tuple[LeastSquares, np.ndarray, float, bool]:
+    """The fit, its model torque, R² and whether the hysteresis τ_h was fitted.
+
+    With at least four rows, two or more of them approached from below and two or more from above,
+    τ = K·i + τ0 − d·τ_h is fitted; otherwise the straight line ``line`` is kept.
+    """
     hysteresis = int(np.count_nonzero(approach > 0)) >= 2 and int(np.count_nonzero(approach < 0)) >= 2
     if hysteresis and current.size >= 4:
         design = np.column_stack([current, np.ones_like(current), -approach])
         fit = fit_linear(design, tau, ["slope", "intercept", "tau_h"])
         model_tau = design @ fit.values
-        r2 = r_squared(tau, model_tau)
-    else:
-        hysteresis = False
-        fit, model_tau, r2 = line.fit, line.model, line.r2
-    est = fit.estimates({"slope": "N*m/A", "intercept": "N*m", "tau_h": "N*m"})
+        return fit, model_tau, r_squared(tau, model_tau), True
+    return line.fit, line.model, line.r2, False
+
+
+def _parameters(
+    est: dict[str, Estimate], hysteresis: bool, arm_used: float | None, arm_stderr: float,
+    gearbox: tuple[float, float | None, float],
+) -> tuple[dict[str, Estimate], list[str]]:
+    """K (the slope's magnitude, the arm's uncertainty added), tau0, the gearbox's efficiency and
+    loss torque (with ``gearbox`` = ratio, motor K, its standard error, when the motor K is given) and
+    tau_h (when fitted); the warnings about them (a reversed polarity, an impossible gearbox)."""
+    ratio, motor_constant, motor_constant_stderr = gearbox
+    warnings: list[str] = []
     slope, intercept = est["slope"], est["intercept"]
     if slope.value < 0:
         warnings.append(
@@ -212,37 +249,44 @@ def torque(
             "tau_h", h.value, h.stderr, "N*m", h.determined,
             "friction held by the stalled shaft (half-width of the up/down hysteresis)",
         )
-    if current.size == 2:
-        warnings.append("only two rows: the line passes through both, so no uncertainty can be estimated")
-    elif line.exact:
-        warnings.append(EXACT_LINE_WARNING)
-    warnings.extend(_offset_warning(intercept, tau))
+    return parameters, warnings
+
+
+def _fit_warnings(n_rows: int, exact: bool, intercept: Estimate, tau: np.ndarray) -> list[str]:
+    """Warnings about the fit itself: no uncertainty from two rows or from rows exactly on the line,
+    and a significant torque offset."""
+    out: list[str] = []
+    if n_rows == 2:
+        out.append("only two rows: the line passes through both, so no uncertainty can be estimated")
+    elif exact:
+        out.append(EXACT_LINE_WARNING)
+    out.extend(_offset_warning(intercept, tau))
+    return out
+
+
+def _details(approach: np.ndarray, hysteresis: bool, arm_used: float | None,
+             gearbox: tuple[float, float | None, float]) -> dict[str, object]:
+    """The torque analysis's ``details``: g, the approach direction of each row, whether the hysteresis
+    was fitted, the gearbox's figures (when the motor K is given) and the arm used."""
+    ratio, motor_constant, motor_constant_stderr = gearbox
     details: dict[str, object] = {"g": STANDARD_GRAVITY, "approach": [int(d) for d in approach],
                                   "hysteresis_fitted": hysteresis}
     if motor_constant is not None:
         details.update(_gearbox_details(ratio, motor_constant, motor_constant_stderr))
     if arm_used is not None:
         details["arm_m"] = arm_used
-    panel = Panel(
+    return details
+
+
+def _panel(current: np.ndarray, tau: np.ndarray, model_tau: np.ndarray, k_value: float,
+           arm_used: float | None) -> Panel:
+    """Torque against current, with the fitted line."""
+    return Panel(
         title="Torque vs current",
         x_label="current [A]",
         y_label="torque τ = m·g·r [N·m]" if arm_used is not None else "torque [N·m]",
         data=Series(current, tau, "scale readings", "data"),
         model=Series(current, model_tau, f"fit: K = {k_value:.4g} N·m/A", "model"),
-    )
-    return FitResult(
-        experiment="torque",
-        parameters=parameters,
-        correlation=fit.correlation,
-        correlation_names=["K", "tau0", "tau_h"] if hysteresis else ["K", "tau0"],
-        rmse=float(np.sqrt(np.mean((tau - model_tau) ** 2))),
-        rmse_unit="N*m",
-        r2=r2,
-        n_points=int(current.size),
-        panels=[panel],
-        warnings=reader_warnings(recs) + warnings,
-        details=details,
-        sources=sources,
     )
 
 
