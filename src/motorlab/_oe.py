@@ -262,6 +262,147 @@ def _simulate_log(model: OEModel, p: np.ndarray, log: Log, speed0: float, offset
     return out
 
 
+class _Problem:
+    """The weighted residuals of :func:`fit_output_error` and their Jacobian, in scaled unknowns.
+
+    The unknowns are z = x / x_scale with x = (model parameters, one angle offset per run, one initial
+    speed per run that starts moving); ``z0``, ``lower_z``, ``upper_z`` are the start and bounds.
+    """
+
+    def __init__(self, model: OEModel, logs: list[Log], p0: np.ndarray, *, lower: np.ndarray, upper: np.ndarray,
+                 scale: np.ndarray, sigma: dict[str, float]):
+        self.model, self.logs, self.sigma = model, logs, sigma
+        self.n_model = p0.size
+        self.speed_logs = speed_logs = [k for k, log in enumerate(logs) if log.moving_at_start]
+        self.names = list(model.names) + [f"theta0[{k}]" for k in range(len(logs))] + [
+            f"omega0[{k}]" for k in speed_logs]
+        self.signals = ["position"] + (["current"] if model.uses_current else [])
+        # nuisance starting values
+        offsets0 = np.array([log.position[0] for log in logs])
+        speeds0 = np.array([initial_speed_guess(logs[k]) for k in speed_logs])
+        speed_scale = np.maximum(np.abs(speeds0), 1.0)
+        pos_scale = np.array([max(float(np.ptp(log.position)), 1.0) for log in logs])
+        self.x_scale = x_scale = np.concatenate([scale, pos_scale, speed_scale])
+        self.factors = [log.position_factor(sigma["position"]) for log in logs]
+        self.row_starts = np.cumsum([0] + [log.time.size * len(self.signals) for log in logs])
+        self._last: dict[str, Any] = {}
+        z0 = np.concatenate([p0, offsets0, speeds0]) / x_scale
+        self.lower_z = np.concatenate([lower / scale, np.full(len(logs) + len(speed_logs), -np.inf)])
+        self.upper_z = np.concatenate([upper / scale, np.full(len(logs) + len(speed_logs), np.inf)])
+        finite = np.isfinite(self.lower_z)
+        z0 = np.where(finite, np.maximum(z0, np.where(finite, self.lower_z, 0.0) + 1e-6), z0)
+        self.z0 = np.minimum(z0, self.upper_z)
+
+    def unpack(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(model parameters, angle offsets, initial speeds) in SI from the scaled unknowns."""
+        x = z * self.x_scale
+        n_model, n_logs = self.n_model, len(self.logs)
+        return x[:n_model], x[n_model : n_model + n_logs], x[n_model + n_logs :]
+
+    def speed_of(self, k: int, speeds: np.ndarray) -> float:
+        """Initial speed of run k (0 for a run that starts at rest) [rad/s]."""
+        return float(speeds[self.speed_logs.index(k)]) if k in self.speed_logs else 0.0
+
+    def residual_parts(self, p: np.ndarray, offsets: np.ndarray, speeds: np.ndarray) -> tuple[np.ndarray, list]:
+        """Weighted residuals (per run: angle, then current) and the simulations."""
+        model, sigma = self.model, self.sigma
+        parts = []
+        sims = []
+        for k, log in enumerate(self.logs):
+            sim = _simulate_log(model, p, log, self.speed_of(k, speeds), float(offsets[k]))
+            sims.append(sim)
+            parts.append((sim["position"] - log.position) * self.factors[k])
+            if model.uses_current:
+                assert log.current is not None
+                parts.append((sim["current"] - log.current) / sigma["current"])
+        parts.append(model.extra_residuals(p))
+        return np.concatenate(parts), sims
+
+    def fun(self, z: np.ndarray) -> np.ndarray:
+        """Weighted residuals at z."""
+        last = self._last
+        # least_squares asks for the Jacobian at the point it has just evaluated: keep that residual
+        if "z" in last and np.array_equal(last["z"], z):
+            return last["r"]
+        p, offsets, speeds = self.unpack(z)
+        r, sims = self.residual_parts(p, offsets, speeds)
+        last["z"] = z.copy()
+        last["r"] = r
+        last["sims"] = sims
+        return r
+
+    def local_column(self, zj: np.ndarray, k: int, k0: int, r0: np.ndarray) -> np.ndarray:
+        """Residuals with log k re-simulated from grid step k0 (the parameter changed acts from there)."""
+        model, sigma, row_starts = self.model, self.sigma, self.row_starts
+        p, offsets, _ = self.unpack(zj)
+        log = self.logs[k]
+        sim0 = self._last["sims"][k]
+        sw = model.switches(p, log)
+        if sw is not None:
+            keep = sw[0] >= k0
+            sw = (sw[0][keep] - k0, sw[1][keep], sw[2][keep])
+        x0 = np.array([sim0["current"][k0], sim0["speed"][k0]])
+        states, theta = simulate(model.plant(p), model.drive(p, log)[k0:], log.dt, x0=x0,
+                                 theta0=float(sim0["position"][k0] - offsets[k]), switches=sw)
+        r = r0.copy()
+        rs, m = int(row_starts[k]), log.time.size
+        assert log.current is not None
+        r[rs + k0 : rs + m] = (theta + offsets[k] - log.position[k0:]) * self.factors[k][k0:]
+        r[rs + m + k0 : rs + 2 * m] = (states[:, 0] - log.current[k0:]) / sigma["current"]
+        r[int(row_starts[-1]) :] = model.extra_residuals(p)
+        return r
+
+    def jac(self, z: np.ndarray) -> np.ndarray:
+        """Jacobian of the weighted residuals in z: forward differences, the angle offsets' columns analytic."""
+        model, logs, n_model = self.model, self.logs, self.n_model
+        r0 = self.fun(z)
+        cols = np.empty((r0.size, z.size))
+        for j in range(z.size):
+            if n_model <= j < n_model + len(logs):
+                continue
+            h = 1e-6 * max(abs(z[j]), 1.0)
+            if z[j] + h > self.upper_z[j]:
+                h = -h
+            zj = z.copy()
+            zj[j] += h
+            loc = model.local_start(j) if j < n_model else None
+            if loc is not None and logs[loc[0]].uniform and model.uses_current and not model.lag:
+                cols[:, j] = (self.local_column(zj, loc[0], loc[1], r0) - r0) / h
+                continue
+            p, offsets, speeds = self.unpack(zj)
+            cols[:, j] = (self.residual_parts(p, offsets, speeds)[0] - r0) / h
+        # angle offsets: residual of log k's angle rises 1/σ per unit offset
+        start = 0
+        for k, log in enumerate(logs):
+            col = np.zeros(r0.size)
+            m = log.time.size
+            col[start : start + m] = self.x_scale[n_model + k] * self.factors[k]
+            cols[:, n_model + k] = col
+            start += m * len(self.signals)
+        return cols
+
+    def blocks(self) -> list[tuple[int, int]]:
+        """Residual series per log, as (first row, samples) of its (time, signal) block."""
+        blocks = []
+        start = 0
+        for log in self.logs:
+            m = log.time.size
+            blocks.append((start, m))
+            start += m * len(self.signals)
+        return blocks
+
+    def residual_rms(self, sims: list[dict[str, np.ndarray]]) -> dict[str, float]:
+        """RMS of simulated − measured per signal over all runs (unweighted)."""
+        rms: dict[str, float] = {}
+        for name in self.signals:
+            err = np.concatenate(
+                [sims[k][name] - (log.position if name == "position" else log.current)
+                 for k, log in enumerate(self.logs)]
+            )  # type: ignore[operator]
+            rms[name] = float(np.sqrt(np.mean(err**2)))
+        return rms
+
+
 def fit_output_error(
     model: OEModel,
     logs: list[Log],
@@ -298,120 +439,15 @@ def fit_output_error(
     forward differences of the simulation; the angle offsets enter linearly (analytic column).
     Covariance: see :func:`hac_covariance`.
     """
-    n_model = p0.size
-    speed_logs = [k for k, log in enumerate(logs) if log.moving_at_start]
-    names = list(model.names) + [f"theta0[{k}]" for k in range(len(logs))] + [f"omega0[{k}]" for k in speed_logs]
-    signals = ["position"] + (["current"] if model.uses_current else [])
-    # nuisance starting values
-    offsets0 = np.array([log.position[0] for log in logs])
-    speeds0 = np.array([initial_speed_guess(logs[k]) for k in speed_logs])
-    speed_scale = np.maximum(np.abs(speeds0), 1.0)
-    pos_scale = np.array([max(float(np.ptp(log.position)), 1.0) for log in logs])
-    x_scale = np.concatenate([scale, pos_scale, speed_scale])
-
-    def unpack(z: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        x = z * x_scale
-        return x[:n_model], x[n_model : n_model + len(logs)], x[n_model + len(logs) :]
-
-    def speed_of(k: int, speeds: np.ndarray) -> float:
-        return float(speeds[speed_logs.index(k)]) if k in speed_logs else 0.0
-
-    factors = [log.position_factor(sigma["position"]) for log in logs]
-
-    def residual_parts(p: np.ndarray, offsets: np.ndarray, speeds: np.ndarray) -> tuple[np.ndarray, list]:
-        parts = []
-        sims = []
-        for k, log in enumerate(logs):
-            sim = _simulate_log(model, p, log, speed_of(k, speeds), float(offsets[k]))
-            sims.append(sim)
-            parts.append((sim["position"] - log.position) * factors[k])
-            if model.uses_current:
-                assert log.current is not None
-                parts.append((sim["current"] - log.current) / sigma["current"])
-        parts.append(model.extra_residuals(p))
-        return np.concatenate(parts), sims
-
-    last: dict[str, Any] = {}
-
-    def fun(z: np.ndarray) -> np.ndarray:
-        # least_squares asks for the Jacobian at the point it has just evaluated: keep that residual
-        if "z" in last and np.array_equal(last["z"], z):
-            return last["r"]
-        p, offsets, speeds = unpack(z)
-        r, sims = residual_parts(p, offsets, speeds)
-        last["z"] = z.copy()
-        last["r"] = r
-        last["sims"] = sims  # type: ignore[assignment]
-        return r
-
-    row_starts = np.cumsum([0] + [log.time.size * len(signals) for log in logs])
-
-    def local_column(zj: np.ndarray, k: int, k0: int, r0: np.ndarray) -> np.ndarray:
-        """Residuals with log k re-simulated from grid step k0 (the parameter changed acts from there)."""
-        p, offsets, _ = unpack(zj)
-        log = logs[k]
-        sim0 = last["sims"][k]  # type: ignore[index]
-        sw = model.switches(p, log)
-        if sw is not None:
-            keep = sw[0] >= k0
-            sw = (sw[0][keep] - k0, sw[1][keep], sw[2][keep])
-        x0 = np.array([sim0["current"][k0], sim0["speed"][k0]])
-        states, theta = simulate(model.plant(p), model.drive(p, log)[k0:], log.dt, x0=x0,
-                                 theta0=float(sim0["position"][k0] - offsets[k]), switches=sw)
-        r = r0.copy()
-        rs, m = int(row_starts[k]), log.time.size
-        assert log.current is not None
-        r[rs + k0 : rs + m] = (theta + offsets[k] - log.position[k0:]) * factors[k][k0:]
-        r[rs + m + k0 : rs + 2 * m] = (states[:, 0] - log.current[k0:]) / sigma["current"]
-        r[int(row_starts[-1]) :] = model.extra_residuals(p)
-        return r
-
-    def jac(z: np.ndarray) -> np.ndarray:
-        r0 = fun(z)
-        cols = np.empty((r0.size, z.size))
-        for j in range(z.size):
-            if n_model <= j < n_model + len(logs):
-                continue
-            h = 1e-6 * max(abs(z[j]), 1.0)
-            if z[j] + h > upper_z[j]:
-                h = -h
-            zj = z.copy()
-            zj[j] += h
-            loc = model.local_start(j) if j < n_model else None
-            if loc is not None and logs[loc[0]].uniform and model.uses_current and not model.lag:
-                cols[:, j] = (local_column(zj, loc[0], loc[1], r0) - r0) / h
-                continue
-            p, offsets, speeds = unpack(zj)
-            cols[:, j] = (residual_parts(p, offsets, speeds)[0] - r0) / h
-        # angle offsets: residual of log k's angle rises 1/σ per unit offset
-        start = 0
-        for k, log in enumerate(logs):
-            col = np.zeros(r0.size)
-            m = log.time.size
-            col[start : start + m] = x_scale[n_model + k] * factors[k]
-            cols[:, n_model + k] = col
-            start += m * len(signals)
-        return cols
-
-    z0 = np.concatenate([p0, offsets0, speeds0]) / x_scale
-    lower_z = np.concatenate([lower / scale, np.full(len(logs) + len(speed_logs), -np.inf)])
-    upper_z = np.concatenate([upper / scale, np.full(len(logs) + len(speed_logs), np.inf)])
-    finite = np.isfinite(lower_z)
-    z0 = np.where(finite, np.maximum(z0, np.where(finite, lower_z, 0.0) + 1e-6), z0)
-    z0 = np.minimum(z0, upper_z)
-
-    sol = levenberg_marquardt(fun, jac, z0, lower_z, upper_z, max_iterations=max_nfev)
-    p, offsets, speeds = unpack(sol.x)
-    res, sims = residual_parts(p, offsets, speeds)
-    jz = sol.jac
-    jx = jz / x_scale  # d residual / d parameter (SI)
+    problem = _Problem(model, logs, p0, lower=lower, upper=upper, scale=scale, sigma=sigma)
+    x_scale = problem.x_scale
+    sol = levenberg_marquardt(problem.fun, problem.jac, problem.z0, problem.lower_z, problem.upper_z,
+                              max_iterations=max_nfev)
+    p, offsets, speeds = problem.unpack(sol.x)
+    res, sims = problem.residual_parts(p, offsets, speeds)
+    jx = sol.jac / x_scale  # d residual / d parameter (SI)
     # residual series per log, as (time, signal) blocks for the long-run covariance
-    blocks = []
-    start = 0
-    for log in logs:
-        m = log.time.size
-        blocks.append((start, m))
-        start += m * len(signals)
+    blocks = problem.blocks()
     values = sol.x * x_scale
     # The residual is made of the logged voltage's noise run through the plant (integrated twice into
     # the angle: a random walk no stationary residual model captures), counting noise and current
@@ -424,44 +460,36 @@ def fit_output_error(
                                                        current_noise=current_noise)
     actual = float(np.mean(res**2))
     ratio = actual / predicted if predicted > 0 else math.inf
-    explained = ratio <= 2.0
     bias = np.zeros(values.size)
     if model.uses_current and model.input_noise and 0.5 <= ratio <= 2.0:
         # The logged voltage's noise reaches the simulated current (errors in the input variable) and
         # biases L and R: remove the first-order bias (see input_noise_bias). Only when the residuals
         # look like that noise: real ripple on the voltage is input the motor saw, and biases nothing.
         bias = input_noise_bias(jx, model, p, logs, sigma["current"])
-        if np.all(np.isfinite(bias)) and np.all(values - bias >= lower_z * x_scale) and np.any(bias):
+        if np.all(np.isfinite(bias)) and np.all(values - bias >= problem.lower_z * x_scale) and np.any(bias):
             values = values - bias
-            p, offsets, speeds = unpack(values / x_scale)
-            res, sims = residual_parts(p, offsets, speeds)
+            res, sims = problem.residual_parts(*problem.unpack(values / x_scale))
         else:
             bias = np.zeros(values.size)
-    cov_hac, cov_white, null, bandwidth = hac_covariance(jx, res, blocks, len(signals), values)
-    if explained:
+    cov_hac, cov_white, null, bandwidth = hac_covariance(jx, res, blocks, len(problem.signals), values)
+    if ratio <= 2.0:  # the measured noises explain the residuals
         cov_full = cov_prop * max(1.0, ratio)  # never below what the residuals themselves show
         noise_model = "measured noise propagated (voltage, counting" + (", current)" if model.uses_current else ")")
     else:
         cov_full = cov_hac
         noise_model = f"Newey–West (residuals {math.sqrt(ratio):.3g}× larger than the measured noise explains)"
-    rms: dict[str, float] = {}
-    for name in signals:
-        err = np.concatenate(
-            [sims[k][name] - (log.position if name == "position" else log.current) for k, log in enumerate(logs)]
-        )  # type: ignore[operator]
-        rms[name] = float(np.sqrt(np.mean(err**2)))
     return Fit(
         values=values,
-        names=names,
+        names=problem.names,
         covariance=cov_full,
         covariance_white=cov_white,
         covariance_residuals=cov_hac,
         null=null,
-        residual_rms=rms,
+        residual_rms=problem.residual_rms(sims),
         simulations=sims,
         bandwidth=bandwidth,
         noise_model=noise_model,
-        bias_correction=bias[:n_model],
+        bias_correction=bias[: problem.n_model],
         jacobian=jx,
         nfev=int(sol.nfev),
         success=bool(sol.success),

@@ -26,7 +26,6 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 from scipy import linalg, signal
@@ -230,6 +229,45 @@ def _locate(fun: Callable[[float], float], f0: float, f1: float, *, iterations: 
     return min(max(c, 0.0), 1.0)
 
 
+class _Regimes:
+    """The plant's regimes for one simulation: cached ZOH matrices and the friction tests.
+
+    ``modal(s)`` and ``discrete(s)`` build each regime's decomposition and its full-step matrices once
+    per simulation (at most three regimes: moving either way, stuck).
+    """
+
+    def __init__(self, plant: StatePlant, dt: float):
+        self.plant = plant
+        self.dt = dt
+        self.w = plant.w
+        self.f_level = plant.friction
+        self._modal: dict[int, _Modal] = {}
+        self._discrete: dict[int, _Discrete] = {}
+
+    def modal(self, s: int) -> _Modal:
+        """Eigen-decomposition of regime s (built on first use)."""
+        if s not in self._modal:
+            self._modal[s] = _Modal(self.plant, s)
+        return self._modal[s]
+
+    def discrete(self, s: int) -> _Discrete:
+        """ZOH matrices of regime s over one grid step (built on first use)."""
+        if s not in self._discrete:
+            self._discrete[s] = self.modal(s).discrete(self.dt)
+        return self._discrete[s]
+
+    def drive(self, xs: np.ndarray, v: np.ndarray | float) -> np.ndarray | float:
+        """Acceleration the drive would give at rest (ω = 0): row w of A·x + b_V·V without the ω term."""
+        plant, w = self.plant, self.w
+        acc = xs @ plant.a[w] - (xs[..., w] * plant.a[w, w]) + plant.b_drive[w] * v
+        return acc
+
+    def new_mode(self, xs: np.ndarray, v: float) -> int:
+        """Regime a shaft at rest enters: stuck while the drive does not exceed the friction level."""
+        acc = float(self.drive(xs, v))
+        return 0 if abs(acc) <= self.f_level else (1 if acc > 0 else -1)
+
+
 def simulate(
     plant: StatePlant,
     voltage: np.ndarray,
@@ -265,39 +303,16 @@ def simulate(
     """
     voltage = np.asarray(voltage, dtype=float)
     n_steps = voltage.size
-    n = plant.n
     w = plant.w
-    f_level = plant.friction
-    x = np.zeros(n) if x0 is None else np.asarray(x0, dtype=float).copy()
-    states = np.empty((n_steps + 1, n))
+    x = np.zeros(plant.n) if x0 is None else np.asarray(x0, dtype=float).copy()
+    states = np.empty((n_steps + 1, plant.n))
     theta = np.empty(n_steps + 1)
     states[0] = x
     theta[0] = theta0
-    cache: dict[int, _Discrete] = {}
-    modal: dict[int, _Modal] = {}
-
-    def mdl(s: int) -> _Modal:
-        if s not in modal:
-            modal[s] = _Modal(plant, s)
-        return modal[s]
-
-    def disc(s: int) -> _Discrete:
-        if s not in cache:
-            cache[s] = mdl(s).discrete(dt)
-        return cache[s]
-
-    def drive(xs: np.ndarray, v: np.ndarray | float) -> np.ndarray | float:
-        # acceleration the drive would give at rest (ω = 0): row w of A·x + b_V·V without the ω term
-        acc = xs @ plant.a[w] - (xs[..., w] * plant.a[w, w]) + plant.b_drive[w] * v
-        return acc
-
-    def new_mode(xs: np.ndarray, v: float) -> int:
-        acc = float(drive(xs, v))
-        return 0 if abs(acc) <= f_level else (1 if acc > 0 else -1)
-
+    reg = _Regimes(plant, dt)
     k = 0
     th = float(theta0)
-    mode = int(np.sign(x[w])) if x[w] != 0 else (new_mode(x, voltage[0]) if n_steps else 0)
+    mode = int(np.sign(x[w])) if x[w] != 0 else (reg.new_mode(x, voltage[0]) if n_steps else 0)
     chunk = _MIN_CHUNK
     sw_steps, sw_frac, sw_before = switches if switches is not None else (np.zeros(0, int), (), ())
     sw = 0
@@ -305,114 +320,125 @@ def simulate(
         while sw < len(sw_steps) and sw_steps[sw] < k:
             sw += 1
         if sw < len(sw_steps) and sw_steps[sw] == k:
-            frac_sw = float(sw_frac[sw])
-            x, dth1, mode = _advance(x, mode, float(sw_before[sw]), frac_sw * dt, mdl, drive, new_mode, f_level, w)
-            x, dth2, mode = _advance(x, mode, float(voltage[k]), (1.0 - frac_sw) * dt, mdl, drive, new_mode,
-                                     f_level, w)
-            th += dth1 + dth2
-            k += 1
-            states[k] = x
-            theta[k] = th
-            chunk = _MIN_CHUNK
-            continue
-        stop = min(n_steps, k + chunk, int(sw_steps[sw]) if sw < len(sw_steps) else n_steps)
-        v = voltage[k:stop]
-        d = disc(mode)
-        xs, dth = _propagate(d, x, v)
-        if mode != 0:
-            bad = np.flatnonzero(mode * xs[1:, w] <= 0.0)
+            x, dth_step, mode = _switch_step(reg, x, mode, float(sw_before[sw]), float(voltage[k]), float(sw_frac[sw]))
         else:
-            # break-away at the start of a step (input change) or inside it (current rising)
-            margin_start = np.abs(drive(xs[:-1], v)) - f_level
-            margin_end = np.abs(drive(xs[1:], v)) - f_level
-            bad = np.flatnonzero((margin_start > 0) | (margin_end > 0))
-        if bad.size == 0:
-            states[k + 1 : stop + 1] = xs[1:]
-            theta[k + 1 : stop + 1] = th + np.cumsum(dth)
-            th = float(theta[stop])
-            x = xs[-1].copy()
-            k = stop
-            chunk = min(2 * chunk, 1 << 16)
-            continue
-        j = int(bad[0])  # the event happens inside step k + j
-        if j:
-            states[k + 1 : k + j + 1] = xs[1 : j + 1]
-            theta[k + 1 : k + j + 1] = th + np.cumsum(dth[:j])
-            th = float(theta[k + j])
-            x = xs[j].copy()
-        k += j
-        vk = float(voltage[k])
-        x_start = x
-
-        def event_value(frac: float, _mode: int = mode, _x: np.ndarray = x_start, _v: float = vk) -> float:
-            xm, _ = _flow(mdl(_mode).discrete(frac * dt), _x, _v)
-            if _mode != 0:
-                return float(xm[w])
-            return abs(float(drive(xm, _v))) - f_level
-
-        if mode != 0:
-            frac = _locate(event_value, float(x[w]), float(xs[j + 1, w]))
-        else:
-            m0 = float(margin_start[j])
-            frac = 0.0 if m0 > 0 else _locate(event_value, m0, float(margin_end[j]))
-        frac = min(max(frac, 0.0), 1.0)
-        x_mid, dth_mid = _flow(mdl(mode).discrete(frac * dt), x, vk) if frac > 0 else (x, 0.0)
-        if mode != 0:
-            x_mid = x_mid.copy()
-            x_mid[w] = 0.0
-        if mode == 0:  # break-away located: move in the direction of the drive (its margin is ~0 here)
-            nxt = 1 if float(drive(x_mid, vk)) > 0 else -1
-        else:
-            nxt = new_mode(x_mid, vk)
-        if nxt == mode:  # interpolation put the event at the very end: finish the step in the old regime
-            nxt = 0 if mode != 0 else nxt
-        x_end, dth_end = _flow(mdl(nxt).discrete((1.0 - frac) * dt), x_mid, vk) if frac < 1 else (x_mid, 0.0)
-        if nxt != 0 and nxt * x_end[w] < 0:  # numerically impossible reversal: hold at rest
-            x_end = x_mid
-            dth_end = 0.0
-            nxt = 0
-        th += dth_mid + dth_end
-        x = np.asarray(x_end, dtype=float).copy()
+            # Propagate a chunk in the current regime; stop at the first step where the regime ends
+            # (the chunk doubles while nothing happens, up to 65 536 steps).
+            stop = min(n_steps, k + chunk, int(sw_steps[sw]) if sw < len(sw_steps) else n_steps)
+            v = voltage[k:stop]
+            xs, dth = _propagate(reg.discrete(mode), x, v)
+            margins: tuple[np.ndarray, np.ndarray] | None = None
+            if mode != 0:
+                bad = np.flatnonzero(mode * xs[1:, w] <= 0.0)
+            else:
+                # break-away at the start of a step (input change) or inside it (current rising)
+                margins = (np.abs(reg.drive(xs[:-1], v)) - reg.f_level, np.abs(reg.drive(xs[1:], v)) - reg.f_level)
+                bad = np.flatnonzero((margins[0] > 0) | (margins[1] > 0))
+            if bad.size == 0:
+                states[k + 1 : stop + 1] = xs[1:]
+                theta[k + 1 : stop + 1] = th + np.cumsum(dth)
+                th = float(theta[stop])
+                x = xs[-1].copy()
+                k = stop
+                chunk = min(2 * chunk, 1 << 16)
+                continue
+            j = int(bad[0])  # the event happens inside step k + j
+            if j:
+                states[k + 1 : k + j + 1] = xs[1 : j + 1]
+                theta[k + 1 : k + j + 1] = th + np.cumsum(dth[:j])
+                th = float(theta[k + j])
+                x = xs[j].copy()
+            k += j
+            ends = (float(x[w]), float(xs[j + 1, w])) if margins is None else (margins[0][j], margins[1][j])
+            x, dth_step, mode = _event_step(reg, x, mode, float(voltage[k]), float(ends[0]), float(ends[1]))
+        th += dth_step
         k += 1
         states[k] = x
         theta[k] = th
-        mode = nxt
         chunk = _MIN_CHUNK
     return states, theta
 
 
-def _advance(x: np.ndarray, mode: int, v: float, tau: float, mdl: Callable[[int], _Modal],
-             drive: Callable[..., Any], new_mode: Callable[[np.ndarray, float], int], f_level: float,
-             w: int) -> tuple[np.ndarray, float, int]:
+def _switch_step(reg: _Regimes, x: np.ndarray, mode: int, v_before: float, v_after: float,
+                 frac: float) -> tuple[np.ndarray, float, int]:
+    """One grid step with a drive switch at ``frac`` of it: v_before, then v_after, each part exact."""
+    dt = reg.dt
+    x, dth1, mode = _advance(reg, x, mode, v_before, frac * dt)
+    x, dth2, mode = _advance(reg, x, mode, v_after, (1.0 - frac) * dt)
+    return x, dth1 + dth2, mode
+
+
+def _event_step(reg: _Regimes, x: np.ndarray, mode: int, vk: float, f0: float,
+                f1: float) -> tuple[np.ndarray, float, int]:
+    """The grid step (voltage vk held) in which the regime ends: locate the event, finish in the new regime.
+
+    ``f0``, ``f1``: the event function at the start and end of the step in the old regime, the speed
+    when moving, the drive margin |drive| − F when stuck. Returns the state at the step's end, the
+    angle increment over the step and the new regime.
+    """
+    dt, w, f_level = reg.dt, reg.w, reg.f_level
+    x_start = x
+
+    def event_value(frac: float, _mode: int = mode, _x: np.ndarray = x_start, _v: float = vk) -> float:
+        xm, _ = _flow(reg.modal(_mode).discrete(frac * dt), _x, _v)
+        if _mode != 0:
+            return float(xm[w])
+        return abs(float(reg.drive(xm, _v))) - f_level
+
+    if mode != 0:
+        frac = _locate(event_value, f0, f1)
+    else:
+        frac = 0.0 if f0 > 0 else _locate(event_value, f0, f1)
+    frac = min(max(frac, 0.0), 1.0)
+    x_mid, dth_mid = _flow(reg.modal(mode).discrete(frac * dt), x, vk) if frac > 0 else (x, 0.0)
+    if mode != 0:
+        x_mid = x_mid.copy()
+        x_mid[w] = 0.0
+    if mode == 0:  # break-away located: move in the direction of the drive (its margin is ~0 here)
+        nxt = 1 if float(reg.drive(x_mid, vk)) > 0 else -1
+    else:
+        nxt = reg.new_mode(x_mid, vk)
+    if nxt == mode:  # interpolation put the event at the very end: finish the step in the old regime
+        nxt = 0 if mode != 0 else nxt
+    x_end, dth_end = _flow(reg.modal(nxt).discrete((1.0 - frac) * dt), x_mid, vk) if frac < 1 else (x_mid, 0.0)
+    if nxt != 0 and nxt * x_end[w] < 0:  # numerically impossible reversal: hold at rest
+        x_end = x_mid
+        dth_end = 0.0
+        nxt = 0
+    return np.asarray(x_end, dtype=float).copy(), dth_mid + dth_end, nxt
+
+
+def _advance(reg: _Regimes, x: np.ndarray, mode: int, v: float, tau: float) -> tuple[np.ndarray, float, int]:
     """Propagate a part of a step (length τ, voltage v held) exactly, with at most one friction event."""
+    w, f_level = reg.w, reg.f_level
     if tau <= 0.0:
         return x, 0.0, mode
-    if mode == 0 and abs(float(drive(x, v))) > f_level:  # break-away at once (the drive just changed)
-        mode = 1 if float(drive(x, v)) > 0 else -1
-    x1, d1 = _flow(mdl(mode).discrete(tau), x, v)
+    if mode == 0 and abs(float(reg.drive(x, v))) > f_level:  # break-away at once (the drive just changed)
+        mode = 1 if float(reg.drive(x, v)) > 0 else -1
+    x1, d1 = _flow(reg.modal(mode).discrete(tau), x, v)
     if mode != 0:
         if mode * x1[w] > 0:
             return x1, d1, mode
         f0, f1 = float(x[w]), float(x1[w])
     else:
-        f1 = abs(float(drive(x1, v))) - f_level
+        f1 = abs(float(reg.drive(x1, v))) - f_level
         if f1 <= 0:
             return x1, d1, 0
-        f0 = abs(float(drive(x, v))) - f_level
+        f0 = abs(float(reg.drive(x, v))) - f_level
 
     def event_value(frac: float) -> float:
-        xm, _ = _flow(mdl(mode).discrete(frac * tau), x, v)
-        return float(xm[w]) if mode != 0 else abs(float(drive(xm, v))) - f_level
+        xm, _ = _flow(reg.modal(mode).discrete(frac * tau), x, v)
+        return float(xm[w]) if mode != 0 else abs(float(reg.drive(xm, v))) - f_level
 
     frac = _locate(event_value, f0, f1)
-    x_mid, d_mid = _flow(mdl(mode).discrete(frac * tau), x, v) if frac > 0 else (x, 0.0)
+    x_mid, d_mid = _flow(reg.modal(mode).discrete(frac * tau), x, v) if frac > 0 else (x, 0.0)
     if mode != 0:
         x_mid = x_mid.copy()
         x_mid[w] = 0.0
-        nxt = new_mode(x_mid, v)
+        nxt = reg.new_mode(x_mid, v)
     else:
-        nxt = 1 if float(drive(x_mid, v)) > 0 else -1
-    x_end, d_end = _flow(mdl(nxt).discrete((1.0 - frac) * tau), x_mid, v) if frac < 1 else (x_mid, 0.0)
+        nxt = 1 if float(reg.drive(x_mid, v)) > 0 else -1
+    x_end, d_end = _flow(reg.modal(nxt).discrete((1.0 - frac) * tau), x_mid, v) if frac < 1 else (x_mid, 0.0)
     if nxt != 0 and nxt * x_end[w] < 0:  # numerically impossible reversal: hold at rest
         return x_mid, d_mid, 0
     return np.asarray(x_end, dtype=float), d_mid + d_end, nxt

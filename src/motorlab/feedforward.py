@@ -267,69 +267,20 @@ def feedforward(
     (:func:`motorlab._oe.grid_angle`), and φ's variance includes q²/12 for the encoder's quantiser
     phase (q = 2π/cpr), which no fit can resolve.
     """
-    recordings = [block_mean(r) for r in ([recordings] if isinstance(recordings, Recording) else recordings)]
-    if mechanism not in MECHANISMS:
-        raise OptionError(f"mechanism must be one of {', '.join(MECHANISMS)}, got {mechanism!r}")
-    if cpr is not None and not (math.isfinite(cpr) and cpr > 0):
-        raise OptionError(f"cpr must be a positive number, got {cpr}")
-    recs = [recordings] if isinstance(recordings, Recording) else list(recordings)
-    if not recs:
-        raise OptionError("no recordings to fit")
-    if mechanism == "arm":
-        for rec in recs:  # kG·cos(θ + φ) needs the arm's angle, not a distance
-            if rec.metadata.get("position_unit") == "m":
-                raise OptionError(
-                    f"{rec.source or 'recording'}: mechanism 'arm' needs the arm's angle, but the position is "
-                    "logged as a distance (m); log the arm angle (rotations, radians or degrees)"
-                )
+    recs = _checked_recordings(recordings, mechanism=mechanism, cpr=cpr)
     logs, warnings = _prepare(recs, cpr=cpr, with_current=False)
-    # Stale status frames (SysId logs of CAN motor controllers): the logged angle is θ(t − d) with d
-    # spread over one refresh period P, a lag of P/2 on average; the first row showing a new reading
-    # places its frame within one row period dt, a scatter of (ω·dt)²/12 per reading about the lag
-    # (the frames' phase, shared by a whole run, is in the propagated covariance).
-    # The lag is not fitted: it trades off against kA (a first-order lag and a delay look alike at
-    # 10 ms sampling) and would take kA's information with it.
-    period = max(_oe.stale_frame_period(log) for log in logs)
-    if period > 0:
-        for log in logs:
-            log.stale_variance = (measured_speed(log) * log.dt) ** 2 / 12.0
-            if mechanism == "arm":  # gravity acts at the shaft's angle, which the readings show P/2 late
-                log.grid_angle = _oe.grid_angle(log.time, log.position, log.dt, log.n_grid, lag=0.5 * period)
+    period = _stale_frames(logs, mechanism)
     try:
         p0 = regression_start(logs, mechanism, lag=0.5 * period)
     except FitError as exc:  # name the file(s): the user must know which log cannot be explained
         raise FitError(f"{', '.join(dict.fromkeys(log.source for log in logs if log.source))}: {exc}") from None
-    v_max = max(float(np.max(np.abs(log.grid_voltage))) for log in logs)
-    ks0, kv0, ka0 = p0[:3]
-    scale = np.concatenate([[max(ks0, 0.01 * v_max), kv0, ka0], np.full(p0.size - 3, max(0.05 * v_max, 0.1))])
-    lower = np.concatenate([[0.0, 1e-3 * kv0, 1e-3 * ka0], np.full(p0.size - 3, -10.0 * v_max)])
-    upper = np.concatenate([[v_max, 1e3 * kv0, max(1e3 * ka0, 100.0 * kv0)], np.full(p0.size - 3, 10.0 * v_max)])
+    lower, upper, scale = _bounds(p0, logs)
     model = FeedforwardModel(mechanism, lag=0.5 * period)
     sigma = noise_levels(logs, with_current=False)
     fit = _oe.fit_output_error(model, logs, np.clip(p0, lower, upper), lower=lower, upper=upper, scale=scale,
                                sigma=sigma)
-    m = len(model.names)
-    values = fit.values[:m].copy()
-    cov = fit.covariance[:m, :m].copy()
-    names = list(model.names[:m])
-    if mechanism == "arm":  # report kG = hypot(a, c) and φ = atan2(c, a) (delta method)
-        values, cov = _arm_gravity(values, cov, max(log.resolution for log in logs))
-        names[3:5] = ["kG", "offset"]
-    stderr = np.sqrt(np.clip(np.diag(cov), 0.0, None))
-    params: dict[str, Estimate] = {}
-    units = {**SI_UNITS, "offset": "rad"}
     linear = all(rec.metadata.get("position_unit") == "m" for rec in recs)
-    if linear:  # a drivetrain or an elevator logged in metres: the gains come per metre
-        units.update(kV="V*s/m", kA="V*s^2/m")
-    for k, name in enumerate(names):
-        determined = not fit.null[min(k, fit.null.size - 1)] and stderr[k] <= MAX_RELATIVE_STDERR * abs(values[k])
-        if name in ("kG", "offset") and not fit.null[k]:
-            determined = bool(np.isfinite(stderr[k]))
-        params[name] = Estimate(name, float(values[k]), float(stderr[k]), units[name], determined,
-                                "" if determined else "the data carry (almost) no information on it")
-    with np.errstate(invalid="ignore", divide="ignore"):
-        corr = cov / np.outer(stderr, stderr)
-    np.fill_diagonal(corr, 1.0)
+    names, values, params, corr = _gain_estimates(fit, model, logs, linear=linear)
     if not fit.success:
         warnings.append(f"the optimiser stopped early: {fit.message}")
     warnings.extend(_noise_warning(recs, logs, fit, length="m" if linear else "rad"))
@@ -355,6 +306,95 @@ def feedforward(
     if mechanism == "simple" and fit.noise_model.startswith("Newey") and all("velocity" in rec for rec in recs):
         _report_open_loop(result, recs, length=result.rmse_unit)  # real logs: docs/real-logs.md
     return result
+
+
+def _checked_recordings(recordings: Recording | Sequence[Recording], *, mechanism: str,
+                        cpr: float | None) -> list[Recording]:
+    """The tests (block-averaged, :func:`motorlab.decimate.block_mean`) after checking the options.
+
+    Raises
+    ------
+    OptionError
+        An unknown mechanism, a non-positive cpr, no recordings, or an arm whose position is a distance.
+    """
+    recordings = [block_mean(r) for r in ([recordings] if isinstance(recordings, Recording) else recordings)]
+    if mechanism not in MECHANISMS:
+        raise OptionError(f"mechanism must be one of {', '.join(MECHANISMS)}, got {mechanism!r}")
+    if cpr is not None and not (math.isfinite(cpr) and cpr > 0):
+        raise OptionError(f"cpr must be a positive number, got {cpr}")
+    recs = [recordings] if isinstance(recordings, Recording) else list(recordings)
+    if not recs:
+        raise OptionError("no recordings to fit")
+    if mechanism == "arm":
+        for rec in recs:  # kG·cos(θ + φ) needs the arm's angle, not a distance
+            if rec.metadata.get("position_unit") == "m":
+                raise OptionError(
+                    f"{rec.source or 'recording'}: mechanism 'arm' needs the arm's angle, but the position is "
+                    "logged as a distance (m); log the arm angle (rotations, radians or degrees)"
+                )
+    return recs
+
+
+def _stale_frames(logs: list[_oe.Log], mechanism: str) -> float:
+    """Refresh period of stale status frames [s] (0 without), with their effect set on the logs in place.
+
+    Stale status frames (SysId logs of CAN motor controllers): the logged angle is θ(t − d) with d
+    spread over one refresh period P, a lag of P/2 on average; the first row showing a new reading
+    places its frame within one row period dt, a scatter of (ω·dt)²/12 per reading about the lag
+    (``Log.stale_variance``; the frames' phase, shared by a whole run, is in the propagated
+    covariance). For an arm, gravity acts at the shaft's angle, which the readings show P/2 late
+    (``Log.grid_angle``).
+    """
+    # The lag is not fitted: it trades off against kA (a first-order lag and a delay look alike at
+    # 10 ms sampling) and would take kA's information with it.
+    period = max(_oe.stale_frame_period(log) for log in logs)
+    if period > 0:
+        for log in logs:
+            log.stale_variance = (measured_speed(log) * log.dt) ** 2 / 12.0
+            if mechanism == "arm":  # gravity acts at the shaft's angle, which the readings show P/2 late
+                log.grid_angle = _oe.grid_angle(log.time, log.position, log.dt, log.n_grid, lag=0.5 * period)
+    return period
+
+
+def _bounds(p0: np.ndarray, logs: list[_oe.Log]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Lower and upper bounds and scale of (kS, kV, kA[, gravity terms]) about the start ``p0``."""
+    v_max = max(float(np.max(np.abs(log.grid_voltage))) for log in logs)
+    ks0, kv0, ka0 = p0[:3]
+    scale = np.concatenate([[max(ks0, 0.01 * v_max), kv0, ka0], np.full(p0.size - 3, max(0.05 * v_max, 0.1))])
+    lower = np.concatenate([[0.0, 1e-3 * kv0, 1e-3 * ka0], np.full(p0.size - 3, -10.0 * v_max)])
+    upper = np.concatenate([[v_max, 1e3 * kv0, max(1e3 * ka0, 100.0 * kv0)], np.full(p0.size - 3, 10.0 * v_max)])
+    return lower, upper, scale
+
+
+def _gain_estimates(fit: _oe.Fit, model: FeedforwardModel, logs: list[_oe.Log], *,
+                    linear: bool) -> tuple[list[str], np.ndarray, dict[str, Estimate], np.ndarray]:
+    """Names, values, estimates and correlation matrix of the reported gains.
+
+    For the arm, (a, c) are reported as kG and the offset φ (:func:`_arm_gravity`); ``linear``: the
+    positions are distances [m], so the gains come per metre.
+    """
+    m = len(model.names)
+    values = fit.values[:m].copy()
+    cov = fit.covariance[:m, :m].copy()
+    names = list(model.names[:m])
+    if model.mechanism == "arm":  # report kG = hypot(a, c) and φ = atan2(c, a) (delta method)
+        values, cov = _arm_gravity(values, cov, max(log.resolution for log in logs))
+        names[3:5] = ["kG", "offset"]
+    stderr = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    params: dict[str, Estimate] = {}
+    units = {**SI_UNITS, "offset": "rad"}
+    if linear:  # a drivetrain or an elevator logged in metres: the gains come per metre
+        units.update(kV="V*s/m", kA="V*s^2/m")
+    for k, name in enumerate(names):
+        determined = not fit.null[min(k, fit.null.size - 1)] and stderr[k] <= MAX_RELATIVE_STDERR * abs(values[k])
+        if name in ("kG", "offset") and not fit.null[k]:
+            determined = bool(np.isfinite(stderr[k]))
+        params[name] = Estimate(name, float(values[k]), float(stderr[k]), units[name], determined,
+                                "" if determined else "the data carry (almost) no information on it")
+    with np.errstate(invalid="ignore", divide="ignore"):
+        corr = cov / np.outer(stderr, stderr)
+    np.fill_diagonal(corr, 1.0)
+    return names, values, params, corr
 
 
 def _arm_gravity(values: np.ndarray, cov: np.ndarray, resolution: float) -> tuple[np.ndarray, np.ndarray]:

@@ -124,36 +124,15 @@ def identify(
     (:func:`motorlab._oe.noise_propagation_covariance`); the Newey–West covariance of the residuals
     is used when these noises do not explain the residuals.
     """
-    recordings = [block_mean(r) for r in ([recordings] if isinstance(recordings, Recording) else recordings)]
-    recs = [recordings] if isinstance(recordings, Recording) else list(recordings)
-    if not recs:
-        raise OptionError("no recordings to identify")
-    for name, value in (("resistance", resistance), ("torque constant", torque_constant), ("cpr", cpr)):
-        if value is not None and not (math.isfinite(value) and value > 0):
-            raise OptionError(f"{name} must be a positive number, got {value}")
+    recs = _checked_recordings(recordings, resistance=resistance, torque_constant=torque_constant, cpr=cpr)
     with_current = use_current and all("current" in r for r in recs)
     if not with_current:
         return _identify_without_current(recs, resistance=resistance, torque_constant=torque_constant, cpr=cpr,
                                          note_missing=use_current and any("current" in r for r in recs))
     logs, warnings = _prepare(recs, cpr=cpr, with_current=True)
-    try:
-        p0 = regression_start(logs)
-    except FitError as exc:  # name the file(s): the user must know which log cannot be explained
-        raise FitError(f"{', '.join(dict.fromkeys(log.source for log in logs if log.source))}: {exc}") from None
-    k0, r0, _, j0, _, _ = p0
-    v_max = max(float(np.max(np.abs(log.grid_voltage))) for log in logs)
+    p0, lower, upper, scale = _start_and_bounds(logs)
     dt = min(log.dt for log in logs)
-    scale = np.array([k0, r0, max(p0[2], r0 * dt), j0, max(p0[4], 0.05 * k0 * k0 / r0),
-                      max(p0[5], 0.01 * k0 * v_max / r0)])
-    lower = np.array([1e-3 * k0, 1e-3 * r0, 1e-3 * r0 * dt, 1e-3 * j0, 0.0, 0.0])
-    upper = np.array([1e3 * k0, 1e3 * r0, 1e3 * scale[2] + 1.0, 1e3 * j0, 1e3 * scale[4], 1e3 * scale[5]])
-    sigma = noise_levels(logs, with_current=True)
-    current_noise = sigma["current"]
-    # The simulated current carries the logged voltage's noise filtered by the winding (errors in the
-    # input variable): weight the current by the noise its residual really has, measurement and input.
-    gain = float(_oe.input_noise_gain(MotorModel().plant(np.clip(p0, lower, upper)), dt)[0, 0])
-    voltage_noise = max(_oe.voltage_noise(log) for log in logs)
-    sigma["current"] = math.sqrt(current_noise**2 + voltage_noise**2 * gain)
+    sigma, current_noise, voltage_noise = _noise_weights(logs, np.clip(p0, lower, upper), dt)
 
     def sample_held(start: np.ndarray) -> _oe.Fit:
         return _oe.fit_output_error(MotorModel(), logs, np.clip(start, lower, upper), lower=lower, upper=upper,
@@ -167,6 +146,75 @@ def identify(
     cov = fit.covariance[:6, :6]
     stderr = np.sqrt(np.clip(np.diag(cov), 0.0, None))
     params = _motor_estimates(fit, values, stderr, l_floor=lower[2], dt=dt)
+    warnings.extend(_fit_warnings(fit, logs, values, resistance=resistance, torque_constant=torque_constant))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        corr = cov / np.outer(stderr, stderr)
+    np.fill_diagonal(corr, 1.0)
+    details = _details(fit, values, p0, sigma, input_details, current_noise=current_noise, voltage_noise=voltage_noise)
+    _bound_details(fit, logs, params, details, weight_current=sigma["current"], current_noise=current_noise)
+    return _result("identify", params, corr, list(MOTOR_NAMES), logs, fit, warnings, details)
+
+
+def _checked_recordings(recordings: Recording | Sequence[Recording], *, resistance: float | None,
+                        torque_constant: float | None, cpr: float | None) -> list[Recording]:
+    """The runs (block-averaged, :func:`motorlab.decimate.block_mean`) after checking the options.
+
+    Raises
+    ------
+    OptionError
+        No recordings, or a non-positive resistance, torque constant or cpr.
+    """
+    recordings = [block_mean(r) for r in ([recordings] if isinstance(recordings, Recording) else recordings)]
+    recs = [recordings] if isinstance(recordings, Recording) else list(recordings)
+    if not recs:
+        raise OptionError("no recordings to identify")
+    for name, value in (("resistance", resistance), ("torque constant", torque_constant), ("cpr", cpr)):
+        if value is not None and not (math.isfinite(value) and value > 0):
+            raise OptionError(f"{name} must be a positive number, got {value}")
+    return recs
+
+
+def _start_and_bounds(logs: list[_oe.Log]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Start (:func:`regression_start`), lower and upper bounds and scale of K, R, L, J, b, Tf (SI).
+
+    Raises
+    ------
+    FitError
+        No starting point can be found; the message names the files.
+    """
+    try:
+        p0 = regression_start(logs)
+    except FitError as exc:  # name the file(s): the user must know which log cannot be explained
+        raise FitError(f"{', '.join(dict.fromkeys(log.source for log in logs if log.source))}: {exc}") from None
+    k0, r0, _, j0, _, _ = p0
+    v_max = max(float(np.max(np.abs(log.grid_voltage))) for log in logs)
+    dt = min(log.dt for log in logs)
+    scale = np.array([k0, r0, max(p0[2], r0 * dt), j0, max(p0[4], 0.05 * k0 * k0 / r0),
+                      max(p0[5], 0.01 * k0 * v_max / r0)])
+    lower = np.array([1e-3 * k0, 1e-3 * r0, 1e-3 * r0 * dt, 1e-3 * j0, 0.0, 0.0])
+    upper = np.array([1e3 * k0, 1e3 * r0, 1e3 * scale[2] + 1.0, 1e3 * j0, 1e3 * scale[4], 1e3 * scale[5]])
+    return p0, lower, upper, scale
+
+
+def _noise_weights(logs: list[_oe.Log], start: np.ndarray, dt: float) -> tuple[dict[str, float], float, float]:
+    """Noise weights of angle and current, the current's measured noise [A] and the voltage's [V].
+
+    The simulated current carries the logged voltage's noise filtered by the winding (errors in the
+    input variable): the current is weighted by the noise its residual really has, measurement and
+    input, the latter from the plant at ``start`` (K, R, L, J, b, Tf) and the grid step ``dt`` [s].
+    """
+    sigma = noise_levels(logs, with_current=True)
+    current_noise = sigma["current"]
+    gain = float(_oe.input_noise_gain(MotorModel().plant(start), dt)[0, 0])
+    voltage_noise = max(_oe.voltage_noise(log) for log in logs)
+    sigma["current"] = math.sqrt(current_noise**2 + voltage_noise**2 * gain)
+    return sigma, current_noise, voltage_noise
+
+
+def _fit_warnings(fit: _oe.Fit, logs: list[_oe.Log], values: np.ndarray, *, resistance: float | None,
+                  torque_constant: float | None) -> list[str]:
+    """Optimiser, noise and excitation warnings, and a note for each given R or K the fit did not use."""
+    warnings = []
     if not fit.success:
         warnings.append(f"the optimiser stopped early: {fit.message}")
     warnings.extend(_oe.noise_warning(fit, rms_text=f"{fit.residual_rms['position']:.3g} rad"))
@@ -179,11 +227,14 @@ def identify(
                 "from the given value); "
                 "--no-current fits without the current and uses it"
             )
-    with np.errstate(invalid="ignore", divide="ignore"):
-        corr = cov / np.outer(stderr, stderr)
-    np.fill_diagonal(corr, 1.0)
+    return warnings
+
+
+def _details(fit: _oe.Fit, values: np.ndarray, p0: np.ndarray, sigma: dict[str, float], input_details: dict[str, Any],
+             *, current_noise: float, voltage_noise: float) -> dict[str, Any]:
+    """``FitResult.details`` of the fit with current (the Cramér–Rao bound is added by :func:`_bound_details`)."""
     motor = MotorParams(*(float(v) for v in np.maximum(values, [1e-12, 1e-12, 0, 1e-12, 0, 0])))
-    details: dict[str, Any] = {
+    return {
         "method": "output error (angle and current simulated from the voltage)"
         + (", errors-in-variables bias removed" if np.any(fit.bias_correction) else "")
         + f"; input: {input_details['text']}",
@@ -203,8 +254,6 @@ def identify(
         "function_evaluations": fit.nfev,
         "input_model": input_details,
     }
-    _bound_details(fit, logs, params, details, weight_current=sigma["current"], current_noise=current_noise)
-    return _result("identify", params, corr, list(MOTOR_NAMES), logs, fit, warnings, details)
 
 
 def _motor_estimates(fit: _oe.Fit, values: np.ndarray, stderr: np.ndarray, *, l_floor: float,
