@@ -405,6 +405,41 @@ def plan_rig(
     ----------
     Seed 1, "First Experiment", eq. (5), and "Flywheel and INA219 Experiment" (16 V warning).
     """
+    motor, current, voltage = _checked_plan_options(
+        motor, material=material, fraction=fraction, time=time, radius=radius, thickness=thickness, ratio=ratio,
+        log_period=log_period, shunt_resistance=shunt_resistance, free_speed=free_speed,
+        stall_torque=stall_torque, current=current, voltage=voltage,
+    )
+    density = MATERIALS[material]
+    params = motor.nominal_params()
+    warnings: list[str] = []
+    target = _target_section(motor, current=current, fraction=fraction, time=time)
+    target_speed, torque = target["target_speed"].value, target["torque"].value
+    flywheel = _size_flywheel(params, target["required_inertia"].value, density=density, radius=radius,
+                              thickness=thickness, ratio=ratio, warnings=warnings)
+    times = _times_section(motor, flywheel.rig, target_speed=target_speed, torque=torque, current=current,
+                           voltage=voltage, warnings=warnings)
+    encoder = _encoder_section(motor, flywheel.rig, times, target_speed=target_speed, torque=torque,
+                               log_period=log_period, voltage=voltage, warnings=warnings)
+    sensors = _sensors_section(torque=torque, current=current, voltage=voltage, shunt_resistance=shunt_resistance,
+                               lever_arm=lever_arm, scale_capacity=scale_capacity, warnings=warnings)
+    # The flywheel's figures come last: the mass of the direct disc is checked after the sensors'
+    # options, in the order the checks have always been made.
+    figures = {"motor": _motor_section(motor, params), "target": target,
+               "flywheel": _flywheel_section(flywheel, material), "times": times, "encoder": encoder,
+               "sensors": sensors}
+    return RigPlan(motor=motor.key, figures=figures, warnings=tuple(warnings))
+
+
+def _checked_plan_options(
+    motor: Motor, *, material: str, fraction: float, time: float, radius: float, thickness: float, ratio: float,
+    log_period: float, shunt_resistance: float, free_speed: float | None, stall_torque: float | None,
+    current: float | None, voltage: float | None,
+) -> tuple[Motor, float, float]:
+    """Check :func:`plan_rig`'s options; return the motor with its replaced figures, the current and the voltage.
+
+    The current defaults to half the stall current and the voltage to the motor's nominal one.
+    """
     if material not in MATERIALS:
         raise OptionError(f"unknown material {material!r}; choose from {', '.join(sorted(MATERIALS))}")
     if not (math.isfinite(fraction) and 0 < fraction < 1):
@@ -432,17 +467,62 @@ def plan_rig(
             f"voltage {voltage:g} V is more than {MAX_VOLTAGE_FACTOR:g} times the nominal "
             f"{motor.nominal_voltage:g} V of {motor.key}: no bench test drives a motor there"
         )
-    density = MATERIALS[material]
-    params = motor.nominal_params()
-    warnings: list[str] = []
+    return motor, current, voltage
 
-    # Target (seed: half speed in 5 s at half stall torque).
+
+def _motor_section(motor: Motor, params: MotorParams) -> dict[str, Figure]:
+    """Section ``motor`` of the plan: the catalogue's figures and the nominal model's K and J."""
+    return {
+        "free_speed": Figure("free speed (nominal)", motor.free_speed, "rad/s"),
+        "free_speed_rpm": Figure("free speed (nominal)", motor.free_speed / RPM, "rpm"),
+        "stall_torque": Figure("stall torque", motor.stall_torque, "N*m"),
+        "stall_current": Figure("stall current", motor.stall_current, "A"),
+        "torque_constant": Figure("Kt = τ_stall/I_stall (data sheet)", motor.torque_constant, "N*m/A"),
+        "K": Figure("K = Ke (model)", params.K, "V*s/rad"),
+        "motor_inertia": Figure("gearmotor's own J (nominal, assumed)", params.J, "kg*m^2"),
+    }
+
+
+def _target_section(motor: Motor, *, current: float, fraction: float, time: float) -> dict[str, Figure]:
+    """Section ``target``: the seed's constant-torque rule J_f = τ/α (half speed in 5 s at half stall torque)."""
     target_speed = fraction * motor.free_speed
     torque = motor.torque_constant * current
     acceleration = target_speed / time
     j_required = required_inertia(torque, target_speed, time)
+    return {
+        "target_speed": Figure(f"target speed ({fraction:g} × free speed)", target_speed, "rad/s"),
+        "time": Figure("time to reach it", time, "s"),
+        "current": Figure("drive current", current, "A"),
+        "torque": Figure("drive torque Kt·i (constant)", torque, "N*m"),
+        "angular_acceleration": Figure("angular acceleration α = Δω/t", acceleration, "rad/s^2"),
+        "required_inertia": Figure("inertia needed J_f = τ/α", j_required, "kg*m^2"),
+    }
 
-    # Flywheel.
+
+@dataclass(frozen=True)
+class _Flywheel:
+    """The disc on hand against the inertia needed, and the rig it makes (SI; see :func:`_size_flywheel`)."""
+
+    density: float
+    radius: float
+    thickness: float
+    ratio: float
+    disc_inertia: float
+    reflected_inertia: float
+    shortfall: float
+    step_up_needed: float
+    direct_radius: float
+    rig: MotorParams
+
+
+def _size_flywheel(
+    params: MotorParams, j_required: float, *, density: float, radius: float, thickness: float, ratio: float,
+    warnings: list[str],
+) -> _Flywheel:
+    """The disc's inertia seen by the motor, the rig it makes, and the disc that would give J_f.
+
+    Appends a warning to ``warnings`` when the rig's inertia is more than a factor 2 from J_f.
+    """
     j_disc = disc_inertia(radius, thickness, density)
     j_reflected = reflected_inertia(j_disc, ratio)
     rig = params.with_load(j_disc, ratio=ratio)
@@ -460,8 +540,36 @@ def plan_rig(
             f"the rig's inertia {rig.J:.3g} kg·m² is {rig.J / j_required:.3g} times more than needed: "
             "the spin-up will be slower than asked"
         )
+    return _Flywheel(density, radius, thickness, ratio, j_disc, j_reflected, shortfall, n_needed, r_direct, rig)
 
-    # Times.
+
+def _flywheel_section(flywheel: _Flywheel, material: str) -> dict[str, Figure]:
+    """Section ``flywheel``: the disc on hand, what the motor sees of it, and the disc that would do."""
+    f = flywheel
+    return {
+        "density": Figure(f"density ({material})", f.density, "kg/m^3"),
+        "disc_radius": Figure("disc radius", f.radius, "m"),
+        "disc_thickness": Figure("disc thickness", f.thickness, "m"),
+        "disc_mass": Figure("disc mass", disc_mass(f.radius, f.thickness, f.density), "kg"),
+        "disc_inertia": Figure("disc inertia ½·π·r⁴·ρ·h", f.disc_inertia, "kg*m^2"),
+        "ratio": Figure("step-up ratio to the disc", f.ratio, "1"),
+        "reflected_inertia": Figure("disc inertia seen by the motor J·N²", f.reflected_inertia, "kg*m^2"),
+        "shortfall": Figure("needed / seen by the motor", f.shortfall, "1"),
+        "step_up_needed": Figure("step-up ratio that gives J_f with this disc", f.step_up_needed, "1"),
+        "direct_disc_radius": Figure(f"radius of a {f.thickness:g} m disc with J_f", f.direct_radius, "m"),
+        "direct_disc_mass": Figure("mass of that disc", disc_mass(f.direct_radius, f.thickness, f.density), "kg"),
+        "rig_inertia": Figure("rig inertia (motor + disc·N²)", f.rig.J, "kg*m^2"),
+    }
+
+
+def _times_section(
+    motor: Motor, rig: MotorParams, *, target_speed: float, torque: float, current: float, voltage: float,
+    warnings: list[str],
+) -> dict[str, Figure]:
+    """Section ``times``: the rig's spin-up time three ways, the supply's crossover and the coast-down.
+
+    Appends warnings for the gearbox loss at stall and for a target speed never reached.
+    """
     t_constant = rig.J * target_speed / torque
     t_current = spin_up_time_current(rig, current, target_speed)
     t_supply = spin_up_time_supply(rig, voltage, current, target_speed)
@@ -477,11 +585,30 @@ def plan_rig(
     for label, value in (("current source", t_current), ("bench supply", t_supply)):
         if math.isinf(value):
             warnings.append(f"with a {label} at {current:g} A / {voltage:g} V the target speed is never reached")
+    return {
+        "spin_up_constant_torque": Figure("spin-up, constant torque (seed's rule)", t_constant, "s"),
+        "spin_up_current_source": Figure("spin-up, current source with friction", t_current, "s"),
+        "spin_up_bench_supply": Figure(f"spin-up, bench supply {voltage:g} V / {current:g} A", t_supply, "s"),
+        "crossover_speed": Figure("CC→CV crossover speed (V − R·i)/K", crossover, "rad/s"),
+        "final_speed": Figure(f"final speed at {voltage:g} V", w_supply_final, "rad/s"),
+        "mechanical_time_constant": Figure("rig τm = J·R/(K² + R·b)", rig.mechanical_time_constant, "s"),
+        "coast_time": Figure("coast from target speed to rest", t_coast, "s"),
+    }
 
-    # Encoder against the log period.
+
+def _encoder_section(
+    motor: Motor, rig: MotorParams, times: dict[str, Figure], *, target_speed: float, torque: float,
+    log_period: float, voltage: float, warnings: list[str],
+) -> dict[str, Figure]:
+    """Section ``encoder``: count rates and samples against the log period (``times`` from :func:`_times_section`).
+
+    Appends warnings for too few counts per log period or too few samples during the spin-up.
+    """
+    t_constant = times["spin_up_constant_torque"].value
+    t_supply = times["spin_up_bench_supply"].value
     counts_per_rad = motor.cpr / (2 * math.pi)
     rate_target = target_speed * counts_per_rad
-    rate_top = w_supply_final * counts_per_rad
+    rate_top = times["final_speed"].value * counts_per_rad
     counts_target = rate_target * log_period
     # Count samples on the slower (pessimistic) estimate: the model's times use K = Ke, optimistic
     # where the gearbox loses torque (the data sheet's Kt < Ke).
@@ -500,8 +627,26 @@ def plan_rig(
         warnings.append(
             f"only {samples:.3g} log samples during the {t_spin:.3g} s spin-up: too few to resolve the acceleration"
         )
+    return {
+        "cpr": Figure("encoder counts per output revolution", motor.cpr, "counts"),
+        "rate_target": Figure("count rate at target speed", rate_target, "counts/s"),
+        "rate_top": Figure(f"count rate at {voltage:g} V free speed", rate_top, "counts/s"),
+        "log_period": Figure("log period", log_period, "s"),
+        "counts_per_period": Figure("counts per log period at target speed", counts_target, "counts"),
+        "counts_first_period": Figure("counts in the first log period from rest", counts_first, "counts"),
+        "samples_in_spin_up": Figure("log samples during the spin-up", samples, "1"),
+    }
 
-    # Sensors.
+
+def _sensors_section(
+    *, torque: float, current: float, voltage: float, shunt_resistance: float, lever_arm: float | None,
+    scale_capacity: float | None, warnings: list[str],
+) -> dict[str, Figure]:
+    """Section ``sensors``: the INA219's bus and current ranges, and the scale's range when given.
+
+    Appends warnings for a supply above the INA219's bus limit, a current beyond its shunt range and
+    a scale reading above the scale's capacity.
+    """
     shunt_range = INA219_SHUNT_MAX / shunt_resistance
     if voltage > INA219_BUS_MAX:
         warnings.append(
@@ -530,62 +675,7 @@ def plan_rig(
                     f"the drive torque reads {reading:.3g} kg on the scale at {lever_arm:g} m, "
                     f"above its {scale_capacity:g} kg capacity: lengthen the arm or lower the current"
                 )
-
-    figures = {
-        "motor": {
-            "free_speed": Figure("free speed (nominal)", motor.free_speed, "rad/s"),
-            "free_speed_rpm": Figure("free speed (nominal)", motor.free_speed / RPM, "rpm"),
-            "stall_torque": Figure("stall torque", motor.stall_torque, "N*m"),
-            "stall_current": Figure("stall current", motor.stall_current, "A"),
-            "torque_constant": Figure("Kt = τ_stall/I_stall (data sheet)", motor.torque_constant, "N*m/A"),
-            "K": Figure("K = Ke (model)", params.K, "V*s/rad"),
-            "motor_inertia": Figure("gearmotor's own J (nominal, assumed)", params.J, "kg*m^2"),
-        },
-        "target": {
-            "target_speed": Figure(f"target speed ({fraction:g} × free speed)", target_speed, "rad/s"),
-            "time": Figure("time to reach it", time, "s"),
-            "current": Figure("drive current", current, "A"),
-            "torque": Figure("drive torque Kt·i (constant)", torque, "N*m"),
-            "angular_acceleration": Figure("angular acceleration α = Δω/t", acceleration, "rad/s^2"),
-            "required_inertia": Figure("inertia needed J_f = τ/α", j_required, "kg*m^2"),
-        },
-        "flywheel": {
-            "density": Figure(f"density ({material})", density, "kg/m^3"),
-            "disc_radius": Figure("disc radius", radius, "m"),
-            "disc_thickness": Figure("disc thickness", thickness, "m"),
-            "disc_mass": Figure("disc mass", disc_mass(radius, thickness, density), "kg"),
-            "disc_inertia": Figure("disc inertia ½·π·r⁴·ρ·h", j_disc, "kg*m^2"),
-            "ratio": Figure("step-up ratio to the disc", ratio, "1"),
-            "reflected_inertia": Figure("disc inertia seen by the motor J·N²", j_reflected, "kg*m^2"),
-            "shortfall": Figure("needed / seen by the motor", shortfall, "1"),
-            "step_up_needed": Figure("step-up ratio that gives J_f with this disc", n_needed, "1"),
-            "direct_disc_radius": Figure(f"radius of a {thickness:g} m disc with J_f", r_direct, "m"),
-            "direct_disc_mass": Figure(
-                "mass of that disc", disc_mass(r_direct, thickness, density), "kg"
-            ),
-            "rig_inertia": Figure("rig inertia (motor + disc·N²)", rig.J, "kg*m^2"),
-        },
-        "times": {
-            "spin_up_constant_torque": Figure("spin-up, constant torque (seed's rule)", t_constant, "s"),
-            "spin_up_current_source": Figure("spin-up, current source with friction", t_current, "s"),
-            "spin_up_bench_supply": Figure(f"spin-up, bench supply {voltage:g} V / {current:g} A", t_supply, "s"),
-            "crossover_speed": Figure("CC→CV crossover speed (V − R·i)/K", crossover, "rad/s"),
-            "final_speed": Figure(f"final speed at {voltage:g} V", w_supply_final, "rad/s"),
-            "mechanical_time_constant": Figure("rig τm = J·R/(K² + R·b)", rig.mechanical_time_constant, "s"),
-            "coast_time": Figure("coast from target speed to rest", t_coast, "s"),
-        },
-        "encoder": {
-            "cpr": Figure("encoder counts per output revolution", motor.cpr, "counts"),
-            "rate_target": Figure("count rate at target speed", rate_target, "counts/s"),
-            "rate_top": Figure(f"count rate at {voltage:g} V free speed", rate_top, "counts/s"),
-            "log_period": Figure("log period", log_period, "s"),
-            "counts_per_period": Figure("counts per log period at target speed", counts_target, "counts"),
-            "counts_first_period": Figure("counts in the first log period from rest", counts_first, "counts"),
-            "samples_in_spin_up": Figure("log samples during the spin-up", samples, "1"),
-        },
-        "sensors": sensors,
-    }
-    return RigPlan(motor=motor.key, figures=figures, warnings=tuple(warnings))
+    return sensors
 
 
 # ---- identification logs: what a log could tell (Cramér–Rao bound) -----------------------------

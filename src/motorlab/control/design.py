@@ -392,6 +392,27 @@ def design_pid_poles(
     above the request. Friction and saturation are not part of this design; the closed-loop
     simulation on the nonlinear model reports their effect.
     """
+    rise_time = _checked_pole_request(loop, feedforward, rise_time, overshoot, period, delay)
+    search = _PoleSearch(loop, Feedforward(0.0, feedforward.kV, feedforward.kA), rise_time, period, delay)
+    speed, shape = search.best(overshoot)
+    result = search.gains(speed, shape)
+    tr, os_ = search.metrics(speed, shape)
+    names = ("wc", "rho") if loop == "velocity" else ("wn", "zeta")
+    settings = {
+        "rise_time": rise_time,
+        "overshoot": overshoot,
+        names[0]: speed,
+        names[1]: shape,
+        "linear_rise_time": tr,
+        "linear_overshoot": os_,
+    }
+    return replace(result, settings=settings)
+
+
+def _checked_pole_request(
+    loop: str, feedforward: Feedforward, rise_time: float | None, overshoot: float, period: float, delay: float
+) -> float:
+    """Check :func:`design_pid_poles`'s request; return the rise time [s], its default filled in."""
     if loop not in LOOPS:
         raise OptionError(f"unknown loop {loop!r} (expected velocity or position)")
     feedforward.check_plant()
@@ -412,45 +433,71 @@ def design_pid_poles(
             f"with feedforward the motor alone rises in {2.2 * tau:.3g} s (2.2·kA/kV); "
             f"ask for a shorter rise time than {rise_time:.3g} s"
         )
-    import scipy.optimize
+    return rise_time
 
-    from motorlab.control.simulation import linear_step_metrics
 
-    linear = Feedforward(0.0, feedforward.kV, feedforward.kA)
-    horizon = 12 * rise_time
+@dataclass(frozen=True)
+class _PoleSearch:
+    """The numerical pole placement of :func:`design_pid_poles` on the sampled, delayed linear loop.
 
-    def gains_of(speed: float, shape: float) -> Gains:
-        kp, ki, kd = _pid_from_shape(loop, linear, speed, shape)
-        return Gains(loop, kp, ki, kd, method="poles", period=period, delay=delay)
+    A pole pair is a ``speed`` (ωc or ωn [rad/s]) and a ``shape`` (ρ or ζ [-]), turned into gains by
+    :func:`_pid_from_shape`; ``plant`` is the feedforward model with kS = 0.
+    """
 
-    def metrics(speed: float, shape: float) -> tuple[float, float]:
-        return linear_step_metrics(gains_of(speed, shape), linear, horizon=horizon)
+    loop: str
+    plant: Feedforward
+    rise_time: float
+    period: float
+    delay: float
 
-    def speed_for(shape: float) -> float:
+    def gains(self, speed: float, shape: float) -> Gains:
+        """The PID gains placing the poles at (``speed``, ``shape``)."""
+        kp, ki, kd = _pid_from_shape(self.loop, self.plant, speed, shape)
+        return Gains(self.loop, kp, ki, kd, method="poles", period=self.period, delay=self.delay)
+
+    def metrics(self, speed: float, shape: float) -> tuple[float, float]:
+        """(rise time [s], overshoot [%]) of those gains on the sampled linear loop."""
+        from motorlab.control.simulation import linear_step_metrics
+
+        return linear_step_metrics(self.gains(speed, shape), self.plant, horizon=12 * self.rise_time)
+
+    def speed_for(self, shape: float) -> float:
+        """The speed meeting the requested rise time at this shape (Brent's method)."""
+        import scipy.optimize
+
         # Rise time falls as the poles get faster; bracket in log(speed) around 2.2/t_r.
         def f(log_speed: float) -> float:
-            return math.log(metrics(math.exp(log_speed), shape)[0] / rise_time)
+            return math.log(self.metrics(math.exp(log_speed), shape)[0] / self.rise_time)
 
-        lo, hi = math.log(0.2 / rise_time), math.log(20.0 / rise_time)
+        lo, hi = math.log(0.2 / self.rise_time), math.log(20.0 / self.rise_time)
         f_lo, f_hi = f(lo), f(hi)
         if f_lo * f_hi > 0:
             return math.exp(lo if abs(f_lo) < abs(f_hi) else hi)
         return math.exp(scipy.optimize.brentq(f, lo, hi, xtol=1e-4))
 
-    if loop == "velocity":
-        shapes = list(np.geomspace(0.02, 1.0, 9))
-    else:
-        shapes = list(np.linspace(0.5, 2.5, 9))
-    table = []
-    for shape in shapes:
-        speed = speed_for(shape)
-        tr, os_ = metrics(speed, shape)
-        table.append((shape, speed, tr, os_))
-    ok = [row for row in table if row[3] <= overshoot and abs(math.log(row[2] / rise_time)) < 0.05]
-    if not ok:
-        # Nothing meets both: keep the least overshoot (reported by the simulation).
-        shape, speed, _, _ = min(table, key=lambda row: row[3])
-    else:
+    def best(self, overshoot: float) -> tuple[float, float]:
+        """(speed, shape) meeting the rise time with the largest overshoot not above ``overshoot`` [%].
+
+        Scans nine shapes, then refines by Brent's method towards the request between the best shape
+        and a neighbour above the limit. When no shape meets both, the least overshoot is kept (the
+        closed-loop simulation reports it).
+        """
+        import scipy.optimize
+
+        if self.loop == "velocity":
+            shapes = list(np.geomspace(0.02, 1.0, 9))
+        else:
+            shapes = list(np.linspace(0.5, 2.5, 9))
+        table = []
+        for shape in shapes:
+            speed = self.speed_for(shape)
+            tr, os_ = self.metrics(speed, shape)
+            table.append((shape, speed, tr, os_))
+        ok = [row for row in table if row[3] <= overshoot and abs(math.log(row[2] / self.rise_time)) < 0.05]
+        if not ok:
+            # Nothing meets both: keep the least overshoot (reported by the simulation).
+            shape, speed, _, _ = min(table, key=lambda row: row[3])
+            return speed, shape
         shape, speed, _, _os_best = max(ok, key=lambda row: row[3])
         # Refine towards the request between this shape and a neighbour above the limit.
         k = shapes.index(shape)
@@ -459,25 +506,14 @@ def design_pid_poles(
                 target = max(overshoot - 0.2, 0.0)
 
                 def g(x: float, target: float = target) -> float:
-                    return metrics(speed_for(x), x)[1] - target
+                    return self.metrics(self.speed_for(x), x)[1] - target
 
                 a, b = shape, shapes[nb]
                 if g(a) * g(b) < 0:
                     shape = scipy.optimize.brentq(g, min(a, b), max(a, b), xtol=1e-3 * abs(b - a))
-                    speed = speed_for(shape)
+                    speed = self.speed_for(shape)
                 break
-    result = gains_of(speed, shape)
-    tr, os_ = metrics(speed, shape)
-    names = ("wc", "rho") if loop == "velocity" else ("wn", "zeta")
-    settings = {
-        "rise_time": rise_time,
-        "overshoot": overshoot,
-        names[0]: speed,
-        names[1]: shape,
-        "linear_rise_time": tr,
-        "linear_overshoot": os_,
-    }
-    return replace(result, settings=settings)
+        return speed, shape
 
 
 def closed_loop_poles(gains: Gains, feedforward: Feedforward) -> np.ndarray:

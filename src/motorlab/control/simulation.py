@@ -391,19 +391,73 @@ def simulate_closed_loop(
     """
     period = gains.period if period is None else period
     delay = gains.delay if delay is None else delay
+    n_periods = _periods_to_run(duration, period=period, delay=delay, substeps=substeps, cpr=cpr)
+    sim = _plant_for(plant)
+    time, states, volts = _run_controller(
+        gains, feedforward, sim, reference, n_periods=n_periods, period=period, delay=delay, substeps=substeps,
+        voltage=voltage, cpr=cpr,
+    )
+    refs = np.array([reference(t) for t in time])
+    ref_col = refs[:, 1] if gains.loop == "velocity" else refs[:, 0]
+    resp = ClosedLoopResponse(
+        loop=gains.loop,
+        kind=kind,
+        time=time,
+        position=states[:, 0],
+        speed=states[:, 1],
+        voltage=volts,
+        reference=ref_col,
+        target=float(ref_col[-1] if target is None else target),
+        settings={
+            "period": period,
+            "delay": delay,
+            "voltage": voltage,
+            "cpr": cpr,
+            "plant": "motor" if isinstance(sim, _MotorPlant) else "feedforward",
+        },
+    )
+    resp.metrics = response_metrics(resp, resolution=0.0 if cpr is None else 2 * math.pi / cpr)
+    return resp
+
+
+def _periods_to_run(duration: float, *, period: float, delay: float, substeps: int, cpr: float | None) -> int:
+    """Check the run's settings of :func:`simulate_closed_loop`; return how many controller periods it takes."""
     if not (period > 0 and delay >= 0 and duration > 0 and substeps >= 1):
         raise OptionError("need period > 0, delay ≥ 0, duration > 0 and substeps ≥ 1")
     if cpr is not None and not cpr > 0:
         raise OptionError(f"encoder counts per revolution must be positive, got {cpr}")
     n_periods = max(math.ceil(duration / period - 1e-9), 1)
     if n_periods > MAX_PERIODS:
-        # Each period is a step of the loop below: a nanosecond period over seconds would take hours
-        # and gigabytes before failing, so refuse it up front.
+        # Each period is a step of the controller loop: a nanosecond period over seconds would take
+        # hours and gigabytes before failing, so refuse it up front.
         raise OptionError(
             f"too long to simulate: a {duration:.3g} s run at a controller period of {period:.3g} s is "
             f"{n_periods:.3g} periods (at most {MAX_PERIODS:.0e})"
         )
-    sim = _plant_for(plant)
+    return n_periods
+
+
+def _run_controller(
+    gains: Gains,
+    feedforward: Feedforward,
+    sim: _FeedforwardPlant | _MotorPlant,
+    reference: Reference,
+    *,
+    n_periods: int,
+    period: float,
+    delay: float,
+    substeps: int,
+    voltage: float,
+    cpr: float | None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The controller loop of :func:`simulate_closed_loop` (see its Notes), from rest.
+
+    Returns
+    -------
+    tuple
+        (time [s], states (position [rad], speed [rad/s], current [A]) [n, 3], voltage [V]) on the
+        dense grid of ``substeps`` points per period.
+    """
     n = n_periods * substeps
     h = period / substeps
     time = np.arange(n + 1) * h
@@ -452,27 +506,7 @@ def simulate_closed_loop(
         volts[filled : filled + substeps] = u
         filled += substeps
     volts[-1] = volts[-2] if n > 0 else 0.0
-    refs = np.array([reference(t) for t in time])
-    ref_col = refs[:, 1] if loop == "velocity" else refs[:, 0]
-    resp = ClosedLoopResponse(
-        loop=loop,
-        kind=kind,
-        time=time,
-        position=states[:, 0],
-        speed=states[:, 1],
-        voltage=volts,
-        reference=ref_col,
-        target=float(ref_col[-1] if target is None else target),
-        settings={
-            "period": period,
-            "delay": delay,
-            "voltage": voltage,
-            "cpr": cpr,
-            "plant": "motor" if isinstance(sim, _MotorPlant) else "feedforward",
-        },
-    )
-    resp.metrics = response_metrics(resp, resolution=0.0 if cpr is None else 2 * math.pi / cpr)
-    return resp
+    return time, states, volts
 
 
 def response_metrics(resp: ClosedLoopResponse, *, resolution: float = 0.0) -> dict[str, Any]:

@@ -219,7 +219,26 @@ def tune(
     if not (voltage > 0 and math.isfinite(voltage)):
         raise OptionError(f"supply voltage must be positive, got {voltage}")
     ff = plant.feedforward.check_plant()
-    n = units.per_radian
+    gains = _design(
+        ff, loop, method, per_radian=units.per_radian, qp=qp, qv=qv, r=r, period=period, delay=delay,
+        rise_time=rise_time, overshoot=overshoot,
+    )
+    tg = to_target(gains, ff, target, units=units, voltage=voltage, geometry=plant.geometry)
+    limits = max_profile(ff, voltage)
+    size = _step_size(ff, loop, step, units=units, voltage=voltage)
+    step_resp, prof_resp = _simulate_step_and_profile(
+        gains, ff, tg.equivalent_feedforward, plant.simulated, size, limits, voltage=voltage, cpr=units.cpr
+    )
+    warnings = [*plant.notes, *_check(gains, step_resp, prof_resp, overshoot if method == "poles" else None, rise_time)]
+    return TuneResult(gains, tg, step_resp, prof_resp, limits, plant, units, warnings)
+
+
+def _design(
+    ff: Feedforward, loop: str, method: str, *, per_radian: float, qp: float, qv: float, r: float, period: float,
+    delay: float, rise_time: float | None, overshoot: float,
+) -> Gains:
+    """Gains of :func:`tune` by ``method``; the LQR tolerances ``qp``, ``qv`` are in the user's unit."""
+    n = per_radian
     if method == "lqr":
         if loop == "velocity":
             gains = design_velocity_lqr(ff.kV, ff.kA, qv=qv / n, r=r, period=period, delay=delay)
@@ -227,11 +246,19 @@ def tune(
             gains = design_position_lqr(ff.kV, ff.kA, qp=qp / n, qv=qv / n, r=r, period=period, delay=delay)
         # Report the tolerances in the user's units, as they were given.
         user = {"qp": qp, "qv": qv} if loop == "position" else {"qv": qv}
-        gains = replace(gains, settings={**gains.settings, **user})
-    else:
-        gains = design_pid_poles(loop, ff, rise_time=rise_time, overshoot=overshoot, period=period, delay=delay)
-    tg = to_target(gains, ff, target, units=units, voltage=voltage, geometry=plant.geometry)
-    limits = max_profile(ff, voltage)
+        return replace(gains, settings={**gains.settings, **user})
+    return design_pid_poles(loop, ff, rise_time=rise_time, overshoot=overshoot, period=period, delay=delay)
+
+
+def _step_size(ff: Feedforward, loop: str, step: float | None, *, units: MechanismUnits, voltage: float) -> float:
+    """The step of :func:`tune` [rad/s or rad]: ``step`` [unit/s or unit], or half the free speed, or one turn.
+
+    Raises
+    ------
+    OptionError
+        When the motor cannot move at ``voltage``, for a zero step, or a velocity step beyond the free speed.
+    """
+    n = units.per_radian
     free = ff.free_speed(voltage)
     if free <= 0:
         raise OptionError(f"at {voltage:g} V the motor cannot overcome kS = {ff.kS:.3g} V")
@@ -246,9 +273,27 @@ def tune(
             f"velocity step {abs(size) * n:.4g} {units.short}/s is beyond the free speed "
             f"{free * n:.4g} {units.short}/s at {voltage:g} V"
         )
-    ctrl_ff = tg.equivalent_feedforward
-    sim_plant = plant.simulated
-    cpr = units.cpr
+    return size
+
+
+def _simulate_step_and_profile(
+    gains: Gains,
+    ff: Feedforward,
+    ctrl_ff: Feedforward,
+    sim_plant: MotorParams | Feedforward,
+    size: float,
+    limits: ProfileLimits,
+    *,
+    voltage: float,
+    cpr: float | None,
+) -> tuple[ClosedLoopResponse, ClosedLoopResponse]:
+    """The closed-loop step of ``size`` and the fastest profile to it, each run long enough to settle.
+
+    ``ff`` is the design plant (run lengths), ``ctrl_ff`` the feedforward the target applies and
+    ``sim_plant`` the model simulated.
+    """
+    loop = gains.loop
+    free = ff.free_speed(voltage)
     travel = abs(size) / free if loop == "position" else 0.0
     step_resp = simulate_closed_loop(
         gains,
@@ -275,8 +320,7 @@ def tune(
         kind="profile",
         target=size,
     )
-    warnings = [*plant.notes, *_check(gains, step_resp, prof_resp, overshoot if method == "poles" else None, rise_time)]
-    return TuneResult(gains, tg, step_resp, prof_resp, limits, plant, units, warnings)
+    return step_resp, prof_resp
 
 
 def _check(
