@@ -541,7 +541,8 @@ def _gain_warnings(logs: list[_oe.Log], fit: _oe.Fit, values: np.ndarray, corr: 
     if peak < 0.1 * v_max:
         warnings.append(
             f"no acceleration event: kA·α never exceeds {100 * peak / max(v_max, 1e-12):.1f} % of the voltage, so "
-            "kA is poorly determined; add a dynamic (step) test"
+            "kA rests on small accelerations (trust it as far as its standard error says); a dynamic (step) "
+            "test or faster changes of the voltage determine it better"
         )
     return warnings
 

@@ -54,7 +54,9 @@ def test_cli_all_three_ramps(tmp_path, capsys):
     code = main(["analyze", "feedforward", *map(str, paths.values()), "--cpr", "8192", "--json"])
     out = capsys.readouterr().out
     assert code == 0
-    params = json.loads(out)["parameters"]
+    doc = json.loads(out)
+    params = doc["parameters"]
+    assert "whole robot" in doc["details"]["shaft"]  # not a SysId mechanism's shaft
     truth = truths["forward"]
     for name in ("kS", "kV", "track_width_ticks", "lateral_ratio"):
         est = params[name]

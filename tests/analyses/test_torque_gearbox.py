@@ -109,3 +109,35 @@ def test_unphysical_efficiency_is_warned():
                     motor_constant=0.7 / 80)
     assert result["efficiency"].value > 1
     assert any("exceeds 1" in w for w in result.warnings)
+
+
+def test_one_current_read_with_meter_noise_is_still_one_current():
+    """A meter's scatter around one setpoint (2.002, 1.999 ... A) is no lever to separate η from τ0."""
+    current = 2.0 + np.array([0.002, -0.001, 0.0, 0.001, -0.002, 0.001])
+    rng = np.random.default_rng(3)
+    tau = 0.6 * 0.7 * current - 0.03 + rng.normal(0.0, 2e-3, current.size)
+    result = torque(Recording(np.arange(6.0), {"current": current, "torque": tau}), ratio=40,
+                    motor_constant=0.7 / 40, motor_constant_stderr=1e-4)
+    assert not result["efficiency"].determined
+    assert not result["loss_torque"].determined
+    assert result["apparent_efficiency"].value == pytest.approx(0.6 - 0.03 / (0.7 * 2.0), rel=0.02)
+    assert not any("polarity" in w or "offset" in w for w in result.warnings)
+
+
+def test_gearbox_options_without_the_motor_k_are_refused():
+    current = np.array([1.0, 2.0, 3.0])
+    rec = Recording(np.arange(3.0), {"current": current, "torque": 0.2 * current - 0.01})
+    with pytest.raises(OptionError, match="--K"):
+        torque(rec, ratio=40)
+    with pytest.raises(OptionError, match="--K"):
+        torque(rec, motor_constant_stderr=1e-4)
+
+
+def test_with_the_motor_k_the_intercept_is_the_loss_torque_not_an_untared_scale():
+    current = np.array([0.5, 1.0, 1.5, 2.0, 2.5, 3.0])
+    tau = 0.7 * 0.7 * current - 0.05 + np.array([1e-3, -1e-3, 2e-3, 0.0, -2e-3, 1e-3])
+    rec = Recording(np.arange(6.0), {"current": current, "torque": tau})
+    assert any("offset" in w for w in torque(rec).warnings)  # without a gearbox: friction or an untared scale
+    result = torque(rec, ratio=40, motor_constant=0.7 / 40)
+    assert not any("offset" in w for w in result.warnings)
+    assert result["loss_torque"].value == pytest.approx(0.05, abs=0.005)

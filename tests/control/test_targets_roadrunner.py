@@ -32,6 +32,15 @@ def test_roadrunner_units_are_ticks():
     kotlin = emit_snippet(tg, "kotlin")
     assert "MecanumDrive.PARAMS.apply {" in kotlin
     assert "    kA = " in kotlin
+    # TankDrive.Params: the same feedforward, its turn controller instead of the holonomic path gains
+    tank = java.split("// TankDrive.java, class Params:")[1]
+    assert "public double kV = " in tank
+    assert "public double turnGain = " in tank
+    assert "axialGain" not in tank
+    assert "lateralInPerTick" not in tank
+    assert "turnGain" not in java.split("// TankDrive.java")[0]
+    assert tg.gains["turnGain"] == tg.gains["headingGain"]
+    assert "TankDrive.PARAMS.apply {" in kotlin
     with pytest.raises(OptionError, match="Java or Kotlin"):
         emit_snippet(tg, "python")
     with pytest.raises(OptionError, match="--cpr"):

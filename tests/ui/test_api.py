@@ -293,6 +293,11 @@ def test_ui_beyond_loopback_warns_and_wants_the_token() -> None:
         token = url.split("?token=")[1]
         ok = httpx.get(f"http://127.0.0.1:{port}/?token={token}", headers={"Host": f"0.0.0.0:{port}"}, timeout=5)
         assert ok.status_code == 200
+        # Bound to every interface, other machines name it by an address of theirs: the token guards.
+        lan_host = {"Host": f"192.0.2.7:{port}"}
+        lan = httpx.get(f"http://127.0.0.1:{port}/?token={token}", headers=lan_host, timeout=5)
+        assert lan.status_code == 200
+        assert httpx.get(f"http://127.0.0.1:{port}/", headers=lan_host, timeout=5).status_code == 403
     finally:
         proc.terminate()
         proc.communicate(timeout=20)  # closes the pipes too
@@ -315,3 +320,34 @@ def test_the_cli_hostile_cases_through_the_api(server: Any) -> None:
         absurd = httpx.post(f"{server.url}/api/tune", data={"loop": "velocity", "kv": kv, "ka": ka}, timeout=120)
         assert absurd.status_code == 400, absurd.text
     _alive(server)
+
+
+def test_forms_no_command_line_can_carry_get_4xx_json(server: Any) -> None:
+    """A NUL byte in a field or its name, a body that is no form, a multipart body that is no multipart."""
+    url = f"{server.url}/api/analyze/spindown"
+    urlencoded = {"Content-Type": "application/x-www-form-urlencoded"}
+    cases = [
+        httpx.post(url, content=b"cpr=1%002", headers=urlencoded, timeout=60),
+        httpx.post(url, content=b"c%00pr=1", headers=urlencoded, timeout=60),
+        httpx.post(f"{server.url}/api/tune", data={"loop": "velocity", "kv": "1\x00"}, timeout=60),
+        httpx.post(url, content=bytes(range(256)) * 4, headers={"Content-Type": "multipart/form-data; boundary=xyz"},
+                   timeout=60),
+        httpx.post(url, content=b"--xyz\r\n", headers={"Content-Type": "multipart/form-data"}, timeout=60),
+    ]
+    for response in cases:
+        assert 400 <= response.status_code < 500, response.text
+        assert response.headers["content-type"].startswith("application/json")
+        assert "\n" not in response.json()["error"]
+    assert "NUL" in cases[0].json()["error"]
+    _alive(server)
+
+
+def test_detect_proposes_the_experiment_a_header_declares(server: Any, tmp_path: Path) -> None:
+    """The rig's transient log (position and current) is identify's, as its header says, not a spin-down."""
+    from motorlab.rig import VirtualRig
+
+    run = VirtualRig("neverest20", unit_seed=0, noise_seed=1).transient(tmp_path / "transient.csv", duration=0.5)
+    with open(run.paths[0], "rb") as handle:
+        response = httpx.post(f"{server.url}/api/detect", files=[("file", ("transient.csv", handle))], timeout=120)
+    assert response.status_code == 200, response.text
+    assert response.json()[0]["experiment"] == "identify"

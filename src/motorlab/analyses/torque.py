@@ -170,7 +170,7 @@ def torque(
     rec, tau, arm_used = _torque_rows(recs, arm, arm_stderr, gearbox)
     current = rec["current"]
     sources = sources_of(recs)
-    if motor_constant is not None and np.unique(np.abs(current)).size == 1:
+    if motor_constant is not None and one_operating_current(current):
         return _single_current(rec, tau, recs, arm_used, arm_stderr, ratio, motor_constant, motor_constant_stderr)
     line = fit_straight_line(current, tau, source=" + ".join(sources), what="current",
                              response="scale reading" if arm_used is not None else "torque")
@@ -178,7 +178,7 @@ def torque(
     fit, model_tau, r2, hysteresis = _fit_line(current, tau, approach, line)
     est = fit.estimates({"slope": "N*m/A", "intercept": "N*m", "tau_h": "N*m"})
     parameters, warnings = _parameters(est, hysteresis, arm_used, arm_stderr, gearbox)
-    warnings.extend(_fit_warnings(int(current.size), line.exact, est["intercept"], tau))
+    warnings.extend(_fit_warnings(int(current.size), line.exact, est["intercept"], tau, motor_constant is None))
     return FitResult(
         experiment="torque",
         parameters=parameters,
@@ -252,16 +252,29 @@ def _parameters(
     return parameters, warnings
 
 
-def _fit_warnings(n_rows: int, exact: bool, intercept: Estimate, tau: np.ndarray) -> list[str]:
+def _fit_warnings(n_rows: int, exact: bool, intercept: Estimate, tau: np.ndarray, offset: bool) -> list[str]:
     """Warnings about the fit itself: no uncertainty from two rows or from rows exactly on the line,
-    and a significant torque offset."""
+    and a significant torque offset (``offset``: not when a gearbox is given, whose loss torque the
+    offset is)."""
     out: list[str] = []
     if n_rows == 2:
         out.append("only two rows: the line passes through both, so no uncertainty can be estimated")
     elif exact:
         out.append(EXACT_LINE_WARNING)
-    out.extend(_offset_warning(intercept, tau))
+    if offset:
+        out.extend(_offset_warning(intercept, tau))
     return out
+
+
+#: Currents that span less than this fraction of their mean are one operating point: a line through
+#: them cannot separate its slope (η) from its intercept (τ0); the meter's scatter would set both.
+ONE_CURRENT_SPAN = 0.05
+
+
+def one_operating_current(current: np.ndarray) -> bool:
+    """Whether the rows' currents are one operating point (their span below :data:`ONE_CURRENT_SPAN`)."""
+    magnitude = np.abs(current)
+    return bool(np.ptp(magnitude) <= ONE_CURRENT_SPAN * float(np.mean(magnitude)))
 
 
 def _details(approach: np.ndarray, hysteresis: bool, arm_used: float | None,
@@ -293,6 +306,10 @@ def _panel(current: np.ndarray, tau: np.ndarray, model_tau: np.ndarray, k_value:
 def _check_gearbox_options(ratio: float, motor_constant: float | None, motor_constant_stderr: float) -> None:
     if not (math.isfinite(ratio) and ratio > 0):
         raise OptionError(f"the gear ratio (--ratio) must be positive, got {ratio}")
+    if motor_constant is None and (ratio != 1.0 or motor_constant_stderr != 0.0):
+        given = "the gear ratio (--ratio)" if ratio != 1.0 else "K's standard error (--K-stderr)"
+        raise OptionError(f"{given} is used only with the motor's K (--K), to report the gearbox efficiency: "
+                          "give --K, or leave it out")
     if motor_constant is not None and not (math.isfinite(motor_constant) and motor_constant > 0):
         raise OptionError(f"the motor's K (--K) must be positive, got {motor_constant} V·s/rad")
     if not (math.isfinite(motor_constant_stderr) and motor_constant_stderr >= 0):
@@ -340,7 +357,7 @@ def _single_current(
 ) -> FitResult:
     """One current: τ = η·N·K·I − τ0 cannot separate η from τ0; only their combination is measured."""
     current = np.abs(rec["current"])
-    i0 = float(current[0])
+    i0 = float(np.mean(current))
     n = int(tau.size)
     mean = float(np.mean(tau))
     se = float(np.std(tau, ddof=1) / math.sqrt(n)) if n > 1 else math.nan
@@ -365,8 +382,9 @@ def _single_current(
         experiment="torque", parameters=parameters, correlation=None, correlation_names=[],
         rmse=float(np.sqrt(np.mean((tau - mean) ** 2))), rmse_unit="N*m", r2=math.nan, n_points=n,
         panels=[panel],
-        warnings=[*reader_warnings(recs), "every row has the same current: the efficiency and the loss torque "
-                  "are not determined separately (measure at several currents)"],
+        warnings=[*reader_warnings(recs), f"every row is at one current ({i0:.3g} A, spread under "
+                  f"{100 * ONE_CURRENT_SPAN:g} %): the efficiency and the loss torque are not determined "
+                  "separately (measure at several currents)"],
         details={"g": STANDARD_GRAVITY, **({"arm_m": arm} if arm is not None else {}),
                  **_gearbox_details(ratio, motor_constant, motor_constant_stderr)},
         sources=sources_of(recs),

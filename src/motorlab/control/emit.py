@@ -222,20 +222,39 @@ def _ftc_pidf(tg: TargetGains, language: str) -> list[str]:
     ]
 
 
+#: Road Runner fields by drive class: TankDrive has no lateral scale or holonomic path gains, and
+#: MecanumDrive no turn controller of its own.
+_TANK_ONLY = ("turnGain", "turnVelGain")
+_MECANUM_ONLY = ("lateralInPerTick", "axialGain", "axialVelGain", "lateralGain", "lateralVelGain", "headingGain",
+                 "headingVelGain")
+
+
 def _roadrunner(tg: TargetGains, language: str) -> list[str]:
-    """Road Runner quickstart fields: Java declarations for ``Params``, Kotlin assignments to ``PARAMS``."""
+    """Road Runner quickstart fields: Java declarations for ``Params``, Kotlin assignments to ``PARAMS``.
+
+    One block for ``MecanumDrive`` and one for ``TankDrive`` (paste the one of your drive class).
+    """
+    values = {**tg.feedforward, **tg.gains}
     names: list[str] = [k for k in ("inPerTick", "lateralInPerTick", "trackWidthTicks", "kS", "kV", "kA")
                         if k in tg.feedforward]
-    values = {**tg.feedforward, **tg.gains}
     names += list(tg.gains)
-    if language == "java":
-        lines = ["", "// MecanumDrive.java (TankDrive.java: the same feedforward fields), class Params:"]
-        lines += [f"public double {k} = {_num(values[k])};  // {tg.units.get(k, '')}" for k in names]
-        return lines
-    lines = ["", "// Kotlin: set the quickstart's PARAMS before building the drive (TankDrive.PARAMS likewise)",
-             "MecanumDrive.PARAMS.apply {"]
-    lines += [f"    {k} = {_num(values[k])}  // {tg.units.get(k, '')}" for k in names]
-    return [*lines, "}"]
+    blocks = [("MecanumDrive", [k for k in names if k not in _TANK_ONLY]),
+              ("TankDrive", [k for k in names if k not in _MECANUM_ONLY])]
+    tank_note = "ramseteZeta, ramseteBBar: keep the quickstart's values (motorlab does not derive RAMSETE gains)"
+    lines: list[str] = []
+    for drive, fields in blocks:
+        if language == "java":
+            lines += ["", f"// {drive}.java, class Params:"]
+            if drive == "TankDrive":
+                lines.append(f"// {tank_note}")
+            lines += [f"public double {k} = {_num(values[k])};  // {tg.units.get(k, '')}" for k in fields]
+        else:
+            lines += ["", f"// Kotlin: set the quickstart's {drive}.PARAMS before building the drive"]
+            if drive == "TankDrive":
+                lines.append(f"// {tank_note}")
+            lines += [f"{drive}.PARAMS.apply {{", *[f"    {k} = {_num(values[k])}  // {tg.units.get(k, '')}"
+                                                   for k in fields], "}"]
+    return lines
 
 
 def _pedro(tg: TargetGains, language: str) -> list[str]:

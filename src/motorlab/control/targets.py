@@ -31,6 +31,9 @@ Targets
     axialGain·e that the feedforward turns into kV·axialGain·e volts, so axialGain = kP/kV [1/s] and
     axialVelGain = kD/kV [-] (velocity loop: axialVelGain = kP/kV); the lateral and heading gains are
     given the same values (the same wheels do the work). inPerTick = 2π·r/cpr with ``--wheel-radius``.
+    ``TankDrive.Params`` has the same feedforward fields (no ``lateralInPerTick``) but follows paths
+    with RAMSETE (``ramseteZeta``, ``ramseteBBar``: the quickstart's values are kept, motorlab does not
+    derive them); its turn controller gains ``turnGain``, ``turnVelGain`` take the heading gains' values.
 ``pedro``
     Pedro Pathing's tuner constants (Pedro-Pathing/PedroPathing ``MecanumConstants``,
     ``FollowerConstants``; Quickstart ``Tuning.java``): ``xVelocity`` [in/s], the forward speed at full
@@ -234,11 +237,15 @@ def _roadrunner(gains: Gains, feedforward: Feedforward, units: MechanismUnits, v
         path = {"axialGain": gains.kP / kv, "axialVelGain": gains.kD / kv}
     else:
         path = {"axialGain": 0.0, "axialVelGain": gains.kP / kv}
+    # TankDrive has no holonomic path gains (it follows paths with RAMSETE): its turn controller,
+    # turnGain·e + turnVelGain·ė on the heading, plays the heading gains' part.
     g = {**path, "lateralGain": path["axialGain"], "lateralVelGain": path["axialVelGain"],
-         "headingGain": path["axialGain"], "headingVelGain": path["axialVelGain"]}
+         "headingGain": path["axialGain"], "headingVelGain": path["axialVelGain"],
+         "turnGain": path["axialGain"], "turnVelGain": path["axialVelGain"]}
     unit_map = {
         "kS": "V", "kV": "V*s/tick", "kA": "V*s^2/tick", "axialGain": "1/s", "lateralGain": "1/s",
         "headingGain": "1/s", "axialVelGain": "1", "lateralVelGain": "1", "headingVelGain": "1",
+        "turnGain": "1/s", "turnVelGain": "1",
         "output": "V", "position": "tick", "velocity": "tick/s", "inPerTick": "in/tick",
     }
     conv = [

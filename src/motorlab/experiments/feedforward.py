@@ -24,6 +24,11 @@ def run(paths: list[str], v: dict[str, Any]) -> Any:
         result = from_runs(runs, cpr=cpr, mechanism=v["mechanism"])
     else:
         result = feedforward(runs, mechanism=v["mechanism"], cpr=None if json_only else cpr)
+    if any(str(r.metadata.get("format", "")).startswith("roadrunner") for r in runs):
+        # Road Runner's files: the gains are per angle of the encoder whose cpr was given (a dead wheel
+        # or a drive motor's output), driving the whole robot: no SysId mechanism, no motor shaft.
+        result.details["shaft"] = ("the encoder whose cpr was given (dead wheel or drive motor output), driving "
+                                   "the whole robot; volts = power × battery")
     if json_only and cpr is not None:
         result.details["cpr"] = {"given": cpr, "note": "counts per logged rotation: the position quantum is "
                                  "one rotation (unitsPerRotation) / cpr"}

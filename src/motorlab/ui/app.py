@@ -17,6 +17,7 @@ from typing import Any
 
 from starlette.applications import Starlette
 from starlette.datastructures import UploadFile
+from starlette.exceptions import HTTPException
 from starlette.requests import Request
 from starlette.responses import FileResponse, JSONResponse, Response
 from starlette.routing import Mount, Route
@@ -46,11 +47,17 @@ def _outcome_response(outcome: runner.Outcome, *, json_body: bool = True) -> Res
 
 async def _save_form(request: Request, folder: Path) -> tuple[dict[str, list[str]], dict[str, list[str]]]:
     """Text fields and uploaded files (saved under ``folder``, sanitised names) of a multipart request."""
-    form = await request.form(max_files=500, max_fields=200)
+    try:
+        form = await request.form(max_files=500, max_fields=200)
+    except HTTPException as exc:  # starlette's own words for a body that is no form ("Invalid multipart data.")
+        raise uploads.UploadError(f"the request is not a form the app can read: {exc.detail}") from exc
     values: dict[str, list[str]] = {}
     files: dict[str, list[str]] = {}
     try:
         for key, item in form.multi_items():
+            if "\x00" in key or (isinstance(item, str) and "\x00" in item):
+                # No command line can carry a NUL byte (the child process could not even be started).
+                raise uploads.UploadError(f"form field {key.replace(chr(0), '?')!r}: contains a NUL byte")
             if isinstance(item, UploadFile):
                 target = uploads.place(folder, item.filename or "upload")
                 with open(target, "wb") as out:
@@ -241,7 +248,7 @@ class Guard:
     ``?token=`` or in the cookie the page gets with it.
     """
 
-    def __init__(self, app: ASGIApp, *, hosts: set[str], token: str | None, max_body: int) -> None:
+    def __init__(self, app: ASGIApp, *, hosts: set[str] | None, token: str | None, max_body: int) -> None:
         self.app, self.hosts, self.token, self.max_body = app, hosts, token, max_body
 
     async def _refuse(self, send: Callable[[Any], Awaitable[None]], status: int, message: str) -> None:
@@ -268,7 +275,7 @@ class Guard:
             return
         headers = dict(scope.get("headers", []))
         host = headers.get(b"host", b"").decode("latin-1").lower()
-        if host not in self.hosts:
+        if self.hosts is not None and host not in self.hosts:
             await self._refuse(send, 403, f"Host {host!r} is not this app's address (DNS rebinding guard)")
             return
         if not self._token_ok(scope, headers):
@@ -296,8 +303,19 @@ class Guard:
         await self.app(scope, receive, send_with_headers)
 
 
-def allowed_hosts(host: str, port: int) -> set[str]:
-    """Host header values that name this app: ``host:port`` (and ``localhost:port`` on loopback)."""
+#: Addresses that mean "every interface": clients name the machine by any of its addresses or names.
+WILDCARDS = ("0.0.0.0", "::", "")
+
+
+def allowed_hosts(host: str, port: int) -> set[str] | None:
+    """Host header values that name this app: ``host:port`` (and ``localhost:port`` on loopback).
+
+    None (any Host) when bound to every interface: other machines reach it by whatever name or
+    address they know, so the Host header cannot be checked; the token (always required off
+    loopback) is the guard then, as in Jupyter.
+    """
+    if host in WILDCARDS:
+        return None
     names = {host.lower()}
     if host in ("127.0.0.1", "localhost", "::1"):
         names |= {"127.0.0.1", "localhost", "[::1]"}

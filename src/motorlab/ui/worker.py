@@ -46,8 +46,24 @@ def _thin(values: np.ndarray) -> list[float | None]:
     return [float(v) if np.isfinite(v) else None for v in arr[::step]]
 
 
-def propose(fmt: str, signals: Sequence[str]) -> str:
-    """The experiment a log of this format with these signals most likely records (a proposal)."""
+#: Experiment names the virtual rig and motorlab's robot code write into a log's header, where they
+#: differ from the analysis that reads the log.
+_BY_HEADER = {"transient": "identify", "sysid": "feedforward", "quasistatic": "feedforward",
+              "dynamic": "feedforward"}
+
+
+def propose(fmt: str, signals: Sequence[str], declared: str | None = None) -> str:
+    """The experiment a log of this format with these signals most likely records (a proposal).
+
+    ``declared`` is the experiment the file's own header names (``# experiment: transient``), which
+    wins over guessing from the signals.
+    """
+    from motorlab.experiments import all_experiments
+
+    if declared:
+        declared = _BY_HEADER.get(declared, declared)
+        if declared in all_experiments():
+            return declared
     if fmt in _BY_FORMAT:
         return _BY_FORMAT[fmt]
     for signal, experiment in _BY_SIGNAL:
@@ -77,7 +93,7 @@ def detect(paths: Sequence[str]) -> list[dict[str, Any]]:
         names = list(recording.signals)
         entry.update(
             format=fmt,
-            experiment=propose(fmt, names),
+            experiment=propose(fmt, names, str(recording.metadata.get("experiment") or "") or None),
             time=_thin(recording.time),
             signals=[{"name": n, "unit": SIGNALS.get(n, ""), "y": _thin(recording.signals[n])} for n in names],
         )
