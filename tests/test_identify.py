@@ -216,6 +216,19 @@ def test_cli_on_csv(tmp_path):
     assert result.to_dict()["parameters"]["K"]["unit"] == "V*s/rad"
 
 
+def test_text_output_names_the_input_model(tmp_path, capsys):
+    from motorlab import cli
+    from motorlab.io import write_csv
+
+    rec = random_steps(13, duration=1.0, dt=1e-3)
+    path = tmp_path / "steps.csv"
+    write_csv(path, {"time_s": rec.time, "voltage_V": rec["voltage"], "position_counts": rec["counts"],
+                     "current_A": rec["current"]})
+    assert cli.main(["analyze", "identify", str(path), "--cpr", str(CPR)]) == 0
+    lines = [line for line in capsys.readouterr().out.splitlines() if line.startswith("input model: ")]
+    assert len(lines) == 1
+
+
 # --------------------------------------------------------------------------------------------------
 # Drives that switch between samples, on an independent simulation path (tests/ivp_reference.py)
 # --------------------------------------------------------------------------------------------------
