@@ -262,6 +262,63 @@ def _simulate_log(model: OEModel, p: np.ndarray, log: Log, speed0: float, offset
     return out
 
 
+#: A perturbed run has settled back onto the baseline when its current and speed differ from the
+#: baseline's by less than this fraction of the largest difference seen.
+SETTLED = 1e-9
+
+
+def _settled_simulation(model: OEModel, p: np.ndarray, p_base: np.ndarray, log: Log, sim0: dict[str, np.ndarray],
+                        k0: int, sw: tuple[np.ndarray, np.ndarray, np.ndarray] | None, x0: np.ndarray,
+                        theta0: float) -> tuple[np.ndarray, np.ndarray]:
+    """States and angle from grid step ``k0`` with parameters ``p`` that change the drive locally.
+
+    A held level or a switch instant changes the drive over one segment only. Once the segment is
+    over and the current and speed are back on the baseline run ``sim0`` (within :data:`SETTLED` of
+    the largest difference: the electrical and mechanical transients have decayed), the rest of the
+    run is the baseline's with the angle shifted by a constant: simulated in doubling chunks up to
+    there, the column of a nuisance parameter costs its segment, not the rest of the log (a 50 000-sample
+    log with 170 switches: minutes otherwise).
+    """
+    drive = model.drive(p, log)
+    plant = model.plant(p)
+    changed = np.flatnonzero(drive[k0:] != model.drive(p_base, log)[k0:])
+    last = k0 + (int(changed[-1]) + 1 if changed.size else 0)
+    base_sw = model.switches(p_base, log)
+    if sw is not None and base_sw is not None:
+        keep = base_sw[0] >= k0
+        moved = np.flatnonzero((sw[1] != base_sw[1][keep]) | (sw[2] != base_sw[2][keep]))
+        if moved.size:
+            last = max(last, k0 + int(sw[0][moved[-1]]) + 1)
+    n = drive.size  # steps; grid points n + 1
+    out_states, out_theta = [np.asarray([x0])], [np.asarray([theta0])]
+    start, chunk, peak = k0, 256, np.zeros(2)
+    while start < n:
+        stop = min(n, max(start + chunk, last + 1))
+        part = None
+        if sw is not None:
+            inside = (sw[0] + k0 >= start) & (sw[0] + k0 < stop)
+            part = (sw[0][inside] + k0 - start, sw[1][inside], sw[2][inside])
+        states, theta = simulate(plant, drive[start:stop], log.dt, x0=out_states[-1][-1],
+                                 theta0=float(out_theta[-1][-1]), switches=part)
+        out_states.append(states[1:])
+        out_theta.append(theta[1:])
+        base = np.column_stack([sim0["current"][start:stop + 1], sim0["speed"][start:stop + 1]])
+        delta = np.abs(states[:, :2] - base)
+        peak = np.maximum(peak, delta.max(axis=0))
+        start, chunk = stop, 2 * chunk
+        if stop >= last and np.all(delta[-1] <= SETTLED * peak):
+            break
+    states, theta = np.concatenate(out_states), np.concatenate(out_theta)
+    if start < n:  # settled: the baseline's run from here on, the angle shifted by what the change left
+        shift = theta[-1] - sim0["position"][start]
+        tail = np.column_stack([sim0["current"][start + 1:], sim0["speed"][start + 1:]])
+        if states.shape[1] > 2:
+            tail = np.column_stack([tail, np.zeros((tail.shape[0], states.shape[1] - 2))])
+        states = np.concatenate([states, tail])
+        theta = np.concatenate([theta, sim0["position"][start + 1:] + shift])
+    return states, theta
+
+
 class _Problem:
     """The weighted residuals of :func:`fit_output_error` and their Jacobian, in scaled unknowns.
 
@@ -342,8 +399,8 @@ class _Problem:
             keep = sw[0] >= k0
             sw = (sw[0][keep] - k0, sw[1][keep], sw[2][keep])
         x0 = np.array([sim0["current"][k0], sim0["speed"][k0]])
-        states, theta = simulate(model.plant(p), model.drive(p, log)[k0:], log.dt, x0=x0,
-                                 theta0=float(sim0["position"][k0] - offsets[k]), switches=sw)
+        states, theta = _settled_simulation(model, p, self.unpack(self._last["z"])[0], log, sim0, k0, sw, x0,
+                                            float(sim0["position"][k0] - offsets[k]))
         r = r0.copy()
         rs, m = int(row_starts[k]), log.time.size
         assert log.current is not None

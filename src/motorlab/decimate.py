@@ -66,3 +66,59 @@ def block_mean(recording: Recording, *, max_points: int = MAX_POINTS) -> Recordi
                     lines=lines)
     out.segments = {key: (a // k, -(-b // k)) for key, (a, b) in recording.segments.items()}
     return out
+
+
+#: A block "holds" the voltage when its readings span at most this many noise standard deviations.
+HOLD_SIGMAS = 8.0
+
+
+def driven_log(recording: Recording, *, max_points: int = MAX_POINTS) -> Recording:
+    """A long voltage-driven log made affordable without blurring its input.
+
+    Block means (:func:`block_mean`) where the logged voltage holds over every block; otherwise the
+    window of ``max_points`` consecutive samples over which the voltage changes most. A block mean of
+    a voltage that switches inside its block is a level the motor never saw: simulated as held over
+    the block, it biases a fit driven by the voltage (identify: b by −23 % and K, R by 8 standard
+    errors on a 60 000-sample log averaged in pairs).
+
+    Parameters
+    ----------
+    recording
+        A log with ``voltage`` [V] (without one, :func:`block_mean`).
+    max_points
+        The most samples to keep.
+
+    Returns
+    -------
+    Recording
+        The recording itself when short enough, its block means, or a window of it, with a warning
+        in ``metadata["warnings"]`` saying which and ``metadata["decimation"]``.
+    """
+    n = len(recording)
+    if n <= max_points or "voltage" not in recording.signals:
+        return block_mean(recording, max_points=max_points)
+    v = np.asarray(recording.signals["voltage"], dtype=float)
+    k = math.ceil(n / max_points)
+    whole = n // k * k
+    blocks = v[:whole].reshape(-1, k)
+    spread = float(np.max(blocks.max(axis=1) - blocks.min(axis=1)))
+    d = np.diff(v)
+    noise = float(1.4826 * np.median(np.abs(d - np.median(d)))) / math.sqrt(2.0)
+    if spread <= HOLD_SIGMAS * noise + 1e-9 * max(float(np.max(np.abs(v))), 1e-12):
+        return block_mean(recording, max_points=max_points)
+    change = np.concatenate([[0.0], np.cumsum(np.abs(d))])  # total variation up to each sample
+    starts = np.arange(0, n - max_points + 1, max(1, max_points // 10))
+    a = int(starts[np.argmax(change[starts + max_points - 1] - change[starts])])
+    out = recording.select(slice(a, a + max_points))
+    metadata = out.metadata
+    if isinstance(metadata.get("file_starts"), list):
+        metadata["file_starts"] = [int(s) - a for s in metadata["file_starts"] if a <= int(s) < a + max_points]
+    metadata["decimation"] = {"window": [a, a + max_points], "samples": n, "points": max_points}
+    t0, t1 = float(recording.time[a]), float(recording.time[a + max_points - 1])
+    metadata["warnings"] = [
+        *(recording.metadata.get("warnings") or []),
+        f"{recording.source or 'log'}: {n} samples; the fit uses the {max_points} from {t0:.6g} s to {t1:.6g} s "
+        "(where the voltage changes most): block means would blur the voltage's switches inside blocks and "
+        "bias the fit; split the log to fit the rest",
+    ]
+    return out

@@ -35,7 +35,7 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from motorlab import _oe, held_input
-from motorlab.decimate import block_mean
+from motorlab.decimate import driven_log
 from motorlab.errors import FitError, OptionError
 from motorlab.fitting import MAX_RELATIVE_STDERR
 from motorlab.model import MotorParams, feedforward_from_params
@@ -157,14 +157,14 @@ def identify(
 
 def _checked_recordings(recordings: Recording | Sequence[Recording], *, resistance: float | None,
                         torque_constant: float | None, cpr: float | None) -> list[Recording]:
-    """The runs (block-averaged, :func:`motorlab.decimate.block_mean`) after checking the options.
+    """The runs (long ones made affordable: :func:`motorlab.decimate.driven_log`) after checking the options.
 
     Raises
     ------
     OptionError
         No recordings, or a non-positive resistance, torque constant or cpr.
     """
-    recordings = [block_mean(r) for r in ([recordings] if isinstance(recordings, Recording) else recordings)]
+    recordings = [driven_log(r) for r in ([recordings] if isinstance(recordings, Recording) else recordings)]
     recs = [recordings] if isinstance(recordings, Recording) else list(recordings)
     if not recs:
         raise OptionError("no recordings to identify")

@@ -100,6 +100,22 @@ def test_a_fifo_without_writer_is_refused_at_once(tmp_path: Path) -> None:
     assert len(done.stderr.strip().splitlines()) == 1
 
 
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="no FIFOs on this system")
+def test_outputs_never_replace_a_fifo_or_a_folder(tmp_path: Path, capsys) -> None:
+    """The rename of an atomic write would put a regular file where the FIFO (or, as root, /dev/null) was."""
+    import stat
+
+    fifo = tmp_path / "out.csv"
+    os.mkfifo(fifo)
+    refused(capsys, "simulate", "torque", "--motor", "neverest40", "-o", fifo, mentions="not a regular file")
+    refused(capsys, "simulate", "torque", "--motor", "neverest40", "-o", tmp_path, mentions="is a folder")
+    os.mkfifo(tmp_path / "fifo.png")
+    refused(capsys, "tune", "velocity", "--kv", "0.12", "--ka", "0.01", "--plot", tmp_path / "fifo.png",
+            mentions="not a regular file")
+    assert stat.S_ISFIFO(os.stat(fifo).st_mode)
+    assert stat.S_ISFIFO(os.stat(tmp_path / "fifo.png").st_mode)
+
+
 def test_size_limit_refuses_and_the_variable_lifts_it(rig, tmp_path: Path, monkeypatch, capsys) -> None:
     path = copy(rig["lcr"], tmp_path)
     monkeypatch.setenv("MOTORLAB_MAX_INPUT_SIZE", "100")

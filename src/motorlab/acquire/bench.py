@@ -37,6 +37,7 @@ import numpy as np
 from motorlab.acquire.errors import InstrumentError
 from motorlab.acquire.scpi import RigolDS1000Z, Supply
 from motorlab.errors import OptionError, RigError
+from motorlab.io._output import check_writable_target
 from motorlab.io.csv_table import write_csv
 from motorlab.io.scope import find_rising_edges
 from motorlab.rig.base import MAX_READINGS, PathArg, RigRun, check_size
@@ -137,6 +138,7 @@ class _RowLog:
     handle: IO[str] | None = field(default=None, init=False)
 
     def __enter__(self) -> _RowLog:
+        check_writable_target(self.path)  # a FIFO would hang the run, a device would swallow it
         self.handle = open(self.path, "w", encoding="utf-8", newline="")
         lines = [f"# {k}: {v}" for k, v in self.metadata.items()] + [",".join(self.columns)]
         self.handle.write("\n".join(lines) + "\n")

@@ -27,6 +27,7 @@ from typing import IO, Any
 from motorlab.acquire.errors import InstrumentError
 from motorlab.acquire.es51919 import BAUD_RATE, Packet, PacketReader
 from motorlab.errors import OptionError
+from motorlab.io._output import check_writable_target
 
 #: What one run of readings may hold (seed 1 takes ten positions).
 MAX_LCR_READINGS = 10_000
@@ -135,6 +136,7 @@ class LCRLog:
         """Append ``reading`` (opening the file and writing its header first)."""
         if self.handle is None:
             self.kind, self.circuit = reading.kind, reading.circuit
+            check_writable_target(self.path)  # a FIFO would hang the reading, a device would swallow it
             self.handle = open(self.path, "w", encoding="utf-8", newline="")  # noqa: SIM115 (kept open)
             meta = {"experiment": "lcr", "instrument": "DER EE DE-5000 (Cyrustek ES51919)", "port": self.port,
                     "started": datetime.now(UTC).isoformat(timespec="seconds")}

@@ -105,6 +105,12 @@ def check_figure_path(path: str, *, option: str = "--plot") -> None:
     folder = os.path.dirname(os.path.abspath(path))
     if not os.path.isdir(folder):
         raise OptionError(f"{option} {path}: the directory {folder} does not exist")
+    from motorlab.io._output import check_writable_target
+
+    try:
+        check_writable_target(path)
+    except OptionError as exc:
+        raise OptionError(f"{option} {exc.message}") from None
 
 
 def check_output_dir(path: str | os.PathLike[str], *, option: str = "-o") -> None:

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import stat
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 
@@ -26,6 +27,7 @@ def atomic_path(path: PathArg) -> Iterator[Path]:
     removed and ``path`` is left as it was.
     """
     target = Path(os.fspath(path))
+    check_writable_target(target)
     temporary = target.with_name(f".{target.stem}.tmp-{os.getpid()}{target.suffix}")
     try:
         yield temporary
@@ -34,6 +36,27 @@ def atomic_path(path: PathArg) -> Iterator[Path]:
         with contextlib.suppress(OSError):
             temporary.unlink()
         raise
+
+
+def check_writable_target(path: PathArg) -> None:
+    """Refuse an output path that exists and is not a regular file (a folder, a device, a FIFO, a socket).
+
+    The rename of :func:`atomic_path` would otherwise put a regular file in its place: run as root,
+    ``-o /dev/null`` would replace the system's null device.
+
+    Raises
+    ------
+    OptionError
+        Naming the path and what it is.
+    """
+    try:
+        info = os.stat(path)  # through a symbolic link: what it points to counts
+    except OSError:
+        return  # absent (or unreadable: the write itself will say so)
+    if not stat.S_ISREG(info.st_mode):
+        kind = "a folder" if stat.S_ISDIR(info.st_mode) else "a device, FIFO or socket"
+        raise OptionError(f"{os.fspath(path)}: is {kind}, not a regular file: motorlab writes its outputs to "
+                          "regular files only")
 
 
 def write_text_atomic(path: PathArg, text: str, *, newline: str | None = None) -> None:

@@ -33,6 +33,7 @@ from typing import Any
 import numpy as np
 
 from motorlab.errors import LogFormatError, OptionError
+from motorlab.io._output import check_writable_target
 from motorlab.io._text import PathArg, check_cpr, read_bytes
 from motorlab.recording import Recording
 
@@ -476,6 +477,7 @@ def write_roadrunner_ramp(path: PathArg, content: dict[str, Any]) -> None:
             out[key] = [_signal(*v) for v in value]
         else:
             out[key] = value
+    check_writable_target(path)
     with open(path, "w", encoding="utf-8") as handle:
         handle.write(_jackson(out, 0))
 

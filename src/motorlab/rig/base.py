@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Any, Protocol, runtime_checkable
 
 from motorlab.errors import InputError, OptionError, RigError
+from motorlab.io._output import check_writable_target
 from motorlab.results import jsonable
 
 #: Most simulator steps or logged samples one run may produce. Ten million steps take ~80 MB per
@@ -134,6 +135,7 @@ def write_truth(data_path: PathArg, entry: dict[str, Any]) -> Path:
             raise RigError(f"{path} exists and is not a motorlab truth file; not overwriting it")
         doc["runs"] = dict(old.get("runs", {}))
     doc["runs"][Path(data_path).name] = jsonable(entry)
+    check_writable_target(path)
     tmp = path.with_name(path.name + ".tmp")
     tmp.write_text(json.dumps(doc, indent=2, allow_nan=False) + "\n", encoding="utf-8")
     tmp.replace(path)
