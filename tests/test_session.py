@@ -245,3 +245,18 @@ def test_documented_example_is_valid(tmp_path: Path) -> None:
     }
     assert s.fleet_threshold == 4
     assert s.healthy_spread["b"] == pytest.approx(0.25)
+
+
+def test_a_file_listed_twice_is_refused_with_its_line(tmp_path: Path) -> None:
+    text = GOOD.replace('files = ["B/lcr.csv"]', 'files = ["B/lcr.csv", "B/../B/lcr.csv"]')
+    err = error_of(tmp_path, text)
+    assert "listed twice" in str(err)
+    assert err.line == text.splitlines().index('files = ["B/lcr.csv", "B/../B/lcr.csv"]') + 1
+
+
+@pytest.mark.parametrize("arm", ['"15 furlongs"', '"1e308 m"', '"0.001 um"'])
+def test_a_rig_quantity_beyond_any_rig_is_refused_at_load(tmp_path: Path, arm: str) -> None:
+    text = GOOD.replace('lever_arm = "20 cm"', f"lever_arm = {arm}")
+    err = error_of(tmp_path, text)
+    assert "beyond any gearmotor rig" in str(err)
+    assert err.line == text.splitlines().index(f"lever_arm = {arm}") + 1

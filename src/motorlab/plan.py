@@ -525,6 +525,9 @@ def _size_flywheel(
     """
     j_disc = disc_inertia(radius, thickness, density)
     j_reflected = reflected_inertia(j_disc, ratio)
+    if not (math.isfinite(j_reflected) and j_reflected > 0):
+        raise OptionError(f"a disc of radius {radius:g} m and thickness {thickness:g} m has an inertia of "
+                          f"{j_disc:g} kg·m² at the motor: no flywheel at all (check --radius, --thickness)")
     rig = params.with_load(j_disc, ratio=ratio)
     shortfall = j_required / j_reflected
     n_needed = step_up_ratio(j_required, j_disc)

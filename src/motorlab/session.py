@@ -59,6 +59,13 @@ from motorlab.units import format_unit, parse_quantity
 #: Densities of flywheel materials [kg/m³]: the one table of :mod:`motorlab.plan`.
 MATERIAL_DENSITY = MATERIALS
 
+#: Plausible ranges (SI) of the rig's quantities: a value outside is a unit mistake, refused at load.
+PLAUSIBLE: dict[str, tuple[float, float]] = {
+    "lever_arm": (1e-4, 100.0), "voltage_limit": (1e-3, 1e3), "current_limit": (1e-6, 1e4),
+    "inertia": (1e-12, 1e6), "radius": (1e-4, 10.0), "diameter": (2e-4, 20.0), "thickness": (1e-5, 10.0),
+    "density": (1.0, 3e4),
+}
+
 #: Settings each experiment accepts besides ``files``: name -> (SI unit or type name, description).
 #: A unit string means a quantity parsed with pint; "int" / "str" / "bool" are plain TOML values.
 #: Generated from the experiments' descriptions (:mod:`motorlab.experiments`).
@@ -334,6 +341,10 @@ class _Table:
             raise self.error(key, exc.message.removeprefix(f"{key}: ")) from None
         if positive and number <= 0:
             raise self.error(key, f"must be positive, got {value!r}")
+        low, high = PLAUSIBLE.get(key, (0.0, math.inf))
+        if not low <= number <= high:  # a unit mistake ("15 furlongs"), refused now rather than failing later
+            raise self.error(key, f"{value!r} is {number:.4g} {format_unit(unit)}, outside {low:g} … {high:g} "
+                             f"{format_unit(unit)}: beyond any gearmotor rig")
         return number
 
     def number(self, key: str, *, required: bool = False, integer: bool = False) -> float | None:
@@ -637,6 +648,9 @@ def _read_experiment(unit: _Table, name: str, folder: Path, rig: RigSpec) -> Exp
     if not isinstance(names, list) or not names or not all(isinstance(n, str) for n in names):
         raise table.error("files", "expected a file name or a non-empty list of file names")
     files = tuple(_existing_file(table, "files", n, folder) for n in names)
+    if len({f.resolve() for f in files}) < len(files):
+        twice = next(n for k, n in enumerate(names) if files[k].resolve() in {f.resolve() for f in files[:k]})
+        raise table.error("files", f"{twice!r} is listed twice: each file of a run is read once")
     settings: dict[str, Any] = {}
     for key, (kind, _description) in EXPERIMENT_SETTINGS[name].items():
         if not table.has(key):

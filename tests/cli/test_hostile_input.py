@@ -345,3 +345,14 @@ def test_identify_says_when_given_r_and_k_are_not_used(rig, capsys) -> None:
     code, out, err = run(capsys, "analyze", "identify", rig["transient"], "--cpr", "1120", "--R", "2", "--json")
     assert code == 0, err
     assert any("the given R = 2" in w and "was not used" in w for w in json.loads(out)["warnings"])
+
+
+def test_the_same_file_twice_is_refused_in_every_analysis(rig, tmp_path: Path, capsys) -> None:
+    """Its rows would count twice (torque: 22 points from 11); spindown and spinup refused it before."""
+    for experiment, options in (("lcr", ()), ("terminal", ("--K", "0.7"))):
+        path = copy(rig[experiment], tmp_path)
+        refused(capsys, "analyze", experiment, path, path, *options, mentions="given twice")
+
+
+def test_feedforward_k_without_r_is_refused(rig, capsys) -> None:
+    refused(capsys, "analyze", "feedforward", rig["sysid"], "--K", "5", mentions="--R")

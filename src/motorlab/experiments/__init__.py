@@ -252,7 +252,13 @@ class Experiment:
         return values
 
     def analyze(self, paths: Sequence[str], values: Mapping[str, Any]) -> FitResult:
-        """Run the analysis on ``paths`` with option ``values`` (as :meth:`values` returns them)."""
+        """Run the analysis on ``paths`` with option ``values`` (as :meth:`values` returns them).
+
+        The same file given twice (also under two names) is refused: its rows would count twice.
+        """
+        from motorlab.io._text import check_distinct
+
+        check_distinct(paths)
         result = self.run([str(p) for p in paths], dict(values))
         if self.shaft:
             result.details.setdefault("shaft", self.shaft)

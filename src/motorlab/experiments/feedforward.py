@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from motorlab.errors import OptionError
 from motorlab.experiments import Experiment, Option, RigRun, stderr_or_none
 
 MECHANISMS = ("simple", "elevator", "arm")  # as motorlab.feedforward.MECHANISMS (tests/test_experiments.py)
@@ -16,6 +17,9 @@ def run(paths: list[str], v: dict[str, Any]) -> Any:
     from motorlab.feedforward import feedforward, motor_estimates, read_tests
 
     cpr = v["cpr"]
+    if v["torque_constant"] is not None and v["resistance"] is None:
+        raise OptionError("the torque constant (--K) turns the gains into motor parameters only with the "
+                          "resistance (--R): give both, or neither")
     runs = read_tests(paths, cpr=cpr, side=v["side"], units=v["units"])
     json_only = any(run.metadata.get("format") in ("sysid-json", "frc-char-json") for run in runs)
     if any(r.metadata.get("ramp") in ("lateral", "angular") for r in runs):  # Road Runner's other ramps
