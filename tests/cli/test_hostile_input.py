@@ -108,7 +108,7 @@ def test_outputs_never_replace_a_fifo_or_a_folder(tmp_path: Path, capsys) -> Non
     fifo = tmp_path / "out.csv"
     os.mkfifo(fifo)
     refused(capsys, "simulate", "torque", "--motor", "neverest40", "-o", fifo, mentions="not a regular file")
-    refused(capsys, "simulate", "torque", "--motor", "neverest40", "-o", tmp_path, mentions="is a folder")
+    refused(capsys, "simulate", "torque", "--motor", "neverest40", "-o", tmp_path, mentions="is a directory")
     os.mkfifo(tmp_path / "fifo.png")
     refused(capsys, "tune", "velocity", "--kv", "0.12", "--ka", "0.01", "--plot", tmp_path / "fifo.png",
             mentions="not a regular file")
@@ -242,6 +242,28 @@ def test_failed_encoder_read_in_a_spindown_is_excluded_and_named(rig, tmp_path: 
     k, k_clean = doc["parameters"]["K"], json.loads(clean[1])["parameters"]["K"]
     assert k["value"] is not None
     assert k["value"] == pytest.approx(k_clean["value"], rel=1e-3)
+
+
+@pytest.mark.parametrize("glitch", ["two-failed-reads", "zero-mid-coast"])
+def test_several_glitches_and_a_zero_in_a_coast_are_excluded(rig, tmp_path: Path, capsys, glitch: str) -> None:
+    """Two failed reads once ended as "K not determined"; a 0 among 7491 and 7517 counts went unseen (the
+    counts' spread over a coast set the threshold)."""
+    clean = run(capsys, "analyze", "spindown", rig["spindown"], "--cpr", "1120", "--json")
+    path = copy(rig["spindown"], tmp_path)
+    rows = data_rows(path)
+    coast = [r for r in rows if int(path.read_text().split("\n")[r].split()[1]) > 1000]  # the shaft has turned
+    if glitch == "two-failed-reads":
+        lines = [set_field(path, rows[len(rows) // 2], 1, str(2**31 - 1)),
+                 set_field(path, rows[len(rows) * 3 // 4], 1, str(2**31 - 1))]
+    else:
+        lines = [set_field(path, coast[len(coast) * 2 // 3], 1, "0")]
+    code, out, err = run(capsys, "analyze", "spindown", path, "--cpr", "1120", "--json")
+    assert code == 0, err
+    doc = json.loads(out)
+    for line in lines:
+        assert any(f"{path.name}:{line}: single-sample glitch excluded" in w for w in doc["warnings"]), line
+    k, k_clean = doc["parameters"]["K"], json.loads(clean[1])["parameters"]["K"]
+    assert k["value"] == pytest.approx(k_clean["value"], rel=2e-3)
 
 
 def test_65535_in_a_terminal_table_is_flagged(rig, tmp_path: Path, capsys) -> None:

@@ -54,7 +54,7 @@ def check_writable_target(path: PathArg) -> None:
     except OSError:
         return  # absent (or unreadable: the write itself will say so)
     if not stat.S_ISREG(info.st_mode):
-        kind = "a folder" if stat.S_ISDIR(info.st_mode) else "a device, FIFO or socket"
+        kind = "a directory" if stat.S_ISDIR(info.st_mode) else "a device, FIFO or socket"
         raise OptionError(f"{os.fspath(path)}: is {kind}, not a regular file: motorlab writes its outputs to "
                           "regular files only")
 
