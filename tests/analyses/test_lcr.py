@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from motorlab.analyses.lcr import lcr, robust_outliers
-from motorlab.errors import LogFormatError, OptionError
+from motorlab.errors import FitError, LogFormatError, OptionError
 from motorlab.io import read_csv, write_csv
 from motorlab.recording import Recording
 
@@ -138,6 +138,16 @@ def test_frequency_no_lcr_meter_uses_is_refused(frequency, tmp_path):
     write_csv(path, {"L_uH": [700.0, 710.0], "Q": [2.2, 2.23]}, metadata={"frequency_Hz": frequency})
     with pytest.raises(LogFormatError, match="frequency_Hz"):
         lcr(read_csv(path))
+
+
+def test_readings_at_several_frequencies_are_not_averaged(tmp_path):
+    """A meter switched from 1 kHz to 10 kHz: R = 2πfL/Q of both averaged (8.5 Ω of 1.55 and 15.5) is refused."""
+    path = tmp_path / "lcr.csv"
+    write_csv(path, {"L_uH": [700.0] * 4, "Q": [2.84] * 4, "frequency_Hz": [1000.0, 1000.0, 1e4, 1e4]})
+    with pytest.raises(FitError, match="1 kHz, 10 kHz"):
+        lcr(read_csv(path))
+    write_csv(path, {"L_uH": [700.0, 705.0], "Q": [28.4, 28.1]}, metadata={"frequency_Hz": 10000})
+    assert any("at 10 kHz includes AC losses" in w for w in lcr(read_csv(path)).warnings)
 
 
 def test_unusual_frequency_is_warned(tmp_path):

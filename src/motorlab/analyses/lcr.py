@@ -17,7 +17,7 @@ import numpy as np
 
 from motorlab.analyses import _common as common
 from motorlab.analyses._common import finite_rows, metadata_quantity, reader_warnings, sources_of
-from motorlab.errors import LogFormatError, OptionError
+from motorlab.errors import FitError, LogFormatError, OptionError
 from motorlab.recording import Recording
 from motorlab.results import Estimate, FitResult, Panel, Series
 from motorlab.units import SI_UNITS
@@ -216,6 +216,12 @@ def _fit_lq(rows: _Rows, threshold: float, fit: _Fit, warnings: list[str]) -> No
     f = np.concatenate(f_rows)
     if inductance.size < 2:
         raise _only_one("L/Q", l_recs, l_rows)
+    if np.ptp(f) > 1e-6 * float(np.max(f)):
+        # R = 2πfL/Q grows with f (eddy currents, skin effect): readings at several test frequencies
+        # averaged together describe no frequency (a meter switched from 1 kHz to 10 kHz mid-run).
+        found = ", ".join(_freq_text(np.array([v])) for v in np.unique(f))
+        raise FitError(f"the L/Q readings were taken at several test frequencies ({found}): analyse each "
+                       "frequency's readings on their own")
     low, high = FREQUENCY_USUAL
     if np.any((f < low) | (f > high)):
         warnings.append(
@@ -321,17 +327,19 @@ def _fit_dcr(rows: _Rows, threshold: float, fit: _Fit, warnings: list[str]) -> N
 
 def _compare_resistances(parameters: dict[str, Estimate], details: dict[str, object], warnings: list[str]) -> None:
     """Say how far the AC resistance 2πfL/Q is from the DC one, or that the DC one is missing."""
+    f = details.get("frequency_Hz")
+    at = f"at {_freq_text(np.array([f]))}" if isinstance(f, float) else "at the test frequency"
     if "R" in parameters and "R_dc" in parameters:
         ratio = parameters["R"].value / parameters["R_dc"].value
         details["R_over_R_dc"] = ratio
         warnings.append(
             f"R from 2πfL/Q ({parameters['R'].value:.3g} Ω) is {100 * (ratio - 1):+.0f} % from the DC "
-            f"resistance R_dc ({parameters['R_dc'].value:.3g} Ω): the 1 kHz value includes AC losses "
+            f"resistance R_dc ({parameters['R_dc'].value:.3g} Ω): the value {at} includes AC losses "
             "(eddy currents, commutation); use R_dc as the model's winding resistance R"
         )
     elif "R" in parameters:
         warnings.append(
-            "no DC resistance readings: R from 2πfL/Q at 1 kHz includes AC losses and overstates the DC "
+            f"no DC resistance readings: R from 2πfL/Q {at} includes AC losses and overstates the DC "
             "winding resistance the motor model needs; add DCR readings"
         )
 
