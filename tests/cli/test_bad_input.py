@@ -1002,3 +1002,22 @@ def test_no_traceback_reaches_stderr_for_real(rig_files, session_dir: Path, tmp_
         assert done.returncode == 2, (argv, done.stderr)
         assert_one_line(done.stderr)
     assert snapshot(tmp_path) == before
+
+
+def test_a_refusal_is_one_line_even_after_numpy_warned(monkeypatch: pytest.MonkeyPatch, capsys) -> None:
+    """numpy's overflow on the way to a refusal is a symptom of the same bad input: only the refusal prints."""
+    import warnings
+
+    import motorlab.cli.motors as motors
+    from motorlab.errors import OptionError
+
+    def overflow_then_refuse(args: Any) -> int:
+        warnings.warn("overflow encountered in multiply", RuntimeWarning, stacklevel=1)
+        raise OptionError("the lever arm (--arm) must lie between 0.0001 and 100 [m], got 1e+308")
+
+    monkeypatch.setattr(motors, "run", overflow_then_refuse)
+    with warnings.catch_warnings():
+        warnings.simplefilter("always")
+        code, _, err = run(capsys, ["motors"])
+    assert code == 2
+    assert_one_line(err, mentions="lever arm")

@@ -8,6 +8,7 @@ and becomes one line asking for a report, exit code 1.
 
 from __future__ import annotations
 
+import functools
 import importlib
 import os
 import sys
@@ -36,6 +37,7 @@ def build_parser() -> Parser:
 
 
 def _one_line_warning(
+    pending: list[str],
     message: Warning | str,
     category: type[Warning],
     filename: str,
@@ -43,9 +45,13 @@ def _one_line_warning(
     file: TextIO | None = None,
     line: str | None = None,
 ) -> None:
-    """Print a Python warning (numpy's overflow, matplotlib's …) as one line, not two with source code."""
+    """A Python warning (numpy's overflow, matplotlib's …) as one line, not two with source code.
+
+    Kept in ``pending`` and printed when the command has finished: when it ends in a refusal, the
+    warnings were symptoms of the same bad input and the refusal's one line says all.
+    """
     text = " ".join(str(message).split())
-    print(f"motorlab: warning: {category.__name__}: {text} ({os.path.basename(filename)}:{lineno})", file=sys.stderr)
+    pending.append(f"motorlab: warning: {category.__name__}: {text} ({os.path.basename(filename)}:{lineno})")
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -58,10 +64,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     """
     parser = build_parser()
     args = parser.parse_args(argv)
+    pending: list[str] = []
     try:
         with warnings.catch_warnings():  # restores the warning machinery when the command returns
-            warnings.showwarning = _one_line_warning
-            return int(args.func(args) or 0)
+            warnings.showwarning = functools.partial(_one_line_warning, pending)
+            code = int(args.func(args) or 0)
+        for line in pending:
+            print(line, file=sys.stderr)
+        return code
     except MotorlabError as exc:
         print(f"motorlab: error: {exc}", file=sys.stderr)
         return EXIT_INPUT
@@ -81,6 +91,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         if is_numerical_failure(exc):  # absurd numbers in the input: the user's to fix (exit 2)
             print(f"motorlab: error: {numerical_failure_message(exc, args)}", file=sys.stderr)
             return EXIT_INPUT
+        for line in pending:  # a bug: what numpy said on the way may help the report
+            print(line, file=sys.stderr)
         if os.environ.get("MOTORLAB_TRACEBACK"):
             raise
         detail = " ".join(str(exc).split()) or "no message"
