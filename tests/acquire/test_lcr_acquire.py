@@ -136,3 +136,17 @@ def test_cli_interactive_reads_enter_from_stdin(
     assert "position 3 of 3" in captured.err
     rows = [line.split(",") for line in out.read_text().splitlines() if line[0].isdigit()]
     assert [r[3] for r in rows] == ["1", "2"]  # the shaft positions
+
+
+def test_a_meter_that_stops_answering_keeps_the_readings_taken_and_says_so(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    inductance, q = _truth(7, n=3)
+    out = tmp_path / "lcr.csv"
+    with DE5000Emulator(winding_stream(inductance, q, seed=7)) as meter:
+        code = main(["acquire", "lcr", "--port", meter.url, "--readings", "6", "--timeout", "1", "-o", str(out)])
+    assert code == 2
+    err = [line for line in capsys.readouterr().err.strip().splitlines() if not line.startswith("reading ")]
+    assert len(err) == 1  # the readings as they came, then one error line
+    assert f"the 3 reading(s) taken are kept in {out}" in err[0]
+    assert len([line for line in out.read_text().splitlines() if line and line[0].isdigit()]) == 3

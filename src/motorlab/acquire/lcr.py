@@ -336,6 +336,10 @@ def acquire_lcr(
                     progress(k, readings)
         else:
             _consecutive(stream, log, readings, kind, timeout, say, progress)
+    except InstrumentError as exc:
+        if log.rows:  # what was read is kept (flushed row by row): say so in the one error line
+            raise InstrumentError(f"{exc}; the {log.rows} reading(s) taken are kept in {path}") from None
+        raise
     finally:
         log.close()
         ser.close()
