@@ -35,11 +35,16 @@ pytestmark = pytest.mark.skipif(
 )
 
 
-#: Official samples (FtcRobotController/.../external/samples) that use motors, bulk reads, telemetry and
-#: gamepads, and nothing else of the SDK: they must compile unmodified against ftc/sdk-stubs.
+#: Official samples (FtcRobotController/.../external/samples) that use motors, servos, digital/touch inputs,
+#: bulk reads, telemetry (with its log) and gamepads (with rumble and edge detection), and nothing else of the
+#: SDK: they must compile unmodified against ftc/sdk-stubs. Names are paths under samples/, without ".java".
 SAMPLES = (
     "BasicOpMode_Linear", "BasicOpMode_Iterative", "BasicOmniOpMode_Linear", "ConceptMotorBulkRead",
     "ConceptRampMotorSpeed", "ConceptNullOp", "RobotAutoDriveByEncoder_Linear", "RobotAutoDriveByTime_Linear",
+    "ConceptTelemetry", "ConceptGamepadRumble", "RobotTeleopTank_Iterative", "RobotTeleopPOV_Linear",
+    "ConceptScanServo", "ConceptGamepadTouchpad", "ConceptGamepadEdgeDetection", "ConceptBlackboard",
+    "ConceptRevSPARKMini", "SensorDigitalTouch", "SensorTouch",
+    "externalhardware/RobotHardware", "externalhardware/ConceptExternalHardwareClass",
 )
 
 

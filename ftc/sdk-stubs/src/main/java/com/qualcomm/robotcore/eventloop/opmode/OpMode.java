@@ -4,6 +4,7 @@ package com.qualcomm.robotcore.eventloop.opmode;
 
 import com.qualcomm.robotcore.hardware.Gamepad;
 import com.qualcomm.robotcore.hardware.HardwareMap;
+import java.util.HashMap;
 import org.firstinspires.ftc.robotcore.external.Telemetry;
 
 /**
@@ -12,6 +13,9 @@ import org.firstinspires.ftc.robotcore.external.Telemetry;
  * the init/loop cycle: a test harness sets the fields and calls the methods.
  */
 public abstract class OpMode {
+    /** Values kept across OpModes (e.g. from autonomous to TeleOp); static, as in the SDK. */
+    public static final HashMap<String, Object> blackboard = new HashMap<String, Object>();
+
     public volatile Gamepad gamepad1 = new Gamepad();
     public volatile Gamepad gamepad2 = new Gamepad();
     public Telemetry telemetry = null;
