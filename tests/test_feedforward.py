@@ -242,6 +242,23 @@ def test_rig_sysid_default_flywheel_file(tmp_path):
     assert result.details["residual_rms"]["position"] < 0.05
 
 
+def test_stale_frames_read_right_when_the_angle_steps_0_3_0_3(tmp_path):
+    """A heavy flywheel ends its 30 s ramp turning ~1.5 counts per row with every other row stale: a
+    7-row running mean picked only the stale rows, read a 0.2 s refresh (for 0.02 s) and fitted a
+    90 ms lag away into kV (+25σ) and kA (−30σ)."""
+    from motorlab.feedforward import read_tests
+    from motorlab.rig import VirtualRig
+
+    run = VirtualRig("neverest20", unit_seed=3, noise_seed=1).sysid(tmp_path / "sysid.json")
+    truth = run.truth["expected"]
+    result = feedforward(read_tests([str(run.paths[0])], cpr=None))
+    status = run.truth["instruments"]["controller"]["status_period"]
+    assert result.details["status_frames"]["period_s"] == pytest.approx(status, rel=0.2)
+    for name in ("kS", "kV", "kA"):
+        est = result[name]
+        assert abs(est.value - truth[name]) < 3 * est.stderr, (name, est, truth[name])
+
+
 # --------------------------------------------------------------------------------------------------
 # arm: kG·cos(θ + φ), truth integrated independently (scipy's solve_ivp, not motorlab's simulators)
 # --------------------------------------------------------------------------------------------------
