@@ -446,6 +446,10 @@ def _checked_plan_options(
         raise OptionError(f"fraction must lie strictly between 0 and 1, got {fraction}")
     _positive(time=time, radius=radius, thickness=thickness, ratio=ratio, log_period=log_period)
     _positive(shunt_resistance=shunt_resistance)
+    for name, value, high, unit in (("free speed", free_speed, 1e5, "rad/s"),
+                                    ("stall torque", stall_torque, 1e5, "N·m")):
+        if value is not None and math.isfinite(value) and value > high:  # a unit mistake, not a gearmotor
+            raise OptionError(f"the {name} {value:g} {unit} is beyond any gearmotor (at most {high:g} {unit})")
     if free_speed is not None:
         _positive(free_speed=free_speed)
         motor = replace(motor, free_speed=free_speed)

@@ -378,3 +378,11 @@ def test_the_same_file_twice_is_refused_in_every_analysis(rig, tmp_path: Path, c
 
 def test_feedforward_k_without_r_is_refused(rig, capsys) -> None:
     refused(capsys, "analyze", "feedforward", rig["sysid"], "--K", "5", mentions="--R")
+
+
+def test_absurd_plan_and_tune_options_get_messages_that_name_them(capsys) -> None:
+    refused(capsys, "plan", "--motor", "neverest40", "--free-speed", "1e308", mentions="free speed")
+    code, out, err = run(capsys, "tune", "position", "--kv", "1", "--ka", "0.1", "--step", "1e308")
+    assert code == 0, err
+    assert "still travelling" in out + err  # not "Coulomb friction holds it" with kS = 0
+    assert "Coulomb" not in out + err

@@ -10,6 +10,8 @@ import math
 from dataclasses import dataclass, field, replace
 from typing import Any
 
+import numpy as np
+
 from motorlab.control.design import (
     LOOPS,
     Feedforward,
@@ -229,7 +231,8 @@ def tune(
     step_resp, prof_resp = _simulate_step_and_profile(
         gains, ff, tg.equivalent_feedforward, plant.simulated, size, limits, voltage=voltage, cpr=units.cpr
     )
-    warnings = [*plant.notes, *_check(gains, step_resp, prof_resp, overshoot if method == "poles" else None, rise_time)]
+    warnings = [*plant.notes, *_check(gains, step_resp, prof_resp, overshoot if method == "poles" else None, rise_time,
+                                      static_friction=ff.kS)]
     return TuneResult(gains, tg, step_resp, prof_resp, limits, plant, units, warnings)
 
 
@@ -329,6 +332,8 @@ def _check(
     profile: ClosedLoopResponse,
     overshoot: float | None,
     rise_time: float | None,
+    *,
+    static_friction: float = 0.0,
 ) -> list[str]:
     out = []
     m = step.metrics
@@ -341,11 +346,22 @@ def _check(
             # Stopped, or creeping too slowly to close the gap within another run's length.
             and abs(float(step.speed[-1])) * float(step.time[-1]) < abs(m["steady_state_error"])
         )
-        if stuck:
+        travelling = abs(float(step.speed[-1])) > 0.1 * float(np.max(np.abs(step.speed)))
+        if stuck and travelling:  # not held: the step is longer than the motor can travel in the run
+            out.append(
+                f"the motor is still travelling at {abs(float(step.speed[-1])):.3g} rad/s when the simulated run ends, "
+                f"{abs(m['steady_state_error']):.3g} rad short of the target: use a motion profile or a smaller step"
+            )
+        elif stuck and static_friction > 0:
             out.append(
                 f"the motor stops (or creeps) {abs(m['steady_state_error']):.3g} rad short of the target: Coulomb "
                 "friction holds it where kP·error < kS; add kS·sgn(error) feedforward, an integral term "
                 "or a tighter qp"
+            )
+        elif stuck:
+            out.append(
+                f"the motor stops (or creeps) {abs(m['steady_state_error']):.3g} rad short of the target with no "
+                "static friction in the model (kS = 0): the loop is too slow for the run; raise qp or lower r"
             )
         else:
             out.append("the simulated step response does not settle within the run")
