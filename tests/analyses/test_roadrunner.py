@@ -88,3 +88,16 @@ def test_angular_ramp_with_drive_encoders(tmp_path, capsys):
     assert tw["value"] == pytest.approx(truth["drive_track_width_ticks"], rel=0.002)
     # the feedforward of the turning wheels, fitted from the same file as the page does
     assert params["kV"]["value"] == pytest.approx(0.3438, rel=0.01)
+
+
+def test_simulate_roadrunner_ramp_command_round_trip(tmp_path, capsys):
+    """``motorlab simulate roadrunner-ramp`` writes the OpMode's JSON and the truth; the fit recovers it."""
+    path = tmp_path / "forward.json"
+    assert main(["simulate", "roadrunner-ramp", "--seed", "11", "-o", str(path)]) == 0
+    assert "--cpr 8192" in capsys.readouterr().out
+    truth = json.loads((tmp_path / "truth.json").read_text())["runs"]["forward.json"]["expected"]
+    assert main(["analyze", "feedforward", str(path), "--cpr", f"{truth['cpr']:g}", "--json"]) == 0
+    params = json.loads(capsys.readouterr().out)["parameters"]
+    assert params["kS"]["value"] == pytest.approx(truth["kS"], rel=0.05)
+    assert params["kV"]["value"] == pytest.approx(truth["kV"], rel=0.02)
+    assert main(["simulate", "roadrunner-ramp", "-o", str(tmp_path / "ramp.csv")]) == 2  # the OpMode writes JSON

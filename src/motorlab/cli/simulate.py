@@ -9,6 +9,7 @@ file(s) a real rig gives plus ``truth.json`` beside them. ``spindown --split`` w
 from __future__ import annotations
 
 import argparse
+import os
 from collections.abc import Callable
 from typing import Any
 
@@ -179,6 +180,17 @@ def register(subparsers: Any) -> None:
     for p in a.values():
         p.set_defaults(func=run)
 
+    ramp = sub.add_parser("roadrunner-ramp", help="Road Runner 1.0's ramp logger on a simulated mecanum drive "
+                          "(its JSON)", description="Simulate one of Road Runner's ramp loggers (ForwardRampLogger, "
+                          "LateralRampLogger, AngularRampLogger) on a mecanum drive with 8192-count dead wheels "
+                          "whose 16-bit velocities wrap, a 10-40 ms bulk-read loop and a sagging battery, and write "
+                          "the JSON file the OpMode saves, plus truth.json (kS, kV, kA at the dead-wheel encoder).")
+    ramp.add_argument("--kind", choices=("forward", "lateral", "angular"), default="forward",
+                      help="which ramp (forward)")
+    ramp.add_argument("--seed", type=nonnegative_int, default=0, help="noise and loop-timing seed (0)")
+    ramp.add_argument("-o", "--output", required=True, metavar="FILE.json", help="file to write")
+    ramp.set_defaults(func=run_roadrunner_ramp)
+
     session = sub.add_parser("session", help="a whole session: every experiment for several units",
                              description="Write a simulated session folder (data files, truth.json and "
                              "the session TOML) for several units of one motor.")
@@ -302,6 +314,21 @@ def run(args: argparse.Namespace) -> int:
     result = rig.run(args.experiment, args.output, **_settings(args))
     files = " + ".join(str(p) for p in result.paths)
     print(f"{args.experiment}: {rig.motor.key} unit {rig.unit}: wrote {files}; truth in {result.truth_path}")
+    return 0
+
+
+def run_roadrunner_ramp(args: argparse.Namespace) -> int:
+    """Write a simulated Road Runner ramp log (:func:`motorlab.rig.ftc.simulate_ramp`) and its truth."""
+    from motorlab.rig.base import write_truth
+    from motorlab.rig.ftc import simulate_ramp
+
+    if not str(args.output).lower().endswith(".json"):
+        raise OptionError(f"-o {args.output}: Road Runner's ramp logs are .json files")
+    truth = simulate_ramp(args.output, kind=args.kind, seed=args.seed)
+    where = write_truth(args.output, {"experiment": "roadrunner-ramp", "kind": args.kind, "seed": args.seed,
+                                      "files": [os.path.basename(args.output)], "expected": truth})
+    print(f"roadrunner-ramp: {args.kind} ramp: wrote {args.output}; truth in {where} "
+          f"(analyse with --cpr {truth['cpr']:g})")
     return 0
 
 
