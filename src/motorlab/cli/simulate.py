@@ -180,17 +180,12 @@ def register(subparsers: Any) -> None:
     for p in a.values():
         p.set_defaults(func=run)
 
-    ramp = sub.add_parser("roadrunner-ramp", help="Road Runner 1.0's ramp logger on a simulated mecanum drive "
-                          "(its JSON)", description="Simulate one of Road Runner's ramp loggers (ForwardRampLogger, "
-                          "LateralRampLogger, AngularRampLogger) on a mecanum drive with 8192-count dead wheels "
-                          "whose 16-bit velocities wrap, a 10-40 ms bulk-read loop and a sagging battery, and write "
-                          "the JSON file the OpMode saves, plus truth.json (kS, kV, kA at the dead-wheel encoder).")
-    ramp.add_argument("--kind", choices=("forward", "lateral", "angular"), default="forward",
-                      help="which ramp (forward)")
-    ramp.add_argument("--seed", type=nonnegative_int, default=0, help="noise and loop-timing seed (0)")
-    ramp.add_argument("-o", "--output", required=True, metavar="FILE.json", help="file to write")
-    ramp.set_defaults(func=run_roadrunner_ramp)
+    _add_roadrunner_ramp(sub)
+    _add_session(sub)
 
+
+def _add_session(sub: Any) -> None:
+    """``motorlab simulate session``: a whole simulated session (:func:`run_session`)."""
     session = sub.add_parser("session", help="a whole session: every experiment for several units",
                              description="Write a simulated session folder (data files, truth.json and "
                              "the session TOML) for several units of one motor.")
@@ -207,6 +202,20 @@ def register(subparsers: Any) -> None:
     session.add_argument("--worn-efficiency", type=quantity("", positive=True), default=1.0, metavar="FACTOR",
                          help="factor applied to the worn unit's gearbox efficiency (default 1)")
     session.set_defaults(func=run_session)
+
+
+def _add_roadrunner_ramp(sub: Any) -> None:
+    """``motorlab simulate roadrunner-ramp``: Road Runner's ramp loggers (:func:`run_roadrunner_ramp`)."""
+    ramp = sub.add_parser("roadrunner-ramp", help="Road Runner 1.0's ramp logger on a simulated mecanum drive "
+                          "(its JSON)", description="Simulate one of Road Runner's ramp loggers (ForwardRampLogger, "
+                          "LateralRampLogger, AngularRampLogger) on a mecanum drive with 8192-count dead wheels "
+                          "whose 16-bit velocities wrap, a 10-40 ms bulk-read loop and a sagging battery, and write "
+                          "the JSON file the OpMode saves, plus truth.json (kS, kV, kA at the dead-wheel encoder).")
+    ramp.add_argument("--kind", choices=("forward", "lateral", "angular"), default="forward",
+                      help="which ramp (forward)")
+    ramp.add_argument("--seed", type=nonnegative_int, default=0, help="noise and loop-timing seed (0)")
+    ramp.add_argument("-o", "--output", required=True, metavar="FILE.json", help="file to write")
+    ramp.set_defaults(func=run_roadrunner_ramp)
 
 
 def _settings(args: argparse.Namespace) -> dict[str, Any]:
