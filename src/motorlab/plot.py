@@ -248,5 +248,7 @@ def plot_motor_curves(
         h, lab = a.get_legend_handles_labels()
         handles += h
         labels += lab
-    ax.legend(handles, labels, fontsize=7, loc="upper right")
+    # Below the axes, not on them: inside, the legend hid the current line's top and the stall point.
+    ax.legend(handles, labels, fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncols=4,
+              frameon=False)
     return fig
