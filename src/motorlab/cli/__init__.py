@@ -16,6 +16,7 @@ import warnings
 from collections.abc import Sequence
 from typing import TextIO
 
+from motorlab import progress
 from motorlab.cli.common import EXIT_INPUT, EXIT_INTERNAL, Parser, is_numerical_failure, numerical_failure_message
 from motorlab.errors import MotorlabError
 
@@ -54,6 +55,13 @@ def _one_line_warning(
     pending.append(f"motorlab: warning: {category.__name__}: {text} ({os.path.basename(filename)}:{lineno})")
 
 
+def _progress_reporter() -> progress.Reporter:
+    """JSON lines on stderr for the browser app (``MOTORLAB_PROGRESS=json``), else a bar on a terminal."""
+    if os.environ.get("MOTORLAB_PROGRESS") == "json":
+        return progress.JsonLines()
+    return progress.Terminal()
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the console script; returns the exit code.
 
@@ -65,8 +73,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     pending: list[str] = []
+    reporter = _progress_reporter()
     try:
-        with warnings.catch_warnings():  # restores the warning machinery when the command returns
+        with warnings.catch_warnings(), progress.reporting(reporter):  # both restored when the command returns
             warnings.showwarning = functools.partial(_one_line_warning, pending)
             code = int(args.func(args) or 0)
         for line in pending:
@@ -102,6 +111,9 @@ def main(argv: Sequence[str] | None = None) -> int:
             file=sys.stderr,
         )
         return EXIT_INTERNAL
+    finally:
+        if isinstance(reporter, progress.Terminal):
+            reporter.close()
 
 
 if __name__ == "__main__":  # pragma: no cover
