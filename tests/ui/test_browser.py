@@ -74,7 +74,7 @@ def test_road_runner_ramp_to_gains(page: Any, ramp: tuple[Path, float], size: tu
     page.check()
     page.click("Run the fit")
     page.wait_text("Result from ramp.json")
-    assert "Velocity constant kV" in page.text()
+    assert "Velocity gain kV" in page.text()  # the parameter in words, with its symbol
     assert "?" not in page.text().split("Result from ramp.json")[1].split("The same as a command")[0]
     page.check()
     if laptop:

@@ -194,19 +194,33 @@ def _curve(resp: Any, per: float) -> dict[str, Any]:
 
 
 def response(argv: Sequence[str]) -> dict[str, Any]:
-    """The step and profile responses of ``motorlab tune ARG...`` as curves (with the tune JSON)."""
+    """The step and profile responses of ``motorlab tune ARG...`` as curves.
+
+    The CLI's own ``run`` designs the loop (so the options mean exactly what they mean there); the
+    :class:`~motorlab.control.tune.TuneResult` it computes is caught on its way to the printing.
+    """
+    import contextlib
+    import io
+
+    import motorlab.cli.tune as cli_tune
     from motorlab.cli import build_parser
-    from motorlab.cli.tune import plant_from_args
-    from motorlab.control.plant import MechanismUnits
-    from motorlab.control.tune import tune
 
     args = build_parser().parse_args(["tune", *argv])
-    units = MechanismUnits.from_options(args.units, cpr=args.cpr, wheel_radius=args.wheel_radius)
-    result = tune(
-        plant_from_args(args, units), args.loop, method=args.method, target=args.target, units=units,
-        qp=args.qp, qv=args.qv, r=args.r, period=args.period, delay=args.delay, rise_time=args.rise_time,
-        overshoot=args.overshoot, voltage=args.voltage, step=args.step,
-    )
+    args.json, args.emit, args.plot = False, None, None
+    caught: list[Any] = []
+    design = cli_tune.tune
+
+    def catch(*a: Any, **k: Any) -> Any:
+        caught.append(design(*a, **k))
+        return caught[-1]
+
+    cli_tune.tune = catch  # type: ignore[assignment]
+    try:
+        with contextlib.redirect_stdout(io.StringIO()):
+            cli_tune.run(args)
+    finally:
+        cli_tune.tune = design  # type: ignore[assignment]
+    result = caught[-1]
     per = result._display_per_radian()
     quantity = "velocity" if result.gains.loop == "velocity" else "position"
     return {

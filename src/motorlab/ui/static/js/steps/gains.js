@@ -92,7 +92,7 @@ function targetPicker(ctx, onChange) {
   const name = uid("target");
   return el("fieldset", { class: "targets" }, el("legend", { text: "Your library" }),
     targets(ctx).map((key) => el("label", { class: "choice" },
-      el("input", { type: "radio", name, value: key, checked: key === g.target, onchange: () => { g.target = key; save(); onChange(); } }),
+      el("input", { type: "radio", name, value: key, checked: key === g.target, onchange: () => { g.target = key; save(); ctx.rerender(); } }),
       el("span", { text: targetLabel(key) }))));
 }
 
@@ -201,11 +201,14 @@ export function render(host, ctx) {
   const more = fields.filter((f) => !PRIMARY.includes(f.name));
   const note = (f) => (isShared(f.name) && state.shared[f.name] ? "as you gave it in the first step" : "");
   const language = uid("lang");
+  const spec = (ctx.app.schema.targets || []).find((x) => x.key === g.target);
+  const languages = spec && spec.languages ? LANGUAGES.filter(([k]) => spec.languages.includes(k)) : LANGUAGES;
+  if (!languages.some(([k]) => k === g.language)) g.language = languages[0][0];
   const command = () => commandBox(["tune", g.loop, ...list.map((s) => `--params=${s.name}`), `--target=${g.target}`, ...argvOf(fields, g.options), `--emit=${g.language}`]);
   host.append(el("section", { class: "card" }, targetPicker(ctx, changed), loopPicker(ctx, changed),
     el("div", { class: "options" }, primary.map((f) => field(f, g.options, changed, { note: note(f) })),
       el("div", { class: "field" }, el("label", { for: language, text: "Code language" }),
-        el("select", { id: language, onchange: (e) => { g.language = e.target.value; save(); changed(); } }, LANGUAGES.map(([k, w]) => el("option", { value: k, text: w, selected: k === g.language }))))),
+        el("select", { id: language, onchange: (e) => { g.language = e.target.value; save(); changed(); } }, languages.map(([k, w]) => el("option", { value: k, text: w, selected: k === g.language }))))),
     el("details", { class: "more" }, el("summary", { text: "More settings (design method, tolerances, loop period, delay)" }),
       el("div", { class: "options" }, more.map((f) => field(f, g.options, changed)))),
     command()));
