@@ -15,7 +15,7 @@ import os
 from collections.abc import Sequence
 from typing import Any
 
-from motorlab.cli.common import Parser, check_figure_path, positive_int, print_json, quantity
+from motorlab.cli.common import Parser, check_figure_path, column_rule, positive_int, print_json, quantity
 from motorlab.experiments import Option, all_experiments, get
 from motorlab.results import Estimate, FitResult
 from motorlab.units import format_unit
@@ -75,6 +75,9 @@ def _argparse_keywords(opt: Option) -> dict[str, Any]:
         out["choices"] = opt.choices
     elif opt.kind == "files":
         out["action"] = "append"
+    elif opt.kind == "columns":
+        out["action"] = "append"
+        out["type"] = column_rule
     elif opt.kind == "int":
         out["type"] = positive_int
     else:

@@ -31,7 +31,7 @@ if TYPE_CHECKING:
     from motorlab.results import Estimate, FitResult
 
 #: Kinds of option value.
-KINDS = ("quantity", "choice", "flag", "files", "int")
+KINDS = ("quantity", "choice", "flag", "files", "int", "columns")
 
 
 @dataclass(frozen=True)
@@ -51,7 +51,8 @@ class Option:
         One line for ``--help``, the docs' tables and the browser's forms.
     kind
         ``"quantity"`` (a number with a unit), ``"choice"``, ``"flag"`` (true/false), ``"files"``
-        (one or more paths) or ``"int"``.
+        (one or more paths), ``"int"`` or ``"columns"`` (column rules ``HEADER=quantity``, repeatable:
+        :mod:`motorlab.io.headers`; the value is a list of rules as text).
     dest
         Name of the value handed to the experiment's ``run`` (default: ``name`` with ``_``). A flag
         whose default is True is switched off by ``--name`` (``--no-current`` sets ``use_current``
@@ -114,6 +115,10 @@ class Option:
         if self.kind == "files":
             items = [value] if isinstance(value, str) or hasattr(value, "__fspath__") else list(value)
             return [str(item) for item in items]
+        if self.kind == "columns":
+            from motorlab.io.headers import parse_column_mapping
+
+            return [rule.text() for rule in parse_column_mapping(value, name=label)] or None
         if self.kind == "int":
             text = value.strip() if isinstance(value, str) else None
             if text is not None and not (text.lstrip("+-").isdigit() and text.isascii()):
@@ -257,9 +262,11 @@ class Experiment:
         The same file given twice (also under two names) is refused: its rows would count twice.
         """
         from motorlab.io._text import check_distinct
+        from motorlab.io.headers import column_mapping
 
         check_distinct(paths)
-        result = self.run([str(p) for p in paths], dict(values))
+        with column_mapping(values.get("columns")):
+            result = self.run([str(p) for p in paths], dict(values))
         if self.shaft:
             result.details.setdefault("shaft", self.shaft)
         result.check_physics()  # also what the run added after the analysis made its result

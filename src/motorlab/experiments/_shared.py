@@ -1,4 +1,4 @@
-"""Options and readers several experiments share (encoder, inertia, current unit)."""
+"""Options and readers several experiments share (encoder, inertia, current unit, CSV column mapping)."""
 
 from __future__ import annotations
 
@@ -16,6 +16,12 @@ CPR = Option(
 CURRENT_UNIT = Option(
     "current-unit", kind="choice", choices=("A", "mA"),
     help="unit of the current column of an FTC log (default: from its header, else A)",
+)
+COLUMN = Option(
+    "column", kind="columns", dest="columns", metavar='"HEADER=QUANTITY"',
+    help='read a CSV column whose header motorlab does not know as a quantity, e.g. "Amps=current", '
+         '"I (mA)=current", "Load=torque [oz*in]" or "Notes=skip" (repeatable; headers in words with a unit in '
+         'brackets, such as "Current (A)", need none)',
 )
 _INERTIA_GROUP = "inertia at the encoder shaft (give --inertia or a disc)"
 INERTIA = (

@@ -6,7 +6,7 @@ from __future__ import annotations
 from typing import Any
 
 from motorlab.experiments import Experiment, Option, RigRun, Setting
-from motorlab.experiments._shared import read_tables
+from motorlab.experiments._shared import COLUMN, read_tables
 
 
 def _gain(name: str, *, summary: str, inputs: str, unit: str, example: str, reports: tuple[str, str],
@@ -24,7 +24,7 @@ def _gain(name: str, *, summary: str, inputs: str, unit: str, example: str, repo
     return Experiment(
         name=name, summary=summary, analysis=f"motorlab.analyses.gains:{name}", inputs=inputs, run=run,
         options=(Option("nominal", unit, positive=True, metavar="GAIN",
-                        help=f"nominal gain to compare with [{unit}], e.g. {example}"),),
+                        help=f"nominal gain to compare with [{unit}], e.g. {example}"), COLUMN),
         reports=reports, shaft="electrical", order=order, settings=(Setting("nominal", unit, setting),),
         characterize=characterize, rig=RigRun(name, f"{name}.csv", order=rig_order),
     )

@@ -5,6 +5,7 @@ from __future__ import annotations
 from typing import Any
 
 from motorlab.experiments import Experiment, Option, RigRun
+from motorlab.experiments._shared import COLUMN
 
 PARAMETERS = ("K", "R", "L", "J", "b", "Tf")
 
@@ -55,6 +56,7 @@ EXPERIMENT = Experiment(
                help="torque constant, if known (separates K from b without current) [V·s/rad]"),
         Option("no-current", kind="flag", default=True, dest="use_current",
                help="ignore a current column (fit voltage and angle only)"),
+        COLUMN,
     ),
     reports=PARAMETERS,
     shaft="output, what the log drove, per unit of K·i",

@@ -5,7 +5,7 @@ from __future__ import annotations
 from typing import Any
 
 from motorlab.experiments import Experiment, Option, RigRun, Setting
-from motorlab.experiments._shared import read_tables
+from motorlab.experiments._shared import COLUMN, read_tables
 
 OUTLIER_Z = 3.5  # as motorlab.analyses.lcr.OUTLIER_Z (checked by tests/test_experiments.py)
 
@@ -38,6 +38,7 @@ EXPERIMENT = Experiment(
                help="equivalent circuit the meter displayed (default: '# circuit:' metadata, else series)"),
         Option("outlier-z", "1", positive=True, default=OUTLIER_Z, metavar="Z",
                help=f"modified z-score above which a reading is an outlier (default {OUTLIER_Z})"),
+        COLUMN,
     ),
     reports=("R", "L", "R_dc"),
     shaft="electrical (motor terminals)",

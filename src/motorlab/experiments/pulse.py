@@ -7,6 +7,7 @@ from typing import Any
 
 from motorlab.errors import LogFormatError, OptionError
 from motorlab.experiments import Experiment, Option, RigRun, Setting, stderr_or_none
+from motorlab.experiments._shared import COLUMN
 
 DEFAULT_SKIP = 0.002  # as motorlab.analyses.pulse.DEFAULT_SKIP (checked by tests/test_experiments.py)
 FRICTION_MODELS = ("viscous", "coulomb", "both")  # as motorlab.analyses.pulse.FRICTION_MODELS
@@ -91,6 +92,7 @@ EXPERIMENT = Experiment(
                help="tachometer gain [V·s/rad], when the file holds tach_voltage_V instead of a speed"),
         Option("friction", kind="choice", choices=("auto", *FRICTION_MODELS), default="auto",
                help="friction model of the final fit (default auto: the best by BIC on the coast-downs)"),
+        COLUMN,
     ),
     reports=("J", "Tf", "b", "gamma"),
     shaft="output, bare gearmotor, per unit of K·i",

@@ -5,7 +5,7 @@ from __future__ import annotations
 from typing import Any
 
 from motorlab.experiments import Experiment, Option, RigRun, Setting
-from motorlab.experiments._shared import CPR, CURRENT_UNIT, INERTIA, inertia_of
+from motorlab.experiments._shared import COLUMN, CPR, CURRENT_UNIT, INERTIA, inertia_of
 
 
 def run(paths: list[str], v: dict[str, Any]) -> Any:
@@ -41,6 +41,7 @@ EXPERIMENT = Experiment(
         Option("cutoff", "s", help="instant the relay opened [s] (default: from the current)"),
         Option("guard", "s", nonnegative=True, default=0.1,
                help="leave out samples this long after the cut-off [s] (default 0.1)"),
+        COLUMN,
     ),
     reports=("K", "gamma", "Tf_over_J", "J", "b", "Tf"),
     shaft="output + flywheel, coasting: gearbox back-driven, physical torques",

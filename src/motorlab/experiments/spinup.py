@@ -6,7 +6,7 @@ from typing import Any
 
 from motorlab.errors import OptionError
 from motorlab.experiments import Experiment, Option, RigRun, Setting
-from motorlab.experiments._shared import CPR, CURRENT_UNIT, INERTIA, inertia_of
+from motorlab.experiments._shared import COLUMN, CPR, CURRENT_UNIT, INERTIA, inertia_of
 
 
 def run(paths: list[str], v: dict[str, Any]) -> Any:
@@ -76,6 +76,7 @@ EXPERIMENT = Experiment(
                help="spin-down log of the same rig, to take the friction from (repeat for a split run)"),
         Option("start", "s", help="start of the constant-current phase [s]"),
         Option("end", "s", help="end of the constant-current phase [s]"),
+        COLUMN,
     ),
     reports=("K", "alpha", "i"),
     shaft="output + flywheel, motor driving: K = Kt through the gearbox",

@@ -6,7 +6,7 @@ from typing import Any
 
 from motorlab.errors import OptionError
 from motorlab.experiments import Experiment, Option, RigRun, Setting, stderr_or_none
-from motorlab.experiments._shared import CPR
+from motorlab.experiments._shared import COLUMN, CPR
 
 
 def _read(paths: list[str], cpr: float | None) -> Any:
@@ -55,6 +55,7 @@ EXPERIMENT = Experiment(
                help="standard error of one current reading (used when the rows show no scatter, e.g. a single row)"),
         Option("frequency-stderr", "Hz", nonnegative=True,
                help="standard error of one frequency reading (the counter's resolution), used with --current-stderr"),
+        COLUMN,
     ),
     reports=("b", "Tf"),
     shaft="output, bare gearmotor, per unit of K·i",
