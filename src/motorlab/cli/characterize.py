@@ -13,7 +13,9 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from motorlab.cli.analyze import add_options
 from motorlab.cli.common import EXIT_PARTIAL, check_output_dir
+from motorlab.experiments import command_options
 
 
 def register(subparsers: Any) -> None:
@@ -28,7 +30,7 @@ def register(subparsers: Any) -> None:
         "stderr; each unit's status says why); 2 the session was refused before any analysis (one line naming "
         "the file, line and key); 1 an internal error.",
     )
-    parser.add_argument("session", metavar="SESSION.toml", help="the session description (see docs/session.md)")
+    add_options(parser, command_options("characterize"))
     parser.add_argument(
         "-o", "--output", metavar="DIR", help="folder for the results (default: 'results' beside the session file)"
     )
@@ -51,9 +53,14 @@ def run(args: argparse.Namespace) -> int:
     out_dir = Path(args.output) if args.output is not None else session.folder / "results"
     check_output_dir(out_dir)
     check_not_inputs(output_paths(out_dir, report=not args.no_report), session_inputs(session))
-    for path in session_inputs(session)[1:]:  # a column in an unknown unit is refused now, not after hours
-        if path.suffix.lower() == ".csv" and path.is_file() and _is_table(path):
-            check_header(path)
+    from motorlab.io.headers import column_mapping
+
+    for unit in session.units.values():  # a column in an unknown unit is refused now, not after hours
+        for spec in unit.experiments.values():
+            with column_mapping(spec.settings.get("columns")):
+                for path in spec.files:
+                    if path.suffix.lower() == ".csv" and path.is_file() and _is_table(path):
+                        check_header(path)
     result = run_with_progress(session, quiet=args.quiet, figures=not args.no_report)
     paths = write_outputs(result, out_dir, report=not args.no_report)
     if not args.quiet:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import re
 import sys
@@ -45,6 +46,25 @@ class Parser(argparse.ArgumentParser):
         raise SystemExit(EXIT_INPUT)
 
 
+def finite_number(text: str) -> float:
+    """A plain finite number (``--kv 1.2``); argparse reports a bad one in one line."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"{text!r} is not a finite number")
+    return value
+
+
+def positive_number(text: str) -> float:
+    """A plain positive finite number (``--cpr 537.7``)."""
+    value = finite_number(text)
+    if value <= 0:
+        raise argparse.ArgumentTypeError(f"{text!r} must be positive")
+    return value
+
+
 def quantity(unit: str, *, positive: bool = False, nonnegative: bool = False) -> Callable[[str], float]:
     """A converter that parses numbers or pint quantities into ``unit`` (SI).
 
@@ -65,6 +85,17 @@ def quantity(unit: str, *, positive: bool = False, nonnegative: bool = False) ->
 
     convert.__name__ = f"quantity in {unit}"
     return convert
+
+
+def column_rule(text: str) -> str:
+    """An argparse ``type`` for ``--column "HEADER=quantity"`` (:mod:`motorlab.io.headers`): the rule as text."""
+    from motorlab.io.headers import parse_column_mapping
+
+    try:
+        (rule,) = parse_column_mapping(text)
+    except OptionError as exc:
+        raise argparse.ArgumentTypeError(exc.message.removeprefix("--column ")) from None
+    return rule.text()
 
 
 def _whole_number(text: str) -> int:

@@ -5,6 +5,7 @@ from __future__ import annotations
 from typing import Any
 
 from motorlab.experiments import Experiment, Option, RigRun
+from motorlab.experiments._shared import COLUMN
 
 PARAMETERS = ("K", "R", "L", "J", "b", "Tf")
 
@@ -43,18 +44,21 @@ def characterize(ctx: Any) -> Any:
 
 EXPERIMENT = Experiment(
     name="identify",
+    title="Whole motor model from one log",
     summary="Whole-model identification from ordinary logs: applied voltage, encoder angle, maybe current",
     analysis="motorlab.identify:identify",
     inputs="logs of applied voltage and encoder angle, maybe current: FTC log, CSV, SysId JSON, .wpilog",
     run=run,
     options=(
-        Option("cpr", "count", positive=True, help="encoder counts per revolution at the shaft (537.7 too)"),
-        Option("R", "ohm", positive=True, dest="resistance",
-               help="winding resistance, if known (needed without current) [Ω]"),
-        Option("K", "V*s/rad", positive=True, dest="torque_constant",
-               help="torque constant, if known (separates K from b without current) [V·s/rad]"),
-        Option("no-current", kind="flag", default=True, dest="use_current",
-               help="ignore a current column (fit voltage and angle only)"),
+        Option("cpr", "count", positive=True, label="Encoder counts per revolution",
+               help="at the shaft the encoder turns with (537.7 is fine)"),
+        Option("R", "ohm", positive=True, dest="resistance", label="Winding resistance",
+               help="if known (an LCR reading); needed when the log has no current"),
+        Option("K", "V*s/rad", positive=True, dest="torque_constant", label="Back-EMF constant",
+               help="if known (a spin-down); separates K from b when the log has no current"),
+        Option("no-current", kind="flag", default=True, dest="use_current", label="Ignore the current column",
+               help="fit the voltage and the angle only"),
+        COLUMN,
     ),
     reports=PARAMETERS,
     shaft="output, what the log drove, per unit of K·i",

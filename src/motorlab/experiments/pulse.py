@@ -7,6 +7,7 @@ from typing import Any
 
 from motorlab.errors import LogFormatError, OptionError
 from motorlab.experiments import Experiment, Option, RigRun, Setting, stderr_or_none
+from motorlab.experiments._shared import COLUMN
 
 DEFAULT_SKIP = 0.002  # as motorlab.analyses.pulse.DEFAULT_SKIP (checked by tests/test_experiments.py)
 FRICTION_MODELS = ("viscous", "coulomb", "both")  # as motorlab.analyses.pulse.FRICTION_MODELS
@@ -66,31 +67,33 @@ def characterize(ctx: Any) -> Any:
 
 EXPERIMENT = Experiment(
     name="pulse",
+    title="Square-wave pulse responses",
     summary='Inertia J and friction from a square-wave-driven speed trace (seed 2, "Motor Mechanical Properties")',
     analysis="motorlab.analyses.pulse:pulse",
     inputs="CSV of time_s, command_V and speed (speed_rad_per_s, speed_rpm or tach_voltage_V)",
     run=run,
     options=(
-        Option("Ka", "A/V", positive=True, dest="amplifier_gain", metavar="GAIN",
-               help="servo-amplifier gain [A/V] (measure with 'analyze amplifier'; seed 2's nominal is 2; "
-                    "default: '# Ka_A_per_V:' in the file)"),
-        Option("I0", "A", default=0.0, dest="amplifier_offset", metavar="CURRENT",
-               help="amplifier output current at zero command [A] (the intercept I0 of 'analyze amplifier'; "
-                    "default 0)"),
+        Option("Ka", "A/V", positive=True, dest="amplifier_gain", metavar="GAIN", label="Amplifier gain",
+               help="the servo amplifier's Ka (measure it with the amplifier experiment); left empty: the "
+                    "file's '# Ka_A_per_V:' line"),
+        Option("I0", "A", default=0.0, dest="amplifier_offset", metavar="CURRENT", label="Amplifier offset current",
+               help="the amplifier's output at zero command (the intercept I0 of the amplifier experiment)"),
         Option("Km", "N*m/A", positive=True, required=True, dest="torque_constant", aliases=("K",), metavar="K",
-               help="motor torque constant Km = K [N·m/A] ('analyze torque')"),
+               label="Torque constant", help="the motor's K (from the torque test)"),
         Option("Ka-stderr", "A/V", nonnegative=True, default=0.0, dest="amplifier_gain_stderr", metavar="GAIN",
-               help="standard error of Ka [A/V], propagated into J, b, Tf (default: exact)"),
+               label="Uncertainty of the amplifier gain", help="standard error of Ka, carried into J, b and Tf"),
         Option("I0-stderr", "A", nonnegative=True, default=0.0, dest="amplifier_offset_stderr", metavar="CURRENT",
-               help="standard error of I0 [A], propagated into Tf (default: exact)"),
+               label="Uncertainty of the offset current", help="standard error of I0, carried into Tf"),
         Option("Km-stderr", "N*m/A", nonnegative=True, default=0.0, dest="torque_constant_stderr",
-               aliases=("K-stderr",), metavar="K", help="standard error of Km [N·m/A], propagated (default: exact)"),
-        Option("skip", "s", nonnegative=True, default=DEFAULT_SKIP, metavar="TIME",
-               help=f"time left out after each command edge [s] (default {DEFAULT_SKIP * 1000:g} ms)"),
-        Option("tach-gain", "V*s/rad", positive=True, metavar="GAIN",
-               help="tachometer gain [V·s/rad], when the file holds tach_voltage_V instead of a speed"),
+               aliases=("K-stderr",), metavar="K", label="Uncertainty of the torque constant",
+               help="standard error of K, carried into the results"),
+        Option("skip", "s", nonnegative=True, default=DEFAULT_SKIP, metavar="TIME", label="Time left out after an edge",
+               help="samples this long after each command edge are not fitted"),
+        Option("tach-gain", "V*s/rad", positive=True, metavar="GAIN", label="Tachometer gain",
+               help="when the file holds the tachometer voltage instead of a speed"),
         Option("friction", kind="choice", choices=("auto", *FRICTION_MODELS), default="auto",
-               help="friction model of the final fit (default auto: the best by BIC on the coast-downs)"),
+               label="Friction model", help="of the final fit; auto: the one the coast-downs support best (BIC)"),
+        COLUMN,
     ),
     reports=("J", "Tf", "b", "gamma"),
     shaft="output, bare gearmotor, per unit of K·i",

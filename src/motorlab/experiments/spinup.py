@@ -6,7 +6,7 @@ from typing import Any
 
 from motorlab.errors import OptionError
 from motorlab.experiments import Experiment, Option, RigRun, Setting
-from motorlab.experiments._shared import CPR, CURRENT_UNIT, INERTIA, inertia_of
+from motorlab.experiments._shared import COLUMN, CPR, CURRENT_UNIT, INERTIA, inertia_of
 
 
 def run(paths: list[str], v: dict[str, Any]) -> Any:
@@ -62,20 +62,27 @@ def characterize(ctx: Any) -> Any:
 
 EXPERIMENT = Experiment(
     name="spinup",
+    title="Flywheel spin-up at constant current",
     summary="Spin-up of a known flywheel at constant current: K = J·α/i, corrected for friction",
     analysis="motorlab.analyses.spinup:spinup",
     inputs="FTC OpMode log(s) of one run (time, encoder counts, bus voltage, shunt current) or a CSV",
     run=run,
     options=(
         CPR, CURRENT_UNIT, *INERTIA,
-        Option("b", "N*m*s/rad", nonnegative=True, help="viscous friction b [N·m·s/rad]"),
-        Option("b-stderr", "N*m*s/rad", nonnegative=True, help="standard error of b"),
-        Option("Tf", "N*m", nonnegative=True, help="Coulomb friction Tf [N·m]"),
-        Option("Tf-stderr", "N*m", nonnegative=True, help="standard error of Tf"),
-        Option("spindown", kind="files", metavar="FILE",
-               help="spin-down log of the same rig, to take the friction from (repeat for a split run)"),
-        Option("start", "s", help="start of the constant-current phase [s]"),
-        Option("end", "s", help="end of the constant-current phase [s]"),
+        Option("b", "N*m*s/rad", nonnegative=True, label="Viscous friction",
+               help="b, if known; or give the spin-down log"),
+        Option("b-stderr", "N*m*s/rad", nonnegative=True, label="Uncertainty of the viscous friction",
+               help="standard error of b"),
+        Option("Tf", "N*m", nonnegative=True, label="Coulomb friction", help="Tf, if known; or give the spin-down log"),
+        Option("Tf-stderr", "N*m", nonnegative=True, label="Uncertainty of the Coulomb friction",
+               help="standard error of Tf"),
+        Option("spindown", kind="files", metavar="FILE", label="Spin-down log of the same rig",
+               help="the friction is taken from it (a run split over several files: give them all)"),
+        Option("start", "s", label="Start of the constant current",
+               help="in the log's time; left empty: found from the current"),
+        Option("end", "s", label="End of the constant current",
+               help="in the log's time; left empty: found from the current"),
+        COLUMN,
     ),
     reports=("K", "alpha", "i"),
     shaft="output + flywheel, motor driving: K = Kt through the gearbox",

@@ -6,7 +6,7 @@ from typing import Any
 
 from motorlab.errors import OptionError
 from motorlab.experiments import Experiment, Option, RigRun, Setting, stderr_or_none
-from motorlab.experiments._shared import CPR
+from motorlab.experiments._shared import COLUMN, CPR
 
 
 def _read(paths: list[str], cpr: float | None) -> Any:
@@ -41,20 +41,25 @@ def characterize(ctx: Any) -> Any:
 
 EXPERIMENT = Experiment(
     name="terminal",
+    title="Terminal speed at constant currents",
     summary="Terminal (steady) speed at constant current: viscous friction b and Coulomb friction Tf",
     analysis="motorlab.analyses.terminal:terminal",
     inputs="CSV rows of steady current and speed (current_A with speed_rpm, velocity or frequency_Hz)",
     run=run,
     options=(
         CPR,
-        Option("K", "V*s/rad", positive=True, required=True, help="torque constant K [V·s/rad] = [N·m/A]"),
-        Option("K-stderr", "V*s/rad", nonnegative=True, help="standard error of K"),
-        Option("Tf", "N*m", nonnegative=True, help="known Coulomb friction Tf [N·m]"),
-        Option("Tf-stderr", "N*m", nonnegative=True, help="standard error of Tf"),
-        Option("current-stderr", "A", nonnegative=True,
-               help="standard error of one current reading (used when the rows show no scatter, e.g. a single row)"),
-        Option("frequency-stderr", "Hz", nonnegative=True,
-               help="standard error of one frequency reading (the counter's resolution), used with --current-stderr"),
+        Option("K", "V*s/rad", positive=True, required=True, label="Torque constant",
+               help="K of this motor (from a spin-down or a torque test); V·s/rad = N·m/A"),
+        Option("K-stderr", "V*s/rad", nonnegative=True, label="Uncertainty of the torque constant",
+               help="standard error of K"),
+        Option("Tf", "N*m", nonnegative=True, label="Coulomb friction", help="Tf, if known: then only b is fitted"),
+        Option("Tf-stderr", "N*m", nonnegative=True, label="Uncertainty of the Coulomb friction",
+               help="standard error of Tf"),
+        Option("current-stderr", "A", nonnegative=True, label="Uncertainty of one current reading",
+               help="used when the rows show no scatter (a single row)"),
+        Option("frequency-stderr", "Hz", nonnegative=True, label="Uncertainty of one frequency reading",
+               help="the counter's resolution; used with the current's uncertainty"),
+        COLUMN,
     ),
     reports=("b", "Tf"),
     shaft="output, bare gearmotor, per unit of K·i",
