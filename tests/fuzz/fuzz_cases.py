@@ -54,12 +54,12 @@ def make_case(seed: Seed, corpus: Path, c: Chooser, *, modes: Sequence[str] = MO
                 session="session" in seed.tags, any_outcome="any-outcome" in seed.tags)
     if case.session:  # what a session's file list may point at
         case.special.update({"fifo.csv": "fifo", "loop.csv": "symlink-loop", "zero.csv": "dev-zero"})
-    inputs = list(seed.files)
+    inputs = list(seed.files) or list(seed.support)  # tune's --params file is its input
     if mode == "valid":
         case.valid = not seed.real
     if mode in ("file", "file+options") and inputs:
         name = c.choice(inputs) if not case.session else c.choice([*inputs, *seed.support])
-        table = mutators_for(seed.kind if name in seed.files else "text")
+        table = mutators_for(seed.kind if name in seed.files or not seed.files else "text")
         steps = []
         for _ in range(c.choice([1, 1, 2])):
             mutator = c.choice(sorted(table))
@@ -92,6 +92,8 @@ def make_case(seed: Seed, corpus: Path, c: Chooser, *, modes: Sequence[str] = MO
     if seed.json_output and "--json" not in argv:
         argv.append("--json")
     case.argv = argv
+    if "writes-truth" in seed.tags:  # simulate writes truth.json beside its output (documented)
+        outputs += [str(Path(o).parent / "truth.json") if Path(o).parent != Path() else "truth.json" for o in outputs]
     case.outputs = sorted(set(outputs))
     return case
 

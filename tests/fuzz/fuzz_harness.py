@@ -300,7 +300,7 @@ def judge(case: Case, code: int, stdout: str, stderr: str, before: dict[str, str
         return "modified-input", ", ".join(changed[:3])
     created = sorted(set(after) - set(before))
     allowed = [o.rstrip("/") for o in case.outputs if o.strip(" ./")]
-    stray = [n for n in created if not any(n == o or n.startswith(o + "/") for o in allowed)]
+    stray = [n for n in created if not any(n == o or n.startswith(o + "/") or o.startswith(n + "/") for o in allowed)]
     hidden = [n for n in created if Path(n).name.startswith(".") or ".tmp" in Path(n).name]
     if temp:
         return "stray-output", f"left in the temporary folder: {', '.join(p.name for p in temp[:3])}"
