@@ -57,7 +57,9 @@ class HypothesisChooser:
 @pytest.fixture(scope="module")
 def corpus(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, list[Seed]]:
     folder = tmp_path_factory.mktemp("fuzz-corpus")
-    return folder, build(folder)
+    seeds = build(folder)
+    warm()
+    return folder, seeds
 
 
 @pytest.fixture(scope="module")
