@@ -42,8 +42,9 @@ function fileRow(ctx, entry) {
       el("a", { href: "#/bench/session", text: "Characterise motors on a bench with it" }), " ", remove);
   }
   const select = el("select", { id, onchange: (e) => { entry.experiment = e.target.value; entry.chosen = true; save(); ctx.rerender(); } });
-  for (const [key, words] of Object.entries(EXPERIMENT_WORDS)) {
-    if (ctx.app.schema.analyze[key]) select.append(el("option", { value: key, text: key === info.experiment ? proposalWords(info) : words, selected: key === entry.experiment }));
+  for (const key of Object.keys(ctx.app.schema.analyze)) {
+    const words = EXPERIMENT_WORDS[key] || ctx.app.schema.analyze[key].label || key;
+    select.append(el("option", { value: key, text: key === info.experiment ? proposalWords(info) : words, selected: key === entry.experiment }));
   }
   const differs = entry.chosen && info.experiment && entry.experiment !== info.experiment;
   return el("li", { class: "file", "data-file": entry.name },
