@@ -258,7 +258,7 @@ def test_the_app_still_reads_the_argparse_line() -> None:
 
 
 def test_the_open_loop_score_of_huge_residuals_warns_nothing() -> None:
-    """``sysid_score.py: overflow encountered in square`` printed on runs that succeeded (pytest: warnings are errors)."""
+    """``sysid_score.py: overflow encountered in square`` on runs that succeeded (pytest: warnings are errors)."""
     import numpy as np
 
     from motorlab.sysid_score import ScoreTest, score
