@@ -1,0 +1,115 @@
+"""Locked-rotor (stall) runs: K, R at 25 °C and the winding's thermal network."""
+
+from __future__ import annotations
+
+import re
+from typing import Any
+
+import numpy as np
+
+from motorlab.experiments import Experiment, Option, Setting
+from motorlab.thermal import MAGNET_COEFFICIENTS
+
+
+def read_runs(paths: list[str]) -> list[Any]:
+    """One recording per file: a headed CSV (``time_s,voltage_V,current_A,torque_Nm``), or a dynamometer
+    export with worded headers (``Time,Amps,Volts,Torque 6V (N · m)``)."""
+    from motorlab.analyses._common import read_tables
+    from motorlab.errors import LogFormatError
+
+    out = []
+    for path in paths:
+        try:
+            out.extend(read_tables([path]))
+        except LogFormatError as exc:
+            rec = _dyno_export(path)
+            if rec is None:
+                raise exc from None
+            out.append(rec)
+    return out
+
+
+# A minimal reader of VEX's dynamometer exports, until the general worded-header reader (issue 23,
+# dyno-io) is on main: the four columns of a locked-rotor run, by their words.
+_WORDS = {"time": "time", "amps": "current", "current": "current", "volts": "voltage", "voltage": "voltage",
+          "torque": "torque"}
+
+
+def _dyno_export(path: str) -> Any:
+    from motorlab.io._text import read_text
+    from motorlab.recording import Recording
+
+    text = read_text(path)
+    lines = [line for line in text.lines if line.strip()]
+    if len(lines) < 2:
+        return None
+    names = []
+    for field in lines[0].split(","):
+        word = re.split(r"[\s(]", field.strip().lower(), maxsplit=1)[0]
+        names.append(_WORDS.get(word))
+    if names.count("time") != 1 or ("current" not in names and "torque" not in names):
+        return None
+    try:
+        table = np.array([[float(x) for x in line.split(",")] for line in lines[1:]], dtype=float)
+    except ValueError:
+        return None
+    if table.ndim != 2 or table.shape[1] != len(names):
+        return None
+    signals = {name: table[:, k] for k, name in enumerate(names) if name and name != "time"}
+    return Recording(time=table[:, names.index("time")], signals=signals, source=str(path),
+                     metadata={"format": "dynamometer export"})
+
+
+def run(paths: list[str], v: dict[str, Any]) -> Any:
+    """Run ``motorlab analyze stall FILE...``."""
+    from motorlab.analyses.stall import stall
+
+    return stall(read_runs(paths), voltage=v["voltage"], magnet=v["magnet"], magnet_coefficient=v["magnet_coefficient"],
+                 ambient=v["ambient"], until=v["until"], answer_voltage=v["answer_voltage"], limit=v["limit"],
+                 rise=v["rise"])
+
+
+def characterize(ctx: Any) -> Any:
+    """The session's stall runs (voltage, magnet and ambient from the session's table)."""
+    from motorlab.analyses.stall import stall
+
+    return stall(read_runs(ctx.files), voltage=ctx.setting("voltage"), magnet=ctx.setting("magnet") or "ferrite",
+                 ambient=25.0 if ctx.setting("ambient") is None else ctx.setting("ambient"))
+
+
+EXPERIMENT = Experiment(
+    name="stall",
+    summary="Locked rotor: K, R at 25 °C and the winding's heating (thermal network) from stall runs at held "
+            "voltages; runs that end in a failure or at a limit of the rig are cut and named",
+    analysis="motorlab.analyses.stall:stall",
+    inputs="CSV of time_s, current_A, voltage_V and torque_Nm when measured, or a dynamometer export "
+           "(Time,Amps,Volts,Torque (N · m)); one file per run (voltage)",
+    run=run,
+    options=(
+        Option("voltage", "V", positive=True, metavar="VOLTS",
+               help="the supply's voltage for files without a voltage column [V]"),
+        Option("magnet", kind="choice", choices=tuple(MAGNET_COEFFICIENTS), default="ferrite",
+               help="magnet material: ferrite (K changes by −0.002 per kelvin) or ndfeb (−0.0012 per kelvin)"),
+        Option("magnet-coefficient", "1/K", dest="magnet_coefficient", metavar="BETA",
+               help="the magnets' coefficient on K instead [1/K], e.g. -0.0019"),
+        Option("ambient", "degC", default=25.0, metavar="CELSIUS",
+               help="ambient temperature [°C] (the coolest run starts at it; default 25)"),
+        Option("until", "s", positive=True, metavar="SECONDS",
+               help="fit only each run's samples up to this time [s] (forecast the rest with simulate stall)"),
+        Option("answer-voltage", "V", positive=True, default=12.0, metavar="VOLTS",
+               help="the voltage of the 'how long can it stay stalled' answer [V] (default 12)"),
+        Option("limit", "degC", default=150.0, metavar="CELSIUS",
+               help="the winding temperature of that answer [°C] (default 150)"),
+        Option("rise", "K", positive=True, default=100.0, metavar="KELVIN",
+               help="the winding rise of the 'current held indefinitely' answer [K] (default 100)"),
+    ),
+    reports=("K", "tau0", "R", "R_wc", "R_ca", "C_w", "C_c", "t_limit", "I_continuous", "R_hot"),
+    shaft="the stalled shaft where torque is measured (a bare motor: the motor shaft); R at 25 °C",
+    order=35,
+    settings=(
+        Setting("voltage", "V", "the supply's voltage, for files without a voltage column"),
+        Setting("magnet", "str", "magnet material: ferrite (default) or ndfeb"),
+        Setting("ambient", "float", "ambient temperature [°C] (default 25)"),
+    ),
+    characterize=characterize,
+)
