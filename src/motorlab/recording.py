@@ -26,6 +26,8 @@ SIGNALS: dict[str, str] = {
     "battery": "V",
     "speed": "rad/s",  # optical tachometer reading
     "tach_voltage": "V",
+    "winding_temperature": "degC",  # estimated or measured, °C (a temperature, not SI kelvin)
+    "case_temperature": "degC",
 }
 
 

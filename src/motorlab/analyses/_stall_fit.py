@@ -29,7 +29,8 @@ BOUNDS = {"R": (1e-3, 1e3), "R_wc": (1e-3, 100.0), "R_ca": (1e-2, 300.0), "C_w":
 
 @dataclass
 class StallData:
-    """One run's healthy part: times [s] from the run's start, voltage [V], current [A], torque [N·m] or None."""
+    """One run's healthy part: times [s] since the supply switched on (the run's first row), voltage [V],
+    current [A], torque [N·m] or None; ``offset`` is the file's time of that first row [s]."""
 
     source: str
     time: np.ndarray
@@ -64,12 +65,17 @@ def _thermal(values: Sequence[float], magnet: float, ambient: float) -> ThermalM
 
 def simulate_runs(shared: Sequence[float], initial: Sequence[float], runs: Sequence[StallData], magnet: float,
                   ambient: float) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
-    """Model current, winding and case temperatures of each run."""
+    """Model current, winding and case temperatures of each run (heating from the supply's switch-on at
+    time 0, before the first full sample)."""
     th = _thermal(shared, magnet, ambient)
     out = []
     for run, t0 in zip(runs, initial, strict=True):
-        r = stall_response(shared[0], th, run.time, run.voltage, winding=t0)
-        out.append((r.current, r.winding_temperature, r.case_temperature))
+        lead = run.time.size and run.time[0] > 0
+        time = np.concatenate([[0.0], run.time]) if lead else run.time
+        volts = np.concatenate([run.voltage[:1], run.voltage]) if lead else run.voltage
+        r = stall_response(shared[0], th, time, volts, winding=t0)
+        k = 1 if lead else 0
+        out.append((r.current[k:], r.winding_temperature[k:], r.case_temperature[k:]))
     return out
 
 
@@ -159,8 +165,8 @@ def fit_heating(runs: Sequence[StallData], *, magnet: float, ambient: float) -> 
 
     if groups.size <= len(x0):
         raise FitError(f"{groups.size} healthy samples cannot determine {len(x0)} parameters")
-    fit = fit_least_squares(residual, x0, names, bounds=(lo, hi), x_scale=[1.0] * len(x0), covariance="hac", groups=groups,
-                             max_nfev=200 * len(x0))
+    fit = fit_least_squares(residual, x0, names, bounds=(lo, hi), x_scale=[1.0] * len(x0), covariance="hac",
+                            groups=groups, max_nfev=200 * len(x0))
     shared = np.exp(fit.values[: len(SHARED)])
     t0 = initial_of(fit.values)
     sims = simulate_runs(shared, t0, runs, magnet, ambient)
@@ -233,17 +239,18 @@ def fit_torque(runs: Sequence[StallData], case: Sequence[np.ndarray], magnet: fl
         n_eff = max(k.size / 10.0, 1.0)  # neighbouring samples are far from independent
         per_run.append((float(np.mean(run.current)), float(np.mean(k)),
                         float(np.std(k, ddof=1) / math.sqrt(n_eff)) if k.size > 1 else math.nan))
-    if np.ptp(x) <= 0 or x.size < 3:
-        k0 = float(np.mean(y / x))
-        return TorqueFit(k0, math.nan, 0.0, math.nan, per_run, float(np.std(y - k0 * x)),
-                         [None if r.torque is None else k0 * r.current for r in runs], beta, warning)
-    fit = fit_linear(np.column_stack([x, np.ones_like(x)]), y, ["K", "tau0"], covariance="hac", groups=groups)
+    # τ = K·i at a held shaft; the intercept τ₀ (sensor offset, friction held, the curvature of saturation)
+    # only when runs at three or more voltages span at least half the current range: over one run's narrow
+    # range it is nearly collinear with K and takes K wherever the model's small systematic errors lead.
+    wide = len(with_torque) >= 3 and np.ptp(x) >= 0.5 * np.max(x)
+    design = np.column_stack([x, np.ones_like(x)]) if wide else x[:, None]
+    fit = fit_linear(design, y, ["K", "tau0"][: design.shape[1]], covariance="hac", groups=groups)
+    tau0, tau0_se = (float(fit.values[1]), float(fit.stderr[1])) if wide else (0.0, math.nan)
     model: list[np.ndarray | None] = []
     for run, t in zip(runs, case, strict=True):
-        model.append(None if run.torque is None else
-                     fit.values[0] * run.current * (1 + beta * (t - 25.0)) + fit.values[1])
-    resid = y - (fit.values[0] * x + fit.values[1])
-    return TorqueFit(float(fit.values[0]), float(fit.stderr[0]), float(fit.values[1]), float(fit.stderr[1]),
+        model.append(None if run.torque is None else fit.values[0] * run.current * (1 + beta * (t - 25.0)) + tau0)
+    resid = y - (fit.values[0] * x + tau0)
+    return TorqueFit(float(fit.values[0]), float(fit.stderr[0]), tau0, tau0_se,
                      per_run, float(np.sqrt(np.mean(resid**2))), model, beta, warning)
 
 

@@ -37,7 +37,7 @@ def run_rows(runs: Sequence[Any], used: list[int], fitted: list[int],
         t_cut = None
         if t0 is not None and run.cut.index is not None:
             sl = slice(run.start, run.cut.index + 1)
-            data = StallData(run.source, run.time[sl] - run.time[run.start], run.voltage[sl], run.current[sl], None)
+            data = StallData(run.source, run.time[sl] - run.time[0], run.voltage[sl], run.current[sl], None)
             t_cut = float(simulate_runs(shared, [t0], [data], heat.thermal.magnet_coefficient,
                                         heat.thermal.ambient_temperature)[0][1][-1])
         rows.append({
@@ -131,8 +131,9 @@ def parameters_of(heat: HeatFit, torque: TorqueFit | None, extra: dict[str, Esti
         note = ("torque per amp at 25 °C (the magnets' coefficient applied at the case temperature)" if torque.beta
                 else "torque per amp at the runs' temperatures (see the warnings)")
         out["K"] = Estimate("K", torque.K, torque.K_stderr, "N*m/A", True, note)
-        out["tau0"] = Estimate("tau0", torque.tau0, torque.tau0_stderr, "N*m", True,
-                               "torque at zero current (an offset of the torque sensor, or friction held)")
+        if math.isfinite(torque.tau0_stderr):
+            out["tau0"] = Estimate("tau0", torque.tau0, torque.tau0_stderr, "N*m", True,
+                                   "torque at zero current (a sensor offset, friction held, or saturation's curve)")
     for k, name in enumerate(SHARED):
         determined = bool(heat.fit.determined[k]) and math.isfinite(heat.stderr[name])
         note = _NOTES[name] if determined else _NOTES[name] + ": the runs are too short to tell it"

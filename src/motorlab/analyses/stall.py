@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -59,10 +59,10 @@ class Run:
     cut: Cut
 
     def data(self) -> StallData:
-        """The healthy part, its time counted from the first full sample."""
+        """The healthy part, its time counted from the run's first row (the supply switching on)."""
         sl = slice(self.start, self.end)
-        return StallData(self.source, self.time[sl] - self.time[self.start], self.voltage[sl], self.current[sl],
-                         None if self.torque is None else self.torque[sl], float(self.time[self.start]))
+        return StallData(self.source, self.time[sl] - self.time[0], self.voltage[sl], self.current[sl],
+                         None if self.torque is None else self.torque[sl], float(self.time[0]))
 
 
 def _run_of(rec: Recording, voltage: float | None, until: float | None) -> Run:
@@ -155,7 +155,12 @@ def stall(
     heat, excluded = _fit_with_exclusions([runs[k] for k in used], beta, ambient, warnings)
     data = [runs[k].data() for k in used]
     fitted = [j for j in range(len(used)) if j not in excluded]
-    torque = fit_torque([data[j] for j in fitted], heat.case, beta)
+    # The torque against the heating model's current, not the measured one: the model's is free of the
+    # ammeter's noise, which would bias the slope low (errors in the regressor).
+    smooth = [replace(data[j], current=heat.model_current[pos]) for pos, j in enumerate(fitted)]
+    torque = fit_torque(smooth, heat.case, beta)
+    if torque is not None and torque.beta:
+        torque = _with_case_uncertainty(torque, smooth, heat)
     if torque is not None:
         if torque.warning:
             warnings.append(torque.warning)
@@ -165,6 +170,22 @@ def stall(
     return _result(runs, used, fitted, heat, torque, warnings, recs,
                    {"beta": beta, "ambient": ambient, "answer_voltage": answer_voltage, "limit": limit,
                     "rise": rise, "until": until, "magnet": magnet if magnet_coefficient is None else "given"})
+
+
+def _with_case_uncertainty(torque: TorqueFit, data: list[StallData], heat: HeatFit) -> TorqueFit:
+    """K's standard error with the uncertainty of the case temperatures it is corrected to (the network's
+    covariance, by the delta method on the logarithms of the shared parameters)."""
+    base = [heat.values[n] for n in SHARED]
+    grad = np.zeros(len(SHARED))
+    for k in range(len(SHARED)):
+        shared = list(base)
+        shared[k] *= math.exp(1e-3)
+        sims = simulate_runs(shared, heat.initial, data, torque.beta, heat.thermal.ambient_temperature)
+        moved = fit_torque(data, [s[2] for s in sims], torque.beta)
+        grad[k] = ((moved.K if moved is not None else torque.K) - torque.K) / 1e-3
+    extra = float(grad @ np.nan_to_num(heat.log_covariance) @ grad)
+    torque.K_stderr = math.sqrt(torque.K_stderr**2 + max(extra, 0.0))
+    return torque
 
 
 def _magnet(magnet: str, coefficient: float | None) -> float:

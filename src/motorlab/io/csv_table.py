@@ -56,6 +56,8 @@ COLUMNS: dict[str, tuple[str, str]] = {
     "speed_rad_per_s": ("speed", "rad/s"),
     "tach_voltage_V": ("tach_voltage", "V"),
     "battery_V": ("battery", "V"),
+    "winding_temperature_C": ("winding_temperature", "degC"),
+    "case_temperature_C": ("case_temperature", "degC"),
 }
 
 #: Prefix of user columns that the reader skips (notes, extra instruments).
