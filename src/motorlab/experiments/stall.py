@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from motorlab.experiments import Experiment, Option, Setting
+from motorlab.experiments import Experiment, Option, RigRun, Setting
 from motorlab.thermal import MAGNET_COEFFICIENTS
 
 
@@ -113,4 +113,5 @@ EXPERIMENT = Experiment(
         Setting("ambient", "float", "ambient temperature [°C] (default 25)"),
     ),
     characterize=characterize,
+    rig=RigRun("stall", "stall.csv", settings={"voltage": 6.0, "duration": 120.0}, order=35),
 )
