@@ -2,62 +2,18 @@
 
 from __future__ import annotations
 
-import re
 from typing import Any
-
-import numpy as np
 
 from motorlab.experiments import Experiment, Option, RigRun, Setting
 from motorlab.thermal import MAGNET_COEFFICIENTS
 
 
 def read_runs(paths: list[str]) -> list[Any]:
-    """One recording per file: a headed CSV (``time_s,voltage_V,current_A,torque_Nm``), or a dynamometer
-    export with worded headers (``Time,Amps,Volts,Torque 6V (N · m)``)."""
+    """One recording per file: a headed CSV (``time_s,voltage_V,current_A,torque_Nm``) or a dynamometer
+    export with worded headers (``Time,Amps,Volts,Torque 6V (N · m)``, :mod:`motorlab.io.headers`)."""
     from motorlab.analyses._common import read_tables
-    from motorlab.errors import LogFormatError
 
-    out = []
-    for path in paths:
-        try:
-            out.extend(read_tables([path]))
-        except LogFormatError as exc:
-            rec = _dyno_export(path)
-            if rec is None:
-                raise exc from None
-            out.append(rec)
-    return out
-
-
-# A minimal reader of VEX's dynamometer exports, until the general worded-header reader (issue 23,
-# dyno-io) is on main: the four columns of a locked-rotor run, by their words.
-_WORDS = {"time": "time", "amps": "current", "current": "current", "volts": "voltage", "voltage": "voltage",
-          "torque": "torque"}
-
-
-def _dyno_export(path: str) -> Any:
-    from motorlab.io._text import read_text
-    from motorlab.recording import Recording
-
-    text = read_text(path)
-    lines = [line for line in text.lines if line.strip()]
-    if len(lines) < 2:
-        return None
-    names = []
-    for field in lines[0].split(","):
-        word = re.split(r"[\s(]", field.strip().lower(), maxsplit=1)[0]
-        names.append(_WORDS.get(word))
-    if names.count("time") != 1 or ("current" not in names and "torque" not in names):
-        return None
-    try:
-        table = np.array([[float(x) for x in line.split(",")] for line in lines[1:]], dtype=float)
-    except ValueError:
-        return None
-    if table.ndim != 2 or table.shape[1] != len(names):
-        return None
-    signals = {name: table[:, k] for k, name in enumerate(names) if name and name != "time"}
-    return Recording(time=table[:, names.index("time")], signals=signals, source=str(path),
-                     metadata={"format": "dynamometer export"})
+    return list(read_tables(paths))
 
 
 def run(paths: list[str], v: dict[str, Any]) -> Any:
