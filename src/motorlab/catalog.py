@@ -375,6 +375,9 @@ def list_motors(*, path: str | PathLike[str] | None = None) -> list[Motor]:
         table = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise InputError(f"not a valid catalogue: {exc}", path=where) from None
+    except (ValueError, RecursionError):  # an integer of 4,300 digits, or tables nested too deeply
+        raise InputError("not a valid catalogue: a number or a nesting beyond any motor's figures",
+                         path=where) from None
     return [_motor_from_entry(key, entry, where) for key, entry in table.items()]
 
 

@@ -39,6 +39,11 @@ PARAMETERS: dict[str, Parameter] = {
     "Tf_over_J": _P("Coulomb deceleration (Tf/J)", "Tf/J", "rad/s^2"),
     "alpha": _P("Angular acceleration", "α", "rad/s^2"),
     "i": _P("Current during the spin-up", "i", "A"),
+    # a motor curve (dynamometer)
+    "Kt": _P("Torque per amp", "Kt", "N*m/A"),
+    "Kt_over_K": _P("Torque per amp over back-EMF constant", "Kt/K", "1"),
+    "I_free": _P("Free current", "I₀", "A"),
+    "friction_torque": _P("Friction torque at free speed", "τ_f", "N*m"),
     # the gearbox
     "efficiency": _P("Gearbox efficiency", "η", "1"),
     "loss_torque": _P("Gearbox loss torque", "τ0", "N*m"),
