@@ -457,7 +457,7 @@ def _unit_params(unit: UnitResult) -> Any:
     from motorlab.errors import MotorlabError
     from motorlab.model import MotorParams
 
-    values = {}
+    values: dict[str, Any] = {}
     for name in ("K", "R", "L", "J", "b", "Tf"):
         combined = unit.parameters.get(name)
         if combined is not None and combined.estimate.determined and math.isfinite(combined.estimate.value):

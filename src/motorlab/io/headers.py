@@ -54,6 +54,8 @@ COLUMNS: dict[str, tuple[str, str]] = {
     "speed_rad_per_s": ("speed", "rad/s"),
     "tach_voltage_V": ("tach_voltage", "V"),
     "battery_V": ("battery", "V"),
+    "winding_temperature_C": ("winding_temperature", "degC"),  # motorlab simulate stall's forecast
+    "case_temperature_C": ("case_temperature", "degC"),
 }
 
 _BY_LOWER = {name.lower(): name for name in COLUMNS}
