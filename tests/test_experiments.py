@@ -119,3 +119,22 @@ def test_whole_number_options_take_digits_only() -> None:
             count.convert(bad)
     with pytest.raises(OptionError, match="must be positive"):
         count.convert("-1")
+
+
+def test_every_option_has_a_label_in_words_and_every_report_a_name() -> None:
+    from motorlab.experiments import command_options
+    from motorlab.glossary import PARAMETERS
+
+    options = [opt for exp in all_experiments().values() for opt in exp.options]
+    options += [*command_options("tune"), *command_options("characterize")]
+    for opt in options:
+        assert opt.label, opt.name
+        assert opt.label[0].isupper(), opt.label
+        assert "--" not in opt.label + opt.help, opt.name
+        assert "(default" not in opt.help, opt.name  # the CLI appends the default; the page shows it
+    for exp in all_experiments().values():
+        assert exp.title, exp.name
+        missing = [k for k in (*exp.reports, *exp.contributes, *exp.contributes.values()) if k not in PARAMETERS]
+        assert not missing, (exp.name, missing)
+    assert "(default 0.1)" in get("spindown").option("guard").cli_help
+    assert "[s]" in get("spindown").option("guard").cli_help

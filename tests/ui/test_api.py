@@ -207,18 +207,54 @@ def test_tune_gives_the_cli_json_and_snippet(server: Any, tmp_path: Path) -> Non
     assert "--kv" in bad.json()["error"]
 
 
-def test_schema_is_the_cli_parsers() -> None:
+def test_schema_is_the_descriptions_and_agrees_with_the_cli_parsers() -> None:
     s = schema()
     spindown = {f["name"]: f for f in s["analyze"]["spindown"]["fields"]}
     assert spindown["guard"]["unit"] == "s"
     assert spindown["guard"]["default"] == 0.1
     assert spindown["files"]["required"]
+    assert spindown["cpr"]["label"] == "Encoder counts per revolution"
+    assert spindown["inertia"]["label"] == "Flywheel moment of inertia"
     tune = {f["name"]: f for f in s["tune"]["fields"]}
     assert tune["target"]["choices"][:2] == ["volts", "wpilib"]
     assert tune["params"]["kind"] == "file"
     assert "json" not in tune
     assert "plot" not in spindown
-    json.dumps(s)
+    assert s["parameters"]["K"] == {"name": "Back-EMF constant", "symbol": "K", "unit": "V*s/rad"}
+    assert [t["key"] for t in s["targets"]] == tune["target"]["choices"]
+    json.dumps(s, allow_nan=False)
+    # Words everywhere a person reads: a label on every field, no flag, seed or repeated default in the help.
+    for command, fields in [*((f"analyze {n}", e["fields"]) for n, e in s["analyze"].items()),
+                            ("tune", s["tune"]["fields"]), ("characterize", s["characterize"]["fields"])]:
+        for f in fields:
+            assert f["label"], (command, f["name"])
+            assert "--" not in f["label"], (command, f["name"])
+            for bad in ("--", "seed ", "(default"):
+                assert bad not in f["help"], (command, f)
+            assert "--" not in (f["group"] or ""), (command, f["group"])
+    for e in s["analyze"].values():
+        assert "seed " not in e["description"]
+        assert all(key in s["parameters"] for key in e["reports"])
+    # The CLI's parsers are generated from the same descriptions: the same options, defaults and choices.
+    import argparse
+
+    parser = cli.build_parser()
+    commands = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction)).choices
+
+    def options(p: argparse.ArgumentParser) -> dict[str, argparse.Action]:
+        return {(a.option_strings[0] if a.option_strings else a.dest): a for a in p._actions
+                if a.dest not in {"help", "json", "plot", "each", "emit", "output", "quiet", "no_report"}}
+
+    analyze = next(a for a in commands["analyze"]._actions if isinstance(a, argparse._SubParsersAction)).choices
+    pairs = [(options(analyze[n]), s["analyze"][n]["fields"]) for n in s["analyze"]]
+    pairs += [(options(commands[c]), s[c]["fields"]) for c in ("tune", "characterize")]
+    for actions, fields in pairs:
+        assert set(actions) == {f["option"] or f["dest"] for f in fields}
+        for f in fields:
+            action = actions[f["option"] or f["dest"]]
+            assert (list(action.choices) if action.choices else None) == f["choices"]
+            if f["kind"] not in ("flag", "file"):
+                assert action.default == f["default"], f["name"]
 
 
 def test_time_limit_ends_the_command(server: Any, sim_session: Path, monkeypatch: pytest.MonkeyPatch) -> None:

@@ -15,7 +15,15 @@ import os
 from collections.abc import Sequence
 from typing import Any
 
-from motorlab.cli.common import Parser, check_figure_path, positive_int, print_json, quantity
+from motorlab.cli.common import (
+    Parser,
+    check_figure_path,
+    finite_number,
+    positive_int,
+    positive_number,
+    print_json,
+    quantity,
+)
 from motorlab.experiments import Option, all_experiments, get
 from motorlab.results import Estimate, FitResult
 from motorlab.units import format_unit
@@ -48,35 +56,51 @@ def register(subparsers: Any) -> None:
 
 def add_arguments(parser: argparse.ArgumentParser, experiment: str) -> None:
     """The options of ``experiment``'s description as argparse options of ``parser``."""
+    add_options(parser, get(experiment).options)
+
+
+def flags(opt: Option) -> list[str]:
+    """The CLI spellings of ``opt`` (``--Km``, ``--K``; a positional argument's name)."""
+    if opt.positional:
+        return [opt.key]
+    return [f"--{name}" for name in (opt.name, *opt.aliases)]
+
+
+def add_options(parser: argparse.ArgumentParser, options: Sequence[Option]) -> dict[str, Any]:
+    """``options`` (a command's descriptions) as argparse arguments of ``parser``; returns the groups by title."""
     groups: dict[str, Any] = {}
-    for opt in get(experiment).options:
+    for opt in options:
         target: Any = parser
         if opt.group:
             target = groups.get(opt.group) or groups.setdefault(opt.group, parser.add_argument_group(opt.group))
         target.add_argument(*flags(opt), **_argparse_keywords(opt))
-
-
-def flags(opt: Option) -> list[str]:
-    """The CLI spellings of ``opt`` (``--Km``, ``--K``)."""
-    return [f"--{name}" for name in (opt.name, *opt.aliases)]
+    return groups
 
 
 def _argparse_keywords(opt: Option) -> dict[str, Any]:
-    out: dict[str, Any] = {"dest": opt.key, "help": opt.help, "default": opt.default}
+    """``add_argument``'s keywords for ``opt`` (its help with the unit and default appended)."""
+    out: dict[str, Any] = {"help": opt.cli_help, "default": opt.default}
+    if not opt.positional:
+        out["dest"] = opt.key
     if opt.kind == "flag":
         out["action"] = "store_false" if opt.default is True else "store_true"
         out["default"] = bool(opt.default)
         return out
     if opt.metavar:
         out["metavar"] = opt.metavar
-    if opt.required:
+    if opt.required and not opt.positional:
         out["required"] = True
     if opt.kind == "choice":
         out["choices"] = opt.choices
     elif opt.kind == "files":
-        out["action"] = "append"
+        if not opt.positional:
+            out["action"] = "append"
     elif opt.kind == "int":
         out["type"] = positive_int
+    elif opt.kind == "number":
+        out["type"] = positive_number if opt.positive else finite_number
+    elif opt.kind == "text":
+        pass
     else:
         assert opt.unit is not None
         out["type"] = quantity(opt.unit, positive=opt.positive, nonnegative=opt.nonnegative)

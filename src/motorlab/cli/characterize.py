@@ -13,7 +13,9 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from motorlab.cli.analyze import add_options
 from motorlab.cli.common import EXIT_PARTIAL, check_output_dir
+from motorlab.experiments import command_options
 
 
 def register(subparsers: Any) -> None:
@@ -28,7 +30,7 @@ def register(subparsers: Any) -> None:
         "stderr; each unit's status says why); 2 the session was refused before any analysis (one line naming "
         "the file, line and key); 1 an internal error.",
     )
-    parser.add_argument("session", metavar="SESSION.toml", help="the session description (see docs/session.md)")
+    add_options(parser, command_options("characterize"))
     parser.add_argument(
         "-o", "--output", metavar="DIR", help="folder for the results (default: 'results' beside the session file)"
     )

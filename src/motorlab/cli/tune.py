@@ -6,34 +6,19 @@ import argparse
 import math
 from typing import Any
 
-from motorlab.cli.common import check_figure_path, check_option, print_json, quantity
+from motorlab.cli.analyze import add_options
+from motorlab.cli.common import check_figure_path, check_option, print_json
 from motorlab.control.design import Feedforward
 from motorlab.control.emit import LANGUAGES, emit_snippet
-from motorlab.control.plant import UNIT_NAMES, MechanismUnits, Plant, load_plant
-from motorlab.control.targets import TARGETS
-from motorlab.control.tune import METHODS, TuneResult, tune
+from motorlab.control.plant import MechanismUnits, Plant, load_plant
+from motorlab.control.targets import TARGET_INFO
+from motorlab.control.tune import TuneResult, tune
 from motorlab.errors import OptionError
-
-
-def _finite_float(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if not math.isfinite(value):
-        raise argparse.ArgumentTypeError(f"{text!r} is not a finite number")
-    return value
-
-
-def _positive_float(text: str) -> float:
-    value = _finite_float(text)
-    if value <= 0:
-        raise argparse.ArgumentTypeError(f"{text!r} must be positive")
-    return value
+from motorlab.experiments import command_options
 
 
 def register(subparsers: Any) -> None:
-    """Add the ``tune`` sub-command."""
+    """Add the ``tune`` sub-command: its options from :func:`motorlab.experiments.command_options`."""
     p = subparsers.add_parser(
         "tune",
         help="controller gains (LQR as WPILib SysId, or pole placement) checked in closed-loop simulation",
@@ -44,38 +29,7 @@ def register(subparsers: Any) -> None:
             "loop on the motor model and report rise time, overshoot, settling time and steady-state error."
         ),
     )
-    p.add_argument("loop", choices=("velocity", "position"), help="which quantity the loop controls")
-    plant = p.add_argument_group("plant")
-    plant.add_argument("--kv", type=_finite_float, help="velocity constant kV [V*s/unit]")
-    plant.add_argument("--ka", type=_finite_float, help="acceleration constant kA [V*s^2/unit]")
-    plant.add_argument("--ks", type=_finite_float, default=0.0, help="static friction voltage kS [V] (default 0)")
-    plant.add_argument(
-        "--params",
-        action="append",
-        metavar="FILE.json",
-        help="motorlab analyze/characterize JSON with K, R, J (b, Tf, L) or kS, kV, kA; repeat to merge",
-    )
-    plant.add_argument(
-        "--unit", metavar="NAME", help="which unit of a characterize results.json (required when it has several)"
-    )
-    plant.add_argument("--units", choices=UNIT_NAMES, default="rad", help="length unit of kV, kA, tolerances, step")
-    plant.add_argument("--cpr", type=_positive_float, help="encoder counts per revolution of the shaft")
-    plant.add_argument(
-        "--wheel-radius", type=quantity("m", positive=True), help='lengths in metres at this radius ("2 in")'
-    )
-    d = p.add_argument_group("design")
-    d.add_argument("--method", choices=METHODS, default="lqr", help="lqr (SysId's, default) or poles")
-    d.add_argument("--qp", type=_positive_float, default=1.0, help="LQR position error tolerance [unit] (1)")
-    d.add_argument("--qv", type=_positive_float, default=1.5, help="LQR velocity error tolerance [unit/s] (1.5)")
-    d.add_argument("--r", type=quantity("V", positive=True), default=7.0, help="LQR control effort tolerance [V] (7)")
-    d.add_argument("--period", type=quantity("s", positive=True), default=0.02, help="controller period [s] (0.02)")
-    d.add_argument("--delay", type=quantity("s", nonnegative=True), default=0.0, help="measurement delay [s] (0)")
-    d.add_argument("--rise-time", type=quantity("s", positive=True), help="poles: 10-90%% rise time [s]")
-    d.add_argument("--overshoot", type=_finite_float, default=5.0, help="poles: largest overshoot [%%] (5)")
-    o = p.add_argument_group("output")
-    o.add_argument("--target", choices=TARGETS, default="volts", help="controller the gains are for (volts)")
-    o.add_argument("--voltage", type=quantity("V", positive=True), default=12.0, help="supply voltage [V] (12)")
-    o.add_argument("--step", type=_finite_float, help="step size [unit/s or unit] (half free speed / 1 rev)")
+    o = add_options(p, command_options("tune"))["output"]
     o.add_argument("--json", action="store_true", help="print the result as JSON")
     o.add_argument("--plot", metavar="FILE.png", help="save step and profile responses to an image")
     o.add_argument("--emit", choices=LANGUAGES, help="print a ready-to-paste snippet in this language")
@@ -112,7 +66,7 @@ def run(args: argparse.Namespace) -> int:
         qv=args.qv,
         r=args.r,
         period=args.period,
-        delay=args.delay,
+        delay=TARGET_INFO[args.target].delay if args.delay is None else args.delay,
         rise_time=args.rise_time,
         overshoot=args.overshoot,
         voltage=args.voltage,

@@ -62,6 +62,46 @@ from motorlab.errors import OptionError
 
 TARGETS = ("volts", "wpilib", "ftc-power", "ftc-pidf", "roadrunner", "pedro")
 
+
+@dataclass(frozen=True)
+class TargetInfo:
+    """What a person choosing a target needs to know (``GET /api/schema``'s ``targets``).
+
+    ``label`` names it in words, ``units`` says what its gains are in, ``needs`` lists the options
+    it cannot do without (``cpr``, ``wheel-radius``), ``loops`` the loops it runs, ``languages``
+    the ``--emit`` languages it has snippets for, ``delay`` its measurement delay [s] when
+    ``--delay`` is not given (SysId's presets).
+    """
+
+    key: str
+    label: str
+    units: str
+    needs: tuple[str, ...] = ()
+    loops: tuple[str, ...] = ("velocity", "position")
+    languages: tuple[str, ...] = ("java", "kotlin", "python")
+    delay: float = 0.0
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"key": self.key, "label": self.label, "units": self.units, "needs": list(self.needs),
+                "loops": list(self.loops), "languages": list(self.languages), "delay": self.delay}
+
+
+_FTC = ("java", "kotlin")
+
+#: Every target, in :data:`TARGETS`' order.
+TARGET_INFO: dict[str, TargetInfo] = {t.key: t for t in (
+    TargetInfo("volts", "Volts (any controller)", "volts and your length unit"),
+    TargetInfo("wpilib", "WPILib PIDController and SimpleMotorFeedforward", "volts and your length unit"),
+    TargetInfo("ftc-power", "FTC OpMode PID on motor power", "motor power (−1…1) per encoder tick",
+               needs=("cpr",), languages=_FTC),
+    TargetInfo("ftc-pidf", "FTC hub velocity PIDF (setVelocityPIDFCoefficients)",
+               "hub output (32767 = full power) per encoder tick per second", needs=("cpr",),
+               loops=("velocity",), languages=_FTC),
+    TargetInfo("roadrunner", "Road Runner 1.0 drive", "volts per encoder tick", needs=("cpr",), languages=_FTC),
+    TargetInfo("pedro", "Pedro Pathing follower", "inches and motor power", needs=("wheel-radius",),
+               languages=_FTC),
+)}
+
 #: Metres per inch.
 INCH = 0.0254
 

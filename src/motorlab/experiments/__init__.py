@@ -30,8 +30,9 @@ from motorlab.units import format_unit, parse_quantity
 if TYPE_CHECKING:
     from motorlab.results import Estimate, FitResult
 
-#: Kinds of option value.
-KINDS = ("quantity", "choice", "flag", "files", "int")
+#: Kinds of option value: a number with a unit (pint), one of some words, true/false, paths, a whole
+#: number, a plain number (its unit depends on other options, e.g. tune's kV per ``--units``), text.
+KINDS = ("quantity", "choice", "flag", "files", "int", "number", "text")
 
 
 @dataclass(frozen=True)
@@ -48,7 +49,10 @@ class Option:
     default
         Value when the option is not given (SI), or None.
     help
-        One line for ``--help``, the docs' tables and the browser's forms.
+        One line for ``--help``, the docs' tables and the browser's forms: what to give, in words, no
+        default and no unit (both are shown beside it; the CLI's ``--help`` appends them).
+    label
+        The field's name in words, as a form shows it ("Encoder counts per revolution").
     kind
         ``"quantity"`` (a number with a unit), ``"choice"``, ``"flag"`` (true/false), ``"files"``
         (one or more paths) or ``"int"``.
@@ -58,6 +62,8 @@ class Option:
         False).
     aliases
         Other CLI spellings (``("K",)`` for ``Km``).
+    positional
+        A positional argument of the command (``tune``'s loop), not a ``--name`` option.
     """
 
     name: str
@@ -73,6 +79,8 @@ class Option:
     aliases: tuple[str, ...] = ()
     metavar: str | None = None
     group: str | None = None
+    label: str = ""
+    positional: bool = False
 
     def __post_init__(self) -> None:
         if self.kind not in KINDS:
@@ -114,6 +122,16 @@ class Option:
         if self.kind == "files":
             items = [value] if isinstance(value, str) or hasattr(value, "__fspath__") else list(value)
             return [str(item) for item in items]
+        if self.kind == "text":
+            return str(value)
+        if self.kind == "number":
+            try:
+                number = float(value)
+            except (TypeError, ValueError):
+                raise OptionError(f"{label}: {value!r} is not a number") from None
+            if not math.isfinite(number):
+                raise OptionError(f"{label}: {value!r} is not a finite number")
+            return self._check_sign(number, value, label)
         if self.kind == "int":
             text = value.strip() if isinstance(value, str) else None
             if text is not None and not (text.lstrip("+-").isdigit() and text.isascii()):
@@ -132,6 +150,17 @@ class Option:
             raise OptionError(f"{label}: {given!r} must not be negative")
         return number
 
+    @property
+    def cli_help(self) -> str:
+        """The ``--help`` line: the label, :attr:`help`, the unit and the default (``%`` escaped for argparse)."""
+        text = f"{self.label}: {self.help}" if self.label and self.help else self.label or self.help
+        if self.unit and self.unit not in ("1", "count"):
+            text += f" [{format_unit(self.unit)}]"
+        if self.default is not None and self.kind not in ("flag", "files"):
+            shown = f"{self.default:g}" if isinstance(self.default, float) else str(self.default)
+            text += f" (default {shown})"
+        return text.replace("%", "%%")
+
     def schema(self) -> dict[str, Any]:
         """JSON-able description."""
         default = self.default
@@ -139,10 +168,10 @@ class Option:
             default = None
         return {
             "name": self.name, "keyword": self.key, "aliases": list(self.aliases), "kind": self.kind,
-            "unit": self.unit, "unit_display": format_unit(self.unit) if self.unit else self.unit,
+            "label": self.label, "unit": self.unit, "unit_display": format_unit(self.unit) if self.unit else self.unit,
             "default": default, "choices": list(self.choices) if self.choices else None,
             "positive": self.positive, "nonnegative": self.nonnegative, "required": self.required,
-            "help": self.help, "group": self.group,
+            "help": self.help, "group": self.group, "positional": self.positional,
         }
 
 
@@ -182,6 +211,8 @@ class Experiment:
     ----------
     name
         The CLI name (``motorlab analyze NAME``, the session table ``[units.A.NAME]``).
+    title
+        Its name in words, for a person choosing it ("Flywheel spin-down").
     summary
         One line (the sub-command's help).
     analysis
@@ -225,6 +256,7 @@ class Experiment:
     loaded: bool = False
     characterize: Callable[[Any], FitResult] | None = None
     rig: RigRun | None = None
+    title: str = ""
 
     def option(self, keyword: str) -> Option:
         """The option a notebook keyword or CLI name stands for."""
@@ -268,7 +300,8 @@ class Experiment:
     def schema(self) -> dict[str, Any]:
         """JSON-able description (for forms and documentation)."""
         return {
-            "name": self.name, "summary": self.summary, "analysis": self.analysis, "inputs": self.inputs,
+            "name": self.name, "title": self.title or self.name, "summary": self.summary, "analysis": self.analysis,
+            "inputs": self.inputs,
             "options": [opt.schema() for opt in self.options], "reports": list(self.reports), "shaft": self.shaft,
             "session": {
                 "order": self.order, "loaded": self.loaded, "contributes": dict(self.contributes),
@@ -316,6 +349,23 @@ def schema() -> dict[str, Any]:
     return {name: exp.schema() for name, exp in all_experiments().items()}
 
 
+def command_options(command: str) -> tuple[Option, ...]:
+    """The options of ``motorlab tune`` or ``motorlab characterize`` (:mod:`motorlab.experiments._commands`).
+
+    Raises
+    ------
+    KeyError
+        Another command.
+    """
+    from motorlab.experiments import _commands
+
+    if command == "tune":
+        from motorlab.control.targets import TARGETS
+
+        return _commands.tune_options(TARGETS)
+    return {"characterize": _commands.CHARACTERIZE_OPTIONS}[command]
+
+
 def stderr_or_none(est: Estimate) -> float | None:
     """A usable standard error (finite, ≥ 0) or None."""
     return est.stderr if math.isfinite(est.stderr) and est.stderr >= 0 else None
@@ -330,12 +380,12 @@ def options_markdown() -> str:
     """The option tables of every experiment, as docs/analyze.md shows them (Markdown)."""
     parts = []
     for name, exp in all_experiments().items():
-        parts.append(f"### `{name}`\n\n{exp.summary}. Input: {exp.inputs}. Reports: "
+        parts.append(f"### `{name}`: {exp.title or name}\n\n{exp.summary}. Input: {exp.inputs}. Reports: "
                      + ", ".join(f"`{p}`" for p in exp.reports) + f" ({exp.shaft}).\n")
         if not exp.options:
             parts.append("No options.\n")
             continue
-        rows = ["| option | unit | default | description |", "|---|---|---|---|"]
+        rows = ["| option | in words | unit | default | description |", "|---|---|---|---|---|"]
         for opt in exp.options:
             flag = ", ".join(f"`--{n}`" for n in (opt.name, *opt.aliases))
             if opt.required:
@@ -346,6 +396,6 @@ def options_markdown() -> str:
             if opt.kind == "flag":
                 default = ""
             text = opt.help.replace("|", "\\|")
-            rows.append(f"| {flag} | {unit} | {default} | {text} |")
+            rows.append(f"| {flag} | {opt.label} | {unit} | {default} | {text} |")
         parts.append("\n".join(rows) + "\n")
     return "\n".join(parts)

@@ -10,25 +10,27 @@ from motorlab.experiments import Option
 from motorlab.plan import MATERIALS, disc_inertia
 
 CPR = Option(
-    "cpr", "count", positive=True,
-    help="encoder counts per revolution of the counted shaft (e.g. 560 for a NeveRest 20)",
+    "cpr", "count", positive=True, label="Encoder counts per revolution",
+    help="of the shaft the encoder turns with, e.g. 560 for a NeveRest 20",
 )
 CURRENT_UNIT = Option(
-    "current-unit", kind="choice", choices=("A", "mA"),
-    help="unit of the current column of an FTC log (default: from its header, else A)",
+    "current-unit", kind="choice", choices=("A", "mA"), label="Unit of the current column",
+    help="of an FTC log; left empty: from its header, else amperes",
 )
-_INERTIA_GROUP = "inertia at the encoder shaft (give --inertia or a disc)"
+_INERTIA_GROUP = "inertia at the encoder shaft (its value, or the flywheel disc)"
 INERTIA = (
-    Option("inertia", "kg*m^2", positive=True, group=_INERTIA_GROUP,
-           help='total inertia at the encoder shaft, e.g. "0.0124 kg*m^2"'),
+    Option("inertia", "kg*m^2", positive=True, group=_INERTIA_GROUP, label="Flywheel moment of inertia",
+           help='everything that turns, seen at the encoder shaft, e.g. "0.0124 kg*m^2"; or give the disc below'),
     Option("inertia-stderr", "kg*m^2", nonnegative=True, group=_INERTIA_GROUP,
-           help="standard error of the inertia [kg·m²] (default: exact)"),
-    Option("disc-radius", "m", positive=True, group=_INERTIA_GROUP, help='flywheel disc radius, e.g. "75 mm"'),
-    Option("disc-thickness", "m", positive=True, group=_INERTIA_GROUP, help="flywheel disc thickness [m]"),
+           label="Uncertainty of the moment of inertia", help="its standard error; left empty: exact"),
+    Option("disc-radius", "m", positive=True, group=_INERTIA_GROUP, label="Flywheel disc radius",
+           help='instead of the inertia: the disc\'s radius, e.g. "75 mm"'),
+    Option("disc-thickness", "m", positive=True, group=_INERTIA_GROUP, label="Flywheel disc thickness",
+           help='instead of the inertia: the disc\'s thickness, e.g. "50 mm"'),
     Option("material", kind="choice", choices=tuple(sorted(MATERIALS)), default="steel", group=_INERTIA_GROUP,
-           help="flywheel material (default steel, 7850 kg/m³)"),
-    Option("ratio", "", positive=True, default=1.0, group=_INERTIA_GROUP,
-           help="flywheel speed / encoder-shaft speed (25 for the seed's step-up gearbox)"),
+           label="Flywheel material", help="what the disc is made of (steel: 7850 kg/m³)"),
+    Option("ratio", "", positive=True, default=1.0, group=_INERTIA_GROUP, label="Flywheel to encoder speed ratio",
+           help="flywheel speed ÷ encoder-shaft speed, e.g. 25 behind a 25:1 step-up gearbox"),
 )
 
 

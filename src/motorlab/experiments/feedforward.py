@@ -67,25 +67,26 @@ def characterize(ctx: Any) -> Any:
 
 EXPERIMENT = Experiment(
     name="feedforward",
+    title="Feedforward gains kS, kV, kA (SysId, Road Runner)",
     summary="SysId-style feedforward gains by simulation: ``V = kS·sgn(ω) + kV·ω + kA·α`` (+ gravity)",
     analysis="motorlab.feedforward:feedforward",
     inputs="WPILib SysId JSON or .wpilog, frc-characterization JSON, Road Runner ramps, FTC logs, CSV",
     run=run,
     options=(
-        Option("cpr", "count", positive=True,
-               help="encoder counts per revolution at the shaft (537.7 is fine); for a SysId or "
-                    "frc-characterization file, counts per rotation as the file logs rotations"),
-        Option("mechanism", kind="choice", choices=MECHANISMS, default="simple",
-               help="gravity term: none (simple), kG (elevator), kG·cos(θ+φ) (arm)"),
-        Option("R", "ohm", positive=True, dest="resistance",
-               help="winding resistance, to convert the gains to K, J, b, Tf [Ω]"),
-        Option("K", "V*s/rad", positive=True, dest="torque_constant",
-               help="torque constant, to separate K from b in kV [V·s/rad]"),
+        Option("cpr", "count", positive=True, label="Encoder counts per revolution",
+               help="at the shaft the encoder turns with (537.7 is fine; 8192 for a REV Through Bore dead "
+                    "wheel); for a SysId or frc-characterization file, counts per rotation the file logs"),
+        Option("mechanism", kind="choice", choices=MECHANISMS, default="simple", label="Mechanism",
+               help="the gravity term: none (simple), kG (elevator), kG·cos(θ+φ) (arm)"),
+        Option("R", "ohm", positive=True, dest="resistance", label="Winding resistance",
+               help="if known (an LCR reading): turns the gains into K, J, b, Tf"),
+        Option("K", "V*s/rad", positive=True, dest="torque_constant", label="Back-EMF constant",
+               help="if known (a spin-down): separates K from b in kV; needs the resistance too"),
         Option("side", kind="choice", choices=("both", "left", "right"), default="both",
-               help="drivetrain logs: fit both sides' tests (default, as SysId) or one side"),
-        Option("units", kind="choice", choices=UNIT_CHOICES,
-               help="unit of a frc-characterization file without a 'units' key (default: that tool's "
-                    "template units, Feet; Degrees for an arm)"),
+               label="Drivetrain side", help="of a drivetrain log: both sides' tests together (as SysId), or one"),
+        Option("units", kind="choice", choices=UNIT_CHOICES, label="Unit of a frc-characterization file",
+               help="for a file without a 'units' key; left empty: that tool's template units (Feet; Degrees "
+                    "for an arm)"),
     ),
     reports=("kS", "kV", "kA", "kG"),
     shaft="output + the SysId mechanism, per unit of K·i",

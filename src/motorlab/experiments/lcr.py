@@ -26,18 +26,19 @@ def characterize(ctx: Any) -> Any:
 
 EXPERIMENT = Experiment(
     name="lcr",
+    title="LCR-meter readings",
     summary='Winding resistance and inductance from LCR-meter readings (seed 1, "LCR Meter Experiment")',
     analysis="motorlab.analyses.lcr:lcr",
     inputs="CSV of meter readings: L_uH/L_mH/L_H, Q and/or DCR_ohm (optionally frequency_Hz)",
     run=run,
     options=(
-        Option("frequency", "Hz", positive=True, metavar="F",
-               help="test frequency of the L/Q readings [Hz], e.g. 1000 or '1 kHz' "
-                    "(default: frequency_Hz column or '# frequency_Hz:' metadata, else 1 kHz)"),
-        Option("circuit", kind="choice", choices=("series", "parallel"),
-               help="equivalent circuit the meter displayed (default: '# circuit:' metadata, else series)"),
-        Option("outlier-z", "1", positive=True, default=OUTLIER_Z, metavar="Z",
-               help=f"modified z-score above which a reading is an outlier (default {OUTLIER_Z})"),
+        Option("frequency", "Hz", positive=True, metavar="F", label="Test frequency",
+               help="of the L and Q readings, e.g. 1000 or '1 kHz'; left empty: the file's frequency_Hz "
+                    "column or '# frequency_Hz:' line, else 1 kHz"),
+        Option("circuit", kind="choice", choices=("series", "parallel"), label="Equivalent circuit",
+               help="the one the meter displayed; left empty: the file's '# circuit:' line, else series"),
+        Option("outlier-z", "1", positive=True, default=OUTLIER_Z, metavar="Z", label="Outlier threshold",
+               help="a reading whose modified z-score is above this is left out as an outlier"),
     ),
     reports=("R", "L", "R_dc"),
     shaft="electrical (motor terminals)",

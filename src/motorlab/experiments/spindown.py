@@ -31,6 +31,7 @@ def characterize(ctx: Any) -> Any:
 
 EXPERIMENT = Experiment(
     name="spindown",
+    title="Flywheel spin-down",
     summary="Spin-down of a flywheel: K from the coasting back-EMF, viscous and Coulomb friction from the coast",
     analysis="motorlab.analyses.spindown:spindown",
     inputs="FTC OpMode log(s) of one run (time, encoder counts, bus voltage, shunt current) or a CSV "
@@ -38,9 +39,10 @@ EXPERIMENT = Experiment(
     run=run,
     options=(
         CPR, CURRENT_UNIT, *INERTIA,
-        Option("cutoff", "s", help="instant the relay opened [s] (default: from the current)"),
-        Option("guard", "s", nonnegative=True, default=0.1,
-               help="leave out samples this long after the cut-off [s] (default 0.1)"),
+        Option("cutoff", "s", label="Instant the power was cut",
+               help="when the relay opened, in the log's time; left empty: found from the current"),
+        Option("guard", "s", nonnegative=True, default=0.1, label="Time left out after the cut",
+               help="samples this long after the cut-off are not fitted (the current decaying)"),
     ),
     reports=("K", "gamma", "Tf_over_J", "J", "b", "Tf"),
     shaft="output + flywheel, coasting: gearbox back-driven, physical torques",

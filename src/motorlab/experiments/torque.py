@@ -25,23 +25,25 @@ def characterize(ctx: Any) -> Any:
 
 EXPERIMENT = Experiment(
     name="torque",
+    title="Stall torque on a lever and scale",
     summary="Torque constant K from a lever arm on a scale at several currents (stall torque test)",
     analysis="motorlab.analyses.torque:torque",
     inputs="CSV of current_A (or current_mA) and scale readings mass_kg/mass_g (or torque_Nm)",
     run=run,
     options=(
-        Option("arm", "m", positive=True, metavar="LENGTH",
-               help="lever arm from the shaft axis to the scale contact [m], e.g. 0.1 or '4 in' "
-                    "(default: '# arm_m:' in the file)"),
+        Option("arm", "m", positive=True, metavar="LENGTH", label="Lever arm length",
+               help="from the shaft's axis to where the lever presses on the scale, e.g. 0.1 or '4 in'; left "
+                    "empty: the file's '# arm_m:' line"),
         Option("arm-stderr", "m", nonnegative=True, default=0.0, metavar="LENGTH",
-               help="standard uncertainty of the arm length [m], added to K's standard error"),
-        Option("ratio", "", positive=True, default=1.0, metavar="N",
-               help="gear ratio between the motor shaft and the lever's shaft (default 1)"),
+               label="Uncertainty of the lever arm", help="standard uncertainty of its length, added to K's"),
+        Option("ratio", "", positive=True, default=1.0, metavar="N", label="Gear ratio",
+               help="between the motor shaft and the lever's shaft"),
         Option("K", "V*s/rad", positive=True, dest="motor_constant", metavar="K_MOTOR",
-               help="the motor's back-EMF constant at the MOTOR shaft [V·s/rad] (e.g. from spindown, ÷ N if "
-                    "measured at the output): reports the gearbox efficiency and loss torque"),
+               label="Back-EMF constant at the motor shaft",
+               help="e.g. a spin-down's K ÷ the gear ratio when measured at the output: gives the gearbox's "
+                    "efficiency and loss torque"),
         Option("K-stderr", "V*s/rad", nonnegative=True, default=0.0, dest="motor_constant_stderr", metavar="S",
-               help="standard error of --K [V·s/rad], propagated into the efficiency's"),
+               label="Uncertainty of that back-EMF constant", help="standard error, carried into the efficiency's"),
     ),
     reports=("K", "tau0", "tau_h", "efficiency", "loss_torque"),
     shaft="output (lever), physical torque, K = Kt = η·Ke",

@@ -1,41 +1,33 @@
-"""The page's forms, read off the CLI's own argparse parsers (one source for page, CLI and session).
+"""The page's forms, from the experiment descriptions (one source for page, CLI, notebook and docs).
 
-Every option of ``motorlab analyze <experiment>``, ``motorlab characterize`` and ``motorlab tune``
-becomes a JSON-ready field: its long name (the form field name and the HTTP API's field name),
-unit, default, help, choices and whether it is required. Nothing here restates an option: a new or
-changed option of the CLI shows on the page as it is.
+Every option of ``motorlab analyze <experiment>`` (:mod:`motorlab.experiments`), ``motorlab
+characterize`` and ``motorlab tune`` (:func:`motorlab.experiments.command_options`) becomes a
+JSON-ready field: its long name (the form field name and the HTTP API's field name), its label in
+words, a one-line help, unit, default, choices and whether it is required. The same descriptions
+generate the CLI's parsers, so the page and the CLI cannot disagree (tests/ui/test_api.py checks
+the parsers against this). ``parameters`` names every result key in words; ``targets`` describes
+``tune``'s targets.
 """
 
 from __future__ import annotations
 
-import argparse
 import functools
 import math
 import re
 from typing import Any
 
 from motorlab.cli.common import plain_text
+from motorlab.experiments import Option, all_experiments, command_options
+from motorlab.units import format_unit
 
-#: Options the app sets itself (output format, figure files): not shown as form fields.
+#: Options the app sets itself (output format, figure files): not form fields (docs/ui.md).
 APP_OWNED = {"help", "json", "plot", "each", "emit", "output", "quiet", "no_report", "version"}
 
-_UNIT_IN_HELP = re.compile(r"\[([^\[\]]+)\]")
+#: "(seed 1, "LCR Meter Experiment")": where an experiment comes from, for the docs, not the page.
+_SEED = re.compile(r"\s*\(seed \d[^)]*\)")
 
-
-def _subparsers(parser: argparse.ArgumentParser) -> dict[str, argparse.ArgumentParser]:
-    for action in parser._actions:  # argparse keeps sub-parsers only here
-        if isinstance(action, argparse._SubParsersAction):
-            return dict(action.choices)
-    return {}
-
-
-def _unit(action: argparse.Action) -> str:
-    """The unit of an option: from its ``quantity(...)`` type, else the last ``[...]`` of its help."""
-    name = getattr(action.type, "__name__", "")
-    if name.startswith("quantity in "):
-        return name.removeprefix("quantity in ")
-    found = _UNIT_IN_HELP.findall((action.help or "").replace("%%", "%"))
-    return found[-1] if found else ""
+#: Option kinds -> the page's input kinds.
+_PAGE_KIND = {"flag": "flag", "choice": "choice", "files": "file"}
 
 
 def _jsonable_default(value: Any) -> Any:
@@ -46,64 +38,77 @@ def _jsonable_default(value: Any) -> Any:
     return str(value)
 
 
-def _is_file(action: argparse.Action) -> bool:
-    return action.dest in ("files", "session") or "FILE" in str(action.metavar or "")
-
-
-def field(action: argparse.Action) -> dict[str, Any]:
+def field(opt: Option) -> dict[str, Any]:
     """One option (or positional argument) as a JSON-ready form field."""
-    long = next((s for s in action.option_strings if s.startswith("--")), None)
-    name = (long or (action.option_strings or [action.dest])[0]).lstrip("-")
-    flag = isinstance(action, argparse._StoreTrueAction)
-    kind = "flag" if flag else "choice" if action.choices else "file" if _is_file(action) else "text"
+    flag = opt.kind == "flag"
+    unit = opt.unit if opt.unit not in (None, "1", "count") else ""
     return {
-        "name": name,
-        "dest": action.dest,
-        "option": long or (action.option_strings[0] if action.option_strings else None),
-        "positional": not action.option_strings,
-        "kind": kind,
-        "unit": _unit(action),
-        "default": None if flag else _jsonable_default(action.default),
-        "help": plain_text((action.help or "").replace("%%", "%")),
-        "choices": list(action.choices) if action.choices else None,
-        "required": bool(action.required) or (not action.option_strings and action.nargs not in ("?", "*")),
-        "repeatable": isinstance(action, argparse._AppendAction) or action.nargs in ("+", "*"),
-        "metavar": action.metavar if isinstance(action.metavar, str) else None,
+        "name": opt.key if opt.positional else opt.name,
+        "dest": opt.key,
+        "option": None if opt.positional else f"--{opt.name}",
+        "aliases": [f"--{a}" for a in opt.aliases],
+        "positional": opt.positional,
+        "kind": _PAGE_KIND.get(opt.kind, "text"),
+        "type": opt.kind,
+        "label": opt.label,
+        "help": plain_text(opt.help),
+        "unit": unit,
+        "unit_display": format_unit(unit) if unit else "",
+        "default": None if flag else _jsonable_default(opt.default),
+        "choices": list(opt.choices) if opt.choices else None,
+        "required": opt.required,
+        "repeatable": opt.kind == "files",
+        "positive": opt.positive,
+        "nonnegative": opt.nonnegative,
+        "group": opt.group,
+        "metavar": opt.metavar,
     }
 
 
-def fields(parser: argparse.ArgumentParser) -> list[dict[str, Any]]:
-    """The form fields of one command's parser (the options the app sets itself left out)."""
-    return [
-        field(action)
-        for action in parser._actions
-        if action.dest not in APP_OWNED and not isinstance(action, argparse._SubParsersAction)
-    ]
+#: The measurement files of ``analyze`` (its positional argument, described by the CLI).
+FILES = Option("files", kind="files", positional=True, required=True, metavar="FILE", label="Measurement files",
+               help="the log or logs of one run (a run split over several files: give them all)")
+
+
+#: What ``characterize`` and ``tune`` do, in a line.
+DESCRIPTIONS = {
+    "characterize": "Every experiment of a session on every unit: the results table, the fleet check and the report",
+    "tune": "Feedback and feedforward gains for a velocity or position loop, in the units of the controller "
+            "that runs them, checked in a closed-loop simulation",
+}
 
 
 @functools.cache
 def schema() -> dict[str, Any]:
-    """``{"analyze": {experiment: {...}}, "characterize": {...}, "tune": {...}}`` from the CLI parsers."""
-    from motorlab.cli import build_parser
+    """``{"analyze": {experiment: {...}}, "characterize": {...}, "tune": {...}, "parameters", "targets"}``."""
+    from motorlab.control.targets import TARGET_INFO
+    from motorlab.glossary import PARAMETERS
 
-    commands = _subparsers(build_parser())
     analyze = {
-        name: {"description": plain_text(p.description or ""), "fields": fields(p)}
-        for name, p in _subparsers(commands["analyze"]).items()
+        name: {
+            "title": exp.title or name,
+            "description": _SEED.sub("", plain_text(exp.summary)),
+            "inputs": plain_text(exp.inputs),
+            "reports": list(exp.reports),
+            "fields": [field(FILES), *(field(opt) for opt in exp.options)],
+        }
+        for name, exp in all_experiments().items()
     }
     return {
         "analyze": analyze,
         **{
             command: {
-                "description": plain_text(commands[command].description or ""),
-                "fields": fields(commands[command]),
+                "description": DESCRIPTIONS[command],
+                "fields": [field(opt) for opt in command_options(command)],
             }
             for command in ("characterize", "tune")
         },
+        "parameters": {key: p.to_dict() for key, p in PARAMETERS.items()},
+        "targets": [info.to_dict() for info in TARGET_INFO.values()],
     }
 
 
 def command_fields(command: str, experiment: str | None = None) -> list[dict[str, Any]]:
     """The fields of ``analyze <experiment>``, ``characterize`` or ``tune`` (KeyError when unknown)."""
     s = schema()
-    return s["analyze"][experiment or ""]["fields"] if command == "analyze" else s[command]["fields"]
+    return list(s["analyze"][experiment or ""]["fields"]) if command == "analyze" else list(s[command]["fields"])
