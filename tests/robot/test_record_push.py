@@ -39,7 +39,7 @@ def test_record_captures_the_telemetry_and_analyze_feedforward_reads_it(
     assert robot.active == STOP_TAG
 
     rows = list(csv.DictReader(line for line in log.read_text().splitlines() if not line.startswith("#")))
-    assert 200 <= len(rows) <= 260  # 10 ms loop for 2.5 s
+    assert 150 <= len(rows) <= 300  # a 10 ms loop for 2.5 s (fewer when the machine is loaded)
     expected = robot.plant.run(5.0)
     for row in rows:  # keys, values and timestamps exactly as the robot sent them
         t, volts, x, v = expected[round(float(row["time_s"]) / robot.plant.period)]
