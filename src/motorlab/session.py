@@ -652,6 +652,9 @@ def _read_experiment(unit: _Table, name: str, folder: Path, rig: RigSpec) -> Exp
         twice = next(n for k, n in enumerate(names) if files[k].resolve() in {f.resolve() for f in files[:k]})
         raise table.error("files", f"{twice!r} is listed twice: each file of a run is read once")
     settings: dict[str, Any] = {}
+    columns = _read_columns(table)
+    if columns:
+        settings["columns"] = columns
     for key, (kind, _description) in EXPERIMENT_SETTINGS[name].items():
         if not table.has(key):
             table.known.append(key)
@@ -681,6 +684,22 @@ def _read_experiment(unit: _Table, name: str, folder: Path, rig: RigSpec) -> Exp
     if name in LOADED_EXPERIMENTS - {"torque"} and rig.flywheel is None:
         raise table.error(None, f"the {name} experiment needs the flywheel: add a [rig.flywheel] table")
     return ExperimentSpec(name=name, files=files, settings=settings, line=_line_lookup(table.ctx.lines, table.keys))
+
+
+def _read_columns(table: _Table) -> list[str]:
+    """The ``columns`` key of an experiment's table: ``{"Amps" = "current"}`` or ``["Amps=current"]``
+    (the rules of ``--column``, :mod:`motorlab.io.headers`), as rule texts."""
+    from motorlab.io.headers import parse_column_mapping
+
+    value = table.raw("columns")
+    if value is None:
+        return []
+    if not isinstance(value, dict | list | str):
+        raise table.error("columns", f"expected a table such as {{ Amps = \"current\" }}, got {_kind(value)}")
+    try:
+        return [rule.text() for rule in parse_column_mapping(value, name="columns")]
+    except OptionError as exc:
+        raise table.error("columns", exc.message.removeprefix("columns").lstrip(": ")) from None
 
 
 def _existing_file(table: _Table, key: str, name: str, folder: Path) -> Path:

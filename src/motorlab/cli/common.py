@@ -85,6 +85,17 @@ def quantity(unit: str, *, positive: bool = False, nonnegative: bool = False) ->
     return convert
 
 
+def column_rule(text: str) -> str:
+    """An argparse ``type`` for ``--column "HEADER=quantity"`` (:mod:`motorlab.io.headers`): the rule as text."""
+    from motorlab.io.headers import parse_column_mapping
+
+    try:
+        (rule,) = parse_column_mapping(text)
+    except OptionError as exc:
+        raise argparse.ArgumentTypeError(exc.message.removeprefix("--column ")) from None
+    return rule.text()
+
+
 def _whole_number(text: str) -> int:
     """Digits with an optional sign, nothing else: Python's ``int`` would also take "1_0" as 10."""
     stripped = text.strip()

@@ -140,6 +140,16 @@ async def tune_figure(request: Request) -> Response:
         return Response((folder / "step.svg").read_bytes(), media_type="image/svg+xml")
 
 
+async def tune_response(request: Request) -> Response:
+    """The step and profile responses of ``tune`` as curves (the page's interactive plot)."""
+    with uploads.private_folder() as folder:
+        argv = await _argv(request, folder, ["tune"], schema.command_fields("tune"))
+        if isinstance(argv, Response):
+            return argv
+        outcome = await runner.run_module("motorlab.ui.worker", ["response", *argv[1:]], cwd=str(folder))
+        return _outcome_response(outcome)
+
+
 async def panels(request: Request) -> Response:
     """Data against model of one analysis (the curves of ``--plot``), for the interactive plot."""
     fields = _experiment_fields(request)
@@ -184,6 +194,10 @@ async def characterize(request: Request) -> Response:
         session = _session_file(all_files, values)
         if session is None:
             return _error("upload the session description (one .toml file, or name it in the 'session' field)")
+        try:
+            uploads.place_session_files(folder, session, all_files)  # loose files go where the TOML names them
+        except uploads.UploadError as exc:
+            return _error(str(exc))
         fields = schema.command_fields("characterize")
         refused = sorted(set(values) & _REFUSED_FIELDS)
         if refused:
@@ -337,6 +351,7 @@ def create_app(*, host: str = "127.0.0.1", port: int = 8765, token: str | None =
         Route("/api/panels/{experiment}", panels, methods=["POST"]),
         Route("/api/tune", tune, methods=["POST"]),
         Route("/api/tune/figure", tune_figure, methods=["POST"]),
+        Route("/api/tune/response", tune_response, methods=["POST"]),
         Route("/api/characterize", characterize, methods=["POST"]),
     ]
     return Guard(Starlette(routes=routes), hosts=allowed_hosts(host, port), token=token, max_body=max_body)
