@@ -25,6 +25,7 @@ from motorlab.proposal import propose
 #: Points sent per curve (a 2M-sample log is thinned by a stride for the browser).
 MAX_POINTS = 4000
 
+
 def _thin(values: np.ndarray) -> list[float | None]:
     arr = np.asarray(values, dtype=float)
     step = max(1, int(np.ceil(arr.size / MAX_POINTS)))
