@@ -320,8 +320,10 @@ def _checked_recordings(recordings: Recording | Sequence[Recording], *, mechanis
     recordings = [block_mean(r) for r in ([recordings] if isinstance(recordings, Recording) else recordings)]
     if mechanism not in MECHANISMS:
         raise OptionError(f"mechanism must be one of {', '.join(MECHANISMS)}, got {mechanism!r}")
-    if cpr is not None and not (math.isfinite(cpr) and cpr > 0):
-        raise OptionError(f"cpr must be a positive number, got {cpr}")
+    if cpr is not None:
+        from motorlab.analyses._common import check_cpr
+
+        check_cpr(cpr)  # within what an encoder can have, as every reader and analysis checks
     recs = [recordings] if isinstance(recordings, Recording) else list(recordings)
     if not recs:
         raise OptionError("no recordings to fit")

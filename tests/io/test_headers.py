@@ -35,6 +35,12 @@ from motorlab.io.headers import column_mapping, normalise_unit, parse_column_map
         ("Temperature (°C)", ("temperature", "degC")),
         ("I (mA)", ("current", "mA")),
         ("temperature_C", ("temperature", "degC")),
+        ("Torque (oz-in)", ("torque", "ozf*in")),  # a weight on an arm, as gearmotor sheets mean it
+        ("Torque (kg·cm)", ("torque", "kgf*cm")),
+        ("Torque (mNm)", ("torque", "mN*m")),
+        ("Torque (lb-ft)", ("torque", "lbf*ft")),
+        ("Speed (rev/min)", ("speed", "rpm")),
+        ("Motor Speed [r/min]", ("speed", "rpm")),
         ("Zeit", None),
         ("Power (W)", None),  # which power? the person says, with --column
         ("Voltage Current", None),

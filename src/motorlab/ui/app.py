@@ -166,11 +166,12 @@ async def detect(request: Request) -> Response:
     """Format, proposed experiment and raw signals of each uploaded file."""
     with uploads.private_folder() as folder:
         try:
-            _values, files = await _save_form(request, folder)
+            values, files = await _save_form(request, folder)
         except uploads.UploadError as exc:
             return _error(str(exc))
         paths = [p for key in files for p in files[key]]
-        outcome = await runner.run_module("motorlab.ui.worker", ["detect", *paths], cwd=str(folder))
+        rules = [f"--column={rule}" for rule in values.get("column", [])]  # the column picker's answers
+        outcome = await runner.run_module("motorlab.ui.worker", ["detect", *rules, "--", *paths], cwd=str(folder))
         return _outcome_response(outcome)
 
 

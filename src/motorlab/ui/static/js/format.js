@@ -1,7 +1,7 @@
 // Numbers for people: human-scaled units, the uncertainty in the same unit, "not determined" in words.
 const PREFIXES = [[1e9, "G"], [1e6, "M"], [1e3, "k"], [1, ""], [1e-3, "m"], [1e-6, "µ"], [1e-9, "n"]];
 // Units whose leading symbol takes an SI prefix (the rest of the unit is kept as is).
-const PREFIXABLE = /^(H|ohm|Ω|V|A|W|Hz|F|N|s|m|g)(?=$|[*/·^])/;
+const PREFIXABLE = /^(H|ohm|Ω|V|A|W|Hz|F|s|m|N\*m)$/;  // simple units only: "mV·s/rad" reads worse than 0.0123 V·s/rad
 const SUPERSCRIPT = { "-": "⁻", "0": "⁰", "1": "¹", "2": "²", "3": "³", "4": "⁴", "5": "⁵", "6": "⁶", "7": "⁷", "8": "⁸", "9": "⁹" };
 
 export function prettyUnit(unit) {

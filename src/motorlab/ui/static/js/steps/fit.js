@@ -32,6 +32,7 @@ function fileRow(ctx, entry) {
   const id = uid("exp");
   const remove = el("button", { type: "button", class: "link", text: "remove", "aria-label": `Remove ${entry.name}`,
     onclick: () => { t.files = t.files.filter((f) => f !== entry); save(); ctx.rerender(); } });
+  if (info.error && info.column) return columnQuestion(ctx, entry, remove);
   if (info.error) {
     return el("li", { class: "file refused" }, el("strong", { text: entry.name }), " ",
       el("span", { class: "error", role: "alert", text: `${plain(info.error)}. Check this file, or choose another one.` }), " ", remove);
@@ -41,8 +42,9 @@ function fileRow(ctx, entry) {
       el("a", { href: "#/bench/session", text: "Characterise motors on a bench with it" }), " ", remove);
   }
   const select = el("select", { id, onchange: (e) => { entry.experiment = e.target.value; entry.chosen = true; save(); ctx.rerender(); } });
-  for (const [key, words] of Object.entries(EXPERIMENT_WORDS)) {
-    if (ctx.app.schema.analyze[key]) select.append(el("option", { value: key, text: key === info.experiment ? proposalWords(info) : words, selected: key === entry.experiment }));
+  for (const key of Object.keys(ctx.app.schema.analyze)) {
+    const words = EXPERIMENT_WORDS[key] || ctx.app.schema.analyze[key].label || key;
+    select.append(el("option", { value: key, text: key === info.experiment ? proposalWords(info) : words, selected: key === entry.experiment }));
   }
   const differs = entry.chosen && info.experiment && entry.experiment !== info.experiment;
   return el("li", { class: "file", "data-file": entry.name },
@@ -53,6 +55,40 @@ function fileRow(ctx, entry) {
       el("button", { type: "button", class: "link", text: "Use that", onclick: () => { entry.experiment = info.experiment; entry.chosen = false; save(); ctx.rerender(); } })) : null,
     remove);
 }
+
+// "Which quantity is the column 'Load'?": the answer becomes a column rule ("Load=torque [oz*in]") the file
+// is read again with, and that every fit of the file passes on.
+function columnQuestion(ctx, entry, remove) {
+  const { column, quantities } = entry.info;
+  const [qid, uidUnit] = [uid("column"), uid("unit")];
+  const quantity = el("select", { id: qid }, el("option", { value: "", text: "choose…" }),
+    quantities.map((q) => el("option", { value: q, text: q === "skip" ? "nothing to read (leave it out)" : q.replace(/_/g, " ") })));
+  const unit = el("input", { type: "text", id: uidUnit, placeholder: "e.g. mA, oz*in, rpm", autocomplete: "off" });
+  const status = el("span", { role: "status" });
+  const apply = el("button", { type: "button", class: "primary", text: "Read the file again", onclick: async () => {
+    if (!quantity.value) { status.textContent = "choose what the column holds first"; return; }
+    entry.columns = [...(entry.columns || []), `${column}=${quantity.value}${unit.value.trim() ? ` [${unit.value.trim()}]` : ""}`];
+    status.textContent = "reading…";
+    try { await redetect(entry); save(); ctx.rerender(); } catch (e) { status.textContent = e.message; }
+  } });
+  return el("li", { class: "file refused", "data-file": entry.name }, el("strong", { text: entry.name }),
+    el("p", { class: "error", role: "alert", text: `motorlab does not know what the column “${column}” holds.` }),
+    el("div", { class: "options" },
+      el("div", { class: "field" }, el("label", { for: qid, text: `Which quantity is the column “${column}”?` }), quantity),
+      el("div", { class: "field" }, el("label", { for: uidUnit, text: "Its unit, if the header does not say" }), unit)),
+    el("div", { class: "actions" }, apply, status, remove));
+}
+
+async function redetect(entry) {
+  const form = new FormData();
+  form.append("file", entry.file, entry.name);
+  for (const rule of entry.columns || []) form.append("column", rule);
+  const [info] = await post("api/detect", form);
+  entry.info = info;
+  entry.experiment = entry.chosen ? entry.experiment : info.experiment || "";
+}
+
+const columnRules = (files) => files.flatMap((f) => f.columns || []);
 
 function groups(t) {
   const out = new Map();
@@ -81,8 +117,13 @@ async function runGroup(ctx, exp, files) {
   const t = ctx.state;
   const [fields, values] = [ctx.app.schema.analyze[exp].fields, t.options[exp] || {}];
   const names = files.map((f) => f.name);
-  const make = () => { const d = new FormData(); for (const f of files) d.append("file", f.file, f.name); return appendValues(d, fields, values); };
-  const run = (t.runs[exp] = { experiment: exp, files: names, status: "running", started: Date.now(), argv: argvOf(fields, values) });
+  const make = () => {
+    const d = new FormData();
+    for (const f of files) d.append("file", f.file, f.name);
+    for (const rule of columnRules(files)) d.append("column", rule);
+    return appendValues(d, fields, values);
+  };
+  const run = (t.runs[exp] = { experiment: exp, files: names, status: "running", started: Date.now() });
   const controller = new AbortController();
   controllers.set(exp, controller);
   ctx.rerender();
@@ -118,7 +159,7 @@ function groupCard(ctx, exp, files) {
   const card = el("section", { class: "card group", "data-group": exp },
     el("h3", { text: /^roadrunner/.test((files[0].info || {}).format || "") ? "Road Runner feedforward fit (kS, kV, kA)" : EXPERIMENT_WORDS[exp] || exp }),
     el("p", { class: "small", text: `From ${files.map((f) => f.name).join(", ")}` }),
-    box, more, commandBox(["analyze", exp, ...files.map((f) => f.name), ...argvOf(fields, values)]),
+    box, more, commandBox(["analyze", exp, ...files.map((f) => f.name), ...columnRules(files).map((r) => `--column=${r}`), ...argvOf(fields, values)]),
     el("div", { class: "actions" }, runButton, cancel, running ? el("progress", { "aria-label": "Progress of the fit" }) : null,
       el("span", { class: "run-status", role: "status", text: running ? "fitting…" : run && run.status === "stopped" ? "cancelled" : "" })));
   if (run && run.status === "failed") card.append(el("p", { class: "error", role: "alert", text: `${run.error}` }));
