@@ -146,3 +146,32 @@ def test_app_uploads(data: st.DataObject, client, corpus) -> None:
     if os.environ.get("FUZZ_VERBOSE"):
         print(f"\napp {verdict:9} {what}: {detail[:100]}")
     assert verdict in GOOD, f"{verdict}: {detail}\n  {what}"
+
+
+def test_the_judge_catches_every_broken_promise(tmp_path: Path) -> None:
+    """The oracle itself: each way of breaking the promise gets its verdict (a judge that passes all is no judge)."""
+    from fuzz_harness import Case, judge
+
+    case = Case(seed="s", mutation="m", argv=["analyze", "lcr", "a.csv", "--json"], blame="a.csv", json_output=True)
+    before = {"a.csv": "h1"}
+
+    def verdict(code: int, out: str = "", err: str = "", after: dict[str, str] | None = None,
+                temp: list[Path] | None = None) -> str:
+        return judge(case, code, out, err, before, after or dict(before), temp or [], tmp_path)[0]
+
+    good = '{"parameters": {"R": {"value": 1.0}}, "warnings": []}'
+    assert verdict(0, good) == "ok"
+    assert verdict(2, err="motorlab: error: a.csv:3: not a number\n") == "refused"
+    assert verdict(1, err="motorlab: internal error: KeyError\n") == "internal-error"
+    assert verdict(2, err="Traceback (most recent call last):\n  x\nValueError\n") == "traceback"
+    assert verdict(2, err="motorlab: error: not a number\n") == "unnamed-file"
+    assert verdict(2, err="motorlab: error: a.csv: x\nmotorlab: error: y\n") == "not-one-line"
+    assert verdict(0, good, after={"a.csv": "h2"}) == "modified-input"
+    assert verdict(0, good, after={**before, "b.png": "h"}) == "stray-output"
+    assert verdict(0, good, temp=[tmp_path / "tmpabc"]) == "stray-output"
+    assert verdict(2, err="motorlab: error: a.csv: x\n", after={**before, "out.csv": "h"}) == "stray-output"
+    assert verdict(0, '{"parameters": {"R": {"value": NaN}}}') == "bad-json"
+    assert verdict(0, '{"parameters": {"R": {"value": -1.0}}, "warnings": []}') == "unwarned-physics"
+    assert verdict(0, '{"parameters": {"R": {"value": -1.0}}, "warnings": ["R < 0: leads swapped?"]}') == "ok"
+    assert verdict(0, good, err="motorlab: warning: RuntimeWarning: overflow (x.py:3)\n") == "python-warning"
+    assert verdict(3, good) == "bad-exit"
