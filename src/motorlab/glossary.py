@@ -49,6 +49,14 @@ PARAMETERS: dict[str, Parameter] = {
     "loss_torque": _P("Gearbox loss torque", "τ0", "N*m"),
     "tau0": _P("Torque offset at zero current", "τ0", "N*m"),
     "tau_h": _P("Hysteresis torque (half the up/down gap)", "τ_h", "N*m"),
+    # heat (analyze stall)
+    "R_wc": _P("Thermal resistance, winding to case", "R_wc", "K/W"),
+    "R_ca": _P("Thermal resistance, case to ambient", "R_ca", "K/W"),
+    "C_w": _P("Heat capacity of the winding", "C_w", "J/K"),
+    "C_c": _P("Heat capacity of the case", "C_c", "J/K"),
+    "t_limit": _P("Time stalled until the winding reaches its limit", "t_limit", "s"),
+    "I_continuous": _P("Stall current held indefinitely", "I_cont", "A"),
+    "R_hot": _P("Winding resistance hot", "R_hot", "ohm"),
     # seed 2's calibrations
     "Ka": _P("Amplifier gain", "Ka", "A/V"),
     "I0": _P("Amplifier offset current", "I0", "A"),
