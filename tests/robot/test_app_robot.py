@@ -5,9 +5,8 @@ from __future__ import annotations
 import copy
 import json
 import time
-from pathlib import Path
-
 import warnings
+from pathlib import Path
 
 import pytest
 
@@ -32,10 +31,11 @@ def test_connect_to_the_robot_pulls_and_serves_the_files(client: TestClient, rob
     assert answer.status_code == 200, answer.text
     files = answer.json()["files"]
     assert {f["name"] for f in files} >= {robot_files.logs[0].name, robot_files.motorlab[0].name}
+    served = {p.name: p for p in [*robot_files.logs, *robot_files.motorlab]}
+    for kind in robot_files.tuning.values():
+        served.update({p.name: p for p in kind})
     for f in files:
-        body = client.get("/" + f["url"]).content
-        assert body == next(p for p in [*robot_files.logs, *robot_files.motorlab,
-                                        *sum(robot_files.tuning.values(), [])] if p.name == f["name"]).read_bytes()
+        assert client.get("/" + f["url"]).content == served[f["name"]].read_bytes()
     assert client.get("/api/robot/files/1/../../etc/passwd").status_code == 404
     refused = client.post("/api/robot/pull", data={"host": "127.0.0.1", "http-port": "1"})
     assert refused.status_code == 400
@@ -59,7 +59,8 @@ def test_record_live_and_stop(client: TestClient, robot: EmulatedRobot) -> None:
             break
         time.sleep(0.1)
     assert live["state"] == "running"
-    assert "voltage" in live["series"] and len(live["time"]) == len(live["series"]["voltage"])
+    assert "voltage" in live["series"]
+    assert len(live["time"]) == len(live["series"]["voltage"])
     assert client.post("/api/robot/record/start", data={"opmode": "x"}).status_code == 409  # one at a time
     pressed = time.monotonic()
     client.post("/api/robot/record/stop")
@@ -72,7 +73,8 @@ def test_record_live_and_stop(client: TestClient, robot: EmulatedRobot) -> None:
     assert done["stop_reason"] == "stopped from the app"
     assert done["summary"]["columns"]["voltage"] == "voltage_V"
     log = client.get("/" + done["log"]).text
-    assert "# cpr: 537.6" in log and "time_s,battery_V,voltage_V,position_counts,x_velocity" in log
+    assert "# cpr: 537.6" in log
+    assert "time_s,battery_V,voltage_V,position_counts,x_velocity" in log
 
 
 def test_send_to_the_robot_and_put_back(client: TestClient, robot: EmulatedRobot, tmp_path: Path) -> None:
