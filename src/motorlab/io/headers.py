@@ -356,7 +356,8 @@ def unknown_column_message(field: str, rules: Sequence[ColumnRule]) -> str:
     hint = field.strip() or "HEADER"
     text = (f"column {shown!r} names no quantity motorlab knows: map it with --column \"{hint}=QUANTITY\" "
             f"(QUANTITY one of {', '.join(QUANTITIES)}, optionally with a unit: \"{hint}=current [mA]\"; "
-            f"or \"{hint}=skip\"), or name it like time_s, current_A (docs/formats.md)")
+            f"or \"{hint}=skip\"; in a session file: columns = {{ \"{hint}\" = \"QUANTITY\" }}), or name it like "
+            "time_s, current_A (docs/formats.md)")
     if rules:
         text += f"; the mapping given ({'; '.join(unused) or 'none'}) names no column {shown!r}"
     return text
