@@ -190,7 +190,7 @@ def fit_heating(runs: Sequence[StallData], *, magnet: float, ambient: float) -> 
         def with_prior(x: np.ndarray) -> np.ndarray:
             return np.append(residual(x), weight * (x[2] + x[4] - math.log(PRIOR_CASE_TIME_CONSTANT)))
 
-        fit = fit_least_squares(with_prior, fit.values, names, bounds=(lo, hi), x_scale=[1.0] * len(x0),
+        fit = fit_least_squares(with_prior, list(fit.values), names, bounds=(lo, hi), x_scale=[1.0] * len(x0),
                                 covariance="hac", groups=np.append(groups, len(runs)), max_nfev=200 * len(x0))
     shared = np.exp(fit.values[: len(SHARED)])
     t0 = initial_of(fit.values)
