@@ -281,17 +281,20 @@ def fit_torque(runs: Sequence[StallData], case: Sequence[np.ndarray], magnet: fl
 
 
 def current_dependence(tq: TorqueFit) -> str | None:
-    """A sentence when the torque per amp changes with current beyond its uncertainty (else None)."""
+    """A sentence when the torque per amp of the runs differs beyond its uncertainty (else None), with the
+    likely cause from how it goes with the current."""
     rows = sorted((r for r in tq.per_run if math.isfinite(r[2])), key=lambda r: r[0])
     if len(rows) < 2:
         return None
-    lo, hi = rows[0], rows[-1]
+    lo, hi = min(rows, key=lambda r: r[1]), max(rows, key=lambda r: r[1])
     diff = hi[1] - lo[1]
-    se = math.hypot(lo[2], hi[2])
-    if abs(diff) <= 3 * se or abs(diff) <= 0.03 * abs(lo[1]):
+    if diff <= 3 * math.hypot(lo[2], hi[2]) or diff <= 0.03 * lo[1]:
         return None
-    cause = ("saturation of the iron (armature reaction) at high current" if diff < 0 else
-             "brush friction taking a larger share of the torque at low current")
-    return (f"the torque per amp changes with current beyond its uncertainty: {lo[1]:.4g} ± {lo[2]:.1g} N·m/A at "
-            f"{lo[0]:.3g} A against {hi[1]:.4g} ± {hi[2]:.1g} N·m/A at {hi[0]:.3g} A ({100 * diff / lo[1]:+.0f} %): "
-            f"{cause}; K above is the fit over all currents")
+    trend = float(np.corrcoef([r[0] for r in rows], [r[1] for r in rows])[0, 1]) if len(rows) > 2 else (
+        1.0 if rows[-1][1] > rows[0][1] else -1.0)
+    cause = ("falling as the current rises: saturation of the iron (armature reaction) at high current" if trend < 0
+             else "rising with the current: brush friction taking a larger share of the torque at low current")
+    listing = ", ".join(f"{r[1]:.4g} at {r[0]:.3g} A" for r in rows)
+    return (f"the torque per amp changes between runs beyond its uncertainty, from {lo[1]:.4g} ± {lo[2]:.1g} to "
+            f"{hi[1]:.4g} ± {hi[2]:.1g} N·m/A ({100 * diff / lo[1]:.0f} %; by mean current: {listing}), {cause}; "
+            "K above is the fit over all currents")
