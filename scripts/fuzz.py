@@ -31,7 +31,7 @@ sys.path.insert(0, str(ROOT / "tests" / "fuzz"))
 
 from fuzz_cases import case_for  # noqa: E402
 from fuzz_corpus import build  # noqa: E402
-from fuzz_harness import GOOD, Case, Outcome, run  # noqa: E402
+from fuzz_harness import GOOD, Case, Outcome, run, warm  # noqa: E402
 
 
 def _save_failure(out: Path, index: int, case: Case, outcome: Outcome) -> Path:
@@ -116,6 +116,7 @@ def main(argv: list[str] | None = None) -> int:
         print(summary(state))
         return 0
     seeds = build(args.out / "corpus")
+    warm()
     if args.only:
         seeds = [s for s in seeds if args.only in s.name]
     deadline = time.monotonic() + 60.0 * args.minutes

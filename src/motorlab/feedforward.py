@@ -197,14 +197,16 @@ def sysid_ols(recordings: Sequence[Recording], *, mechanism: str = "simple") -> 
     rows = []
     for rec in recordings:
         t = rec.time
-        if "velocity" in rec:
-            w = rec.signals["velocity"]
-        else:
-            w = np.concatenate([[0.0], np.diff(rec.signals["position"]) / np.diff(t)])
-        acc = np.diff(w) / np.diff(t)
+        dt = np.diff(t)
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):  # repeated times: rows dropped below
+            if "velocity" in rec:
+                w = rec.signals["velocity"]
+            else:
+                w = np.concatenate([[0.0], np.diff(rec.signals["position"]) / dt])
+            acc = np.diff(w) / dt
         v = rec.signals["voltage"][:-1]
         ws = w[:-1]
-        keep = ws != 0
+        keep = (ws != 0) & np.isfinite(ws) & np.isfinite(acc) & (dt > 0)
         cols = [ws, v, np.sign(ws)]
         if mechanism == "elevator":
             cols.append(np.ones_like(ws))
@@ -213,9 +215,11 @@ def sysid_ols(recordings: Sequence[Recording], *, mechanism: str = "simple") -> 
         rows.append((np.column_stack(cols)[keep], acc[keep]))
     a = np.concatenate([r[0] for r in rows])
     y = np.concatenate([r[1] for r in rows])
-    if y.size < a.shape[1]:
+    if y.size < a.shape[1] or not np.all(np.isfinite(a)):
         raise FitError("too few moving samples for the SysId regression")
     c, *_ = np.linalg.lstsq(a, y, rcond=None)
+    if c[1] == 0 or not np.all(np.isfinite(c)):
+        raise FitError("the SysId regression does not determine kA (the voltage explains no acceleration)")
     out = {"kS": -c[2] / c[1], "kV": -c[0] / c[1], "kA": 1.0 / c[1]}
     if mechanism != "simple":
         out["kG"] = -c[3] / c[1]

@@ -252,3 +252,37 @@ def test_the_app_still_reads_the_argparse_line() -> None:
 
     line = "motorlab: error: analyze spindown: argument --cpr: cannot read 'abc'"
     assert Outcome(2, "", line + "\n").error_line() == "analyze spindown: argument --cpr: cannot read 'abc'"
+
+
+# ---- numpy warnings on successful runs -------------------------------------------------------------------
+
+
+def test_the_open_loop_score_of_huge_residuals_warns_nothing() -> None:
+    """``sysid_score.py: overflow encountered in square`` on runs that succeeded (pytest: warnings are errors)."""
+    import numpy as np
+
+    from motorlab.sysid_score import ScoreTest, score
+
+    t = np.linspace(0.0, 1.0, 50)
+    test = ScoreTest("fast-forward", t, np.full(50, 6.0), np.zeros(50), np.full(50, 1e200))
+    result = score((0.1, 1.0, 0.1), [test])
+    assert 1e199 < result.speed < 1e201
+    from motorlab.sysid_score import rms
+
+    assert rms(np.array([3.0, -4.0])) == pytest.approx(np.sqrt(12.5))
+
+
+def test_the_sysid_regression_on_a_repeated_time_warns_nothing() -> None:
+    """``feedforward.py: divide by zero`` from a time step of zero in the SysId-style regression."""
+    import numpy as np
+
+    from motorlab.feedforward import sysid_ols
+    from motorlab.recording import Recording
+
+    t = np.linspace(0.0, 2.0, 400)
+    t = np.insert(t, 200, t[200])  # one time twice: a step of zero
+    v = np.where(t < 1.0, 3.0, 6.0) + 0.5 * np.sin(7.0 * t)
+    position = np.cumsum(v + 0.1 * np.cos(3.0 * t)) * 5e-3
+    rec = Recording(time=t, signals={"voltage": v, "position": position}, source="rep.json")
+    gains = sysid_ols([rec])
+    assert all(np.isfinite(list(gains.values())))

@@ -164,8 +164,11 @@ def seeds(folder: Path) -> list[Seed]:
         if path.suffix == ".json":
             out.append(Seed(f"shared-{path.stem}", ("analyze", "feedforward"), (f"shared/{path.name}",), kind="json",
                             real=True, slow=True))
-        elif "locked-rotor" in path.name or "curve" in path.name or "peak" in path.name:
-            # No analysis reads these dynamometer tables yet: the reader must still answer in one line.
-            out.append(Seed(f"shared-{path.stem}", ("analyze", "torque"), (f"shared/{path.name}",), real=True,
-                            tags=frozenset({"any-outcome"})))
+        elif "motor-curve" in path.name:  # a VEX dynamometer curve (12 V, no voltage column): analyze curve
+            out.append(Seed(f"shared-{path.stem}", ("analyze", "curve"), (f"shared/{path.name}",), ("--voltage", "12"),
+                            real=True))
+        elif "locked-rotor" in path.name or "peak" in path.name:
+            # Tables that no analysis reads as they are: the reader must still answer in one line.
+            out.append(Seed(f"shared-{path.stem}", ("analyze", "curve"), (f"shared/{path.name}",), ("--voltage", "12"),
+                            real=True, tags=frozenset({"any-outcome"})))
     return out

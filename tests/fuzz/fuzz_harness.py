@@ -81,6 +81,23 @@ class Outcome:
     peak_rss_mb: float
 
 
+def warm() -> None:
+    """Import every motorlab module (and what they import) once, so that forked cases do not each import them."""
+    import importlib
+    import pkgutil
+
+    os.environ.setdefault("MPLBACKEND", "Agg")
+    import motorlab
+
+    for info in pkgutil.walk_packages(motorlab.__path__, "motorlab."):
+        if info.name.endswith("__main__"):
+            continue
+        with contextlib.suppress(Exception):
+            importlib.import_module(info.name)
+    with contextlib.suppress(Exception):
+        import matplotlib.pyplot  # noqa: F401  (the figures of --plot)
+
+
 # ---- setting up the folder ------------------------------------------------------------------------
 
 

@@ -28,7 +28,7 @@ sys.path.insert(0, str(Path(__file__).parent))
 
 from fuzz_cases import make_case, pick_seed
 from fuzz_corpus import Seed, build, shared_real
-from fuzz_harness import GOOD, run
+from fuzz_harness import GOOD, run, warm
 from fuzz_mutate import SPECIAL_FILES, mutators_for
 
 T = TypeVar("T")
@@ -57,7 +57,9 @@ class HypothesisChooser:
 @pytest.fixture(scope="module")
 def corpus(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, list[Seed]]:
     folder = tmp_path_factory.mktemp("fuzz-corpus")
-    return folder, build(folder)
+    seeds = build(folder)
+    warm()
+    return folder, seeds
 
 
 @pytest.fixture(scope="module")

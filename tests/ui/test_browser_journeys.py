@@ -153,3 +153,17 @@ def test_dynamometer_csv_with_worded_headers(page: Any, tmp_path: Path) -> None:
     k, k_err = _value(page.text(), "Back-EMF constant K")
     assert abs(k - 0.35) < 4 * k_err + 0.001
     page.check()
+
+    # points picked on the plot with the box tool are left out and the fit runs again
+    from selenium.webdriver.common.action_chains import ActionChains
+
+    page.d.find_element("css selector", ".plots .modebar-btn[data-title='Box Select']").click()
+    area = page.d.find_element("css selector", ".plots .nsewdrag")
+    width, height = area.size["width"], area.size["height"]
+    ActionChains(page.d).move_to_element_with_offset(area, width // 6, -height // 2 + 3).click_and_hold() \
+        .move_by_offset(width // 3 - 6, height - 6).release().perform()
+    page.click("selected point")
+    page.wait_text("left out)")
+    k2, k2_err = _value(page.text(), "Back-EMF constant K")
+    assert abs(k2 - 0.35) < 4 * k2_err + 0.001
+    assert (tmp_path / "dyno.csv").read_text(encoding="utf-8").count("\n") == 21  # the file given is kept whole

@@ -125,7 +125,13 @@ _TOKEN_UNIT = {
     "rpm": "rpm", "%": "percent", "°c": "degC", "ºc": "degC", "degc": "degC", "c": "degC", "°f": "degF",
     "f": "degF", "k": "kelvin", "n.m": "N*m", "n-m": "N*m", "oz-in": "ozf*in", "oz.in": "ozf*in",
     "in-oz": "ozf*in", "in-lb": "lbf*in", "ft-lb": "lbf*ft", "rad/s": "rad/s", "1": "dimensionless",
+    "amps": "A", "amp": "A", "amperes": "A", "ampere": "A", "a": "A", "ma": "mA", "milliamps": "mA",
+    "volts": "V", "volt": "V", "v": "V", "mv": "mV",
+    "in-lbs": "lbf*in", "lb-in": "lbf*in", "lbs-in": "lbf*in", "ft-lbs": "lbf*ft", "lb-ft": "lbf*ft",
+    "rev/min": "rpm", "r/min": "rpm", "rev/s": "revolution/s", "rps": "revolution/s", "r/s": "revolution/s",
 }
+#: Masses that stand for weights in a torque unit (oz·in, kg·cm on gearmotor sheets): their force units.
+_WEIGHTS = re.compile(r"\b(oz|lb|kg|g)\b")
 
 Target = tuple[str, str]  # (signal or "time", unit as written)
 
@@ -238,14 +244,16 @@ def _rule(header: str, target: Any, name: str) -> ColumnRule:
 def normalise_unit(text: str) -> str:
     """A unit as dynamometers write it (``N · m``, ``N·m``, ``RPM``, ``°C``, ``%``) as pint reads it."""
     unit = text.strip()
-    if unit in ("Nm", "NM"):  # not nm, a nanometre
-        return "N*m"
+    nm = re.fullmatch(r"([munk]?)N[mM]", unit)  # Nm, mNm (not nm, a nanometre)
+    if nm:
+        return f"{nm.group(1)}N*m"
     low = unit.lower().replace(" ", "")
     if low in _TOKEN_UNIT:
         return _TOKEN_UNIT[low]
     unit = re.sub(r"\s*[·⋅•∙×]\s*|\s*\.\s*(?=[A-Za-z])", "*", unit)  # N · m, N·m, N.m
+    unit = re.sub(r"\blbs\b", "lb", unit)
     unit = unit.replace("Ω", "ohm").replace("µ", "u").replace("μ", "u").replace("²", "^2").replace("°", "deg")
-    unit = re.sub(r"(?<=[A-Za-z])\s+(?=[A-Za-z])", "*", unit)  # "N m"
+    unit = re.sub(r"(?<=[A-Za-z])(\s+|-)(?=[A-Za-z])", "*", unit)  # "N m", "kgf-cm"
     return unit
 
 
@@ -264,6 +272,9 @@ def _check_unit(text: str, quantity: str, error: Any) -> str:
             unit = unit.lower()
         except Exception:
             raise error(f"unknown unit {text.strip()!r}") from None
+    if quantity == "torque" and parsed.dimensionality == ureg.Unit("kg*m").dimensionality:
+        unit = _WEIGHTS.sub(r"\1f", unit)  # oz·in, kg·cm: a weight on an arm, as the sheets mean it
+        parsed = ureg.Unit(unit)
     if parsed.dimensionality != ureg.Unit(si).dimensionality:
         raise error(f"{text.strip()!r} is not a unit of {quantity.replace('_', ' ')} (SI: {si})")
     return unit
@@ -289,9 +300,9 @@ def worded_column(field: str) -> tuple[str, str | None] | None:
     tokens = _WORD.findall(words.lower())
     found: list[tuple[str, str | None]] = []
     if "power" in tokens:
-        kinds = {_POWER_KINDS[t] for t in tokens if t in _POWER_KINDS}
+        kinds = {_POWER_KINDS[t] for t in tokens if t in _POWER_KINDS} or {"output_power"}  # a datasheet's "Power"
         if len(kinds) != 1:
-            return None  # "Power (W)": which power? the person says, with --column
+            return None  # "Input Output Power": which? the person says, with --column
         found.append((kinds.pop(), None))
     else:
         for token in tokens:
@@ -349,7 +360,8 @@ def unknown_column_message(field: str, rules: Sequence[ColumnRule]) -> str:
     hint = field.strip() or "HEADER"
     text = (f"column {shown!r} names no quantity motorlab knows: map it with --column \"{hint}=QUANTITY\" "
             f"(QUANTITY one of {', '.join(QUANTITIES)}, optionally with a unit: \"{hint}=current [mA]\"; "
-            f"or \"{hint}=skip\"), or name it like time_s, current_A (docs/formats.md)")
+            f"or \"{hint}=skip\"; in a session file: columns = {{ \"{hint}\" = \"QUANTITY\" }}), or name it like "
+            "time_s, current_A (docs/formats.md)")
     if rules:
         text += f"; the mapping given ({'; '.join(unused) or 'none'}) names no column {shown!r}"
     return text

@@ -21,60 +21,16 @@ from typing import Any
 
 import numpy as np
 
+from motorlab.proposal import propose
+
 #: Points sent per curve (a 2M-sample log is thinned by a stride for the browser).
 MAX_POINTS = 4000
-
-#: Format -> experiment proposed when the signals do not say more.
-_BY_FORMAT = {
-    "sysid-json": "feedforward",
-    "frc-char-json": "feedforward",
-    "wpilog": "feedforward",
-    "roadrunner-ramp": "feedforward",
-    "roadrunner-log": "feedforward",
-}
-
-#: Signal present -> experiment (first match wins): what a table of that quantity is measured for.
-_BY_SIGNAL = (
-    ("inductance", "lcr"),
-    ("torque", "torque"),
-    ("mass", "torque"),
-    ("tach_voltage", "tachometer"),
-    ("speed", "terminal"),
-)
 
 
 def _thin(values: np.ndarray) -> list[float | None]:
     arr = np.asarray(values, dtype=float)
     step = max(1, int(np.ceil(arr.size / MAX_POINTS)))
     return [float(v) if np.isfinite(v) else None for v in arr[::step]]
-
-
-#: Experiment names the virtual rig and motorlab's robot code write into a log's header, where they
-#: differ from the analysis that reads the log.
-_BY_HEADER = {"transient": "identify", "sysid": "feedforward", "quasistatic": "feedforward",
-              "dynamic": "feedforward"}
-
-
-def propose(fmt: str, signals: Sequence[str], declared: str | None = None) -> str:
-    """The experiment a log of this format with these signals most likely records (a proposal).
-
-    ``declared`` is the experiment the file's own header names (``# experiment: transient``), which
-    wins over guessing from the signals.
-    """
-    from motorlab.experiments import all_experiments
-
-    if declared:
-        declared = _BY_HEADER.get(declared, declared)
-        if declared in all_experiments():
-            return declared
-    if fmt in _BY_FORMAT:
-        return _BY_FORMAT[fmt]
-    for signal, experiment in _BY_SIGNAL:
-        if signal in signals:
-            return experiment
-    if "position" in signals or "counts" in signals:
-        return "spindown" if "current" in signals else "identify"
-    return "spindown"
 
 
 #: Each format in words (what the page says it recognised).

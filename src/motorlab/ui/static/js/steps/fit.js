@@ -107,7 +107,7 @@ function optionsForm(ctx, exp, files) {
   const needs = new Set(files.flatMap((f) => (f.info && f.info.needs) || []));
   const primary = fields.filter((f) => f.required || isShared(f.name) || needs.has(f.name) || (PRIMARY[exp] || []).includes(f.name));
   const more = fields.filter((f) => !primary.includes(f));
-  const note = (f) => (f.name === "cpr" && needs.has("cpr") ? "this log counts encoder ticks: give the counts per revolution of its encoder (8192 for REV Through Bore dead wheels)" : "");
+  const note = (f) => (f.name === "cpr" && needs.has("cpr") ? "needed: this log counts encoder ticks" : "");
   const box = el("div", { class: "options" }, primary.map((f) => field(f, values, null, { note: note(f) })));
   return [fields, values, box, more.length ? el("details", { class: "more" }, el("summary", { text: "More options for this fit" }),
     el("div", { class: "options" }, more.map((f) => field(f, values)))) : null];
@@ -119,7 +119,7 @@ async function runGroup(ctx, exp, files) {
   const names = files.map((f) => f.name);
   const make = () => {
     const d = new FormData();
-    for (const f of files) d.append("file", f.file, f.name);
+    for (const f of files) d.append("file", f.excluded && f.excluded.length ? f.trimmed || f.file : f.file, f.name);
     for (const rule of columnRules(files)) d.append("column", rule);
     return appendValues(d, fields, values);
   };
@@ -132,7 +132,7 @@ async function runGroup(ctx, exp, files) {
       runRequest(`api/analyze/${encodeURIComponent(exp)}`, make(), { signal: controller.signal, onProgress: (p) => progress(exp, p) }),
       post(`api/panels/${encodeURIComponent(exp)}`, make(), { signal: controller.signal }).catch((e) => (isAbort(e) ? Promise.reject(e) : [])),
     ]);
-    Object.assign(run, { status: "done", result: answer, panels, finished: Date.now() });
+    Object.assign(run, { status: "done", result: answer, panels, finished: Date.now(), excluded: files.reduce((n, f) => n + (f.excluded || []).length, 0) });
     t.gains.use[exp] = true;
   } catch (e) {
     Object.assign(run, isAbort(e) ? { status: "stopped" } : { status: "failed", error: e.message });
@@ -165,14 +165,55 @@ function groupCard(ctx, exp, files) {
   if (run && run.status === "failed") card.append(el("p", { class: "error", role: "alert", text: `${run.error}` }));
   if (run && run.result) {
     const same = run.files.join("\n") === files.map((f) => f.name).join("\n");
-    card.append(el("h4", { text: `Result from ${run.files.join(", ")}` }));
+    const left = files.reduce((n, f) => n + (f.excluded || []).length, 0);
+    card.append(el("h4", { text: `Result from ${run.files.join(", ")}${run.excluded ? ` (${run.excluded} point${run.excluded > 1 ? "s" : ""} left out)` : ""}` }));
+    if (left) card.append(el("p", { class: "small" }, `${left} point${left > 1 ? "s are" : " is"} left out of the fit. `,
+      el("button", { type: "button", class: "link", text: "Put them back", onclick: () => { for (const f of files) f.excluded = []; save(); runGroup(ctx, exp, files); } })));
     if (!same) card.append(el("p", { class: "small", text: "The files have changed since this result: run the fit again to update it." }));
     card.append(...resultView(run.result));
     const host = el("div", { class: "plots" });
-    card.append(host);
-    requestAnimationFrame(() => plots.panels(host, run.panels));
+    const exclude = el("div", { class: "actions exclude" });
+    card.append(el("p", { class: "small", text: "To leave points out: pick the box or lasso tool above a plot, select the points, then fit again." }), exclude, host);
+    requestAnimationFrame(() => plots.panels(host, run.panels, { onSelect: (panel, indices) => offerExclusion(ctx, exp, files, panel, indices, exclude) }));
   }
   return card;
+}
+
+// The data rows of a small table file (the points of its fit, one per row, when nothing was thinned).
+function dataRows(lines) {
+  const rows = [];
+  let header = false;
+  lines.forEach((line, k) => {
+    const t = line.trim();
+    if (!t || t.startsWith("#")) return;
+    if (!header && /[A-Za-z]/.test(t.replace(/[eE][+-]?\d/g, ""))) { header = true; return; }
+    header = true;
+    rows.push(k);
+  });
+  return rows;
+}
+
+// Points selected on a fit's plot: leave their rows out of a copy of the file (the file itself is kept) and fit again.
+async function offerExclusion(ctx, exp, files, panel, indices, host) {
+  host.replaceChildren();
+  if (!indices.length) return;
+  const entry = files.length === 1 ? files[0] : null;
+  const current = entry && entry.excluded && entry.excluded.length && entry.trimmed ? entry.trimmed : entry && entry.file;
+  const text = entry ? await current.text() : "";
+  const lines = text.split(/\r?\n/);
+  const rows = dataRows(lines);
+  const n = panel.data ? panel.data.x.length : -1;
+  if (!entry || rows.length !== n) {
+    host.append(el("p", { class: "small", text: "Points can be left out of a fit of one table file whose every row is a point (an LCR, torque or terminal-speed table); this fit's points come from a longer log." }));
+    return;
+  }
+  host.append(el("button", { type: "button", class: "primary", text: `Leave out the ${indices.length} selected point${indices.length > 1 ? "s" : ""} and fit again`, onclick: () => {
+    const drop = new Set(indices.map((i) => rows[i]));
+    entry.excluded = [...(entry.excluded || []), ...[...drop].map((k) => lines[k])];  // the rows left out, as they were
+    entry.trimmed = new Blob([lines.filter((_, k) => !drop.has(k)).join("\n")], { type: "text/plain" });
+    save();
+    runGroup(ctx, exp, files);
+  } }));
 }
 
 function motorPicker(ctx) {
