@@ -432,7 +432,7 @@ def _controller_gains(result: Characterization, *, plot: bool = True) -> dict[st
     """
     from motorlab.model import MotorParams
 
-    values: dict[str, float] = {}
+    values: dict[str, Any] = {}
     for name in PARAMETERS:
         stats = result.fleet.parameters.get(name)
         if stats is not None and math.isfinite(stats.median):

@@ -32,6 +32,8 @@ SIGNALS: dict[str, str] = {
     "power_dissipation": "W",  # input − output: heat in the motor
     "efficiency": "1",  # a fraction (a column in % is divided by 100)
     "temperature": "K",  # a thermometer's reading (a column in °C is read with its offset)
+    "winding_temperature": "K",  # a winding's temperature (simulate stall writes °C)
+    "case_temperature": "K",
 }
 
 

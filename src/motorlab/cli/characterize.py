@@ -48,7 +48,9 @@ def run(args: argparse.Namespace) -> int:
     from motorlab.session import load_session
 
     session = load_session(args.session)  # every validation error happens here, before any analysis
-    out_dir = Path(args.output) if args.output else session.folder / "results"
+    if args.output is not None:
+        check_output_dir(args.output)  # "-o ''" is refused, not taken as the default folder
+    out_dir = Path(args.output) if args.output is not None else session.folder / "results"
     check_output_dir(out_dir)
     check_not_inputs(output_paths(out_dir, report=not args.no_report), session_inputs(session))
     from motorlab.io.headers import column_mapping

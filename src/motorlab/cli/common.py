@@ -40,7 +40,9 @@ class Parser(argparse.ArgumentParser):
         return plain_text(super().format_help())
 
     def error(self, message: str) -> NoReturn:
-        print(f"{self.prog}: error: {message}", file=sys.stderr)
+        """``motorlab: error: SUB-COMMAND: message`` like every other refusal, and exit code 2."""
+        command = self.prog.split(None, 1)[1] if " " in self.prog else ""
+        print(f"motorlab: error: {command + ': ' if command else ''}{message}", file=sys.stderr)
         raise SystemExit(EXIT_INPUT)
 
 

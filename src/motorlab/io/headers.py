@@ -54,6 +54,8 @@ COLUMNS: dict[str, tuple[str, str]] = {
     "speed_rad_per_s": ("speed", "rad/s"),
     "tach_voltage_V": ("tach_voltage", "V"),
     "battery_V": ("battery", "V"),
+    "winding_temperature_C": ("winding_temperature", "degC"),  # motorlab simulate stall's forecast
+    "case_temperature_C": ("case_temperature", "degC"),
 }
 
 _BY_LOWER = {name.lower(): name for name in COLUMNS}
@@ -123,7 +125,10 @@ _TOKEN_UNIT = {
     "rpm": "rpm", "%": "percent", "°c": "degC", "ºc": "degC", "degc": "degC", "c": "degC", "°f": "degF",
     "f": "degF", "k": "kelvin", "n.m": "N*m", "n-m": "N*m", "oz-in": "ozf*in", "oz.in": "ozf*in",
     "in-oz": "ozf*in", "in-lb": "lbf*in", "ft-lb": "lbf*ft", "rad/s": "rad/s", "1": "dimensionless",
+    "rev/min": "rpm", "r/min": "rpm", "rev/s": "revolution/s", "rps": "revolution/s", "r/s": "revolution/s",
 }
+#: Masses that stand for weights in a torque unit (oz·in, kg·cm on gearmotor sheets): their force units.
+_WEIGHTS = re.compile(r"\b(oz|lb|kg|g)\b")
 
 Target = tuple[str, str]  # (signal or "time", unit as written)
 
@@ -236,14 +241,15 @@ def _rule(header: str, target: Any, name: str) -> ColumnRule:
 def normalise_unit(text: str) -> str:
     """A unit as dynamometers write it (``N · m``, ``N·m``, ``RPM``, ``°C``, ``%``) as pint reads it."""
     unit = text.strip()
-    if unit in ("Nm", "NM"):  # not nm, a nanometre
-        return "N*m"
+    nm = re.fullmatch(r"([munk]?)N[mM]", unit)  # Nm, mNm (not nm, a nanometre)
+    if nm:
+        return f"{nm.group(1)}N*m"
     low = unit.lower().replace(" ", "")
     if low in _TOKEN_UNIT:
         return _TOKEN_UNIT[low]
     unit = re.sub(r"\s*[·⋅•∙×]\s*|\s*\.\s*(?=[A-Za-z])", "*", unit)  # N · m, N·m, N.m
     unit = unit.replace("Ω", "ohm").replace("µ", "u").replace("μ", "u").replace("²", "^2").replace("°", "deg")
-    unit = re.sub(r"(?<=[A-Za-z])\s+(?=[A-Za-z])", "*", unit)  # "N m"
+    unit = re.sub(r"(?<=[A-Za-z])(\s+|-)(?=[A-Za-z])", "*", unit)  # "N m", "kgf-cm"
     return unit
 
 
@@ -262,6 +268,9 @@ def _check_unit(text: str, quantity: str, error: Any) -> str:
             unit = unit.lower()
         except Exception:
             raise error(f"unknown unit {text.strip()!r}") from None
+    if quantity == "torque" and parsed.dimensionality == ureg.Unit("kg*m").dimensionality:
+        unit = _WEIGHTS.sub(r"\1f", unit)  # oz·in, kg·cm: a weight on an arm, as the sheets mean it
+        parsed = ureg.Unit(unit)
     if parsed.dimensionality != ureg.Unit(si).dimensionality:
         raise error(f"{text.strip()!r} is not a unit of {quantity.replace('_', ' ')} (SI: {si})")
     return unit
@@ -347,7 +356,8 @@ def unknown_column_message(field: str, rules: Sequence[ColumnRule]) -> str:
     hint = field.strip() or "HEADER"
     text = (f"column {shown!r} names no quantity motorlab knows: map it with --column \"{hint}=QUANTITY\" "
             f"(QUANTITY one of {', '.join(QUANTITIES)}, optionally with a unit: \"{hint}=current [mA]\"; "
-            f"or \"{hint}=skip\"), or name it like time_s, current_A (docs/formats.md)")
+            f"or \"{hint}=skip\"; in a session file: columns = {{ \"{hint}\" = \"QUANTITY\" }}), or name it like "
+            "time_s, current_A (docs/formats.md)")
     if rules:
         text += f"; the mapping given ({'; '.join(unused) or 'none'}) names no column {shown!r}"
     return text

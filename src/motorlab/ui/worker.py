@@ -14,66 +14,23 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import sys
 from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 
+from motorlab.proposal import propose
+
 #: Points sent per curve (a 2M-sample log is thinned by a stride for the browser).
 MAX_POINTS = 4000
-
-#: Format -> experiment proposed when the signals do not say more.
-_BY_FORMAT = {
-    "sysid-json": "feedforward",
-    "frc-char-json": "feedforward",
-    "wpilog": "feedforward",
-    "roadrunner-ramp": "feedforward",
-    "roadrunner-log": "feedforward",
-}
-
-#: Signal present -> experiment (first match wins): what a table of that quantity is measured for.
-_BY_SIGNAL = (
-    ("inductance", "lcr"),
-    ("torque", "torque"),
-    ("mass", "torque"),
-    ("tach_voltage", "tachometer"),
-    ("speed", "terminal"),
-)
 
 
 def _thin(values: np.ndarray) -> list[float | None]:
     arr = np.asarray(values, dtype=float)
     step = max(1, int(np.ceil(arr.size / MAX_POINTS)))
     return [float(v) if np.isfinite(v) else None for v in arr[::step]]
-
-
-#: Experiment names the virtual rig and motorlab's robot code write into a log's header, where they
-#: differ from the analysis that reads the log.
-_BY_HEADER = {"transient": "identify", "sysid": "feedforward", "quasistatic": "feedforward",
-              "dynamic": "feedforward"}
-
-
-def propose(fmt: str, signals: Sequence[str], declared: str | None = None) -> str:
-    """The experiment a log of this format with these signals most likely records (a proposal).
-
-    ``declared`` is the experiment the file's own header names (``# experiment: transient``), which
-    wins over guessing from the signals.
-    """
-    from motorlab.experiments import all_experiments
-
-    if declared:
-        declared = _BY_HEADER.get(declared, declared)
-        if declared in all_experiments():
-            return declared
-    if fmt in _BY_FORMAT:
-        return _BY_FORMAT[fmt]
-    for signal, experiment in _BY_SIGNAL:
-        if signal in signals:
-            return experiment
-    if "position" in signals or "counts" in signals:
-        return "spindown" if "current" in signals else "identify"
-    return "spindown"
 
 
 #: Each format in words (what the page says it recognised).
@@ -99,20 +56,34 @@ _TASK_BY_FORMAT = {"roadrunner-ramp": "drive", "roadrunner-log": "drive", "sessi
 _TICKS_AS_RADIANS = 2 * np.pi
 
 
-def _read_for_detect(path: str, fmt: str) -> tuple[Any, list[str]]:
+def _read_for_detect(path: str, fmt: str, columns: Sequence[str]) -> tuple[Any, list[str]]:
     """The recording of ``path`` and the options it still needs (``["cpr"]`` for a log counting ticks)."""
     from motorlab.errors import OptionError
     from motorlab.io import read_any
 
+    options: dict[str, Any] = {"columns": list(columns)} if columns and fmt == "csv" else {}
     try:
-        return read_any(path), []
+        return read_any(path, **options), []
     except OptionError as exc:
         if "cpr" not in str(exc):
             raise
-        return read_any(path, cpr=_TICKS_AS_RADIANS), ["cpr"]
+        return read_any(path, cpr=_TICKS_AS_RADIANS, **options), ["cpr"]
 
 
-def _detect_one(path: str) -> dict[str, Any]:
+_UNMAPPED = re.compile(r"column '([^']+)'")
+
+
+def _column_question(entry: dict[str, Any]) -> None:
+    """A reader's refusal of a column it cannot name: which column, and the quantities it could be."""
+    from motorlab.io.headers import QUANTITIES
+
+    found = _UNMAPPED.search(entry.get("error", ""))
+    if found and "--column" in entry["error"]:
+        entry["column"] = found.group(1)
+        entry["quantities"] = [*QUANTITIES, "skip"]
+
+
+def _detect_one(path: str, columns: Sequence[str] = ()) -> dict[str, Any]:
     """Format (in words), proposed experiment and task, signals against time, or the reader's refusal."""
     from motorlab.errors import MotorlabError
     from motorlab.io import detect_format
@@ -126,9 +97,10 @@ def _detect_one(path: str) -> dict[str, Any]:
     try:
         fmt = detect_format(path)
         entry.update(format=fmt, format_words=FORMAT_WORDS.get(fmt, fmt), task=_TASK_BY_FORMAT.get(fmt))
-        recording, needs = _read_for_detect(path, fmt)
+        recording, needs = _read_for_detect(path, entry["format"], columns)
     except (MotorlabError, OSError, ValueError) as exc:
         entry["error"] = " ".join(str(exc).split())
+        _column_question(entry)
         return entry
     names = list(recording.signals)
     units = dict(SIGNALS)
@@ -146,13 +118,18 @@ def _detect_one(path: str) -> dict[str, Any]:
     return entry
 
 
-def detect(paths: Sequence[str]) -> list[dict[str, Any]]:
+def detect(args: Sequence[str]) -> list[dict[str, Any]]:
     """Per file: format, proposed experiment and the signals against time (or the error).
 
-    A file that needs an option to be read (a Road Runner log counts ticks: ``cpr``) is still
-    recognised and proposed, with ``needs`` naming the option and its angles shown in ticks.
+    ``args`` are ``[--column=RULE ...] [--] FILE...``: the column rules (``Amps=current``) a CSV is
+    read with. A file that needs an option to be read (a Road Runner log counts ticks: ``cpr``) is
+    still recognised and proposed, with ``needs`` naming the option and its angles shown in ticks; a
+    CSV column no reader can name gives ``column`` (its header) and ``quantities`` (what it may be).
     """
-    return [_detect_one(path) for path in paths]
+    args = list(args)
+    cut = args.index("--") if "--" in args else 0
+    columns = [a.split("=", 1)[1] for a in args[:cut] if a.startswith("--column=")]
+    return [_detect_one(path, columns) for path in args[cut + 1 if "--" in args else 0:]]
 
 
 def _series(series: Any) -> dict[str, Any] | None:

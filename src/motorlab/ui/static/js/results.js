@@ -13,7 +13,7 @@ export function parameterTable(parameters, shaft) {
       el("td", { class: "note", text: plain(p.note || "") }));
   });
   return el("table", { class: "params" },
-    el("caption", { text: shaft ? `At the ${shaft}` : "The parameters" }),
+    el("caption", { text: shaft ? `At ${/^(the|a|an) /i.test(shaft) ? "" : "the "}${shaft}` : "The parameters" }),
     el("thead", {}, el("tr", {}, el("th", { scope: "col", text: "Parameter" }), el("th", { scope: "col", text: "Value" }), el("th", { scope: "col", text: "Note" }))),
     el("tbody", {}, rows));
 }

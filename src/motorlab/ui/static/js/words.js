@@ -48,6 +48,7 @@ export const EXPERIMENT_WORDS = {
   torque: "Torque constant (lever arm on a scale)", amplifier: "Current amplifier gain", tachometer: "Tachometer gain",
   pulse: "Speed from encoder pulses at constant current", spinup: "Spin-up at constant current",
   terminal: "Terminal speed at several currents", "free-spinup": "Free spin-up from rest",
+  curve: "Motor curve (dynamometer export or datasheet)",
 };
 
 const TARGET_WORDS = {

@@ -32,6 +32,7 @@ function fileRow(ctx, entry) {
   const id = uid("exp");
   const remove = el("button", { type: "button", class: "link", text: "remove", "aria-label": `Remove ${entry.name}`,
     onclick: () => { t.files = t.files.filter((f) => f !== entry); save(); ctx.rerender(); } });
+  if (info.error && info.column) return columnQuestion(ctx, entry, remove);
   if (info.error) {
     return el("li", { class: "file refused" }, el("strong", { text: entry.name }), " ",
       el("span", { class: "error", role: "alert", text: `${plain(info.error)}. Check this file, or choose another one.` }), " ", remove);
@@ -41,8 +42,9 @@ function fileRow(ctx, entry) {
       el("a", { href: "#/bench/session", text: "Characterise motors on a bench with it" }), " ", remove);
   }
   const select = el("select", { id, onchange: (e) => { entry.experiment = e.target.value; entry.chosen = true; save(); ctx.rerender(); } });
-  for (const [key, words] of Object.entries(EXPERIMENT_WORDS)) {
-    if (ctx.app.schema.analyze[key]) select.append(el("option", { value: key, text: key === info.experiment ? proposalWords(info) : words, selected: key === entry.experiment }));
+  for (const key of Object.keys(ctx.app.schema.analyze)) {
+    const words = EXPERIMENT_WORDS[key] || ctx.app.schema.analyze[key].label || key;
+    select.append(el("option", { value: key, text: key === info.experiment ? proposalWords(info) : words, selected: key === entry.experiment }));
   }
   const differs = entry.chosen && info.experiment && entry.experiment !== info.experiment;
   return el("li", { class: "file", "data-file": entry.name },
@@ -53,6 +55,40 @@ function fileRow(ctx, entry) {
       el("button", { type: "button", class: "link", text: "Use that", onclick: () => { entry.experiment = info.experiment; entry.chosen = false; save(); ctx.rerender(); } })) : null,
     remove);
 }
+
+// "Which quantity is the column 'Load'?": the answer becomes a column rule ("Load=torque [oz*in]") the file
+// is read again with, and that every fit of the file passes on.
+function columnQuestion(ctx, entry, remove) {
+  const { column, quantities } = entry.info;
+  const [qid, uidUnit] = [uid("column"), uid("unit")];
+  const quantity = el("select", { id: qid }, el("option", { value: "", text: "choose…" }),
+    quantities.map((q) => el("option", { value: q, text: q === "skip" ? "nothing to read (leave it out)" : q.replace(/_/g, " ") })));
+  const unit = el("input", { type: "text", id: uidUnit, placeholder: "e.g. mA, oz*in, rpm", autocomplete: "off" });
+  const status = el("span", { role: "status" });
+  const apply = el("button", { type: "button", class: "primary", text: "Read the file again", onclick: async () => {
+    if (!quantity.value) { status.textContent = "choose what the column holds first"; return; }
+    entry.columns = [...(entry.columns || []), `${column}=${quantity.value}${unit.value.trim() ? ` [${unit.value.trim()}]` : ""}`];
+    status.textContent = "reading…";
+    try { await redetect(entry); save(); ctx.rerender(); } catch (e) { status.textContent = e.message; }
+  } });
+  return el("li", { class: "file refused", "data-file": entry.name }, el("strong", { text: entry.name }),
+    el("p", { class: "error", role: "alert", text: `motorlab does not know what the column “${column}” holds.` }),
+    el("div", { class: "options" },
+      el("div", { class: "field" }, el("label", { for: qid, text: `Which quantity is the column “${column}”?` }), quantity),
+      el("div", { class: "field" }, el("label", { for: uidUnit, text: "Its unit, if the header does not say" }), unit)),
+    el("div", { class: "actions" }, apply, status, remove));
+}
+
+async function redetect(entry) {
+  const form = new FormData();
+  form.append("file", entry.file, entry.name);
+  for (const rule of entry.columns || []) form.append("column", rule);
+  const [info] = await post("api/detect", form);
+  entry.info = info;
+  entry.experiment = entry.chosen ? entry.experiment : info.experiment || "";
+}
+
+const columnRules = (files) => files.flatMap((f) => f.columns || []);
 
 function groups(t) {
   const out = new Map();
@@ -71,7 +107,7 @@ function optionsForm(ctx, exp, files) {
   const needs = new Set(files.flatMap((f) => (f.info && f.info.needs) || []));
   const primary = fields.filter((f) => f.required || isShared(f.name) || needs.has(f.name) || (PRIMARY[exp] || []).includes(f.name));
   const more = fields.filter((f) => !primary.includes(f));
-  const note = (f) => (f.name === "cpr" && needs.has("cpr") ? "this log counts encoder ticks: give the counts per revolution of its encoder (8192 for REV Through Bore dead wheels)" : "");
+  const note = (f) => (f.name === "cpr" && needs.has("cpr") ? "needed: this log counts encoder ticks" : "");
   const box = el("div", { class: "options" }, primary.map((f) => field(f, values, null, { note: note(f) })));
   return [fields, values, box, more.length ? el("details", { class: "more" }, el("summary", { text: "More options for this fit" }),
     el("div", { class: "options" }, more.map((f) => field(f, values)))) : null];
@@ -81,8 +117,13 @@ async function runGroup(ctx, exp, files) {
   const t = ctx.state;
   const [fields, values] = [ctx.app.schema.analyze[exp].fields, t.options[exp] || {}];
   const names = files.map((f) => f.name);
-  const make = () => { const d = new FormData(); for (const f of files) d.append("file", f.file, f.name); return appendValues(d, fields, values); };
-  const run = (t.runs[exp] = { experiment: exp, files: names, status: "running", started: Date.now(), argv: argvOf(fields, values) });
+  const make = () => {
+    const d = new FormData();
+    for (const f of files) d.append("file", f.excluded && f.excluded.length ? f.trimmed || f.file : f.file, f.name);
+    for (const rule of columnRules(files)) d.append("column", rule);
+    return appendValues(d, fields, values);
+  };
+  const run = (t.runs[exp] = { experiment: exp, files: names, status: "running", started: Date.now() });
   const controller = new AbortController();
   controllers.set(exp, controller);
   ctx.rerender();
@@ -91,7 +132,7 @@ async function runGroup(ctx, exp, files) {
       runRequest(`api/analyze/${encodeURIComponent(exp)}`, make(), { signal: controller.signal, onProgress: (p) => progress(exp, p) }),
       post(`api/panels/${encodeURIComponent(exp)}`, make(), { signal: controller.signal }).catch((e) => (isAbort(e) ? Promise.reject(e) : [])),
     ]);
-    Object.assign(run, { status: "done", result: answer, panels, finished: Date.now() });
+    Object.assign(run, { status: "done", result: answer, panels, finished: Date.now(), excluded: files.reduce((n, f) => n + (f.excluded || []).length, 0) });
     t.gains.use[exp] = true;
   } catch (e) {
     Object.assign(run, isAbort(e) ? { status: "stopped" } : { status: "failed", error: e.message });
@@ -118,20 +159,61 @@ function groupCard(ctx, exp, files) {
   const card = el("section", { class: "card group", "data-group": exp },
     el("h3", { text: /^roadrunner/.test((files[0].info || {}).format || "") ? "Road Runner feedforward fit (kS, kV, kA)" : EXPERIMENT_WORDS[exp] || exp }),
     el("p", { class: "small", text: `From ${files.map((f) => f.name).join(", ")}` }),
-    box, more, commandBox(["analyze", exp, ...files.map((f) => f.name), ...argvOf(fields, values)]),
+    box, more, commandBox(["analyze", exp, ...files.map((f) => f.name), ...columnRules(files).map((r) => `--column=${r}`), ...argvOf(fields, values)]),
     el("div", { class: "actions" }, runButton, cancel, running ? el("progress", { "aria-label": "Progress of the fit" }) : null,
       el("span", { class: "run-status", role: "status", text: running ? "fitting…" : run && run.status === "stopped" ? "cancelled" : "" })));
   if (run && run.status === "failed") card.append(el("p", { class: "error", role: "alert", text: `${run.error}` }));
   if (run && run.result) {
     const same = run.files.join("\n") === files.map((f) => f.name).join("\n");
-    card.append(el("h4", { text: `Result from ${run.files.join(", ")}` }));
+    const left = files.reduce((n, f) => n + (f.excluded || []).length, 0);
+    card.append(el("h4", { text: `Result from ${run.files.join(", ")}${run.excluded ? ` (${run.excluded} point${run.excluded > 1 ? "s" : ""} left out)` : ""}` }));
+    if (left) card.append(el("p", { class: "small" }, `${left} point${left > 1 ? "s are" : " is"} left out of the fit. `,
+      el("button", { type: "button", class: "link", text: "Put them back", onclick: () => { for (const f of files) f.excluded = []; save(); runGroup(ctx, exp, files); } })));
     if (!same) card.append(el("p", { class: "small", text: "The files have changed since this result: run the fit again to update it." }));
     card.append(...resultView(run.result));
     const host = el("div", { class: "plots" });
-    card.append(host);
-    requestAnimationFrame(() => plots.panels(host, run.panels));
+    const exclude = el("div", { class: "actions exclude" });
+    card.append(el("p", { class: "small", text: "To leave points out: pick the box or lasso tool above a plot, select the points, then fit again." }), exclude, host);
+    requestAnimationFrame(() => plots.panels(host, run.panels, { onSelect: (panel, indices) => offerExclusion(ctx, exp, files, panel, indices, exclude) }));
   }
   return card;
+}
+
+// The data rows of a small table file (the points of its fit, one per row, when nothing was thinned).
+function dataRows(lines) {
+  const rows = [];
+  let header = false;
+  lines.forEach((line, k) => {
+    const t = line.trim();
+    if (!t || t.startsWith("#")) return;
+    if (!header && /[A-Za-z]/.test(t.replace(/[eE][+-]?\d/g, ""))) { header = true; return; }
+    header = true;
+    rows.push(k);
+  });
+  return rows;
+}
+
+// Points selected on a fit's plot: leave their rows out of a copy of the file (the file itself is kept) and fit again.
+async function offerExclusion(ctx, exp, files, panel, indices, host) {
+  host.replaceChildren();
+  if (!indices.length) return;
+  const entry = files.length === 1 ? files[0] : null;
+  const current = entry && entry.excluded && entry.excluded.length && entry.trimmed ? entry.trimmed : entry && entry.file;
+  const text = entry ? await current.text() : "";
+  const lines = text.split(/\r?\n/);
+  const rows = dataRows(lines);
+  const n = panel.data ? panel.data.x.length : -1;
+  if (!entry || rows.length !== n) {
+    host.append(el("p", { class: "small", text: "Points can be left out of a fit of one table file whose every row is a point (an LCR, torque or terminal-speed table); this fit's points come from a longer log." }));
+    return;
+  }
+  host.append(el("button", { type: "button", class: "primary", text: `Leave out the ${indices.length} selected point${indices.length > 1 ? "s" : ""} and fit again`, onclick: () => {
+    const drop = new Set(indices.map((i) => rows[i]));
+    entry.excluded = [...(entry.excluded || []), ...[...drop].map((k) => lines[k])];  // the rows left out, as they were
+    entry.trimmed = new Blob([lines.filter((_, k) => !drop.has(k)).join("\n")], { type: "text/plain" });
+    save();
+    runGroup(ctx, exp, files);
+  } }));
 }
 
 function motorPicker(ctx) {

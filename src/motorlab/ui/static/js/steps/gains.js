@@ -65,7 +65,9 @@ function needsBlock(ctx, lack) {
     box.append(el("div", { class: "need" },
       el("p", {}, el("strong", { text: `${words} ${symbol}` }), `: measured by ${MEASURED_BY[key] || "another experiment"}.`),
       el("div", { class: "field" }, el("label", { for: id }, `Type the ${words.toLowerCase()} if you know it`, el("span", { class: "unit", text: ` in ${prettyUnit(TYPED_UNITS[key])}` })),
-        el("input", { type: "text", id, inputmode: "decimal", value: t.gains.typed[key] || "", onchange: (e) => { t.gains.typed[key] = e.target.value.trim(); save(); ctx.rerender(); } }))));
+        el("div", { class: "actions" },
+          el("input", { type: "text", id, inputmode: "decimal", value: t.gains.typed[key] || "", onchange: (e) => { t.gains.typed[key] = e.target.value.trim(); save(); ctx.rerender(); } }),
+          el("button", { type: "button", text: "Use this value" })))));
   }
   if (ctx.task.key !== "bench") {
     const id = uid("add");
@@ -199,7 +201,9 @@ export function render(host, ctx) {
   const fields = tuneFields(ctx);
   const primary = fields.filter((f) => PRIMARY.includes(f.name));
   const more = fields.filter((f) => !PRIMARY.includes(f.name));
-  const note = (f) => (isShared(f.name) && state.shared[f.name] ? "as you gave it in the first step" : "");
+  const wanted = ((ctx.app.schema.targets || []).find((x) => x.key === g.target) || {}).needs || [];
+  const note = (f) => (wanted.includes(f.name) && !state.shared[f.name] ? `needed for ${targetLabel(g.target)}`
+    : isShared(f.name) && state.shared[f.name] ? "as you gave it in the first step" : "");
   const language = uid("lang");
   const spec = (ctx.app.schema.targets || []).find((x) => x.key === g.target);
   const languages = spec && spec.languages ? LANGUAGES.filter(([k]) => spec.languages.includes(k)) : LANGUAGES;
