@@ -42,7 +42,10 @@ from motorlab.io.headers import column_mapping, normalise_unit, parse_column_map
         ("Speed (rev/min)", ("speed", "rpm")),
         ("Motor Speed [r/min]", ("speed", "rpm")),
         ("Zeit", None),
-        ("Power (W)", None),  # which power? the person says, with --column
+        ("Power (W)", ("output_power", "W")),  # a datasheet's "Power" is the shaft's
+        ("Input Output Power (W)", None),  # which power? the person says, with --column
+        ("Current (Amps)", ("current", "A")),
+        ("Torque (in-lbs)", ("torque", "lbf*in")),
         ("Voltage Current", None),
     ],
 )

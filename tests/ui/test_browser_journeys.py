@@ -102,8 +102,10 @@ def test_session_zip_and_loose_files(page: Any, sim_session: Path, truth: dict[s
               "the FTC PIDF code from the session")
     page.check()
 
-    page.d.back()  # the session step, with its result kept; now the same session as loose files
+    page.d.back()  # the session step, with its result kept; now the same session as loose files, on a phone
     page.wait_text("Each unit's parameters")
+    page.d.set_window_size(*browser.PHONE)
+    page.check()
     loose = [sim_session / "session.toml", *sorted((sim_session / "A").iterdir())]
     page.upload("Choose the session file", *loose)
     page.wait_text("all chosen")
@@ -111,6 +113,8 @@ def test_session_zip_and_loose_files(page: Any, sim_session: Path, truth: dict[s
     page.wait_text("Each unit's parameters", 180)
     table = page.d.find_element("xpath", "//table[caption[contains(., \"Each unit's parameters\")]]").text
     assert "ok" in table
+    page.check()
+    page.d.set_window_size(*browser.LAPTOP)
 
 
 def test_sysid_to_wpilib_on_a_phone(page: Any, tmp_path: Path) -> None:
