@@ -68,28 +68,44 @@ def refused(capsys: pytest.CaptureFixture[str], *argv: object, mentions: str = "
 # ---- power towers: bounded work wherever a quantity is parsed ------------------------------------------
 
 
-def _cli_in_child(argv: list[str], env: dict[str, str] | None = None) -> subprocess.Popen[str]:
-    return subprocess.Popen([sys.executable, "-m", "motorlab", *argv], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True, env={**os.environ, **(env or {})})
+_THREE_RUNS = """
+import contextlib, io, json, os, sys
+from motorlab import cli
+out = []
+for argv, env in json.loads(sys.argv[1]):
+    os.environ.update(env)
+    err = io.StringIO()
+    with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+        try:
+            code = cli.main(argv)
+        except SystemExit as exc:
+            code = exc.code
+    for key in env:
+        del os.environ[key]
+    out.append([code, err.getvalue()])
+print(json.dumps(out))
+"""
 
 
 def test_a_power_tower_is_refused_at_once_everywhere(rig, tmp_path: Path) -> None:
-    """Option, session file and MOTORLAB_MAX_INPUT_SIZE: each answered within seconds, one line, exit 2."""
+    """Option, session file and MOTORLAB_MAX_INPUT_SIZE: each answered at once, one line, exit 2.
+
+    In one child process with a time limit: before the fix, pint evaluated 9**9**9 and never returned.
+    """
     session = tmp_path / "session.toml"
     session.write_text('[motor]\ncatalog = "neverest40"\n[rig]\nlever_arm = "9**9**9 m"\n'
                        f'[units.A.lcr]\nfiles = ["{rig["lcr"]}"]\n')
-    children = [
-        _cli_in_child(["analyze", "terminal", str(rig["terminal"]), "--K", "9**9**9 V*s/rad"]),
-        _cli_in_child(["characterize", str(session), "-o", str(tmp_path / "out")]),
-        _cli_in_child(["analyze", "lcr", str(rig["lcr"])], env={"MOTORLAB_MAX_INPUT_SIZE": "9**9**9"}),
+    runs = [
+        (["analyze", "terminal", str(rig["terminal"]), "--K", "9**9**9 V*s/rad"], {}),
+        (["characterize", str(session), "-o", str(tmp_path / "out")], {}),
+        (["analyze", "lcr", str(rig["lcr"])], {"MOTORLAB_MAX_INPUT_SIZE": "9**9**9"}),
     ]
-    try:
-        results = [child.communicate(timeout=60) for child in children]
-    finally:
-        for child in children:
-            child.kill()
-    for child, (_out, err) in zip(children, results, strict=True):
-        assert child.returncode == 2, err
+    done = subprocess.run([sys.executable, "-c", _THREE_RUNS, json.dumps(runs)], capture_output=True, text=True,
+                          timeout=120, check=False, env={**os.environ, "MPLBACKEND": "Agg"})
+    assert done.returncode == 0, done.stderr
+    results = json.loads(done.stdout)
+    for code, err in results:
+        assert code == 2, err
         assert len(err.strip().splitlines()) == 1, err
     assert "--K" in results[0][1]
     assert "power of a power" in results[0][1]
