@@ -319,3 +319,21 @@ def test_scale_factors_outside_any_rig_are_refused(value: str, rig, tmp_path: Pa
         "spindown", tmp_path / "spindown.txt", on_time=5.0, coast_time=10.0).paths[0]
     refused(capsys, "analyze", "spindown", spindown, "--cpr", "1120", "--disc-radius", "75 mm",
             "--disc-thickness", "50 mm", "--ratio", value, mentions="--ratio")
+
+
+def test_the_speed_lag_of_tests_shorter_than_the_shift(tmp_path: Path, capsys) -> None:
+    """Found by the fuzz run: a truncated .wpilog left a 25-row test, and the lag search sliced past it
+    (``ValueError: operands could not be broadcast``, an internal error)."""
+    import numpy as np
+
+    from motorlab.sysid_score import ScoreTest, speed_lag
+
+    t = np.linspace(0.0, 0.5, 25)
+    test = ScoreTest("dynamic-forward", t, np.full(25, 6.0), 0.5 * t**2, t.copy())
+    lag, ratio = speed_lag((0.1, 1.0, 0.1), [test], max_rows=40)
+    assert lag >= 0.0
+    assert 0.0 < ratio <= 1.0
+    failure = Path(__file__).parents[1] / "data" / "fuzz" / "truncated-sysid.wpilog"
+    code, _out, err = run(capsys, "analyze", "feedforward", failure, "--json")
+    assert code in (0, 2), err
+    assert "internal error" not in err
