@@ -337,3 +337,11 @@ def test_the_speed_lag_of_tests_shorter_than_the_shift(tmp_path: Path, capsys) -
     code, _out, err = run(capsys, "analyze", "feedforward", failure, "--json")
     assert code in (0, 2), err
     assert "internal error" not in err
+
+
+def test_free_spinup_without_a_cpr_names_the_file(tmp_path: Path, capsys) -> None:
+    """Found by the fuzz run: a cursor-time file that lost its '# cpr:' line got a refusal naming no file."""
+    run_ = VirtualRig("neverest40", unit_seed=1, noise_seed=7).free_spinup(tmp_path / "edges.csv")
+    path = Path(run_.paths[0])
+    path.write_text("".join(line for line in path.read_text().splitlines(keepends=True) if "cpr" not in line))
+    refused(capsys, "analyze", "free-spinup", path, "--K", "0.7", "--current", "0.5 A", mentions=f"{path}: the file")
