@@ -234,3 +234,15 @@ def test_ctrl_c_stops_the_robot_and_keeps_the_log(robot: EmulatedRobot, tmp_path
     assert latency < 0.1, latency
     assert proc.returncode == 0, err
     assert "Ctrl-C" in log.read_text()
+
+
+def test_telemetry_without_numbers_is_one_line(tmp_path: Path) -> None:
+    from motorlab.robot.record import Recording, write_log
+
+    data = Recording("Words", rows=[(1000, 12.5, {"state": "ramping"}), (1010, 12.5, {"state": "done"})],
+                     keys=["state"], skipped={"state": "ramping"}, stop_reason="1 s elapsed")
+    with pytest.raises(RobotLinkError, match="no telemetry key of Words is a number"):
+        write_log(data, tmp_path / "x.csv")
+    with pytest.raises(RobotLinkError, match="sent no telemetry"):
+        write_log(Recording("Quiet", stop_reason="1 s elapsed"), tmp_path / "x.csv")
+    assert not (tmp_path / "x.csv").exists()
