@@ -203,3 +203,34 @@ def test_dashboard_client_reads_status_and_opmodes(robot: EmulatedRobot) -> None
         assert dash.config() == robot.config
     with pytest.raises(RobotLinkError, match="not connected"):
         dash.stop_op_mode()
+
+
+def test_ctrl_c_stops_the_robot_and_keeps_the_log(robot: EmulatedRobot, tmp_path: Path) -> None:
+    import signal
+    import subprocess
+    import sys
+
+    log = tmp_path / "run.csv"
+    proc = subprocess.Popen([sys.executable, "-m", "motorlab", "robot", "record", "--host", "127.0.0.1",
+                             "--dashboard-port", str(robot.dashboard_port), "--opmode", OPMODE, "--seconds", "60",
+                             "-o", str(log)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 30
+        while robot.status != "RUNNING" and time.monotonic() < deadline:
+            time.sleep(0.01)
+        time.sleep(0.5)
+        assert robot.status == "RUNNING"
+        pressed = time.monotonic()
+        proc.send_signal(signal.SIGINT)
+        while robot.active != STOP_TAG and time.monotonic() - pressed < 2.0:
+            time.sleep(0.001)
+        latency = time.monotonic() - pressed
+        _, err = proc.communicate(timeout=20)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+    assert robot.active == STOP_TAG
+    assert latency < 0.1, latency
+    assert proc.returncode == 0, err
+    assert "Ctrl-C" in log.read_text()
