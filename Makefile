@@ -1,10 +1,10 @@
-# motorlab: make install | make test | make demo | make bench
+# motorlab: make install | make test | make demo | make bench | make fuzz
 PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: install test lint demo bench clean
+.PHONY: install test lint demo bench fuzz clean
 
 install: $(STAMP)
 
@@ -26,6 +26,12 @@ demo: install
 
 bench: install
 	MPLBACKEND=Agg $(BIN)/python benchmarks/run.py
+
+# The long fuzz run (docs/fuzz.md): 10,000 cases, resumable (out/fuzz/state.json), failures in
+# out/fuzz/failures/; stops by itself after FUZZ_MINUTES. E.g. make fuzz FUZZ_ARGS="--cases 20000".
+FUZZ_MINUTES ?= 240
+fuzz: install
+	MPLBACKEND=Agg nice -n 10 $(BIN)/python scripts/fuzz.py --minutes $(FUZZ_MINUTES) $(FUZZ_ARGS)
 
 clean:
 	rm -rf $(VENV) out build src/*.egg-info

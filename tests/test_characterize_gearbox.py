@@ -54,3 +54,42 @@ def test_results_files_and_report_answer_the_seed(worn_gearbox_session):
     assert 'id="gearbox"' in html
     assert "Ke×N" in html
     assert "the gearbox explains it" in html
+
+
+def _bare_curve(path, *, ratio_kt_k: float) -> None:
+    """A 12 V curve of a bare motor whose torque per amp is ``ratio_kt_k`` of its back-EMF constant."""
+    import numpy as np
+
+    from motorlab.io import write_csv
+
+    k, r, tf, volts = 0.0172, 1.04, 0.002, 12.0
+    kt = ratio_kt_k * k
+    free = (kt * volts / r - tf) / (kt * k / r)
+    speed = np.linspace(0.0, free, 30)
+    current = (volts - k * speed) / r
+    rng = np.random.default_rng(5)
+    write_csv(path, {"speed_rad_per_s": speed, "current_A": current + rng.normal(0, 1e-3, speed.size),
+                     "torque_Nm": kt * current - tf + rng.normal(0, 1e-5, speed.size)})
+
+
+def test_report_splits_kt_ke_into_motor_and_gearbox(tmp_path):
+    """A curve of the bare motor in the session: the report gives Kt/K to the motor and η/(Kt/K) to the gearbox."""
+    from motorlab.report import render_report
+
+    toml = write_simulated_session("neverest40", out_dir=tmp_path, units=2, seed=3, gearbox="catalog",
+                                   experiments=("spindown", "torque"))
+    _bare_curve(tmp_path / "A" / "curve.csv", ratio_kt_k=0.9)
+    toml.write_text(toml.read_text() + '\n[units.A.curve]\nfiles = ["A/curve.csv"]\nvoltage = "12 V"\n')
+    result = characterize(load_session(toml), control=False, figures=False)
+    curve_fit = result.units["A"].fits["curve"]
+    assert curve_fit["Kt_over_K"].value == pytest.approx(0.9, abs=0.01)
+    html = render_report(result)
+    assert "Split with the curve run of unit A" in html
+    for name in ("A", "B"):  # B has no curve of its own: the session's (the same motor model) is used
+        eta = result.units[name].parameters["efficiency"].estimate.value
+        assert f"η/(Kt/K) = {eta / curve_fit['Kt_over_K'].value:.3g}" in html
+    # without a bare-motor run the report says where the rest would come from
+    toml2 = write_simulated_session("neverest40", out_dir=tmp_path / "plain", units=1, seed=3, gearbox="catalog",
+                                    experiments=("spindown", "torque"))
+    plain = render_report(characterize(load_session(toml2), control=False, figures=False))
+    assert "All of it is given to the gearbox here" in plain

@@ -21,7 +21,7 @@ ROOT = Path(__file__).resolve().parents[1]
 def test_every_module_describes_one_experiment_whose_analysis_exists() -> None:
     experiments = all_experiments()
     assert set(experiments) == {"spindown", "spinup", "free-spinup", "terminal", "lcr", "torque", "amplifier",
-                                "tachometer", "pulse", "identify", "feedforward"}
+                                "tachometer", "pulse", "identify", "feedforward", "curve", "stall"}
     for name, exp in experiments.items():
         assert isinstance(exp, Experiment)
         module, function = exp.analysis.split(":")

@@ -141,3 +141,22 @@ def test_an_exact_fit_has_unknown_not_zero_uncertainty():
     fit = fit_linear(np.column_stack([x, np.ones_like(x)]), 2.0 * x + 1.0, ["a", "c"])
     assert fit.values == pytest.approx([2.0, 1.0])
     assert np.all(np.isnan(fit.stderr))
+
+
+@pytest.mark.parametrize("bandwidth", [0.0, 0.7, 3.0, 37.5, 400.0])
+def test_hac_meat_through_the_fft_equals_the_lag_by_lag_sum(bandwidth: float) -> None:
+    # The Bartlett-weighted sum of lagged cross-products, computed in the frequency domain, equals
+    # the direct sum over lags within segments (segments shorter than the bandwidth included).
+    from motorlab.fitting import _bartlett_meat, _segments
+
+    rng = np.random.default_rng(7)
+    n, p = 700, 4
+    white = np.cumsum(rng.standard_normal((n, p)), axis=0) * 0.1 + rng.standard_normal((n, p))
+    groups = np.repeat([0, 1, 2, 3], [300, 5, 1, 394])
+    segments = _segments(n, groups)
+    direct = white.T @ white
+    for lag in range(1, math.floor(bandwidth) + 1):
+        gamma = sum(white[s[lag:]].T @ white[s[:-lag]] for s in segments if s.size > lag)
+        direct = direct + (1.0 - lag / (bandwidth + 1.0)) * (gamma + np.transpose(gamma))
+    tolerance = 1e-9 * np.abs(direct).max()
+    assert _bartlett_meat(white, segments, bandwidth) == pytest.approx(direct, rel=1e-10, abs=tolerance)

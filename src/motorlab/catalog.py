@@ -24,6 +24,7 @@ from typing import Any
 from motorlab.errors import InputError, OptionError
 from motorlab.gearbox import Gearbox
 from motorlab.model import MotorParams
+from motorlab.thermal import MAGNET_COEFFICIENTS, ThermalModel
 from motorlab.units import parse_quantity
 
 #: Default bare-motor mechanical time constant τm = J·R/(K² + R·b) [s] used to guess J (see
@@ -278,6 +279,24 @@ class Motor:
             J = mechanical_time_constant * (K**2 + R * b) / R
         return MotorParams(K=K, R=R, L=L, J=J, b=b, Tf=Tf)
 
+    def thermal_model(self) -> ThermalModel:
+        """The motor's thermal network and magnets (``data/thermal.toml``; every figure an estimate with its reason).
+
+        Raises
+        ------
+        InputError
+            If the thermal table is malformed or has no family for this motor.
+        """
+        family, _ = thermal_family(self.key)
+        try:
+            values = {name: parse_quantity(family[name], unit, name=name) for name, unit in _THERMAL_FIELDS.items()}
+        except (KeyError, OptionError) as exc:
+            raise InputError(f"motor {self.key!r}: thermal figures: {exc}", path="motorlab/data/thermal.toml") from None
+        magnet = str(family.get("magnet", "ferrite"))
+        if magnet not in MAGNET_COEFFICIENTS:
+            raise InputError(f"motor {self.key!r}: unknown magnet {magnet!r}", path="motorlab/data/thermal.toml")
+        return ThermalModel(**values, magnet_coefficient=MAGNET_COEFFICIENTS[magnet])
+
     def counts_per_radian(self) -> float:
         """Encoder counts per radian of the output shaft [counts/rad]."""
         return self.cpr / (2 * math.pi)
@@ -312,6 +331,26 @@ class Motor:
         }
 
 
+_THERMAL_FIELDS = {"winding_to_case": "K/W", "case_to_ambient": "K/W", "winding_capacity": "J/K",
+                   "case_capacity": "J/K"}
+
+
+def thermal_family(key: str) -> tuple[dict[str, Any], str]:
+    """The thermal family (figures and their ``sources``) of catalogue motor ``key``, and its name.
+
+    Raises
+    ------
+    InputError
+        No family lists the motor.
+    """
+    text = resources.files("motorlab").joinpath("data/thermal.toml").read_text(encoding="utf-8")
+    families = tomllib.loads(text).get("families", {})
+    for name, family in families.items():
+        if key in family.get("motors", ()):
+            return family, name
+    raise InputError(f"no thermal figures for motor {key!r}", path="motorlab/data/thermal.toml")
+
+
 def list_motors(*, path: str | PathLike[str] | None = None) -> list[Motor]:
     """Every catalogue entry, in file order.
 
@@ -336,6 +375,9 @@ def list_motors(*, path: str | PathLike[str] | None = None) -> list[Motor]:
         table = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise InputError(f"not a valid catalogue: {exc}", path=where) from None
+    except (ValueError, RecursionError):  # an integer of 4,300 digits, or tables nested too deeply
+        raise InputError("not a valid catalogue: a number or a nesting beyond any motor's figures",
+                         path=where) from None
     return [_motor_from_entry(key, entry, where) for key, entry in table.items()]
 
 

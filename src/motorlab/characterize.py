@@ -53,6 +53,7 @@ from motorlab.experiments import all_experiments
 from motorlab.experiments import stderr_or_none as _stderr
 from motorlab.fleet import DEFAULT_THRESHOLD, FleetSummary, fleet_summary
 from motorlab.io._output import atomic_path
+from motorlab.io.headers import column_mapping
 from motorlab.results import Estimate, FitResult, json_float, jsonable
 from motorlab.session import LOADED_EXPERIMENTS, ExperimentSpec, Session, UnitSpec, read_truth
 from motorlab.units import SI_UNITS
@@ -397,7 +398,8 @@ def _characterize_unit(session: Session, spec: UnitSpec, progress: Progress | No
             continue
         ctx = _UnitContext(session, spec.experiments[exp_name], unit.parameters, unit.fits)
         try:
-            fit = adapter(ctx)
+            with column_mapping(ctx.setting("columns")):  # the session's columns = {...} of this experiment
+                fit = adapter(ctx)
         except MotorlabError as exc:
             unit.failures[exp_name] = str(exc)
             continue
@@ -446,7 +448,7 @@ def _controller_gains(result: Characterization, *, plot: bool = True) -> dict[st
     """
     from motorlab.model import MotorParams
 
-    values: dict[str, float] = {}
+    values: dict[str, Any] = {}
     for name in PARAMETERS:
         stats = result.fleet.parameters.get(name)
         if stats is not None and math.isfinite(stats.median):

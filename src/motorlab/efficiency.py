@@ -173,3 +173,56 @@ def gearbox_answer(torque_fit: Any, k: Any, efficiency: Any, *, ratio: float | N
         "mismatch": f"{z:+.1f}",
         "verdict": verdict,
     }
+
+
+#: Experiments run on the bare motor (no gearbox) that give its torque per amp over its back-EMF constant.
+BARE_MOTOR_SOURCES = ("curve", "stall")
+
+
+def bare_motor_ratio(fits_by_unit: Mapping[str, Mapping[str, FitResult]], unit: str, *,
+                     k_output: Estimate | None = None, ratio: float | None = None) -> tuple[Estimate, str] | None:
+    """Kt/K of the bare motor (no gearbox), and where it comes from, for ``unit``'s gearbox split.
+
+    Looked for in ``unit``'s own fits first, then in any unit of the session (the same motor model):
+    a motor curve's ``Kt_over_K`` (``analyze curve``), a stall run's ``Kt_over_K``, or a stall run's
+    torque per amp ``K`` at the motor shaft divided by the unit's back-EMF constant ``k_output``/N.
+
+    Returns
+    -------
+    (Estimate, str) or None
+        ``Kt_over_K`` and a phrase naming its source ("curve of unit A"); None without such a run.
+    """
+    order = [unit, *(name for name in fits_by_unit if name != unit)]
+    for name in order:
+        for experiment in BARE_MOTOR_SOURCES:
+            fit = fits_by_unit.get(name, {}).get(experiment)
+            if fit is None:
+                continue
+            where = f"the {experiment} run of unit {name}"
+            if "Kt_over_K" in fit and fit["Kt_over_K"].determined:
+                return fit["Kt_over_K"], where
+            if experiment == "stall" and "K" in fit and k_output is not None and ratio and fit["K"].determined:
+                ke_motor = k_output.value / ratio
+                value = fit["K"].value / ke_motor
+                se = abs(value) * math.hypot(fit["K"].stderr / fit["K"].value, k_output.stderr / k_output.value)
+                return Estimate("Kt_over_K", value, se, "1", True, "stall run's Kt ÷ the back-EMF K/N"), where
+    return None
+
+
+def gearbox_split(efficiency: Estimate, motor_ratio: Estimate) -> dict[str, float]:
+    """Split the measured Kt/(Ke×N) = (Kt/K)_motor × η_gearbox into the bare motor's and the gearbox's parts.
+
+    Returns
+    -------
+    dict
+        ``motor`` (Kt/K of the bare motor) and ``gearbox`` (η of the gearbox alone = η / (Kt/K)), each
+        with its standard error (``*_stderr``; relative errors combined in quadrature), and the shares of
+        the total torque shortfall (``motor_share``, ``gearbox_share``: fractions of −ln(η) that sum to 1).
+    """
+    eta, r = efficiency, motor_ratio
+    gear = eta.value / r.value
+    gear_se = abs(gear) * math.hypot(eta.stderr / eta.value, r.stderr / r.value)
+    total = -math.log(eta.value) if 0 < eta.value < 1 else math.nan
+    motor_share = -math.log(r.value) / total if math.isfinite(total) and total > 0 and r.value > 0 else math.nan
+    return {"motor": r.value, "motor_stderr": r.stderr, "gearbox": gear, "gearbox_stderr": gear_se,
+            "motor_share": motor_share, "gearbox_share": 1.0 - motor_share}

@@ -197,14 +197,16 @@ def sysid_ols(recordings: Sequence[Recording], *, mechanism: str = "simple") -> 
     rows = []
     for rec in recordings:
         t = rec.time
-        if "velocity" in rec:
-            w = rec.signals["velocity"]
-        else:
-            w = np.concatenate([[0.0], np.diff(rec.signals["position"]) / np.diff(t)])
-        acc = np.diff(w) / np.diff(t)
+        dt = np.diff(t)
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):  # repeated times: rows dropped below
+            if "velocity" in rec:
+                w = rec.signals["velocity"]
+            else:
+                w = np.concatenate([[0.0], np.diff(rec.signals["position"]) / dt])
+            acc = np.diff(w) / dt
         v = rec.signals["voltage"][:-1]
         ws = w[:-1]
-        keep = ws != 0
+        keep = (ws != 0) & np.isfinite(ws) & np.isfinite(acc) & (dt > 0)
         cols = [ws, v, np.sign(ws)]
         if mechanism == "elevator":
             cols.append(np.ones_like(ws))
@@ -213,9 +215,11 @@ def sysid_ols(recordings: Sequence[Recording], *, mechanism: str = "simple") -> 
         rows.append((np.column_stack(cols)[keep], acc[keep]))
     a = np.concatenate([r[0] for r in rows])
     y = np.concatenate([r[1] for r in rows])
-    if y.size < a.shape[1]:
+    if y.size < a.shape[1] or not np.all(np.isfinite(a)):
         raise FitError("too few moving samples for the SysId regression")
     c, *_ = np.linalg.lstsq(a, y, rcond=None)
+    if c[1] == 0 or not np.all(np.isfinite(c)):
+        raise FitError("the SysId regression does not determine kA (the voltage explains no acceleration)")
     out = {"kS": -c[2] / c[1], "kV": -c[0] / c[1], "kA": 1.0 / c[1]}
     if mechanism != "simple":
         out["kG"] = -c[3] / c[1]
@@ -320,8 +324,10 @@ def _checked_recordings(recordings: Recording | Sequence[Recording], *, mechanis
     recordings = [block_mean(r) for r in ([recordings] if isinstance(recordings, Recording) else recordings)]
     if mechanism not in MECHANISMS:
         raise OptionError(f"mechanism must be one of {', '.join(MECHANISMS)}, got {mechanism!r}")
-    if cpr is not None and not (math.isfinite(cpr) and cpr > 0):
-        raise OptionError(f"cpr must be a positive number, got {cpr}")
+    if cpr is not None:
+        from motorlab.analyses._common import check_cpr
+
+        check_cpr(cpr)  # within what an encoder can have, as every reader and analysis checks
     recs = [recordings] if isinstance(recordings, Recording) else list(recordings)
     if not recs:
         raise OptionError("no recordings to fit")

@@ -20,6 +20,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from scipy import fft as scipy_fft
 from scipy import optimize
 
 from motorlab.errors import FitError
@@ -182,18 +183,51 @@ def hac_covariance(
         bandwidth = _andrews_bandwidth(white, segments)
     longest = max(seg.size for seg in segments)
     bandwidth = float(min(max(bandwidth, 0.0), longest - 1))
-    meat = white.T @ white
-    for lag_k in range(1, math.floor(bandwidth) + 1):
-        weight = 1.0 - lag_k / (bandwidth + 1.0)
-        gamma = np.zeros((p, p))
-        for seg in segments:
-            if seg.size > lag_k:
-                gamma += white[seg[lag_k:]].T @ white[seg[:-lag_k]]
-        meat += weight * (gamma + gamma.T)
+    meat = _bartlett_meat(white, segments, bandwidth)
     recolour = np.linalg.pinv(np.eye(p) - a_mat)
     meat = recolour @ meat @ recolour.T
     cov = bread @ meat @ bread * (n / max(n - p, 1))
     return cov, bandwidth
+
+
+def _bartlett_meat(white: np.ndarray, segments: list[np.ndarray], bandwidth: float) -> np.ndarray:
+    """Γ₀ + Σ_{l=1}^{⌊L⌋} (1 − l/(L+1))·(Γ_l + Γ_lᵀ), Γ_l summed within segments, through the FFT.
+
+    Summing lag by lag costs ⌊L⌋·n·p² (the bandwidth reaches hundreds of lags on a tachometer trace:
+    seconds, and minutes with many regions). Every Γ_l is a cross-correlation of the scores'
+    columns, so the weighted sum is one product in the frequency domain: with X the DFT of a
+    segment zero-padded to N ≥ m + ⌊L⌋ (no lag wraps around), Σ_l h(l)·Γ_l = Re(Xᵀ·diag(H)·X̄),
+    H = DFT(h)/N of the symmetric Bartlett kernel h. Exact up to rounding, n·p² + n·p·log n.
+    """
+    p = white.shape[1]
+    lags = math.floor(bandwidth)
+    if lags <= 0:
+        return white.T @ white
+    meat = np.zeros((p, p))
+    for seg in segments:
+        block = white[seg[0] : seg[-1] + 1]  # segments are contiguous runs
+        m = block.shape[0]
+        top = min(lags, m - 1)
+        if top <= 0:
+            meat += block.T @ block
+            continue
+        size = _fft_size(m + top)
+        kernel = np.zeros(size)
+        kernel[0] = 1.0
+        weights = 1.0 - np.arange(1, top + 1) / (bandwidth + 1.0)
+        kernel[1 : top + 1] = weights
+        kernel[size - top :] = weights[::-1]
+        gain = np.fft.rfft(kernel).real / size  # the kernel is real and even: so is its transform
+        gain[1 : (size + 1) // 2] *= 2.0  # rfft keeps one of each pair of conjugate bins
+        spectrum = np.fft.rfft(block, n=size, axis=0)
+        re, im = spectrum.real, spectrum.imag
+        meat += re.T @ (gain[:, None] * re) + im.T @ (gain[:, None] * im)
+    return 0.5 * (meat + meat.T)
+
+
+def _fft_size(n: int) -> int:
+    """The smallest 2^a·3^b·5^c ≥ n (a fast FFT length)."""
+    return int(scipy_fft.next_fast_len(n, real=True))
 
 
 def covariance_from_jacobian(

@@ -39,11 +39,24 @@ PARAMETERS: dict[str, Parameter] = {
     "Tf_over_J": _P("Coulomb deceleration (Tf/J)", "Tf/J", "rad/s^2"),
     "alpha": _P("Angular acceleration", "α", "rad/s^2"),
     "i": _P("Current during the spin-up", "i", "A"),
+    # a motor curve (dynamometer)
+    "Kt": _P("Torque per amp", "Kt", "N*m/A"),
+    "Kt_over_K": _P("Torque per amp over back-EMF constant", "Kt/K", "1"),
+    "I_free": _P("Free current", "I₀", "A"),
+    "friction_torque": _P("Friction torque at free speed", "τ_f", "N*m"),
     # the gearbox
     "efficiency": _P("Gearbox efficiency", "η", "1"),
     "loss_torque": _P("Gearbox loss torque", "τ0", "N*m"),
     "tau0": _P("Torque offset at zero current", "τ0", "N*m"),
     "tau_h": _P("Hysteresis torque (half the up/down gap)", "τ_h", "N*m"),
+    # heat (analyze stall)
+    "R_wc": _P("Thermal resistance, winding to case", "R_wc", "K/W"),
+    "R_ca": _P("Thermal resistance, case to ambient", "R_ca", "K/W"),
+    "C_w": _P("Heat capacity of the winding", "C_w", "J/K"),
+    "C_c": _P("Heat capacity of the case", "C_c", "J/K"),
+    "t_limit": _P("Time stalled until the winding reaches its limit", "t_limit", "s"),
+    "I_continuous": _P("Stall current held indefinitely", "I_cont", "A"),
+    "R_hot": _P("Winding resistance hot", "R_hot", "ohm"),
     # seed 2's calibrations
     "Ka": _P("Amplifier gain", "Ka", "A/V"),
     "I0": _P("Amplifier offset current", "I0", "A"),

@@ -233,7 +233,7 @@ def _fit_warnings(fit: _oe.Fit, logs: list[_oe.Log], values: np.ndarray, *, resi
 def _details(fit: _oe.Fit, values: np.ndarray, p0: np.ndarray, sigma: dict[str, float], input_details: dict[str, Any],
              *, current_noise: float, voltage_noise: float) -> dict[str, Any]:
     """``FitResult.details`` of the fit with current (the Cramér–Rao bound is added by :func:`_bound_details`)."""
-    motor = MotorParams(*(float(v) for v in np.maximum(values, [1e-12, 1e-12, 0, 1e-12, 0, 0])))
+    motor = MotorParams(*(float(v) for v in np.maximum(values, [1e-12, 1e-12, 0, 1e-12, 0, 0])[:6]))
     return {
         "method": "output error (angle and current simulated from the voltage)"
         + (", errors-in-variables bias removed" if np.any(fit.bias_correction) else "")

@@ -13,12 +13,13 @@ Simulation lives in :mod:`motorlab.simulate`; this module holds the parameters a
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, dataclass, field, replace
 from typing import Any
 
 import numpy as np
 
 from motorlab.errors import OptionError
+from motorlab.thermal import ThermalModel
 from motorlab.units import SI_UNITS
 
 PARAMETER_NAMES = ("K", "R", "L", "J", "b", "Tf")
@@ -56,6 +57,10 @@ class MotorParams:
         Viscous friction [N·m·s/rad].
     Tf
         Coulomb (and static) friction torque [N·m].
+    thermal
+        Optional :class:`~motorlab.thermal.ThermalModel`: the winding heats, R and K drift with its
+        temperatures, and K and R above are their values at 25 °C. Without it (the default) nothing
+        changes with temperature.
     """
 
     K: float
@@ -64,6 +69,7 @@ class MotorParams:
     J: float
     b: float = 0.0
     Tf: float = 0.0
+    thermal: ThermalModel | None = field(default=None, kw_only=True)
 
     def __post_init__(self) -> None:
         for name in PARAMETER_NAMES:
@@ -76,6 +82,8 @@ class MotorParams:
         for name in ("L", "b", "Tf"):
             if getattr(self, name) < 0:
                 raise OptionError(f"motor parameter {name} must not be negative, got {getattr(self, name)}")
+        if self.thermal is not None and not isinstance(self.thermal, ThermalModel):
+            raise OptionError(f"motor parameter thermal must be a ThermalModel, got {self.thermal!r}")
 
     # ---- construction -----------------------------------------------------------------------
     @classmethod
@@ -90,11 +98,27 @@ class MotorParams:
         if missing:
             raise OptionError("motor parameters missing: " + ", ".join(missing))
         kwargs.setdefault("L", 0.0)
-        return cls(**kwargs)
+        thermal = values.get("thermal")
+        return cls(**kwargs, thermal=ThermalModel.from_dict(thermal) if isinstance(thermal, dict) else None)
 
     def to_dict(self) -> dict[str, float]:
-        """Plain dict of SI values."""
-        return asdict(self)
+        """Plain dict of SI values of K, R, L, J, b, Tf (R and K at 25 °C with a thermal model; its
+        figures are ``thermal.to_dict()``)."""
+        out = asdict(self)
+        out.pop("thermal", None)
+        return out
+
+    def at_temperature(self, winding: float, case: float | None = None) -> MotorParams:
+        """The parameters at a winding (and case) temperature [°C], without a thermal model.
+
+        R = R₂₅·(1 + α·(T_w − 25 °C)) and K = K₂₅·(1 + β·(T_c − 25 °C)) (``case`` defaults to ``winding``);
+        a model without heat is returned unchanged.
+        """
+        if self.thermal is None:
+            return self
+        tc = winding if case is None else case
+        return replace(self, R=self.R * self.thermal.resistance_factor(winding),
+                       K=self.K * self.thermal.constant_factor(tc), thermal=None)
 
     def units(self) -> dict[str, str]:
         """SI unit of each parameter."""
@@ -116,7 +140,7 @@ class MotorParams:
             raise OptionError("load inertia must be ≥ 0 and gear ratio > 0")
         return replace(self, J=self.J + inertia * ratio**2, b=self.b + friction * ratio**2)
 
-    def scaled(self, **changes: float) -> MotorParams:
+    def scaled(self, **changes: Any) -> MotorParams:
         """A copy with some parameters replaced (e.g. ``b=2*p.b`` for a worn unit)."""
         return replace(self, **changes)
 

@@ -26,6 +26,14 @@ SIGNALS: dict[str, str] = {
     "battery": "V",
     "speed": "rad/s",  # optical tachometer reading
     "tach_voltage": "V",
+    # a dynamometer's export (worded headers, motorlab.io.headers)
+    "output_power": "W",  # mechanical power at the shaft
+    "input_power": "W",  # electrical power supplied
+    "power_dissipation": "W",  # input − output: heat in the motor
+    "efficiency": "1",  # a fraction (a column in % is divided by 100)
+    "temperature": "K",  # a thermometer's reading (a column in °C is read with its offset)
+    "winding_temperature": "K",  # a winding's temperature (simulate stall writes °C)
+    "case_temperature": "K",
 }
 
 
@@ -89,7 +97,10 @@ class Recording:
             return self.signals[name]
         except KeyError:
             have = ", ".join(sorted(self.signals)) or "none"
-            raise LogFormatError(f"this log has no {name} (it has: {have})", path=self.source or None) from None
+            hint = ""
+            if self.metadata.get("format") == "csv":
+                hint = f"; if a column holds it, map it with --column \"HEADER={name}\""
+            raise LogFormatError(f"this log has no {name} (it has: {have}){hint}", path=self.source or None) from None
 
     def line_of(self, index: int) -> int | None:
         """Source line of sample ``index`` (None if unknown)."""

@@ -394,7 +394,7 @@ def _gearbox_section(result: Characterization) -> str:
             f'<tr><td class="name">{name}</td><td>{_e(a["ke_motor"])}</td><td>{_e(a["ke_n"])}</td>'
             f"<td>{_e(a['kt'])}</td><td>{_e(a['eta'])}</td><td>{_e(a['loss'])}</td><td>{_e(a['mismatch'])}</td></tr>"
         )
-        verdicts.append(f"<li><b>{name}</b>: {_e(a['verdict'])}</li>")
+        verdicts.append(f"<li><b>{name}</b>: {_e(a['verdict'] + _bare_motor_part(result, unit.name, ratio))}</li>")
     if not rows:
         return (
             '<section id="gearbox"><h2>The gearbox: Kt against Ke</h2><p class="muted">Not determined: the gearbox '
@@ -413,7 +413,9 @@ def _gearbox_section(result: Characterization) -> str:
         "<p>Seed 1 ends with an open question: the torque constant Kt from a torque measurement does not match "
         "the back-EMF constant Ke, and the team suspected the gearbox. Ke comes from the back-EMF (spin-down: "
         "V = Ke·ω with no current, so the gearbox's losses do not enter); Kt from a lever at the output shaft, "
-        "which feels τ = η·N·Ke_motor·i − τ0. Their ratio is the gearbox efficiency η." + _e(sheet) + "</p>"
+        "which feels τ = η·N·Ke_motor·i − τ0. Their ratio η holds two parts: the bare motor's own torque per amp "
+        "over its back-EMF constant (Kt/K, below 1 on real motors: a motor curve or a stall run of the bare motor "
+        "measures it) and the gearbox's efficiency." + _e(sheet) + "</p>"
         '<table><thead><tr><th class="name">Unit</th><th>Ke, motor shaft [V·s/rad]</th>'
         "<th>Ke×N (Kt if lossless) [N·m/A]</th><th>Kt at the output [N·m/A]</th><th>η = Kt/(Ke×N)</th>"
         "<th>loss torque τ0 [N·m]</th><th>(Ke×N − Kt)/σ</th></tr></thead>"
@@ -424,12 +426,38 @@ def _gearbox_section(result: Characterization) -> str:
     )
 
 
+def _bare_motor_part(result: Characterization, unit: str, ratio: float | None) -> str:
+    """The split of a unit's Kt/(Ke×N) into the bare motor's Kt/K and the gearbox's η, when the session has
+    a curve or stall run of the bare motor (:func:`motorlab.efficiency.bare_motor_ratio`); else ""."""
+    from motorlab.efficiency import bare_motor_ratio, gearbox_split
+
+    spec = result.units[unit]
+    eta, k = spec.parameters.get("efficiency"), spec.parameters.get("K")
+    if eta is None or not eta.estimate.determined:
+        return ""
+    found = bare_motor_ratio({name: u.fits for name, u in result.units.items()}, unit,
+                             k_output=k.estimate if k is not None else None, ratio=ratio)
+    if found is None:
+        return (" All of it is given to the gearbox here: a motor curve or a stall run of the bare motor in the "
+                "session would tell how much of it the motor's own torque per amp (Kt/K < 1) accounts for.")
+    r, where = found
+    part = gearbox_split(eta.estimate, r)
+    motor_pc, gear_pc = 100 * part["motor_share"], 100 * part["gearbox_share"]
+    share = (f" Of the shortfall, {motor_pc:.0f} % is the motor's and {gear_pc:.0f} % the gearbox's (shares of −ln η)."
+             if math.isfinite(motor_pc) else "")
+    return (f" Split with {where}: the bare motor gives Kt/K = {part['motor']:.3g} ± {part['motor_stderr']:.2g} of its "
+            f"back-EMF constant per amp, so the gearbox's own efficiency is η/(Kt/K) = {part['gearbox']:.3g} ± "
+            f"{part['gearbox_stderr']:.2g}.{share}"
+            + (" An efficiency above 1 is not physical: the bare-motor run is not this motor's, or a calibration "
+               "differs." if part["gearbox"] - 2 * part["gearbox_stderr"] > 1 else ""))
+
+
 def _unit_params(unit: UnitResult) -> Any:
     """MotorParams of a unit for its curves (None when K, R or J are missing)."""
     from motorlab.errors import MotorlabError
     from motorlab.model import MotorParams
 
-    values = {}
+    values: dict[str, Any] = {}
     for name in ("K", "R", "L", "J", "b", "Tf"):
         combined = unit.parameters.get(name)
         if combined is not None and combined.estimate.determined and math.isfinite(combined.estimate.value):

@@ -52,7 +52,14 @@ from typing import Any
 
 from motorlab.errors import InputError, MotorlabError, OptionError, SessionError
 from motorlab.experiments import all_experiments
-from motorlab.io._text import read_bytes
+from motorlab.io._text import (
+    MAX_INTEGER_DIGITS,
+    MAX_NESTING,
+    deep_nesting_line,
+    line_of_offset,
+    load_json,
+    read_bytes,
+)
 from motorlab.plan import MATERIALS, disc_inertia
 from motorlab.units import format_unit, parse_quantity
 
@@ -376,6 +383,23 @@ class _Table:
                 raise self.error(key, f"unknown key {key!r}{suggestion}")
 
 
+def _long_integer_line(text: str) -> int | None:
+    """The line of the first TOML integer literal (``_`` allowed) longer than :data:`MAX_INTEGER_DIGITS` digits."""
+    match = re.search(rf"[0-9][0-9_]{{{MAX_INTEGER_DIGITS},}}", text)
+    return line_of_offset(text, match.start()) if match else None
+
+
+def _check_integers(ctx: _Context, keys: tuple[str, ...], data: Any, depth: int = 0) -> None:
+    """Refuse an integer no float can hold (more than :data:`MAX_INTEGER_DIGITS` digits) before any use of it."""
+    items = data.items() if isinstance(data, dict) else enumerate(data) if isinstance(data, list) else ()
+    for key, value in items:
+        where = (*keys, key) if isinstance(key, str) else keys
+        if isinstance(value, int) and not isinstance(value, bool) and value.bit_length() > 1024:
+            raise ctx.error(where, f"an integer of {len(str(abs(value)))} digits: beyond any number a quantity can be")
+        if isinstance(value, dict | list) and depth < MAX_NESTING:
+            _check_integers(ctx, where, value, depth + 1)
+
+
 def _kind(value: Any) -> str:
     return {dict: "a table", list: "an array", str: "a string", bool: "a boolean"}.get(
         type(value), type(value).__name__
@@ -429,7 +453,14 @@ def load_session(path: str | Path) -> Session:
         if line is not None and 1 <= line <= len(lines) and lines[line - 1].strip():
             message += f" in {_shorten(lines[line - 1].strip())!r}"
         raise SessionError(f"invalid TOML: {message}", path=path, line=line) from None
+    except ValueError:  # an integer of more than 4,300 digits, which Python refuses to convert
+        raise SessionError("an integer of thousands of digits: not a quantity", path=path,
+                           line=_long_integer_line(text)) from None
+    except RecursionError:
+        raise SessionError("not a session file: tables or arrays nested too deeply", path=path,
+                           line=deep_nesting_line(text)) from None
     ctx = _Context(path, text)
+    _check_integers(ctx, (), data)
     top = _Table(ctx, (), data)
     info = top.table("session")
     title = date = notes = ""
@@ -652,6 +683,9 @@ def _read_experiment(unit: _Table, name: str, folder: Path, rig: RigSpec) -> Exp
         twice = next(n for k, n in enumerate(names) if files[k].resolve() in {f.resolve() for f in files[:k]})
         raise table.error("files", f"{twice!r} is listed twice: each file of a run is read once")
     settings: dict[str, Any] = {}
+    columns = _read_columns(table)
+    if columns:
+        settings["columns"] = columns
     for key, (kind, _description) in EXPERIMENT_SETTINGS[name].items():
         if not table.has(key):
             table.known.append(key)
@@ -683,6 +717,22 @@ def _read_experiment(unit: _Table, name: str, folder: Path, rig: RigSpec) -> Exp
     return ExperimentSpec(name=name, files=files, settings=settings, line=_line_lookup(table.ctx.lines, table.keys))
 
 
+def _read_columns(table: _Table) -> list[str]:
+    """The ``columns`` key of an experiment's table: ``{"Amps" = "current"}`` or ``["Amps=current"]``
+    (the rules of ``--column``, :mod:`motorlab.io.headers`), as rule texts."""
+    from motorlab.io.headers import parse_column_mapping
+
+    value = table.raw("columns")
+    if value is None:
+        return []
+    if not isinstance(value, dict | list | str):
+        raise table.error("columns", f"expected a table such as {{ Amps = \"current\" }}, got {_kind(value)}")
+    try:
+        return [rule.text() for rule in parse_column_mapping(value, name="columns")]
+    except OptionError as exc:
+        raise table.error("columns", exc.message.removeprefix("columns").lstrip(": ")) from None
+
+
 def _existing_file(table: _Table, key: str, name: str, folder: Path) -> Path:
     path = Path(name)
     if not path.is_absolute():
@@ -711,9 +761,12 @@ def read_truth(path: str | Path) -> dict[str, float]:
     """
     path = Path(path)
     try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise SessionError(f"cannot read the truth file ({exc})", path=path) from None
+        _name, raw = read_bytes(path)  # a regular file of sane size (not a FIFO, not /dev/zero)
+        data = load_json(raw.decode("utf-8-sig"), str(path))
+    except InputError as exc:
+        raise SessionError(f"the truth file: {exc.message}", path=path, line=exc.line) from None
+    except UnicodeDecodeError:
+        raise SessionError("the truth file is not UTF-8 text", path=path) from None
     if isinstance(data, dict) and isinstance(data.get("runs"), dict) and data["runs"]:
         data = next(iter(data["runs"].values()))
     box = data.get("gearbox") if isinstance(data, dict) else None

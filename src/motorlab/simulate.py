@@ -25,9 +25,8 @@ stopped, with no chatter.
 from __future__ import annotations
 
 import functools
-import itertools
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from functools import lru_cache
 from typing import Any
@@ -35,88 +34,33 @@ from typing import Any
 import numpy as np
 from scipy import linalg, optimize, signal
 
+from motorlab._sim_grid import _drive_values, _Grid, _schedule
 from motorlab.errors import OptionError
 from motorlab.gearbox import Drivetrain
 from motorlab.model import MotorParams
-
-MODE_VOLTAGE = 0
-MODE_CURRENT = 1
-MODE_OPEN = 2
-
-Signal = float | Callable[[np.ndarray], Any]
-
-
-@dataclass(frozen=True)
-class VoltageDrive:
-    """Ideal voltage source.
-
-    Parameters
-    ----------
-    voltage
-        Terminal voltage [V]: a constant or ``f(t) -> volts`` evaluated at the start of each step
-        (held over the step, as a PWM average or a DAC output is).
-    """
-
-    voltage: Signal
-
-
-@dataclass(frozen=True)
-class CurrentDrive:
-    """Ideal current source (a servo amplifier in current mode).
-
-    Parameters
-    ----------
-    current
-        Winding current [A]: a constant or ``f(t) -> amps`` held over each step.
-    """
-
-    current: Signal
-
-
-@dataclass(frozen=True)
-class BenchSupply:
-    """Bench supply with constant-voltage / constant-current crossover.
-
-    Parameters
-    ----------
-    voltage
-        Voltage setpoint [V] (≥ 0).
-    current_limit
-        Current limit [A] (> 0).
-
-    Notes
-    -----
-    In constant voltage (CV) the terminal voltage is the setpoint; when the current would exceed the
-    limit the supply becomes a current source (CC) until R·I + K·ω reaches the setpoint again. A bench
-    supply cannot sink current: when the back-EMF exceeds the setpoint the current stops at zero and
-    the motor coasts as if disconnected.
-    """
-
-    voltage: float
-    current_limit: float
-
-    def __post_init__(self) -> None:
-        if not (self.voltage >= 0 and math.isfinite(self.voltage)):
-            raise OptionError(f"bench supply voltage must be ≥ 0 V, got {self.voltage}")
-        if not (self.current_limit > 0 and math.isfinite(self.current_limit)):
-            raise OptionError(f"bench supply current limit must be > 0 A, got {self.current_limit}")
-
-
-@dataclass(frozen=True)
-class OpenCircuit:
-    """Relay open: no current; the terminals show the back-EMF K·ω."""
-
-
-Drive = VoltageDrive | CurrentDrive | BenchSupply | OpenCircuit
+from motorlab.sim_drives import (  # noqa: F401 - the drives are part of this module's API
+    MODE_CURRENT,
+    MODE_OPEN,
+    MODE_VOLTAGE,
+    BenchSupply,
+    CurrentDrive,
+    Drive,
+    OpenCircuit,
+    Signal,
+    VoltageDrive,
+)
 
 
 @dataclass(frozen=True)
 class State:
-    """Motor state: winding current [A], shaft speed [rad/s], shaft angle [rad]."""
+    """Motor state: winding current [A], shaft speed [rad/s], shaft angle [rad]; with a thermal model,
+    the winding and case temperatures [°C] (None: the ambient)."""
 
     current: float = 0.0
     speed: float = 0.0
     position: float = 0.0
+    winding_temperature: float | None = None
+    case_temperature: float | None = None
 
 
 @dataclass
@@ -137,6 +81,8 @@ class Simulation:
         The motor simulated.
     events
         ``(time, description)`` of every located event (stops, break-aways, CV/CC crossovers).
+    winding_temperature, case_temperature
+        With a thermal model, the temperatures [°C] at each grid point (else None).
     """
 
     time: np.ndarray
@@ -147,10 +93,15 @@ class Simulation:
     mode: np.ndarray
     params: MotorParams
     events: list[tuple[float, str]] = field(default_factory=list)
+    winding_temperature: np.ndarray | None = None
+    case_temperature: np.ndarray | None = None
 
     def final_state(self) -> State:
         """The state at the last grid point (to continue a simulation)."""
-        return State(float(self.current[-1]), float(self.speed[-1]), float(self.position[-1]))
+        if self.winding_temperature is None or self.case_temperature is None:
+            return State(float(self.current[-1]), float(self.speed[-1]), float(self.position[-1]))
+        return State(float(self.current[-1]), float(self.speed[-1]), float(self.position[-1]),
+                     float(self.winding_temperature[-1]), float(self.case_temperature[-1]))
 
     def sample(self, times: np.ndarray) -> dict[str, np.ndarray]:
         """Linear interpolation of current, speed, position and voltage at arbitrary ``times`` [s]."""
@@ -520,61 +471,6 @@ _EVENT_REGIME: dict[str, str | None] = {
 }
 
 
-def _schedule(drive: Drive | Sequence[tuple[float, Drive]]) -> list[tuple[float, Drive]]:
-    if isinstance(drive, VoltageDrive | CurrentDrive | BenchSupply | OpenCircuit):
-        return [(0.0, drive)]
-    items = [(float(t), d) for t, d in drive]
-    if not items:
-        raise OptionError("the drive schedule is empty")
-    for t, d in items:
-        if not isinstance(d, VoltageDrive | CurrentDrive | BenchSupply | OpenCircuit):
-            raise OptionError(f"not a drive: {d!r}")
-        if not math.isfinite(t):
-            raise OptionError(f"drive start time {t} is not finite")
-    if any(b[0] < a[0] for a, b in itertools.pairwise(items)):
-        raise OptionError("drive schedule times must be increasing")
-    return items
-
-
-def _drive_values(drive: Drive, t: np.ndarray) -> np.ndarray:
-    if isinstance(drive, VoltageDrive | CurrentDrive):
-        value = drive.voltage if isinstance(drive, VoltageDrive) else drive.current
-        if callable(value):
-            out = np.broadcast_to(np.asarray(value(t), dtype=float), t.shape).astype(float)
-        else:
-            out = np.full(t.shape, float(value))
-        if not np.all(np.isfinite(out)):
-            raise OptionError("the drive produced a non-finite value")
-        return out
-    if isinstance(drive, BenchSupply):
-        return np.full(t.shape, drive.voltage)
-    return np.zeros(t.shape)
-
-
-@dataclass
-class _Grid:
-    """Output arrays on the grid ``k·dt`` (``n + 1`` points), filled in as the run advances."""
-
-    time: np.ndarray
-    current: np.ndarray
-    speed: np.ndarray
-    position: np.ndarray
-    voltage: np.ndarray
-    mode: np.ndarray
-
-    @classmethod
-    def empty(cls, n: int, dt: float) -> _Grid:
-        """``time`` = k·dt [s] for k = 0 … n; the other arrays allocated, not yet filled."""
-        return cls(
-            np.arange(n + 1) * dt,
-            np.empty(n + 1),
-            np.empty(n + 1),
-            np.empty(n + 1),
-            np.empty(n + 1),
-            np.empty(n + 1, dtype=np.int8),
-        )
-
-
 def simulate(
     params: MotorParams | Drivetrain,
     drive: Drive | Sequence[tuple[float, Drive]],
@@ -582,6 +478,7 @@ def simulate(
     duration: float,
     dt: float = 1e-3,
     initial: State | None = None,
+    thermal_step: float = 0.05,
 ) -> Simulation:
     """Simulate the motor under a drive or a schedule of drives.
 
@@ -602,12 +499,17 @@ def simulate(
         Grid step [s]; the dynamics are exact for held inputs whatever the step, so ``dt`` only sets
         how often the input may change and where the output is reported.
     initial
-        Initial state (default: at rest, no current).
+        Initial state (default: at rest, no current, at the ambient temperature).
+    thermal_step
+        With a thermal model (``params.thermal``), how often R and K are updated [s]: the run advances
+        in stretches of this length (whole steps) with R and K at the winding's predicted midpoint
+        temperature, the stretch's I²·R heat then moves the thermal network exactly. Without a thermal
+        model nothing of this happens and the run is as it always was.
 
     Returns
     -------
     Simulation
-        Arrays on the grid ``k·dt``, k = 0 … round(duration/dt).
+        Arrays on the grid ``k·dt``, k = 0 … round(duration/dt) (with the temperatures when heated).
 
     Raises
     ------
@@ -632,6 +534,8 @@ def simulate(
     starts = [min(max(round(ts / dt), 0), n) for ts, _ in items]
     starts[0] = 0
     bounds = [*starts[1:], n]
+    if motor.thermal is not None:
+        return _simulate_heated(motor, drivetrain, items, (starts, bounds), grid, state, initial, thermal_step)
     for (_, drv), k0, k1 in zip(items, starts, bounds, strict=True):
         if k1 > k0:
             state = _run_drive(runner, drv, grid, k0, k1, state)
@@ -751,3 +655,60 @@ def _fill_outputs(
             else:
                 cur[sl] = np.where(is_cc, lim, np.where(is_oc, 0.0, cur[sl]))
             volt[sl] = np.where(is_cc, p.R * lim + emf, np.where(is_oc, emf, drv.voltage))
+
+
+def _simulate_heated(
+    motor: MotorParams, drivetrain: Drivetrain | None, items: list[tuple[float, Drive]],
+    segments: tuple[list[int], list[int]], grid: _Grid, state: tuple[float, float, float], initial: State,
+    thermal_step: float,
+) -> Simulation:
+    """:func:`simulate` with a thermal model: stretches of ``thermal_step`` at their midpoint R(T), K(T).
+
+    The electrical and mechanical states are carried exactly across stretches; each stretch's Joule heat
+    R(T)·∫i²dt advances the two-node network exactly (:meth:`ThermalModel.step`); the temperatures on the
+    grid are interpolated linearly within a stretch.
+    """
+    from dataclasses import replace as _replace
+
+    thermal = motor.thermal
+    assert thermal is not None
+    if not (thermal_step > 0 and math.isfinite(thermal_step)):
+        raise OptionError(f"thermal step must be positive, got {thermal_step}")
+    dt, n = float(grid.time[1] - grid.time[0]) if grid.time.size > 1 else 1.0, grid.time.size - 1
+    tw = thermal.ambient_temperature if initial.winding_temperature is None else float(initial.winding_temperature)
+    tc = tw if initial.case_temperature is None else float(initial.case_temperature)
+    if initial.winding_temperature is None and initial.case_temperature is not None:
+        tw = tc
+    tw_grid, tc_grid = np.empty(n + 1), np.empty(n + 1)
+    tw_grid[0], tc_grid[0] = tw, tc
+    chunk = max(1, round(thermal_step / dt))
+    events: list[tuple[float, str]] = []
+    slope = 0.0
+    for (_, drv), k0, k1 in zip(items, *segments, strict=True):
+        k = k0
+        while k < k1:
+            kb = min(k + chunk, k1)
+            h = (kb - k) * dt
+            hot = motor.at_temperature(tw + 0.5 * h * slope, tc)
+            train = None if drivetrain is None else _replace(
+                drivetrain, motor=drivetrain.motor.at_temperature(tw + 0.5 * h * slope, tc))
+            runner = _Runner(train.forward() if train is not None else hot, dt, train)
+            state = _run_drive(runner, drv, grid, k, kb, state)
+            if kb == n:
+                grid.mode[n] = grid.mode[n - 1]
+            _fill_outputs(runner, [(0.0, drv)], [k], [kb], grid.time, grid.current, grid.speed, grid.voltage,
+                          grid.mode, runner.p)
+            i2 = grid.current[k : kb + 1] ** 2
+            power = runner.p.R * float(np.sum(0.5 * (i2[1:] + i2[:-1]))) * dt / h
+            tw_new, tc_new = thermal.step(tw, tc, power, h)
+            frac = np.arange(1, kb - k + 1) / (kb - k)
+            tw_grid[k + 1 : kb + 1] = tw + frac * (tw_new - tw)
+            tc_grid[k + 1 : kb + 1] = tc + frac * (tc_new - tc)
+            slope = (tw_new - tw) / h
+            tw, tc = tw_new, tc_new
+            events.extend(runner.events)
+            k = kb
+    if n == 0:
+        grid.mode[0] = MODE_VOLTAGE
+    return Simulation(grid.time, grid.current, grid.speed, grid.position, grid.voltage, grid.mode, motor, events,
+                      tw_grid, tc_grid)

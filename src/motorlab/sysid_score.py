@@ -193,7 +193,18 @@ def residuals(gains: Gains, tests: Sequence[ScoreTest]) -> tuple[np.ndarray, np.
 def score(gains: Gains, tests: Sequence[ScoreTest]) -> Score:
     """The fair score of (kS [V], kV [V·s/unit], kA [V·s²/unit]) on the tests (units as the tests')."""
     rs, rp = residuals(gains, tests)
-    return Score(float(np.sqrt(np.mean(rs**2))), float(np.sqrt(np.mean(rp**2))))
+    return Score(rms(rs), rms(rp))
+
+
+def rms(values: np.ndarray) -> float:
+    """√(mean(x²)) without overflowing on huge residuals (scaled by the largest; inf or NaN as they come)."""
+    x = np.asarray(values, dtype=float)
+    if x.size == 0:
+        return math.nan
+    peak = float(np.max(np.abs(x)))
+    if peak == 0.0 or not math.isfinite(peak):
+        return peak
+    return peak * float(np.sqrt(np.mean(np.square(x / peak))))
 
 
 #: Weight of the position score against the speed score in :func:`fit_gains` (on the log scale).
@@ -344,7 +355,7 @@ def residual_diagnostics(gains: Gains, tests: Sequence[ScoreTest]) -> dict[str, 
     """
     lag, ratio = speed_lag(gains, tests)
     rs_all, _ = residuals(gains, tests)
-    rms = float(np.sqrt(np.mean(rs_all**2))) or 1.0
+    rms_all = rms(rs_all) or 1.0
     by_dir: dict[int, list[float]] = {1: [], -1: []}
     explained, total = 0.0, 0.0
     for test in tests:
@@ -357,7 +368,7 @@ def residual_diagnostics(gains: Gains, tests: Sequence[ScoreTest]) -> dict[str, 
             trend = np.polyval(np.polyfit(test.time, rp, 1), test.time)
             explained += float(np.sum((trend - rp.mean()) ** 2))
             total += float(np.sum((rp - rp.mean()) ** 2))
-    asym = (np.mean(by_dir[1]) - np.mean(by_dir[-1])) / rms if by_dir[1] and by_dir[-1] else 0.0
+    asym = (np.mean(by_dir[1]) - np.mean(by_dir[-1])) / rms_all if by_dir[1] and by_dir[-1] else 0.0
     return {"lag_s": lag, "lag_rmse_ratio": ratio, "asymmetry": float(asym),
             "drift": explained / total if total > 0 else 0.0}
 
@@ -408,8 +419,8 @@ def position_residual_diagnostics(
             total += float(np.sum((res - res.mean()) ** 2))
     lag = -rw / ww if ww > 0 else 0.0
     share = rw * rw / (ww * rr) if ww > 0 and rr > 0 else 0.0
-    rms = math.sqrt(rr / max(n, 1)) or 1.0
-    asym = (np.mean(by_dir[1]) - np.mean(by_dir[-1])) / rms if by_dir[1] and by_dir[-1] else 0.0
+    rms_res = math.sqrt(rr / max(n, 1)) or 1.0
+    asym = (np.mean(by_dir[1]) - np.mean(by_dir[-1])) / rms_res if by_dir[1] and by_dir[-1] else 0.0
     return {"lag_s": max(lag, 0.0), "lag_rmse_ratio": math.sqrt(max(1.0 - share, 0.0)), "asymmetry": float(asym),
             "drift": explained / total if total > 0 else 0.0}
 

@@ -21,12 +21,109 @@ _DIGIT_SEPARATOR = re.compile(r"\d_|_\d")
 STANDARD_GRAVITY = 9.80665
 
 
+#: Bounds on the text of a quantity or unit (see :func:`check_expression`): characters, digits of
+#: one number, size of an exponent, depth of parentheses.
+MAX_QUANTITY_TEXT = 200
+MAX_NUMBER_DIGITS = 40
+MAX_EXPONENT = 12.0
+MAX_PARENTHESES = 2
+
+_TOKEN = re.compile(
+    r"(?P<space>\s+)"
+    r"|(?P<number>(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)"
+    r"|(?P<power>\*\*|\^)"
+    r"|(?P<op>[*/])"
+    r"|(?P<open>\()"
+    r"|(?P<close>\))"
+    r"|(?P<sign>[+-])"
+    r"|(?P<name>(?:[^\W\d]|[°%Ω\u00b5\u03bc²³])+)"
+)
+
+
+def check_expression(text: str) -> None:
+    """Refuse a quantity or unit text that is more than numbers, unit names and the operators of a unit.
+
+    pint evaluates what it is given as an arithmetic expression, with Python's exact integers:
+    ``9**9**9`` would run for ever and ``2**1024`` overflows a float. A unit needs no more than
+    products, quotients, a power by a small constant exponent (``m^2``, ``s**-1``) and
+    parentheses (``(m/s)^2``), so only that is let through: at most :data:`MAX_QUANTITY_TEXT`
+    characters, numbers of at most :data:`MAX_NUMBER_DIGITS` characters, an exponent that is a
+    plain number of magnitude ≤ :data:`MAX_EXPONENT` and not itself raised to a power (no tower),
+    parentheses at most :data:`MAX_PARENTHESES` deep, a sign only in front of a number.
+    Everything it lets through is evaluated by pint in bounded work.
+
+    Raises
+    ------
+    OptionError
+        Saying what is not allowed (the caller adds the option's or file's name).
+    """
+    if len(text) > MAX_QUANTITY_TEXT:
+        raise OptionError(f"longer than {MAX_QUANTITY_TEXT} characters: not a quantity")
+    tokens: list[tuple[str, str]] = []
+    at = 0
+    while at < len(text):
+        match = _TOKEN.match(text, at)
+        if match is None:
+            raise OptionError(f"{text[at]!r} has no place in a quantity (numbers, units, * / ^ and parentheses)")
+        at = match.end()
+        if match.lastgroup != "space":
+            tokens.append((str(match.lastgroup), match.group()))
+    depth = 0
+    for k, (kind, token) in enumerate(tokens):
+        before = tokens[k - 1][0] if k else ""
+        if kind == "number" and len(token) > MAX_NUMBER_DIGITS:
+            raise OptionError(f"the number {token[:20]}… is longer than {MAX_NUMBER_DIGITS} characters")
+        if kind == "open":
+            depth += 1
+            if depth > MAX_PARENTHESES:
+                raise OptionError(f"parentheses nested more than {MAX_PARENTHESES} deep")
+        elif kind == "close":
+            depth -= 1
+        elif kind == "sign" and (k + 1 >= len(tokens) or tokens[k + 1][0] != "number"
+                                 or before not in ("", "power", "op", "open")):
+            raise OptionError(f"{token!r} only as the sign of a number (no sums in a quantity)")
+        elif kind == "power":
+            _check_exponent(tokens[k + 1 :])
+
+
+def _check_exponent(rest: list[tuple[str, str]]) -> None:
+    """The tokens after ``^``/``**``: a signed plain number of small size, not raised again."""
+    sign = 1 if rest and rest[0][0] == "sign" else 0
+    if len(rest) <= sign or rest[sign][0] != "number":
+        raise OptionError("an exponent must be a plain number (such as m^2 or s^-1)")
+    if abs(float(rest[sign][1])) > MAX_EXPONENT:
+        raise OptionError(f"the exponent {rest[sign][1]} is larger than {MAX_EXPONENT:g}")
+    if len(rest) > sign + 1 and rest[sign + 1][0] == "power":
+        raise OptionError("a power of a power (such as 9**9**9) is not a quantity")
+
+
+class _BoundedRegistry(pint.UnitRegistry):  # type: ignore[misc]
+    """A pint registry that parses only what :func:`check_expression` lets through, once it is set up."""
+
+    guarded = False
+
+    def parse_expression(self, input_string: str, *args: Any, **kwargs: Any) -> Any:
+        if self.guarded and isinstance(input_string, str):
+            check_expression(input_string)
+        return super().parse_expression(input_string, *args, **kwargs)
+
+    def parse_units_as_container(self, input_string: str, *args: Any, **kwargs: Any) -> Any:
+        if self.guarded and isinstance(input_string, str):
+            check_expression(input_string)
+        return super().parse_units_as_container(input_string, *args, **kwargs)
+
+
 @lru_cache(maxsize=1)
 def registry() -> pint.UnitRegistry:
-    """The one pint registry motorlab uses (created on first use)."""
-    ureg: pint.UnitRegistry = pint.UnitRegistry()
+    """The one pint registry motorlab uses (created on first use).
+
+    Every text it parses after its set-up, wherever it comes from (an option, a session file, a
+    log's unit metadata, an environment variable), passes :func:`check_expression` first.
+    """
+    ureg = _BoundedRegistry()
     ureg.define("count = [] = counts = ct")
     ureg.define("rotation = revolution")  # WPILib/SysId write "Rotations"
+    ureg.guarded = True
     return ureg
 
 
@@ -82,37 +179,54 @@ def parse_quantity(value: Any, unit: str, *, name: str = "value") -> float:
     if isinstance(value, bool):
         raise OptionError(f"{name}: expected a quantity in {unit}, got {value!r}")
     if isinstance(value, int | float):
-        number = float(value)
+        try:
+            number = float(value)
+        except OverflowError:  # an int beyond a float (a TOML integer of 400 digits)
+            raise OptionError(f"{name}: {_shown(str(value))} is not a finite number") from None
     else:
         text = str(value).strip()
         if _DIGIT_SEPARATOR.search(text):  # Python and pint read "1_0" as 10: refuse, do not guess
-            raise OptionError(f"{name}: {value!r} is not a number (no '_' between digits)")
+            raise OptionError(f"{name}: {_shown(text)!r} is not a number (no '_' between digits)")
         try:
             number = float(text)
         except ValueError:
             number = _parse_with_pint(text, unit, name)
     if not math.isfinite(number):
-        raise OptionError(f"{name}: {value!r} is not a finite number")
+        raise OptionError(f"{name}: {_shown(str(value))!r} is not a finite number")
     return number
+
+
+def _shown(text: str) -> str:
+    """``text`` cut to 60 characters for a message (a 5,000-digit number is not shown whole)."""
+    return text if len(text) <= 60 else text[:57] + "..."
 
 
 def _parse_with_pint(text: str, unit: str, name: str) -> float:
     ureg = registry()
+    shown = _shown(text)
     try:
+        check_expression(text)
         quantity: Any = ureg.Quantity(text)
+    except OptionError as exc:
+        raise OptionError(f"{name}: cannot read {shown!r} as a quantity in {unit}: {exc.message}") from None
+    except OverflowError:  # 1e200^2: beyond a float
+        raise OptionError(f"{name}: {shown!r} is not a finite number") from None
     except Exception as exc:  # pint raises several unrelated types for bad text
-        raise OptionError(f"{name}: cannot read {text!r} as a quantity in {unit} ({exc})") from None
+        raise OptionError(f"{name}: cannot read {shown!r} as a quantity in {unit} ({exc})") from None
     target = ureg.Quantity(1.0, unit)
-    if not isinstance(quantity, pint.Quantity):
-        return float(quantity)
     try:
-        return float(quantity.to(unit).magnitude)
-    except pint.DimensionalityError:
-        pass
-    # A mass standing for a weight: in*oz, kg*cm (torque) or g, kg (force).
-    weighted = quantity * ureg.Quantity(STANDARD_GRAVITY, "m/s^2")
-    if weighted.dimensionality == target.dimensionality:
-        return float(weighted.to(unit).magnitude)
+        if not isinstance(quantity, pint.Quantity):
+            return float(quantity)
+        try:
+            return float(quantity.to(unit).magnitude)
+        except pint.DimensionalityError:
+            pass
+        # A mass standing for a weight: in*oz, kg*cm (torque) or g, kg (force).
+        weighted = quantity * ureg.Quantity(STANDARD_GRAVITY, "m/s^2")
+        if weighted.dimensionality == target.dimensionality:
+            return float(weighted.to(unit).magnitude)
+    except (OverflowError, ValueError, ZeroDivisionError):  # 2**1024 or 1e308^2: beyond a float
+        raise OptionError(f"{name}: {shown!r} is not a finite number") from None
     raise OptionError(
         f"{name}: {text!r} has units of {quantity.units:~P}, which cannot be converted to {unit}"
     )

@@ -75,7 +75,8 @@ def test_column_table_targets_canonical_signals():
 @pytest.mark.parametrize(
     ("name", "pattern"),
     [
-        ("unknown_column.csv", r"unknown_column\.csv:1: unknown column 'temperature_C'; known columns: time_s, "),
+        ("unknown_column.csv", r"unknown_column\.csv:1: column 'humidity_pct' names no quantity motorlab knows: "
+                                  r'map it with --column "humidity_pct=QUANTITY"'),
         ("nan.csv", r"nan\.csv:3: voltage_V: 'nan' is not a finite number"),
         ("missing_value.csv", r"missing_value\.csv:3: expected 3 columns"),
         ("no_header.csv", r"no_header\.csv:1: no header line"),

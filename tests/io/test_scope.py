@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pytest
 
@@ -115,3 +117,94 @@ def test_bad_waveform_files(tmp_path):
     path.write_text("index,volts\n0,1\n1,2\n")
     with pytest.raises(LogFormatError, match="not a waveform export"):
         read_scope_waveform(path)
+
+
+def _square_wave_export(path, n: int = 3000, *, rows=None, newline: str = "\n", end: str = "\n") -> None:
+    """A Rigol export of a 3.3 V square wave of period 100 samples (rising edges at 50, 150, ...)."""
+    k = np.arange(n)
+    volts = np.where((k // 50) % 2 == 1, 3.3, 0.0) + 0.01 * np.sin(k)
+    lines = ["X,CH1,Start,Increment,", "Sequence,Volt,-1.000000e-03,1.000000e-05,"]
+    lines += rows if rows is not None else [f"{i},{v:.4e}," for i, v in zip(k, volts, strict=True)]
+    path.write_text(newline.join(lines) + end, newline="")
+
+
+@pytest.mark.parametrize("chunk", [64, 1000, 1 << 23])
+def test_waveform_read_in_chunks_gives_what_a_whole_read_gives(tmp_path, monkeypatch, chunk):
+    # Chunks of a few lines (a row cut across chunk boundaries, comments and blank lines inside some
+    # chunks, a truncated last line) give the same edges and lines as the file read whole.
+    from motorlab.io import _chunks
+    from motorlab.io.scope import _samples_in_memory, find_rising_edges
+
+    k = np.arange(3000)
+    volts = np.where((k // 50) % 2 == 1, 3.3, 0.0) + 0.01 * np.sin(k)
+    rows = [f"{i},{v:.4e}," for i, v in zip(k, volts, strict=True)]
+    rows[700:700] = ["# a note the user typed", ""]
+    rows.append("3000,3.3e")  # the writer was cut off
+    path = tmp_path / "w.csv"
+    _square_wave_export(path, rows=rows, end="")
+    monkeypatch.setattr(_chunks, "CHUNK", chunk)
+    rec = read_scope_waveform(path)
+    whole = _samples_in_memory(path, None)
+    edges, _ = find_rising_edges(whole.time, whole.volts)
+    np.testing.assert_allclose(rec.time, edges, rtol=0, atol=1e-12)
+    expected = np.searchsorted(whole.time, edges)
+    np.testing.assert_array_equal(rec.lines, whole.lines[expected])
+    assert rec.metadata["n_samples"] == 3000
+    assert rec.metadata["sample_interval"] == pytest.approx(1e-5)
+    assert rec.lines[0] == 3 + 50  # the sample after the first crossing; no comment before it
+
+
+def test_waveform_with_gaps_in_the_index_and_crlf(tmp_path, monkeypatch):
+    from motorlab.io import _chunks
+
+    k = np.concatenate([np.arange(1000), np.arange(1100, 3000)])  # a gap: the indices are kept
+    volts = np.where((k // 50) % 2 == 1, 3.3, 0.0)
+    path = tmp_path / "w.csv"
+    _square_wave_export(path, rows=[f"{i},{v:.4e}," for i, v in zip(k, volts, strict=True)], newline="\r\n")
+    monkeypatch.setattr(_chunks, "CHUNK", 4096)
+    rec = read_scope_waveform(path)
+    rises = [i for i in range(1, k.size) if volts[i] > volts[i - 1]]
+    np.testing.assert_allclose(rec.time, -1e-3 + (k[rises] - 0.5) * 1e-5, atol=1e-9)
+
+
+def test_waveform_errors_name_the_line_in_any_chunk(tmp_path, monkeypatch):
+    from motorlab.io import _chunks
+
+    monkeypatch.setattr(_chunks, "CHUNK", 256)
+    rows = [f"{i},{(i // 50) % 2 * 3.3:.4e}," for i in range(2000)]
+    rows[1500] = "1500,nan,"
+    path = tmp_path / "w.csv"
+    _square_wave_export(path, rows=rows)
+    with pytest.raises(LogFormatError, match=r"w\.csv:1503: CH1: 'nan' is not a finite number"):
+        read_scope_waveform(path)
+    rows[1500] = "1499,0,"
+    _square_wave_export(path, rows=rows)
+    with pytest.raises(LogFormatError, match=r"w\.csv:1503: sample times must increase"):
+        read_scope_waveform(path)
+
+
+def test_waveform_with_bare_carriage_returns_is_read_whole(tmp_path):
+    path = tmp_path / "w.csv"
+    _square_wave_export(path, newline="\r", end="\r")
+    rec = read_scope_waveform(path)
+    assert rec.time.size == 30
+    assert rec.time[0] == pytest.approx(-1e-3 + 49.5e-5, abs=1e-7)  # the 10 mV ripple moves it 0.02 µs
+
+
+def test_reading_a_waveform_reports_progress(tmp_path, monkeypatch):
+    from motorlab import progress
+    from motorlab.io import _chunks
+
+    monkeypatch.setattr(_chunks, "CHUNK", 4096)
+    path = tmp_path / "capture.csv"
+    _square_wave_export(path, n=20000)
+    seen: list[progress.Progress] = []
+    with progress.reporting(seen.append):
+        read_scope_waveform(path)
+    reading = [p for p in seen if p.what == "Reading capture.csv"]
+    assert reading[0].unit == "MB"
+    assert reading[0].total == pytest.approx(path.stat().st_size / 1e6, abs=0.05)
+    assert len(reading) > 20  # one report a chunk
+    assert all(b.done >= a.done for a, b in itertools.pairwise(reading))
+    assert reading[-1].finished
+    assert any(p.what.startswith("Finding the edges") and p.finished for p in seen)

@@ -306,7 +306,7 @@ def test_ui_command_prints_its_url_and_serves() -> None:
                 assert time.monotonic() < deadline
                 time.sleep(0.1)
         assert page.status_code == 200
-        assert 'id="files"' in page.text
+        assert 'static/js/main.js' in page.text  # the page's entry module
     finally:
         proc.terminate()
         proc.communicate(timeout=20)  # closes the pipes too

@@ -32,6 +32,7 @@ from scipy import optimize
 
 from motorlab.errors import FitError, LogFormatError, OptionError
 from motorlab.fitting import LeastSquares, fit_least_squares, fit_linear, r_squared
+from motorlab.io import _text as _io_text
 from motorlab.plan import MATERIALS
 from motorlab.recording import Recording
 
@@ -79,9 +80,9 @@ def check_range(value: float | None, name: str, low: float, high: float, unit: s
         raise OptionError(f"{name} must lie between {low:g} and {high:g}{text}, got {value!r}{reason}")
 
 
-#: Encoder counts per revolution a real encoder can have [count/rev]: at least one count, at most
-#: 2³⁰ (the finest absolute encoders give 2²⁴–2²⁹ counts before a gearbox multiplies them).
-CPR_RANGE = (1.0, 2.0**30)
+#: Encoder counts per revolution a real encoder can have [count/rev]: the one range of the readers
+#: (:data:`motorlab.io._text.CPR_RANGE`), at least one count, at most 2³⁰.
+CPR_RANGE = _io_text.CPR_RANGE
 
 
 #: Generous physical limits of the quantities the analyses are given, by symbol: (lowest, highest,

@@ -21,7 +21,7 @@ from motorlab.cli.common import EXIT_INPUT, EXIT_INTERNAL, Parser, is_numerical_
 from motorlab.errors import MotorlabError
 
 #: Sub-command modules, in the order ``motorlab --help`` lists them.
-COMMANDS = ("demo", "motors", "plan", "simulate", "analyze", "tune", "characterize", "acquire", "ui")
+COMMANDS = ("demo", "motors", "plan", "simulate", "analyze", "tune", "characterize", "acquire", "robot", "ui")
 
 
 def build_parser() -> Parser:

@@ -18,6 +18,7 @@ from typing import Any
 from motorlab.cli.common import (
     Parser,
     check_figure_path,
+    column_rule,
     finite_number,
     positive_int,
     positive_number,
@@ -101,6 +102,9 @@ def _argparse_keywords(opt: Option) -> dict[str, Any]:
         out["type"] = positive_number if opt.positive else finite_number
     elif opt.kind == "text":
         pass
+    elif opt.kind == "columns":
+        out["action"] = "append"
+        out["type"] = column_rule
     else:
         assert opt.unit is not None
         out["type"] = quantity(opt.unit, positive=opt.positive, nonnegative=opt.nonnegative)

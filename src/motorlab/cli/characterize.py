@@ -48,12 +48,19 @@ def run(args: argparse.Namespace) -> int:
     from motorlab.session import load_session
 
     session = load_session(args.session)  # every validation error happens here, before any analysis
-    out_dir = Path(args.output) if args.output else session.folder / "results"
+    if args.output is not None:
+        check_output_dir(args.output)  # "-o ''" is refused, not taken as the default folder
+    out_dir = Path(args.output) if args.output is not None else session.folder / "results"
     check_output_dir(out_dir)
     check_not_inputs(output_paths(out_dir, report=not args.no_report), session_inputs(session))
-    for path in session_inputs(session)[1:]:  # a column in an unknown unit is refused now, not after hours
-        if path.suffix.lower() == ".csv" and path.is_file() and _is_table(path):
-            check_header(path)
+    from motorlab.io.headers import column_mapping
+
+    for unit in session.units.values():  # a column in an unknown unit is refused now, not after hours
+        for spec in unit.experiments.values():
+            with column_mapping(spec.settings.get("columns")):
+                for path in spec.files:
+                    if path.suffix.lower() == ".csv" and path.is_file() and _is_table(path):
+                        check_header(path)
     result = run_with_progress(session, quiet=args.quiet, figures=not args.no_report)
     paths = write_outputs(result, out_dir, report=not args.no_report)
     if not args.quiet:

@@ -40,7 +40,9 @@ class Parser(argparse.ArgumentParser):
         return plain_text(super().format_help())
 
     def error(self, message: str) -> NoReturn:
-        print(f"{self.prog}: error: {message}", file=sys.stderr)
+        """``motorlab: error: SUB-COMMAND: message`` like every other refusal, and exit code 2."""
+        command = self.prog.split(None, 1)[1] if " " in self.prog else ""
+        print(f"motorlab: error: {command + ': ' if command else ''}{message}", file=sys.stderr)
         raise SystemExit(EXIT_INPUT)
 
 
@@ -83,6 +85,17 @@ def quantity(unit: str, *, positive: bool = False, nonnegative: bool = False) ->
 
     convert.__name__ = f"quantity in {unit}"
     return convert
+
+
+def column_rule(text: str) -> str:
+    """An argparse ``type`` for ``--column "HEADER=quantity"`` (:mod:`motorlab.io.headers`): the rule as text."""
+    from motorlab.io.headers import parse_column_mapping
+
+    try:
+        (rule,) = parse_column_mapping(text)
+    except OptionError as exc:
+        raise argparse.ArgumentTypeError(exc.message.removeprefix("--column ")) from None
+    return rule.text()
 
 
 def _whole_number(text: str) -> int:

@@ -50,8 +50,8 @@ def plant_from_args(args: argparse.Namespace, units: MechanismUnits) -> Plant:
 
 def run(args: argparse.Namespace) -> int:
     """Run ``motorlab tune``."""
-    if args.plot:
-        check_figure_path(args.plot)  # before the design and simulations, not after
+    if args.plot is not None:
+        check_figure_path(args.plot)  # before the design and simulations, not after ("--plot ''" refused)
     units = MechanismUnits.from_options(args.units, cpr=args.cpr, wheel_radius=args.wheel_radius)
     if args.overshoot < 0 or args.overshoot >= 100:
         raise OptionError(f"--overshoot must be between 0 and 100 %, got {args.overshoot}")
@@ -73,7 +73,7 @@ def run(args: argparse.Namespace) -> int:
         step=args.step,
     )
     snippet = emit_snippet(result.target, args.emit) if args.emit else None
-    if args.plot:
+    if args.plot is not None:
         import matplotlib
 
         matplotlib.use("Agg")

@@ -32,7 +32,7 @@ if TYPE_CHECKING:
 
 #: Kinds of option value: a number with a unit (pint), one of some words, true/false, paths, a whole
 #: number, a plain number (its unit depends on other options, e.g. tune's kV per ``--units``), text.
-KINDS = ("quantity", "choice", "flag", "files", "int", "number", "text")
+KINDS = ("quantity", "choice", "flag", "files", "int", "number", "text", "columns")
 
 
 @dataclass(frozen=True)
@@ -55,7 +55,8 @@ class Option:
         The field's name in words, as a form shows it ("Encoder counts per revolution").
     kind
         ``"quantity"`` (a number with a unit), ``"choice"``, ``"flag"`` (true/false), ``"files"``
-        (one or more paths) or ``"int"``.
+        (one or more paths), ``"int"`` or ``"columns"`` (column rules ``HEADER=quantity``, repeatable:
+        :mod:`motorlab.io.headers`; the value is a list of rules as text).
     dest
         Name of the value handed to the experiment's ``run`` (default: ``name`` with ``_``). A flag
         whose default is True is switched off by ``--name`` (``--no-current`` sets ``use_current``
@@ -124,6 +125,10 @@ class Option:
             return [str(item) for item in items]
         if self.kind == "text":
             return str(value)
+        if self.kind == "columns":
+            from motorlab.io.headers import parse_column_mapping
+
+            return [rule.text() for rule in parse_column_mapping(value, name=label)] or None
         if self.kind == "number":
             try:
                 number = float(value)
@@ -156,7 +161,7 @@ class Option:
         text = f"{self.label}: {self.help}" if self.label and self.help else self.label or self.help
         if self.unit and self.unit not in ("1", "count"):
             text += f" [{format_unit(self.unit)}]"
-        if self.default is not None and self.kind not in ("flag", "files"):
+        if self.default is not None and self.kind not in ("flag", "files", "columns"):
             shown = f"{self.default:g}" if isinstance(self.default, float) else str(self.default)
             text += f" (default {shown})"
         return text.replace("%", "%%")
@@ -289,9 +294,11 @@ class Experiment:
         The same file given twice (also under two names) is refused: its rows would count twice.
         """
         from motorlab.io._text import check_distinct
+        from motorlab.io.headers import column_mapping
 
         check_distinct(paths)
-        result = self.run([str(p) for p in paths], dict(values))
+        with column_mapping(values.get("columns")):  # --column: every CSV read by the run honours it
+            result = self.run([str(p) for p in paths], dict(values))
         if self.shaft:
             result.details.setdefault("shaft", self.shaft)
         result.check_physics()  # also what the run added after the analysis made its result

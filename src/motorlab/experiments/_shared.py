@@ -1,4 +1,4 @@
-"""Options and readers several experiments share (encoder, inertia, current unit)."""
+"""Options and readers several experiments share (encoder, inertia, current unit, CSV column mapping)."""
 
 from __future__ import annotations
 
@@ -16,6 +16,12 @@ CPR = Option(
 CURRENT_UNIT = Option(
     "current-unit", kind="choice", choices=("A", "mA"), label="Unit of the current column",
     help="of an FTC log; left empty: from its header, else amperes",
+)
+COLUMN = Option(
+    "column", kind="columns", dest="columns", metavar='"HEADER=QUANTITY"', label="Column mapping",
+    help='read a CSV column whose header motorlab does not know as a quantity, e.g. "Amps=current", '
+         '"I (mA)=current", "Load=torque [oz*in]" or "Notes=skip"; one rule per column (headers in words '
+         'with a unit in brackets, such as "Current (A)", need none)',
 )
 _INERTIA_GROUP = "inertia at the encoder shaft (its value, or the flywheel disc)"
 INERTIA = (

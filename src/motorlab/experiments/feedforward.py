@@ -6,6 +6,7 @@ from typing import Any
 
 from motorlab.errors import OptionError
 from motorlab.experiments import Experiment, Option, RigRun, stderr_or_none
+from motorlab.experiments._shared import COLUMN
 
 MECHANISMS = ("simple", "elevator", "arm")  # as motorlab.feedforward.MECHANISMS (tests/test_experiments.py)
 #: frc-characterization units (motorlab.io.frc_json.UNITS), as its --units choices.
@@ -87,6 +88,7 @@ EXPERIMENT = Experiment(
         Option("units", kind="choice", choices=UNIT_CHOICES, label="Unit of a frc-characterization file",
                help="for a file without a 'units' key; left empty: that tool's template units (Feet; Degrees "
                     "for an arm)"),
+        COLUMN,
     ),
     reports=("kS", "kV", "kA", "kG"),
     shaft="output + the SysId mechanism, per unit of K·i",

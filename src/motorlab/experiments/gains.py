@@ -6,7 +6,7 @@ from __future__ import annotations
 from typing import Any
 
 from motorlab.experiments import Experiment, Option, RigRun, Setting
-from motorlab.experiments._shared import read_tables
+from motorlab.experiments._shared import COLUMN, read_tables
 
 
 def _gain(name: str, *, title: str, summary: str, inputs: str, unit: str, example: str, reports: tuple[str, str],
@@ -24,7 +24,7 @@ def _gain(name: str, *, title: str, summary: str, inputs: str, unit: str, exampl
     return Experiment(
         name=name, title=title, summary=summary, analysis=f"motorlab.analyses.gains:{name}", inputs=inputs, run=run,
         options=(Option("nominal", unit, positive=True, metavar="GAIN", label="Nominal gain",
-                        help=f"the gain it should have, to compare with, e.g. {example}"),),
+                        help=f"the gain it should have, to compare with, e.g. {example}"), COLUMN),
         reports=reports, shaft="electrical", order=order, settings=(Setting("nominal", unit, setting),),
         characterize=characterize, rig=RigRun(name, f"{name}.csv", order=rig_order),
     )

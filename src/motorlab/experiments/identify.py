@@ -5,6 +5,7 @@ from __future__ import annotations
 from typing import Any
 
 from motorlab.experiments import Experiment, Option, RigRun
+from motorlab.experiments._shared import COLUMN
 
 PARAMETERS = ("K", "R", "L", "J", "b", "Tf")
 
@@ -57,6 +58,7 @@ EXPERIMENT = Experiment(
                help="if known (a spin-down); separates K from b when the log has no current"),
         Option("no-current", kind="flag", default=True, dest="use_current", label="Ignore the current column",
                help="fit the voltage and the angle only"),
+        COLUMN,
     ),
     reports=PARAMETERS,
     shaft="output, what the log drove, per unit of K·i",

@@ -5,7 +5,7 @@ from __future__ import annotations
 from typing import Any
 
 from motorlab.experiments import Experiment, Option, RigRun, Setting
-from motorlab.experiments._shared import read_tables
+from motorlab.experiments._shared import COLUMN, read_tables
 
 OUTLIER_Z = 3.5  # as motorlab.analyses.lcr.OUTLIER_Z (checked by tests/test_experiments.py)
 
@@ -39,6 +39,7 @@ EXPERIMENT = Experiment(
                help="the one the meter displayed; left empty: the file's '# circuit:' line, else series"),
         Option("outlier-z", "1", positive=True, default=OUTLIER_Z, metavar="Z", label="Outlier threshold",
                help="a reading whose modified z-score is above this is left out as an outlier"),
+        COLUMN,
     ),
     reports=("R", "L", "R_dc"),
     shaft="electrical (motor terminals)",

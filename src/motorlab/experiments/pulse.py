@@ -7,6 +7,7 @@ from typing import Any
 
 from motorlab.errors import LogFormatError, OptionError
 from motorlab.experiments import Experiment, Option, RigRun, Setting, stderr_or_none
+from motorlab.experiments._shared import COLUMN
 
 DEFAULT_SKIP = 0.002  # as motorlab.analyses.pulse.DEFAULT_SKIP (checked by tests/test_experiments.py)
 FRICTION_MODELS = ("viscous", "coulomb", "both")  # as motorlab.analyses.pulse.FRICTION_MODELS
@@ -92,6 +93,7 @@ EXPERIMENT = Experiment(
                help="when the file holds the tachometer voltage instead of a speed"),
         Option("friction", kind="choice", choices=("auto", *FRICTION_MODELS), default="auto",
                label="Friction model", help="of the final fit; auto: the one the coast-downs support best (BIC)"),
+        COLUMN,
     ),
     reports=("J", "Tf", "b", "gamma"),
     shaft="output, bare gearmotor, per unit of K·i",

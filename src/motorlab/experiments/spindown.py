@@ -5,7 +5,7 @@ from __future__ import annotations
 from typing import Any
 
 from motorlab.experiments import Experiment, Option, RigRun, Setting
-from motorlab.experiments._shared import CPR, CURRENT_UNIT, INERTIA, inertia_of
+from motorlab.experiments._shared import COLUMN, CPR, CURRENT_UNIT, INERTIA, inertia_of
 
 
 def run(paths: list[str], v: dict[str, Any]) -> Any:
@@ -43,6 +43,7 @@ EXPERIMENT = Experiment(
                help="when the relay opened, in the log's time; left empty: found from the current"),
         Option("guard", "s", nonnegative=True, default=0.1, label="Time left out after the cut",
                help="samples this long after the cut-off are not fitted (the current decaying)"),
+        COLUMN,
     ),
     reports=("K", "gamma", "Tf_over_J", "J", "b", "Tf"),
     shaft="output + flywheel, coasting: gearbox back-driven, physical torques",

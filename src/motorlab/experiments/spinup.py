@@ -6,7 +6,7 @@ from typing import Any
 
 from motorlab.errors import OptionError
 from motorlab.experiments import Experiment, Option, RigRun, Setting
-from motorlab.experiments._shared import CPR, CURRENT_UNIT, INERTIA, inertia_of
+from motorlab.experiments._shared import COLUMN, CPR, CURRENT_UNIT, INERTIA, inertia_of
 
 
 def run(paths: list[str], v: dict[str, Any]) -> Any:
@@ -82,6 +82,7 @@ EXPERIMENT = Experiment(
                help="in the log's time; left empty: found from the current"),
         Option("end", "s", label="End of the constant current",
                help="in the log's time; left empty: found from the current"),
+        COLUMN,
     ),
     reports=("K", "alpha", "i"),
     shaft="output + flywheel, motor driving: K = Kt through the gearbox",

@@ -6,7 +6,7 @@ from typing import Any
 
 from motorlab.errors import OptionError
 from motorlab.experiments import Experiment, Option, RigRun, Setting, stderr_or_none
-from motorlab.experiments._shared import CPR
+from motorlab.experiments._shared import COLUMN, CPR
 
 
 def _read(paths: list[str], cpr: float | None) -> Any:
@@ -59,6 +59,7 @@ EXPERIMENT = Experiment(
                help="used when the rows show no scatter (a single row)"),
         Option("frequency-stderr", "Hz", nonnegative=True, label="Uncertainty of one frequency reading",
                help="the counter's resolution; used with the current's uncertainty"),
+        COLUMN,
     ),
     reports=("b", "Tf"),
     shaft="output, bare gearmotor, per unit of K·i",

@@ -5,7 +5,7 @@ from __future__ import annotations
 from typing import Any
 
 from motorlab.experiments import Experiment, Option, RigRun
-from motorlab.experiments._shared import read_tables
+from motorlab.experiments._shared import COLUMN, read_tables
 
 
 def run(paths: list[str], v: dict[str, Any]) -> Any:
@@ -44,6 +44,7 @@ EXPERIMENT = Experiment(
                     "efficiency and loss torque"),
         Option("K-stderr", "V*s/rad", nonnegative=True, default=0.0, dest="motor_constant_stderr", metavar="S",
                label="Uncertainty of that back-EMF constant", help="standard error, carried into the efficiency's"),
+        COLUMN,
     ),
     reports=("K", "tau0", "tau_h", "efficiency", "loss_torque"),
     shaft="output (lever), physical torque, K = Kt = η·Ke",

@@ -96,12 +96,13 @@ def max_input_size() -> int:
     text = os.environ.get(MAX_SIZE_ENV, "").strip()
     if not text:
         return MAX_INPUT_SIZE
-    try:
-        value = float(text) if _PLAIN_NUMBER.match(text) else registry().Quantity(text).to("byte").magnitude
+    shown = text if len(text) <= 60 else text[:57] + "..."
+    try:  # pint's parser is bounded (motorlab.units.check_expression): '9**9**9' is refused at once
+        value = float(text if _PLAIN_NUMBER.match(text) else registry().Quantity(text).to("byte").magnitude)
     except Exception:  # pint raises several types for text that is no size
-        raise OptionError(f"{MAX_SIZE_ENV}={text!r}: expected a size in bytes, or e.g. '2 GB'") from None
+        raise OptionError(f"{MAX_SIZE_ENV}={shown!r}: expected a size in bytes, or e.g. '2 GB'") from None
     if not math.isfinite(value) or value <= 0:
-        raise OptionError(f"{MAX_SIZE_ENV}={text!r}: the size limit must be positive")
+        raise OptionError(f"{MAX_SIZE_ENV}={shown!r}: the size limit must be a positive finite number")
     return int(min(value, 2**62))
 
 
@@ -226,14 +227,78 @@ def is_binary(raw: bytes) -> bool:
     return False
 
 
+#: Most digits an integer of a data file (JSON, TOML) may have: 400 is already beyond any float
+#: (1.8e308); Python refuses to convert more than 4,300 at all (a ``ValueError`` from deep inside).
+MAX_INTEGER_DIGITS = 400
+
+#: Nesting of brackets from which a data file is "nested too deeply" (no motorlab file nests 10 deep).
+MAX_NESTING = 100
+
+
+class LongIntegerError(ValueError):
+    """An integer literal of more than :data:`MAX_INTEGER_DIGITS` digits (``token`` holds it)."""
+
+    def __init__(self, token: str):
+        super().__init__(f"an integer of {len(token)} digits")
+        self.token = token
+
+
+def bounded_int(token: str) -> int:
+    """``int(token)`` for a JSON/TOML integer literal, refusing one longer than :data:`MAX_INTEGER_DIGITS`."""
+    if len(token) > MAX_INTEGER_DIGITS + 1:
+        raise LongIntegerError(token)
+    return int(token)
+
+
+def line_of_offset(text: str, offset: int) -> int:
+    """The 1-based line of character ``offset`` of ``text``."""
+    return text.count("\n", 0, max(offset, 0)) + 1
+
+
+def long_integer_line(text: str, token: str | None = None) -> int | None:
+    """The line of the first run of more than :data:`MAX_INTEGER_DIGITS` digits (or of ``token``)."""
+    if token is not None and (at := text.find(token)) >= 0:
+        return line_of_offset(text, at)
+    match = re.search(rf"\d{{{MAX_INTEGER_DIGITS + 1},}}", text)
+    return line_of_offset(text, match.start()) if match else None
+
+
+def deep_nesting_line(text: str, limit: int = MAX_NESTING) -> int | None:
+    """The line where brackets (``[``, ``{``) first nest more than ``limit`` deep, else where they nest deepest.
+
+    Brackets inside strings are counted too: this only points at the line of a file already refused.
+    """
+    codes = np.frombuffer(text.encode("utf-8", "replace"), dtype=np.uint8)
+    if not codes.size:
+        return None
+    step = np.zeros(256, dtype=np.int64)
+    step[[ord("["), ord("{")]] = 1
+    step[[ord("]"), ord("}")]] = -1
+    depth = np.cumsum(step[codes])
+    at = int(np.argmax(depth > min(limit, int(depth.max()) - 1)))
+    return int(np.count_nonzero(codes[:at] == 10)) + 1
+
+
 def load_json(text: str, name: str) -> Any:
-    """``json.loads(text)``, with every failure (syntax, nesting too deep) a :class:`LogFormatError`."""
+    """``json.loads(text)``, with every failure a one-line :class:`LogFormatError` naming the line.
+
+    A syntax error, nesting too deep (Python's recursion limit) and an integer literal of more than
+    :data:`MAX_INTEGER_DIGITS` digits (which Python would refuse to convert beyond 4,300, or turn into
+    an integer no float can hold) are refused with their line.
+    """
     try:
-        return json.loads(text)
+        return json.loads(text, parse_int=bounded_int)
     except json.JSONDecodeError as exc:
         raise LogFormatError(f"not valid JSON ({exc.msg})", path=name, line=exc.lineno) from None
+    except LongIntegerError as exc:
+        raise LogFormatError(
+            f"an integer of {len(exc.token)} digits ({exc.token[:12]}…): not a measurement",
+            path=name, line=long_integer_line(text, exc.token),
+        ) from None
     except RecursionError:
-        raise LogFormatError("not a data file: JSON nested too deeply", path=name) from None
+        raise LogFormatError(
+            "not a data file: JSON nested too deeply", path=name, line=deep_nesting_line(text)
+        ) from None
 
 
 def read_text(path: PathArg) -> TextFile:
@@ -297,22 +362,35 @@ def unit_factor(unit: str, si_unit: str) -> float:
     return float(ureg.Quantity(1.0, unit).to(si_unit).magnitude)
 
 
+#: Encoder counts per revolution a real encoder can have [count/rev]: at least one count (a
+#: fractional cpr above one is real: 537.7 for a 19.2:1 gearmotor), at most 2³⁰ (the finest absolute
+#: encoders give 2²⁴–2²⁹ counts before a gearbox multiplies them). Every reader and every analysis
+#: refuses a cpr outside (``--cpr 1e-12`` would scale counts into absurd angles that still "fit").
+CPR_RANGE = (1.0, 2.0**30)
+
+
 def check_cpr(cpr: float | None) -> float | None:
-    """Validate counts per revolution: a finite positive number or None.
+    """Validate counts per revolution: a finite number within :data:`CPR_RANGE`, or None.
 
     Raises
     ------
     OptionError
-        If ``cpr`` is zero, negative or not finite.
+        If ``cpr`` is not a number, not finite, or outside :data:`CPR_RANGE`.
     """
     if cpr is None:
         return None
     try:
         value = float(cpr)
-    except (TypeError, ValueError):
-        raise OptionError(f"cpr: {cpr!r} is not a number") from None
+    except (TypeError, ValueError, OverflowError):
+        raise OptionError(f"cpr: {str(cpr)[:40]!r} is not a number (--cpr)") from None
+    low, high = CPR_RANGE
     if not math.isfinite(value) or value <= 0:
-        raise OptionError(f"cpr: counts per revolution must be positive, got {cpr!r}")
+        raise OptionError(f"cpr: counts per revolution (--cpr) must be positive, got {value!r}")
+    if not low <= value <= high:
+        raise OptionError(
+            f"cpr: the encoder counts per revolution (--cpr) must lie between {low:g} and {high:.0f} [count/rev], "
+            f"got {value!r} (an encoder gives at least one count per turn)"
+        )
     return value
 
 

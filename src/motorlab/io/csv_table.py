@@ -25,55 +25,36 @@ from motorlab.io._text import (
     parse_number,
     read_text,
     text_file,
-    unit_factor,
 )
 from motorlab.io.glitches import screen_glitches
+from motorlab.io.headers import (
+    COLUMNS,
+    ColumnRule,
+    column_name,
+    current_mapping,
+    is_worded_header,
+    parse_column_mapping,
+    resolve_column,
+    to_si,
+    unknown_column_message,
+)
 from motorlab.recording import SIGNALS, Recording
-
-#: Known column names -> (canonical signal, unit as written). ``"time"`` is the time axis [s].
-COLUMNS: dict[str, tuple[str, str]] = {
-    "time_s": ("time", "s"),
-    "time_ms": ("time", "ms"),
-    "voltage_V": ("voltage", "V"),
-    "current_A": ("current", "A"),
-    "current_mA": ("current", "mA"),
-    "position_counts": ("counts", "count"),
-    "position_rad": ("position", "rad"),
-    "position_rev": ("position", "revolution"),
-    "velocity_rad_per_s": ("velocity", "rad/s"),
-    "velocity_rpm": ("velocity", "rpm"),
-    "command_V": ("command", "V"),
-    "mass_kg": ("mass", "kg"),
-    "mass_g": ("mass", "g"),
-    "torque_Nm": ("torque", "N*m"),
-    "L_uH": ("inductance", "uH"),
-    "L_mH": ("inductance", "mH"),
-    "L_H": ("inductance", "H"),
-    "Q": ("quality_factor", "dimensionless"),
-    "DCR_ohm": ("dc_resistance", "ohm"),
-    "frequency_Hz": ("frequency", "Hz"),
-    "speed_rpm": ("speed", "rpm"),
-    "speed_rad_per_s": ("speed", "rad/s"),
-    "tach_voltage_V": ("tach_voltage", "V"),
-    "battery_V": ("battery", "V"),
-}
 
 #: Prefix of user columns that the reader skips (notes, extra instruments).
 EXTRA_PREFIX = "x_"
 
-_BY_LOWER = {name.lower(): name for name in COLUMNS}
-
-
-def column_name(name: str) -> str | None:
-    """The known column ``name`` refers to (case-insensitive), or None."""
-    return _BY_LOWER.get(name.strip().lower())
 
 
 def is_known_header(fields: list[str]) -> bool:
-    """True when ``fields`` look like a header of this format (every name known or an ``x_`` extra)."""
+    """True when ``fields`` look like a header of this format: every name known or an ``x_`` extra, or
+    names in words with units (``Current (A)``) and the columns mapped (:mod:`motorlab.io.headers`)."""
     names = [f for f in fields if f]
-    return bool(names) and all(column_name(f) or f.startswith(EXTRA_PREFIX) for f in names) and any(
+    if bool(names) and all(column_name(f) or f.startswith(EXTRA_PREFIX) for f in names) and any(
         column_name(f) for f in names
+    ):
+        return True
+    return not all(is_number(f) for f in names) and is_worded_header(
+        [f for f in names if not f.startswith(EXTRA_PREFIX)], current_mapping()
     )
 
 
@@ -137,7 +118,7 @@ def line_at(text: TextFile, index: int) -> str | None:
         count *= 4
 
 
-def read_csv(path: PathArg, *, cpr: float | None = None) -> Recording:
+def read_csv(path: PathArg, *, cpr: float | None = None, columns: Any = None) -> Recording:
     """Read a CSV table whose header names the columns with their units.
 
     Parameters
@@ -147,6 +128,11 @@ def read_csv(path: PathArg, *, cpr: float | None = None) -> Recording:
     cpr
         Encoder counts per revolution [count/rev]; overrides a ``# cpr:`` metadata line. With a
         ``position_counts`` column and a cpr, ``position`` [rad] = counts·2π/cpr is added.
+    columns
+        Column rules for headers the reader does not know (``{"Amps": "current"}``,
+        ``["I (mA)=current"]``: :func:`motorlab.io.headers.parse_column_mapping`); default: the
+        rules in force (:func:`motorlab.io.headers.column_mapping`, set by ``--column``). Headers in
+        words with a unit in brackets (``Current (A)``, ``Torque 6V (N · m)``) need none.
 
     Returns
     -------
@@ -178,7 +164,8 @@ def read_csv(path: PathArg, *, cpr: float | None = None) -> Recording:
         raise LogFormatError(
             "no header line naming the columns (e.g. time_s,voltage_V,current_A)", path=name, line=header_no
         )
-    targets = _resolve_header(header, path=name, line=header_no)
+    rules = parse_column_mapping(columns) if columns is not None else current_mapping()
+    targets = _resolve_header(header, path=name, line=header_no, rules=rules)
 
     used = [i for i, t in enumerate(targets) if t is not None]
     table = fast_table(text, header_no + 1, len(header), delimiter)
@@ -251,8 +238,7 @@ def _assemble(
         assert target is not None  # used holds only resolved columns
         signal, unit = target
         si = "s" if signal == "time" else SIGNALS[signal]
-        factor = unit_factor(unit, si)
-        values = data[:, col] * factor if factor != 1.0 else data[:, col]  # SI already: a view, no copy
+        values = to_si(data[:, col], unit, si)  # SI already: a view, no copy
         units[signal] = unit
         if signal == "time":
             time = values
@@ -288,7 +274,7 @@ def _assemble(
     return screen_glitches(Recording(time=time, signals=signals, metadata=metadata, source=name, lines=line_arr))
 
 
-def check_header(path: PathArg) -> None:
+def check_header(path: PathArg, columns: Any = None) -> None:
     """Check the header of a CSV table without reading its rows (a session's files, before any analysis).
 
     Raises
@@ -305,26 +291,43 @@ def check_header(path: PathArg) -> None:
         return  # read_csv explains
     header = split_fields(lines.lines[start].strip(), guess_delimiter(lines.lines[start].strip()))
     if not all(is_number(f) for f in header):
-        _resolve_header(header, path=name, line=start + 1)
+        rules = parse_column_mapping(columns) if columns is not None else current_mapping()
+        _resolve_header(header, path=name, line=start + 1, rules=rules)
 
 
-def _resolve_header(header: list[str], *, path: str, line: int) -> list[tuple[str, str] | None]:
-    """Map each header field to (signal, unit), None for ``x_`` extras; errors for unknown/duplicates."""
+def _resolve_header(
+    header: list[str], *, path: str, line: int, rules: tuple[ColumnRule, ...] = ()
+) -> list[tuple[str, str] | None]:
+    """Map each header field to (signal, unit), None for ``x_`` extras and skipped columns; errors for
+    unknown/duplicates. A column rule (``--column``) comes first, then the known names (``current_A``),
+    then names in words with a unit in brackets (:func:`motorlab.io.headers.resolve_column`)."""
     targets: list[tuple[str, str] | None] = []
     seen: dict[str, str] = {}
     for field in header:
-        if field.startswith(EXTRA_PREFIX):
+        ruled = any(rule.header.casefold() == field.strip().casefold() for rule in rules)
+        if field.startswith(EXTRA_PREFIX) and not ruled:
             targets.append(None)
             continue
-        known = column_name(field)
+        known = None if ruled else column_name(field)
         if known is None:
-            shown = field if field else "(empty)"
-            raise LogFormatError(
-                f"unknown column {shown!r}; known columns: {', '.join(COLUMNS)} "
-                f"(prefix your own columns with {EXTRA_PREFIX!r} to have them skipped)",
-                path=path,
-                line=line,
-            )
+            try:
+                target = resolve_column(field, rules)
+            except LogFormatError as exc:
+                raise LogFormatError(exc.message + f"; map it with --column \"{field}=QUANTITY [UNIT]\"",
+                                     path=path, line=line) from None
+            if target == "unknown":
+                raise LogFormatError(unknown_column_message(field, rules), path=path, line=line)
+            if target is None:
+                targets.append(None)
+                continue
+            assert isinstance(target, tuple)
+            signal, unit = target
+            if signal in seen:
+                raise LogFormatError(f"columns {seen[signal]!r} and {field!r} both give {signal}: "
+                                     f"skip one with --column \"{field}=skip\"", path=path, line=line)
+            seen[signal] = field
+            targets.append((signal, unit))
+            continue
         signal, unit = COLUMNS[known]
         if signal in seen:
             raise LogFormatError(f"columns {seen[signal]!r} and {field!r} both give {signal}", path=path, line=line)

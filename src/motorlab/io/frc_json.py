@@ -40,6 +40,11 @@ _SIDES = ("left", "right")
 BOTH = "both"
 
 
+#: A rotation in the file's units that a mechanism can have: from a micrometre lead screw (1e-6 m)
+#: to a million (a gear ratio times degrees, with margin). Outside, positions scale into absurd angles.
+UNITS_PER_ROTATION_RANGE = (1e-6, 1e6)
+
+
 def test_kind(name: str) -> dict[str, Any]:
     """``{"kind": "quasistatic"|"dynamic"|None, "direction": +1|-1|0}`` of a test name.
 
@@ -305,6 +310,10 @@ def _units(name: str, data: dict[str, Any], *, units: str | None = None, legacy:
         upr = 1.0
     if isinstance(upr, bool) or not isinstance(upr, int | float) or not math.isfinite(upr) or upr <= 0:
         raise LogFormatError(f"unitsPerRotation {upr!r} is not a positive number", path=name)
+    low, high = UNITS_PER_ROTATION_RANGE
+    if not low <= upr <= high:
+        raise LogFormatError(f"unitsPerRotation {upr!r} is outside {low:g} … {high:g}: no mechanism turns a rotation "
+                             "into that many units (a wheel's circumference, 360 degrees, a gear ratio)", path=name)
     pint_unit, si_unit = UNITS[written.lower()]
     si_per_unit = unit_factor(pint_unit, si_unit)
     if "unitsPerRotation" in data:

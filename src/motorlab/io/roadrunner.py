@@ -34,7 +34,7 @@ import numpy as np
 
 from motorlab.errors import LogFormatError, OptionError
 from motorlab.io._output import check_writable_target
-from motorlab.io._text import PathArg, check_cpr, read_bytes
+from motorlab.io._text import PathArg, check_cpr, load_json, read_bytes
 from motorlab.recording import Recording
 
 #: Ramp kinds and a key only that kind's file has.
@@ -211,13 +211,9 @@ def _load(path: PathArg) -> tuple[str, dict[str, Any], str]:
         raise LogFormatError("the file is empty", path=name)
     try:
         text = raw.decode("utf-8-sig")
-        data = json.loads(text)
     except UnicodeDecodeError:
         raise LogFormatError("not a text file (invalid UTF-8)", path=name) from None
-    except json.JSONDecodeError as exc:
-        raise LogFormatError(f"not valid JSON ({exc.msg})", path=name, line=exc.lineno) from None
-    except RecursionError:
-        raise LogFormatError("JSON nested too deeply", path=name) from None
+    data = load_json(text, name)
     if ramp_kind(data) is None:
         raise LogFormatError(
             "not a Road Runner ramp log (expected 'voltages' and 'forwardEncPositions', "

@@ -10,16 +10,26 @@ apply that factor, the readers do not.
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
+from motorlab import progress
 from motorlab.errors import LogFormatError, OptionError
 from motorlab.io._text import PathArg, TextFile, fast_table, is_number, parse_number, read_text
+from motorlab.io._waveform import (
+    TIME_HEADERS,
+    Samples,
+    pick_channel,
+    stream_samples,
+    waveform_layout,
+    waveform_rows,
+)
 from motorlab.io.csv_table import guess_delimiter, line_at, parse_comments, split_fields
 from motorlab.recording import Recording
 
-_TIME_HEADERS = {"time_ms": 1e-3, "time_s": 1.0}
+_TIME_HEADERS = TIME_HEADERS
 
 #: Default Schmitt-trigger levels as fractions of the signal's low-to-high range.
 LOW_FRACTION = 0.3
@@ -136,11 +146,27 @@ def read_waveform_samples(path: PathArg, *, channel: str | None = None) -> Wavef
     channel
         Column to use (``"CH1"``, ``"CH2"``, ``"CH1_V"`` …); the first channel by default.
 
+    Returns
+    -------
+    Waveform
+        Every sample in memory (float64). :func:`read_scope_waveform` does not make these arrays:
+        it reads the file chunk by chunk and keeps the volts as 32-bit floats.
+
     Raises
     ------
     LogFormatError
         Unknown layout, missing channel, non-numeric or non-finite samples, too few samples.
     """
+    samples = stream_samples(path, channel)
+    if samples is None:
+        return _samples_in_memory(path, channel)
+    index = np.arange(samples.volts.size)
+    return Waveform(samples.time_at(index), samples.volts.astype(float), samples.lines_of(index), samples.channel,
+                    samples.layout)
+
+
+def _samples_in_memory(path: PathArg, channel: str | None) -> Waveform:
+    """:func:`read_waveform_samples` for a file whose lines end with bare carriage returns: read whole."""
     text = read_text(path)
     name = text.path
     numbered = [(n, line) for n, line in text.numbered() if not line.startswith("#")]
@@ -148,19 +174,11 @@ def read_waveform_samples(path: PathArg, *, channel: str | None = None) -> Wavef
         raise LogFormatError("too short for a waveform (needs a header and samples)", path=name)
     header_no, header_line = numbered[0]
     header = split_fields(header_line, ",")
-    layout, channels, rows, (start, increment, time_factor) = _waveform_layout(header, numbered, name)
-    if not channels:
-        raise LogFormatError("no channel column in the header", path=name, line=header_no)
-    if channel is None:
-        column = 1
-    else:
-        wanted = channel.lower()
-        matches = [i for i, c in enumerate(channels) if c.lower() in (wanted, f"{wanted}_v")]
-        if not matches:
-            raise OptionError(f"channel {channel!r} is not in {name} (it has: {', '.join(channels)})")
-        column = matches[0] + 1
+    layout, channels, used, (start, increment, time_factor) = waveform_layout(header, numbered, name)
+    column = pick_channel(channels, channel, name, header_no)
     label = header[column]
-    xs, ys, lines = _waveform_rows(text, rows, column, header[0], label)
+    truncatable = len(text.lines) if not text.ends_with_newline else None
+    xs, ys, lines = waveform_rows(name, numbered[used:], column, (header[0], label), truncatable)
     if len(xs) < 2:
         raise LogFormatError("fewer than two samples", path=name)
     x_arr = np.asarray(xs)
@@ -169,93 +187,6 @@ def read_waveform_samples(path: PathArg, *, channel: str | None = None) -> Wavef
         i = int(np.flatnonzero(np.diff(time) <= 0)[0]) + 1
         raise LogFormatError("sample times must increase", path=name, line=lines[i])
     return Waveform(time, np.asarray(ys), np.asarray(lines, dtype=int), label, layout)
-
-
-_Timing = tuple[float | None, float | None, float]
-
-
-def _waveform_layout(
-    header: list[str], numbered: list[tuple[int, str]], name: str
-) -> tuple[str, list[str], list[tuple[int, str]], _Timing]:
-    """Layout, channel names, sample rows and timing of a waveform file from its header line(s).
-
-    ``numbered`` holds the (line number, line) pairs of the file without comments, the header
-    first. The timing is ``(start, increment, time_factor)``: a Rigol ``Sequence`` export gives the
-    time of sample ``x`` as start + x·increment, other layouts as x·time_factor (start and increment
-    then None).
-    """
-    header_no, header_line = numbered[0]
-    lower = [h.lower() for h in header]
-    rows = numbered[1:]
-    start = increment = None
-    if lower and lower[0] == "x":
-        layout = "rigol"
-        channels = [h for h in header[1:] if h.lower() not in ("start", "increment")]
-        units_no, units_line = rows[0]
-        units = split_fields(units_line, ",")
-        rows = rows[1:]
-        kind = units[0].lower() if units else ""
-        if kind == "sequence":
-            if "start" not in lower or "increment" not in lower:
-                raise LogFormatError("Rigol header without Start and Increment", path=name, line=header_no)
-            try:
-                start = parse_number(units[lower.index("start")], path=name, line=units_no, column="Start")
-                increment = parse_number(
-                    units[lower.index("increment")], path=name, line=units_no, column="Increment"
-                )
-            except IndexError:
-                raise LogFormatError("Start/Increment values missing", path=name, line=units_no) from None
-            if increment <= 0:
-                raise LogFormatError("Increment must be positive", path=name, line=units_no)
-        elif kind != "second":
-            raise LogFormatError(
-                f"second line should start with Sequence or Second, found {units_line[:40]!r}",
-                path=name,
-                line=units_no,
-            )
-        time_factor = 1.0
-    elif lower and lower[0] in _TIME_HEADERS:
-        layout = "table"
-        channels = header[1:]
-        time_factor = _TIME_HEADERS[lower[0]]
-    else:
-        raise LogFormatError(
-            f"not a waveform export: expected 'X,CH1,Start,Increment' or 'time_s,CH1_V', found {header_line[:60]!r}",
-            path=name,
-            line=header_no,
-        )
-    return layout, channels, rows, (start, increment, time_factor)
-
-
-def _waveform_rows(
-    text: TextFile, rows: list[tuple[int, str]], column: int, x_label: str, label: str
-) -> tuple[list[float], list[float], list[int]]:
-    """First-column values, ``column`` values and line numbers of the sample rows.
-
-    A short or non-numeric last line without a line terminator (the writer was cut off) ends the
-    samples quietly; anywhere else it is an error naming the line.
-    """
-    name = text.path
-    xs: list[float] = []
-    ys: list[float] = []
-    lines: list[int] = []
-    for number, line in rows:
-        fields = split_fields(line, ",")
-        if len(fields) <= column:
-            if text.may_be_truncated(number):
-                break
-            raise LogFormatError(f"row has no {label} value", path=name, line=number)
-        try:
-            x = parse_number(fields[0], path=name, line=number, column=x_label)
-            y = parse_number(fields[column], path=name, line=number, column=label)
-        except LogFormatError:
-            if text.may_be_truncated(number):
-                break
-            raise
-        xs.append(x)
-        ys.append(y)
-        lines.append(number)
-    return xs, ys, lines
 
 
 def find_rising_edges(
@@ -293,8 +224,23 @@ def find_rising_edges(
     set them. A transition counts only when the trace, having been at or below ``threshold −
     hysteresis/2``, reaches ``threshold + hysteresis/2``: noise around one level cannot make edges.
     """
-    low_level = float(np.percentile(volts, 5))
-    high_level = float(np.percentile(volts, 95))
+    volts = np.asarray(volts)
+    levels = trigger_levels(volts, threshold=threshold, hysteresis=hysteresis)
+    j = _crossings(volts, levels)
+    time = np.asarray(time, dtype=float)
+    edges, _ = _interpolate(j, volts, levels["threshold"], lambda k: time[k])
+    return edges, levels
+
+
+def trigger_levels(volts: np.ndarray, *, threshold: float | None, hysteresis: float | None) -> dict[str, float]:
+    """The Schmitt trigger's window (see :func:`find_rising_edges`): ``low``, ``high``, ``threshold`` … [V].
+
+    Raises
+    ------
+    OptionError
+        A negative hysteresis.
+    """
+    low_level, high_level = (float(v) for v in np.percentile(volts, [5, 95]))
     span = high_level - low_level
     if threshold is None:
         threshold = low_level + 0.5 * (LOW_FRACTION + HIGH_FRACTION) * span
@@ -302,33 +248,61 @@ def find_rising_edges(
         hysteresis = (HIGH_FRACTION - LOW_FRACTION) * span
     if hysteresis < 0:
         raise OptionError(f"hysteresis must not be negative, got {hysteresis}")
-    lo = threshold - hysteresis / 2
-    hi = threshold + hysteresis / 2
-    levels = {
-        "low": lo,
-        "high": hi,
+    return {
+        "low": threshold - hysteresis / 2,
+        "high": threshold + hysteresis / 2,
         "threshold": threshold,
         "hysteresis": hysteresis,
         "low_level": low_level,
         "high_level": high_level,
     }
-    # Trigger state per sample: 1 above hi, 0 below lo, carried forward in between (-1 = not yet known).
-    state = np.full(volts.size, -1, dtype=np.int8)
-    state[volts >= hi] = 1
-    state[volts <= lo] = 0
-    known = np.where(state >= 0, np.arange(volts.size), 0)
-    np.maximum.accumulate(known, out=known)
-    filled = state[known]  # leading samples inside the window stay -1 (state[0] is then -1)
-    rises = np.flatnonzero((filled[1:] == 1) & (filled[:-1] == 0)) + 1
-    # The crossing lies after the last sample below the threshold before the trigger fired (such a
-    # sample exists: the state was low, i.e. at or below threshold - hysteresis/2).
-    below_index = np.where(volts <= threshold, np.arange(volts.size), -1)
-    np.maximum.accumulate(below_index, out=below_index)
-    j = below_index[rises]
-    v0, v1 = volts[j], volts[j + 1]
+
+
+#: Samples the trigger looks at in one go (bounds its temporary arrays on a 24 Mpt capture).
+_BLOCK = 1 << 20
+
+
+def _crossings(volts: np.ndarray, levels: dict[str, float]) -> np.ndarray:
+    """For each rise of the trigger, the last sample at or below the threshold before it (block by block).
+
+    Trigger state per sample: 1 at or above ``high``, 0 at or below ``low``, carried forward in
+    between (unknown until the trace first leaves the window); a rise is a sample whose state is 1
+    after a 0. The crossing lies after the last sample below the threshold before the rise (such a
+    sample exists: the state was low, i.e. at or below threshold − hysteresis/2).
+    """
+    lo, hi, threshold = levels["low"], levels["high"], levels["threshold"]
+    state, last_below = -1, -1
+    found = []
+    for a in range(0, volts.size, _BLOCK):
+        v = np.asarray(volts[a : a + _BLOCK], dtype=float)
+        mark = np.full(v.size, -1, dtype=np.int8)
+        mark[v >= hi] = 1
+        mark[v <= lo] = 0
+        known = np.where(mark >= 0, np.arange(v.size), -1)
+        np.maximum.accumulate(known, out=known)
+        filled = np.where(known >= 0, mark[np.maximum(known, 0)], state).astype(np.int8)
+        before = np.concatenate([np.array([state], dtype=np.int8), filled[:-1]])
+        rises = np.flatnonzero((filled == 1) & (before == 0))
+        below = np.where(v <= threshold, np.arange(a, a + v.size), -1)
+        np.maximum.accumulate(below, out=below)
+        below = np.where(below >= 0, below, last_below)
+        found.append(below[rises])
+        state, last_below = int(filled[-1]), int(below[-1])
+    return np.concatenate(found) if found else np.zeros(0, dtype=np.int64)
+
+
+def _interpolate(
+    j: np.ndarray, volts: np.ndarray, threshold: float, time_at: Callable[[np.ndarray], np.ndarray]
+) -> tuple[np.ndarray, np.ndarray]:
+    """Edge times between samples j and j + 1 where the trace crosses ``threshold``, and the index of the
+    first sample at or after each edge."""
+    v0 = np.asarray(volts[j], dtype=float)
+    v1 = np.asarray(volts[j + 1], dtype=float)
     frac = np.clip((threshold - v0) / (v1 - v0), 0.0, 1.0)  # v1 > threshold >= v0, so v1 != v0
-    edges = time[j] + frac * (time[j + 1] - time[j])
-    return edges, levels
+    t0, t1 = time_at(j), time_at(j + 1)
+    edges = t0 + frac * (t1 - t0)
+    after = np.where(edges > t0, j + 1, j)
+    return edges, after
 
 
 def read_scope_waveform(
@@ -364,23 +338,30 @@ def read_scope_waveform(
     LogFormatError
         Unreadable file (see :func:`read_waveform_samples`), or no rising edge found.
     """
-    wave = read_waveform_samples(path, channel=channel)
-    edges, levels = find_rising_edges(wave.time, wave.volts, threshold=threshold, hysteresis=hysteresis)
+    samples = stream_samples(path, channel)
     name = os.fsdecode(os.fspath(path))
-    if edges.size == 0:
+    if samples is None:  # bare carriage returns: read whole
+        wave = _samples_in_memory(path, channel)
+        samples = Samples(wave.volts.astype(np.float32), wave.time, 0.0, (None, None, 1.0), wave.channel, wave.layout,
+                          [0], [wave.lines])
+    with progress.task(f"Finding the edges of {samples.channel}", total=samples.volts.size, unit="samples") as step:
+        levels = trigger_levels(samples.volts, threshold=threshold, hysteresis=hysteresis)
+        j = _crossings(samples.volts, levels)
+        step.update(samples.volts.size)
+    if j.size == 0:
         raise LogFormatError(
-            f"no rising edge found in {wave.channel} (levels {levels['low_level']:.3g} V to "
+            f"no rising edge found in {samples.channel} (levels {levels['low_level']:.3g} V to "
             f"{levels['high_level']:.3g} V, trigger {levels['low']:.3g}/{levels['high']:.3g} V)",
             path=name,
         )
-    index = np.searchsorted(wave.time, edges, side="left").clip(0, wave.time.size - 1)
+    edges, after = _interpolate(j, samples.volts, levels["threshold"], samples.time_at)
+    index = after.clip(0, samples.volts.size - 1)
     metadata = {
         "format": "scope-waveform",
-        "layout": wave.layout,
-        "channel": wave.channel,
+        "layout": samples.layout,
+        "channel": samples.channel,
         "levels": levels,
-        "n_samples": int(wave.time.size),
-        "sample_interval": float(np.median(np.diff(wave.time))),
+        "n_samples": int(samples.volts.size),
+        "sample_interval": samples.sample_interval(),
     }
-    return _edges_recording(edges, wave.lines[index], name, metadata)
-
+    return _edges_recording(edges, samples.lines_of(index), name, metadata)

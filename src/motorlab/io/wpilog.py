@@ -268,7 +268,7 @@ def _pint_unit(text: str) -> str | None:
     if text.startswith("{"):  # JSON metadata, e.g. {"source": "NT", "unit": "rotations"}
         try:
             found = json.loads(text)
-        except ValueError:
+        except (ValueError, RecursionError):  # not JSON, an integer of 4,300 digits, or nested too deeply
             return None
         unit = found.get("unit", found.get("units")) if isinstance(found, dict) else None
         return _pint_unit(unit) if isinstance(unit, str) and not unit.startswith("{") else None

@@ -53,6 +53,7 @@ from motorlab.rig.virtual_core import (  # noqa: F401 - re-exported: the rig's n
 )
 from motorlab.rig.virtual_logs import LogExperiments
 from motorlab.rig.virtual_seed2 import Seed2Experiments
+from motorlab.rig.virtual_thermal import ThermalExperiments
 from motorlab.simulate import (
     BenchSupply,
     Drive,
@@ -61,7 +62,7 @@ from motorlab.simulate import (
 )
 
 
-class VirtualRig(Seed2Experiments, LogExperiments):
+class VirtualRig(Seed2Experiments, LogExperiments, ThermalExperiments):
     """A simulated dynamometer with one unit of a catalogue motor on it.
 
     Parameters
@@ -88,6 +89,11 @@ class VirtualRig(Seed2Experiments, LogExperiments):
         unit, the gearbox's drag τ0/η is taken out of the unit's Coulomb friction, so the unit still
         runs free at the catalogue's free current; ``params`` are the motor's own, reflected to the
         output through an ideal gearbox (:func:`motorlab.gearbox.reflect_to_output`).
+    heating
+        Heat the winding in every experiment (the catalogue's thermal figures, unless ``params`` carry
+        their own): R and K drift as the winding and the magnets warm, as on a real rig, and
+        ``truth.json`` records the temperatures. Off by default (the seeds' analyses assume a cool
+        motor); the stall experiment always heats.
 
     Raises
     ------

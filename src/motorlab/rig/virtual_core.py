@@ -46,6 +46,7 @@ EXPERIMENTS: dict[str, str] = {
     "pulse": "pulse",
     "transient": "transient",
     "sysid": "sysid",
+    "stall": "stall",
 }
 
 #: Internal step of the simulator for flywheel runs [s] (mechanical time constant ≈ 10 s).
@@ -112,6 +113,7 @@ class RigCore:
         instruments: Instruments | None = None,
         commutator: Commutator | None = None,
         gearbox: Gearbox | None = None,
+        heating: bool = False,
     ):
         self.motor = Motor.from_catalog(motor) if isinstance(motor, str) else motor
         if unit_seed < 0 or noise_seed < 0:
@@ -125,7 +127,10 @@ class RigCore:
             drag = self.gearbox.loss_torque / self.gearbox.efficiency
             if drag > 0:
                 params = params.scaled(Tf=max(params.Tf - drag, 0.0))
+        if heating and params.thermal is None:
+            params = params.scaled(thermal=self.motor.thermal_model())
         self.params = params
+        self.heat_log: list[dict[str, float]] = []
         self.flywheel = flywheel or Flywheel()
         self.instruments = instruments or Instruments()
         self.commutator = commutator or Commutator()
@@ -200,6 +205,9 @@ class RigCore:
             "settings": settings,
             "instruments": instruments,
         }
+        if self.params.thermal is not None:
+            entry["thermal"] = self.params.thermal.to_dict()
+            entry["temperatures"] = self.heat_log[-1] if self.heat_log else None
         truth_path = write_truth(paths[0], entry)
         return RigRun(experiment, tuple(paths), truth_path, json.loads(json.dumps(jsonable(entry))))
 
@@ -210,10 +218,16 @@ class RigCore:
         # Refused before the simulator allocates its arrays (on_time = 1e9 s asked for 7 TiB).
         check_size(duration / dt, f"simulator steps ({duration:.3g} s in steps of {dt:.3g} s)",
                    hint="shorten the run or sample it less finely")
-        return simulate(
+        sim = simulate(
             params, list(schedule), duration=duration, dt=dt,
             initial=State(speed=initial_speed, position=initial_position),
         )
+        if sim.winding_temperature is not None and sim.case_temperature is not None:
+            self.heat_log.append({"winding_start_C": float(sim.winding_temperature[0]),
+                                  "winding_end_C": float(sim.winding_temperature[-1]),
+                                  "winding_max_C": float(np.max(sim.winding_temperature)),
+                                  "case_end_C": float(sim.case_temperature[-1])})
+        return sim
 
     # ---- seed 1: flywheel experiments -----------------------------------------------------------
 

@@ -227,6 +227,16 @@ async def tune_figure(request: Request) -> Response:
         return Response((folder / "step.svg").read_bytes(), media_type="image/svg+xml")
 
 
+async def tune_response(request: Request) -> Response:
+    """The step and profile responses of ``tune`` as curves (the page's interactive plot)."""
+    with uploads.private_folder() as folder:
+        argv = await _argv(request, folder, ["tune"], schema.command_fields("tune"))
+        if isinstance(argv, Response):
+            return argv
+        outcome = await runner.run_module("motorlab.ui.worker", ["response", *argv[1:]], cwd=str(folder))
+        return _outcome_response(outcome)
+
+
 async def panels(request: Request) -> Response:
     """Data against model of one analysis (the curves of ``--plot``), for the interactive plot."""
     fields = _experiment_fields(request)
@@ -243,11 +253,12 @@ async def detect(request: Request) -> Response:
     """Format, proposed experiment and raw signals of each uploaded file."""
     with uploads.private_folder() as folder:
         try:
-            _values, files = await _save_form(request, folder)
+            values, files = await _save_form(request, folder)
         except uploads.UploadError as exc:
             return _error(str(exc))
         paths = [p for key in files for p in files[key]]
-        outcome = await runner.run_module("motorlab.ui.worker", ["detect", *paths], cwd=str(folder))
+        rules = [f"--column={rule}" for rule in values.get("column", [])]  # the column picker's answers
+        outcome = await runner.run_module("motorlab.ui.worker", ["detect", *rules, "--", *paths], cwd=str(folder))
         return _outcome_response(outcome)
 
 
@@ -272,6 +283,10 @@ async def characterize(request: Request) -> Response:
         session = _session_file(all_files, values)
         if session is None:
             return _error("upload the session description (one .toml file, or name it in the 'session' field)")
+        try:
+            uploads.place_session_files(folder, session, all_files)  # loose files go where the TOML names them
+        except uploads.UploadError as exc:
+            return _error(str(exc))
         fields = schema.command_fields("characterize")
         refused = sorted(set(values) & _REFUSED_FIELDS)
         if refused:
@@ -428,6 +443,7 @@ def create_app(*, host: str = "127.0.0.1", port: int = 8765, token: str | None =
         Route("/api/panels/{experiment}", panels, methods=["POST"]),
         Route("/api/tune", tune, methods=["POST"]),
         Route("/api/tune/figure", tune_figure, methods=["POST"]),
+        Route("/api/tune/response", tune_response, methods=["POST"]),
         Route("/api/characterize", characterize, methods=["POST"]),
     ]
     runner.POOL.fill()  # warm child processes, ready before the first click

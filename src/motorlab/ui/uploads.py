@@ -85,3 +85,63 @@ def unpack_zip(archive: Path, folder: Path) -> list[Path]:
     except (zipfile.BadZipFile, zipfile.LargeZipFile, NotImplementedError, RuntimeError) as exc:
         raise UploadError(f"{archive.name}: not a zip archive that can be read ({exc})") from None
 
+
+
+def _named_paths(node: object) -> list[str]:
+    """The file names a session description gives (``files = [...]``, ``truth = ...``), in order."""
+    found: list[str] = []
+    if isinstance(node, dict):
+        for key, value in node.items():
+            if key in ("files", "truth", "spindown") and isinstance(value, str):
+                found.append(value)
+            elif key in ("files", "spindown") and isinstance(value, list):
+                found.extend(v for v in value if isinstance(v, str))
+            else:
+                found.extend(_named_paths(value))
+    return found
+
+
+def place_session_files(folder: Path, session: str, uploaded: list[str]) -> None:
+    """Put loose uploads where the session description names them (``A/spindown.txt``).
+
+    A browser's file picker gives loose files without their folders; a session names them with
+    folders. Each named file that is missing is matched by its file name among the uploads; a name
+    two named files share, or a named file not chosen, is refused in one line that says what to do.
+    """
+    import tomllib
+
+    root = folder.resolve()
+    toml_path = (root / session).resolve()
+    try:
+        doc = tomllib.loads(toml_path.read_text(encoding="utf-8-sig"))
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+        return  # the CLI reads it again and says what is wrong, in its own words
+    named = [n for n in dict.fromkeys(_named_paths(doc)) if not Path(n).is_absolute()]
+    by_name: dict[str, list[Path]] = {}
+    for rel in uploaded:
+        by_name.setdefault(Path(rel).name, []).append(root / rel)
+    for name in named:
+        target = (toml_path.parent / safe_relative(name)).resolve()
+        if target.exists() or root not in target.parents:
+            continue
+        base = Path(name).name
+        twins = [n for n in named if Path(n).name == base]
+        if len(twins) > 1:
+            raise UploadError(
+                f"{Path(session).name} names {twins[0]} and {twins[1]}, files with the same name in different "
+                "folders: choose the session's folder, or a zip of it, which keeps them apart"
+            )
+        candidates = by_name.get(base, []) or [p for n, ps in by_name.items() if _stem_twin(n, base) for p in ps]
+        if not candidates:
+            raise UploadError(
+                f"{Path(session).name} names {name}, which is not among the chosen files: choose it too, "
+                "or choose the session's folder (or a zip of it)"
+            )
+        target.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(candidates[0], target)
+
+
+def _stem_twin(uploaded: str, base: str) -> bool:
+    """``spindown-2.txt`` is how :func:`place` renamed a second ``spindown.txt``."""
+    stem, suffix = Path(base).stem, Path(base).suffix
+    return bool(re.fullmatch(re.escape(stem) + r"-\d+" + re.escape(suffix), uploaded))

@@ -4,40 +4,27 @@
 (:func:`motorlab.io.detect_format`), the proposed experiment and its signals to plot;
 ``python -m motorlab.ui.worker panels EXPERIMENT ARG...`` parses ``motorlab analyze EXPERIMENT
 ARG...`` with the CLI's own parser, runs ``motorlab.cli.analyze.from_cli`` and prints the result's
-data-against-model panels (the curves :func:`motorlab.plot.plot_fit` draws). Errors go through the
-one line on stderr, exit code 2, as the CLI's.
+data-against-model panels (the curves :func:`motorlab.plot.plot_fit` draws);
+``python -m motorlab.ui.worker response ARG...`` runs ``motorlab tune ARG...`` and prints the
+simulated step and profile responses as curves (the interactive plot of the gains step). Errors go
+through the one line on stderr, exit code 2, as the CLI's.
 """
 
 from __future__ import annotations
 
 import json
 import os
+import re
 import sys
 from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 
+from motorlab.proposal import propose
+
 #: Points sent per curve (a 2M-sample log is thinned by a stride for the browser).
 MAX_POINTS = 4000
-
-#: Format -> experiment proposed when the signals do not say more.
-_BY_FORMAT = {
-    "sysid-json": "feedforward",
-    "frc-char-json": "feedforward",
-    "wpilog": "feedforward",
-    "roadrunner-ramp": "feedforward",
-    "roadrunner-log": "feedforward",
-}
-
-#: Signal present -> experiment (first match wins): what a table of that quantity is measured for.
-_BY_SIGNAL = (
-    ("inductance", "lcr"),
-    ("torque", "torque"),
-    ("mass", "torque"),
-    ("tach_voltage", "tachometer"),
-    ("speed", "terminal"),
-)
 
 
 def _thin(values: np.ndarray) -> list[float | None]:
@@ -46,59 +33,103 @@ def _thin(values: np.ndarray) -> list[float | None]:
     return [float(v) if np.isfinite(v) else None for v in arr[::step]]
 
 
-#: Experiment names the virtual rig and motorlab's robot code write into a log's header, where they
-#: differ from the analysis that reads the log.
-_BY_HEADER = {"transient": "identify", "sysid": "feedforward", "quasistatic": "feedforward",
-              "dynamic": "feedforward"}
+#: Each format in words (what the page says it recognised).
+FORMAT_WORDS = {
+    "ftc-log": "FTC OpMode log",
+    "csv": "table of measurements (CSV)",
+    "scope-times": "oscilloscope export (times)",
+    "scope-waveform": "oscilloscope waveform export",
+    "sysid-json": "WPILib SysId file",
+    "frc-char-json": "frc-characterization file",
+    "wpilog": "WPILib data log",
+    "roadrunner-ramp": "Road Runner ramp log",
+    "roadrunner-log": "Road Runner FlightRecorder log",
+    "session": "session description",
+}
+
+#: Which task of the page a file of this format most likely belongs to.
+_TASK_BY_FORMAT = {"roadrunner-ramp": "drive", "roadrunner-log": "drive", "session": "bench",
+                   "sysid-json": "mechanism", "frc-char-json": "mechanism", "wpilog": "mechanism"}
+
+#: A stand-in counts per revolution that makes an angle in radians read as encoder ticks, so that a
+#: log which needs the counts per revolution can be shown before the student has typed it.
+_TICKS_AS_RADIANS = 2 * np.pi
 
 
-def propose(fmt: str, signals: Sequence[str], declared: str | None = None) -> str:
-    """The experiment a log of this format with these signals most likely records (a proposal).
+def _read_for_detect(path: str, fmt: str, columns: Sequence[str]) -> tuple[Any, list[str]]:
+    """The recording of ``path`` and the options it still needs (``["cpr"]`` for a log counting ticks)."""
+    from motorlab.errors import OptionError
+    from motorlab.io import read_any
 
-    ``declared`` is the experiment the file's own header names (``# experiment: transient``), which
-    wins over guessing from the signals.
-    """
-    from motorlab.experiments import all_experiments
-
-    if declared:
-        declared = _BY_HEADER.get(declared, declared)
-        if declared in all_experiments():
-            return declared
-    if fmt in _BY_FORMAT:
-        return _BY_FORMAT[fmt]
-    for signal, experiment in _BY_SIGNAL:
-        if signal in signals:
-            return experiment
-    if "position" in signals or "counts" in signals:
-        return "spindown" if "current" in signals else "identify"
-    return "spindown"
+    options: dict[str, Any] = {"columns": list(columns)} if columns and fmt == "csv" else {}
+    try:
+        return read_any(path, **options), []
+    except OptionError as exc:
+        if "cpr" not in str(exc):
+            raise
+        return read_any(path, cpr=_TICKS_AS_RADIANS, **options), ["cpr"]
 
 
-def detect(paths: Sequence[str]) -> list[dict[str, Any]]:
-    """Per file: format, proposed experiment and the signals against time (or the error)."""
+_UNMAPPED = re.compile(r"column '([^']+)'")
+
+
+def _column_question(entry: dict[str, Any]) -> None:
+    """A reader's refusal of a column it cannot name: which column, and the quantities it could be."""
+    from motorlab.io.headers import QUANTITIES
+
+    found = _UNMAPPED.search(entry.get("error", ""))
+    if found and "--column" in entry["error"]:
+        entry["column"] = found.group(1)
+        entry["quantities"] = [*QUANTITIES, "skip"]
+
+
+def _detect_one(path: str, columns: Sequence[str] = ()) -> dict[str, Any]:
+    """Format (in words), proposed experiment and task, signals against time, or the reader's refusal."""
     from motorlab.errors import MotorlabError
-    from motorlab.io import detect_format, read_any
+    from motorlab.io import detect_format
     from motorlab.recording import SIGNALS
 
-    out: list[dict[str, Any]] = []
-    for path in paths:
-        entry: dict[str, Any] = {"file": os.path.basename(path)}
-        try:
-            fmt = detect_format(path)
-            recording = read_any(path)
-        except (MotorlabError, OSError, ValueError) as exc:
-            entry["error"] = " ".join(str(exc).split())
-            out.append(entry)
-            continue
-        names = list(recording.signals)
-        entry.update(
-            format=fmt,
-            experiment=propose(fmt, names, str(recording.metadata.get("experiment") or "") or None),
-            time=_thin(recording.time),
-            signals=[{"name": n, "unit": SIGNALS.get(n, ""), "y": _thin(recording.signals[n])} for n in names],
-        )
-        out.append(entry)
-    return out
+    entry: dict[str, Any] = {"file": os.path.basename(path), "path": path}
+    if path.lower().endswith(".toml"):
+        entry.update(format="session", format_words=FORMAT_WORDS["session"], task="bench", experiment=None,
+                     needs=[], time=[], signals=[])
+        return entry
+    try:
+        fmt = detect_format(path)
+        entry.update(format=fmt, format_words=FORMAT_WORDS.get(fmt, fmt), task=_TASK_BY_FORMAT.get(fmt))
+        recording, needs = _read_for_detect(path, entry["format"], columns)
+    except (MotorlabError, OSError, ValueError) as exc:
+        entry["error"] = " ".join(str(exc).split())
+        _column_question(entry)
+        return entry
+    names = list(recording.signals)
+    units = dict(SIGNALS)
+    if needs:  # read with the stand-in: angles are encoder ticks until the student gives the counts
+        units.update(position="tick", velocity="tick/s")
+    experiment = propose(fmt, names, str(recording.metadata.get("experiment") or "") or None)
+    entry.update(
+        experiment=experiment,
+        task=entry["task"] or ("mechanism" if experiment in ("spindown", "identify", "feedforward") else "expert"),
+        needs=needs,
+        cpr=None if needs else recording.metadata.get("cpr"),
+        time=_thin(recording.time),
+        signals=[{"name": n, "unit": units.get(n, ""), "y": _thin(recording.signals[n])} for n in names],
+    )
+    return entry
+
+
+def detect(args: Sequence[str]) -> list[dict[str, Any]]:
+    """Per file: format, proposed experiment and the signals against time (or the error).
+
+    ``args`` are ``[--column=RULE ...] [--] FILE...``: the column rules (``Amps=current``) a CSV is
+    read with. A file that needs an option to be read (a Road Runner log counts ticks: ``cpr``) is
+    still recognised and proposed, with ``needs`` naming the option and its angles shown in ticks; a
+    CSV column no reader can name gives ``column`` (its header) and ``quantities`` (what it may be).
+    """
+    args = list(args)
+    cut = args.index("--") if "--" in args else 0
+    columns = [a.split("=", 1)[1] for a in args[:cut] if a.startswith("--column=")]
+    return [_detect_one(path, columns) for path in args[cut + 1 if "--" in args else 0:]]
 
 
 def _series(series: Any) -> dict[str, Any] | None:
@@ -128,16 +159,67 @@ def panels(argv: Sequence[str]) -> list[dict[str, Any]]:
     ]
 
 
+def _curve(resp: Any, per: float) -> dict[str, Any]:
+    """One simulated closed-loop run as curves in the target's units (time, reference, output, voltage)."""
+    return {
+        "kind": resp.kind,
+        "time": _thin(resp.time),
+        "reference": _thin(np.asarray(resp.reference) * per),
+        "output": _thin(np.asarray(resp.output) * per),
+        "voltage": _thin(resp.voltage),
+    }
+
+
+def response(argv: Sequence[str]) -> dict[str, Any]:
+    """The step and profile responses of ``motorlab tune ARG...`` as curves.
+
+    The CLI's own ``run`` designs the loop (so the options mean exactly what they mean there); the
+    :class:`~motorlab.control.tune.TuneResult` it computes is caught on its way to the printing.
+    """
+    import contextlib
+    import io
+
+    import motorlab.cli.tune as cli_tune
+    from motorlab.cli import build_parser
+
+    args = build_parser().parse_args(["tune", *argv])
+    args.json, args.emit, args.plot = False, None, None
+    caught: list[Any] = []
+    design = cli_tune.tune
+
+    def catch(*a: Any, **k: Any) -> Any:
+        caught.append(design(*a, **k))
+        return caught[-1]
+
+    cli_tune.tune = catch  # type: ignore[assignment]
+    try:
+        with contextlib.redirect_stdout(io.StringIO()):
+            cli_tune.run(args)
+    finally:
+        cli_tune.tune = design  # type: ignore[assignment]
+    result = caught[-1]
+    per = result._display_per_radian()
+    quantity = "velocity" if result.gains.loop == "velocity" else "position"
+    return {
+        "loop": result.gains.loop,
+        "unit": result.target.units[quantity],
+        "step": _curve(result.step, per),
+        "profile": _curve(result.profile, per),
+    }
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry of the child process: JSON on stdout, or one error line on stderr and exit code 2."""
     from motorlab.errors import MotorlabError
 
     args = list(sys.argv[1:] if argv is None else argv)
-    if not args or args[0] not in ("detect", "panels"):
-        print("motorlab: error: worker: use 'detect FILE...' or 'panels EXPERIMENT ARG...'", file=sys.stderr)
+    commands = {"detect": detect, "panels": panels, "response": response}
+    if not args or args[0] not in commands:
+        print("motorlab: error: worker: use 'detect FILE...', 'panels EXPERIMENT ARG...' or 'response ARG...'",
+              file=sys.stderr)
         return 2
     try:
-        result = detect(args[1:]) if args[0] == "detect" else panels(args[1:])
+        result: Any = commands[args[0]](args[1:])
     except (MotorlabError, OSError) as exc:  # the analyze call reports the same error in the CLI's words
         print(f"motorlab: error: {' '.join(str(exc).split())}", file=sys.stderr)
         return 2

@@ -1,0 +1,154 @@
+"""``make fuzz``: the long fuzz run over every reader, command, session file and the app's uploads.
+
+Cases are numbered; case ``k`` of run seed ``s`` is always the same (tests/fuzz/fuzz_cases.py), so a
+run is resumable: ``out/fuzz/state.json`` holds the next case and the tallies, and the next
+``make fuzz`` carries on from there until ``--cases`` is reached. A failure is saved as a folder
+under ``out/fuzz/failures/`` with its files, ``case.json`` and ``replay.sh`` (the command to run it
+again); ``--replay FOLDER`` runs a saved case and prints its verdict. The run stops by itself
+after ``--cases`` cases or ``--minutes`` minutes, whichever comes first.
+
+Usage::
+
+    python scripts/fuzz.py [--cases 10000] [--seed 1] [--minutes 60] [--out out/fuzz] [--time-limit 60]
+    python scripts/fuzz.py --replay out/fuzz/failures/000123-traceback
+    python scripts/fuzz.py --summary          # the tallies of the state file, as docs/fuzz.md shows them
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import shlex
+import sys
+import tempfile
+import time
+from collections import Counter
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tests" / "fuzz"))
+
+from fuzz_cases import case_for  # noqa: E402
+from fuzz_corpus import build  # noqa: E402
+from fuzz_harness import GOOD, Case, Outcome, run, warm  # noqa: E402
+
+
+def _save_failure(out: Path, index: int, case: Case, outcome: Outcome) -> Path:
+    folder = out / "failures" / f"{index:06d}-{outcome.verdict}"
+    (folder / "files").mkdir(parents=True, exist_ok=True)
+    for name, content in case.files.items():
+        path = folder / "files" / name
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_bytes(content)
+    (folder / "case.json").write_text(json.dumps(case.to_json(), indent=1))
+    (folder / "outcome.txt").write_text(
+        f"verdict: {outcome.verdict}\ndetail: {outcome.detail}\nexit: {outcome.code}\nseconds: {outcome.seconds:.1f}\n"
+        f"mutation: {case.mutation}\nspecial files: {case.special}\nenv: {case.env}\n\n"
+        f"--- stderr\n{outcome.stderr[-4000:]}\n--- stdout\n{outcome.stdout[-2000:]}\n"
+    )
+    env = " ".join(f"{k}={shlex.quote(v)}" for k, v in case.env.items())
+    (folder / "replay.sh").write_text(
+        "#!/bin/sh\n# Replays this case exactly (special files are re-created by the harness):\n"
+        f"exec {shlex.quote(sys.executable)} {shlex.quote(str(ROOT / 'scripts' / 'fuzz.py'))} "
+        '--replay "$(dirname "$0")"\n'
+        f"# by hand, in a copy of files/: {env + ' ' if env else ''}motorlab {shlex.join(case.argv)}\n"
+    )
+    os.chmod(folder / "replay.sh", 0o755)
+    return folder
+
+
+def _load_state(path: Path, seed: int) -> dict:
+    if path.exists():
+        state = json.loads(path.read_text())
+        if state.get("seed") == seed:
+            return state
+    return {"seed": seed, "next": 0, "verdicts": {}, "by_seed": {}, "failures": [], "seconds": 0.0,
+            "max_case_seconds": 0.0, "max_peak_rss_mb": 0.0}
+
+
+def _write_state(path: Path, state: dict) -> None:
+    tmp = path.with_name(path.name + ".part")
+    tmp.write_text(json.dumps(state, indent=1, sort_keys=True))
+    os.replace(tmp, path)
+
+
+def summary(state: dict) -> str:
+    """The run's figures in a few lines (cases, outcomes by class, failures)."""
+    verdicts = Counter(state["verdicts"])
+    total = sum(verdicts.values())
+    good = sum(verdicts[v] for v in GOOD)
+    lines = [f"cases: {total} (seed {state['seed']}), kept the promise: {good} ({100 * good / max(total, 1):.2f} %)"]
+    lines += [f"  {name}: {count}" for name, count in verdicts.most_common()]
+    lines.append(f"time: {state['seconds'] / 60:.1f} min; slowest case {state['max_case_seconds']:.1f} s; "
+                 f"largest peak RSS {state['max_peak_rss_mb']:.0f} MB")
+    for failure in state["failures"][-20:]:
+        lines.append(f"  failure {failure}")
+    return "\n".join(lines)
+
+
+def replay(folder: Path, time_limit: float) -> int:
+    case = Case.from_json(json.loads((folder / "case.json").read_text()))
+    with tempfile.TemporaryDirectory(prefix="motorlab-fuzz-") as scratch:
+        outcome = run(case, Path(scratch), time_limit=time_limit)
+    print(f"{outcome.verdict}: {outcome.detail}\nexit {outcome.code}, {outcome.seconds:.1f} s")
+    print(outcome.stderr[-2000:])
+    return 0 if outcome.verdict in GOOD else 1
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--cases", type=int, default=10_000)
+    parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--minutes", type=float, default=90.0, help="stop after this long (default 90)")
+    parser.add_argument("--out", type=Path, default=ROOT / "out" / "fuzz")
+    parser.add_argument("--time-limit", type=float, default=60.0, help="seconds per case (default 60)")
+    parser.add_argument("--replay", type=Path)
+    parser.add_argument("--summary", action="store_true")
+    parser.add_argument("--only", help="only seeds whose name contains this")
+    args = parser.parse_args(argv)
+    if args.replay:
+        return replay(args.replay, args.time_limit)
+    args.out.mkdir(parents=True, exist_ok=True)
+    state_path = args.out / "state.json"
+    state = _load_state(state_path, args.seed)
+    if args.summary:
+        print(summary(state))
+        return 0
+    seeds = build(args.out / "corpus")
+    warm()
+    if args.only:
+        seeds = [s for s in seeds if args.only in s.name]
+    deadline = time.monotonic() + 60.0 * args.minutes
+    scratch = Path(tempfile.mkdtemp(prefix="motorlab-fuzz-"))
+    try:
+        while state["next"] < args.cases and time.monotonic() < deadline:
+            index = state["next"]
+            case = case_for(index, args.seed, seeds, args.out / "corpus")
+            outcome = run(case, scratch, time_limit=args.time_limit)
+            state["verdicts"][outcome.verdict] = state["verdicts"].get(outcome.verdict, 0) + 1
+            by_seed = state["by_seed"].setdefault(case.seed, {})
+            by_seed[outcome.verdict] = by_seed.get(outcome.verdict, 0) + 1
+            state["seconds"] += outcome.seconds
+            state["max_case_seconds"] = max(state["max_case_seconds"], outcome.seconds)
+            if outcome.peak_rss_mb == outcome.peak_rss_mb:  # not NaN
+                state["max_peak_rss_mb"] = max(state["max_peak_rss_mb"], outcome.peak_rss_mb)
+            if outcome.verdict not in GOOD:
+                folder = _save_failure(args.out, index, case, outcome)
+                state["failures"].append(f"{folder.name}: {case.seed}: {case.mutation[:80]}: {outcome.detail[:160]}")
+                print(f"case {index}: {outcome.verdict}: {case.seed}: {case.mutation[:80]}: {outcome.detail[:200]}",
+                      flush=True)
+            state["next"] = index + 1
+            if index % 10 == 0:
+                _write_state(state_path, state)
+    finally:
+        _write_state(state_path, state)
+        import shutil
+
+        shutil.rmtree(scratch, ignore_errors=True)
+    print(summary(state))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

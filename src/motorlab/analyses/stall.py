@@ -1,0 +1,272 @@
+"""Locked-rotor (stall) runs: K, R at 25 °C and the thermal network of the winding, with standard errors.
+
+A supply holds a voltage on the stalled motor for up to minutes while the winding heats (VEX's
+dynamometer runs, seed 1's lever-arm readings at 1, 10, 20 and 29 s, MIT 2.010's torque-constant test).
+The current falls as the copper warms (+0.393 %/K): i = V/R(T_w). One run or several (voltages) are
+fitted together (:mod:`motorlab.analyses._stall_fit`), each from its own initial temperature; a run
+that stops being a healthy stall is cut where it does (:mod:`motorlab.analyses._stall_cuts`), with a
+warning naming the file, the time, the likely cause and the winding temperature then. Torque, when
+measured, gives K = τ/i (the magnets' coefficient applied at the case temperature).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from motorlab.analyses._common import reader_warnings, sources_of
+from motorlab.analyses._stall_cuts import Cut, find_cut, first_full_sample, set_point
+from motorlab.analyses._stall_fit import (
+    SHARED,
+    HeatFit,
+    StallData,
+    TorqueFit,
+    current_dependence,
+    fit_heating,
+    fit_torque,
+    simulate_runs,
+)
+from motorlab.analyses._stall_report import answers, make_panels, parameters_of, run_rows
+from motorlab.errors import FitError, LogFormatError, OptionError
+from motorlab.recording import Recording
+from motorlab.results import FitResult
+from motorlab.thermal import MAGNET_COEFFICIENTS
+
+#: Fewest healthy samples a run needs to enter the fit.
+MIN_SAMPLES = 5
+#: A run fits this much worse than the others (relative RMS, and at least :data:`UNEXPLAINED_RMS`):
+#: heating does not explain it.
+UNEXPLAINED_FACTOR = 4.0
+UNEXPLAINED_RMS = 0.03
+
+
+@dataclass
+class Run:
+    """One file: its samples, where its healthy part starts and ends, and why it ends."""
+
+    source: str
+    time: np.ndarray
+    current: np.ndarray
+    voltage: np.ndarray
+    torque: np.ndarray | None
+    start: int
+    end: int
+    set_point: float
+    cut: Cut
+
+    def data(self) -> StallData:
+        """The healthy part, its time counted from the run's first row (the supply switching on)."""
+        sl = slice(self.start, self.end)
+        return StallData(self.source, self.time[sl] - self.time[0], self.voltage[sl], self.current[sl],
+                         None if self.torque is None else self.torque[sl], float(self.time[0]))
+
+
+def _run_of(rec: Recording, voltage: float | None, until: float | None) -> Run:
+    """The run of one recording, refused in one line when it cannot be a stall run."""
+    source = rec.source or "the recording"
+    if "current" not in rec:
+        raise LogFormatError("this file has no current column: a locked-rotor run needs the winding current "
+                             "(an export that logs torque only cannot give R or the heating)", path=rec.source or None)
+    t, i = np.asarray(rec.time, dtype=float), np.abs(np.asarray(rec["current"], dtype=float))
+    if t.size < 3:
+        raise LogFormatError(f"only {t.size} samples: a stall run needs a time series", path=rec.source or None)
+    if not np.any(i > 0):
+        raise LogFormatError("the current is 0 A in every row: no current flowed in this run (supply off, or "
+                             "the wrong column?)", path=rec.source or None)
+    if "voltage" in rec:
+        v = np.asarray(rec["voltage"], dtype=float)
+    elif voltage is not None:
+        v = np.full(t.size, float(voltage))
+    else:
+        raise OptionError(f"{source}: no voltage column: give the supply's voltage (--voltage)")
+    q = np.abs(np.asarray(rec["torque"], dtype=float)) if "torque" in rec else None
+    start = first_full_sample(i)
+    v_set = set_point(v) if voltage is None else float(voltage)
+    cut = find_cut(t, i, v, q, start, v_set)
+    end = t.size if cut.index is None else cut.index
+    if until is not None:
+        end = min(end, int(np.searchsorted(t, until, side="right")))
+    return Run(source, t, i, v, q, start, end, v_set, cut)
+
+
+def stall(
+    recordings: Recording | Sequence[Recording],
+    *,
+    voltage: float | None = None,
+    magnet: str = "ferrite",
+    magnet_coefficient: float | None = None,
+    ambient: float = 25.0,
+    until: float | None = None,
+    answer_voltage: float = 12.0,
+    limit: float = 150.0,
+    rise: float = 100.0,
+) -> FitResult:
+    """K, R₂₅ and the two-node thermal network from locked-rotor runs.
+
+    Parameters
+    ----------
+    recordings
+        One recording per run: ``time`` [s], ``current`` [A], ``voltage`` [V] (or ``voltage`` given),
+        ``torque`` [N·m] when measured.
+    voltage
+        The supply's voltage [V] for runs without a voltage column (also taken as the set point).
+    magnet, magnet_coefficient
+        The magnets' material (``"ferrite"`` −0.2 %/K, ``"ndfeb"`` −0.12 %/K) or their coefficient on K [1/K].
+    ambient
+        Ambient temperature [°C]; the coolest run starts at it.
+    until
+        Fit only the samples up to this time of each file [s] (to test forecasts on the rest).
+    answer_voltage, limit, rise
+        The answers: how long a stall at ``answer_voltage`` [V] takes to bring the winding to ``limit``
+        [°C], and the stall current held indefinitely for a ``rise`` [K] of the winding.
+
+    Returns
+    -------
+    FitResult
+        ``R`` (at 25 °C), ``R_wc``, ``R_ca``, ``C_w``, ``C_c``, ``K`` and ``tau0`` (with torque), the
+        answers ``t_limit``, ``I_continuous``, ``R_hot``; ``details["runs"]`` has one row per file
+        (set point, cut time and cause, initial temperature and the temperature at the cut).
+
+    Raises
+    ------
+    LogFormatError
+        A file without current, or whose current is 0 everywhere.
+    FitError
+        No run with enough healthy samples.
+    """
+    recs = [recordings] if isinstance(recordings, Recording) else list(recordings)
+    if not recs:
+        raise OptionError("no recording given")
+    beta = _magnet(magnet, magnet_coefficient)
+    if not (math.isfinite(ambient) and -40 <= ambient <= 80):
+        raise OptionError(f"the ambient temperature must lie between −40 and 80 °C, got {ambient!r}")
+    runs = [_run_of(rec, voltage, until) for rec in recs]
+    warnings = reader_warnings(recs)
+    used = [k for k, r in enumerate(runs) if r.end - r.start >= MIN_SAMPLES]
+    for k, r in enumerate(runs):
+        if k not in used:
+            warnings.append(f"{r.source}: only {max(r.end - r.start, 0)} healthy samples before the cut: left out")
+    if not used:
+        raise FitError("no run has a healthy stretch of at least 5 samples to fit")
+    heat, excluded = _fit_with_exclusions([runs[k] for k in used], beta, ambient, warnings)
+    data = [runs[k].data() for k in used]
+    fitted = [j for j in range(len(used)) if j not in excluded]
+    # The torque against the heating model's current, not the measured one: the model's is free of the
+    # ammeter's noise, which would bias the slope low (errors in the regressor).
+    smooth = [replace(data[j], current=heat.model_current[pos]) for pos, j in enumerate(fitted)]
+    torque = fit_torque(smooth, heat.case, beta)
+    if torque is not None and torque.beta:
+        torque = _with_case_uncertainty(torque, smooth, heat)
+    if torque is not None:
+        if torque.warning:
+            warnings.append(torque.warning)
+        note = current_dependence(torque)
+        if note:
+            warnings.append(note)
+    return _result(runs, used, fitted, heat, torque, warnings, recs,
+                   {"beta": beta, "ambient": ambient, "answer_voltage": answer_voltage, "limit": limit,
+                    "rise": rise, "until": until, "magnet": magnet if magnet_coefficient is None else "given"})
+
+
+def _with_case_uncertainty(torque: TorqueFit, data: list[StallData], heat: HeatFit) -> TorqueFit:
+    """K's standard error with the uncertainty of the case temperatures it is corrected to (the network's
+    covariance, by the delta method on the logarithms of the shared parameters)."""
+    base = [heat.values[n] for n in SHARED]
+    grad = np.zeros(len(SHARED))
+    for k in range(len(SHARED)):
+        shared = list(base)
+        shared[k] *= math.exp(1e-3)
+        sims = simulate_runs(shared, heat.initial, data, torque.beta, heat.thermal.ambient_temperature)
+        moved = fit_torque(data, [s[2] for s in sims], torque.beta)
+        grad[k] = ((moved.K if moved is not None else torque.K) - torque.K) / 1e-3
+    extra = float(grad @ np.nan_to_num(heat.log_covariance) @ grad)
+    torque.K_stderr = math.sqrt(torque.K_stderr**2 + max(extra, 0.0))
+    return torque
+
+
+def _magnet(magnet: str, coefficient: float | None) -> float:
+    if coefficient is not None:
+        if not (math.isfinite(coefficient) and -0.01 < coefficient <= 0.001):
+            raise OptionError(f"the magnets' coefficient must lie between −0.01 and 0.001 /K, got {coefficient!r}")
+        return float(coefficient)
+    if magnet not in MAGNET_COEFFICIENTS:
+        raise OptionError(f"unknown magnet material {magnet!r}; known: {', '.join(MAGNET_COEFFICIENTS)}")
+    return MAGNET_COEFFICIENTS[magnet]
+
+
+def _fit_with_exclusions(runs: list[Run], beta: float, ambient: float,
+                         warnings: list[str]) -> tuple[HeatFit, list[int]]:
+    """The heating fit, leaving out (and naming) a run that heating does not explain (with ≥ 3 runs)."""
+    data = [r.data() for r in runs]
+    heat = fit_heating(data, magnet=beta, ambient=ambient)
+    excluded: list[int] = []
+    if len(data) >= 3:
+        rms = np.array(heat.run_rms)
+        bad = int(np.argmax(rms))
+        others = np.delete(rms, bad)
+        if rms[bad] > max(UNEXPLAINED_FACTOR * float(np.median(others)), UNEXPLAINED_RMS):
+            excluded.append(bad)
+            keep = [j for j in range(len(data)) if j != bad]
+            heat = fit_heating([data[j] for j in keep], magnet=beta, ambient=ambient)
+            warnings.append(_unexplained(data[bad], heat))
+    return heat, excluded
+
+
+def _unexplained(run: StallData, heat: HeatFit) -> str:
+    """The warning for a run whose resistance rises far more (or less) than its heat allows."""
+    r_meas = run.voltage / run.current
+    n = max(3, run.time.size // 20)
+    r0, r1 = float(np.median(r_meas[:n])), float(np.median(r_meas[-n:]))
+    power = float(np.mean(run.voltage * run.current))
+    shared = [heat.values[name] for name in SHARED]
+    t0 = heat.thermal.ambient_temperature + (r0 / shared[0] - 1) / heat.thermal.resistance_coefficient
+    sim = simulate_runs(shared, [t0], [run], heat.thermal.magnet_coefficient, heat.thermal.ambient_temperature)[0]
+    r_model = run.voltage / sim[0]
+    allowed = float(r_model[-1] / r_model[0] - 1)
+    return (f"{run.source}: heating does not explain this run: its resistance rose {100 * (r1 / r0 - 1):.0f} % "
+            f"({r0:.3g} -> {r1:.3g} Ω) on {power:.3g} W, where the thermal network of the other runs allows "
+            f"{100 * allowed:.0f} %; likely cause: brush contact (the contact resistance of brushes on the "
+            "commutator grows at low current), not heat. Left out of the fit; no forecast for it")
+
+
+def _result(runs: list[Run], used: list[int], fitted: list[int], heat: HeatFit, torque: TorqueFit | None,
+            warnings: list[str], recs: list[Recording], opts: dict[str, Any]) -> FitResult:
+    """The FitResult: parameters, answers, run table, cut warnings, panels."""
+    rows, cut_warnings = run_rows(runs, used, fitted, heat)
+    warnings[:0] = cut_warnings
+    params, extra = answers(heat, opts)
+    warnings.extend(extra)
+    parameters = parameters_of(heat, torque, params)
+    data = [runs[used[j]].data() for j in fitted]
+    resid = np.concatenate([(m - d.current) for m, d in zip(heat.model_current, data, strict=True)])
+    hottest = float(max(float(np.max(w)) for w in heat.winding))
+    details: dict[str, Any] = {
+        "runs": rows,
+        "R_temperature": "R is the winding's resistance at 25 °C (R(T) = R·(1 + 0.00393·(T − 25 °C)))",
+        "thermal": heat.thermal.to_dict(),
+        "initial_temperature_C": rows[0]["initial winding temperature (°C)"],
+        "max_winding_temperature_C": hottest,
+        "answers": {k: v for k, v in opts.items() if k in ("answer_voltage", "limit", "rise")},
+        "until_s": opts["until"],
+        "magnet": opts["magnet"],
+        "shaft": "the stalled shaft where torque is measured (a bare motor: the motor shaft)",
+    }
+    current = np.concatenate([d.current for d in data])
+    return FitResult(
+        experiment="stall",
+        parameters=parameters,
+        correlation=heat.fit.correlation[: len(SHARED), : len(SHARED)],
+        correlation_names=list(SHARED),
+        rmse=float(np.sqrt(np.mean(resid**2))),
+        rmse_unit="A",
+        r2=float(1 - np.sum(resid**2) / np.sum((current - current.mean()) ** 2)) if current.size > 1 else math.nan,
+        n_points=int(current.size),
+        panels=make_panels(runs, used, fitted, heat, torque),
+        warnings=warnings,
+        details=details,
+        sources=sources_of(recs),
+    )

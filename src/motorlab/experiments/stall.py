@@ -1,0 +1,73 @@
+"""Locked-rotor (stall) runs: K, R at 25 °C and the winding's thermal network."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from motorlab.experiments import Experiment, Option, RigRun, Setting
+from motorlab.thermal import MAGNET_COEFFICIENTS
+
+
+def read_runs(paths: list[str]) -> list[Any]:
+    """One recording per file: a headed CSV (``time_s,voltage_V,current_A,torque_Nm``) or a dynamometer
+    export with worded headers (``Time,Amps,Volts,Torque 6V (N · m)``, :mod:`motorlab.io.headers`)."""
+    from motorlab.analyses._common import read_tables
+
+    return list(read_tables(paths))
+
+
+def run(paths: list[str], v: dict[str, Any]) -> Any:
+    """Run ``motorlab analyze stall FILE...``."""
+    from motorlab.analyses.stall import stall
+
+    return stall(read_runs(paths), voltage=v["voltage"], magnet=v["magnet"], magnet_coefficient=v["magnet_coefficient"],
+                 ambient=v["ambient"], until=v["until"], answer_voltage=v["answer_voltage"], limit=v["limit"],
+                 rise=v["rise"])
+
+
+def characterize(ctx: Any) -> Any:
+    """The session's stall runs (voltage, magnet and ambient from the session's table)."""
+    from motorlab.analyses.stall import stall
+
+    return stall(read_runs(ctx.files), voltage=ctx.setting("voltage"), magnet=ctx.setting("magnet") or "ferrite",
+                 ambient=25.0 if ctx.setting("ambient") is None else ctx.setting("ambient"))
+
+
+EXPERIMENT = Experiment(
+    name="stall",
+    title="Locked rotor (stall) runs and heat",
+    summary="Locked rotor: K, R at 25 °C and the winding's heating (thermal network) from stall runs at held "
+            "voltages; runs that end in a failure or at a limit of the rig are cut and named",
+    analysis="motorlab.analyses.stall:stall",
+    inputs="CSV of time_s, current_A, voltage_V and torque_Nm when measured, or a dynamometer export "
+           "(Time,Amps,Volts,Torque (N · m)); one file per run (voltage)",
+    run=run,
+    options=(
+        Option("voltage", "V", positive=True, metavar="VOLTS", label="Supply voltage",
+               help="for files without a voltage column"),
+        Option("magnet", kind="choice", choices=tuple(MAGNET_COEFFICIENTS), default="ferrite", label="Magnet material",
+               help="ferrite (K changes by −0.002 per kelvin) or ndfeb (−0.0012 per kelvin)"),
+        Option("magnet-coefficient", "1/K", dest="magnet_coefficient", metavar="BETA",
+               label="Magnets' temperature coefficient", help="on K, instead of the material's, e.g. -0.0019"),
+        Option("ambient", "degC", default=25.0, metavar="CELSIUS", label="Ambient temperature",
+               help="in °C; the coolest run starts at it"),
+        Option("until", "s", positive=True, metavar="SECONDS", label="Fit up to",
+               help="fit only each run's samples up to this time (forecast the rest with simulate stall)"),
+        Option("answer-voltage", "V", positive=True, default=12.0, metavar="VOLTS", label="Stall voltage asked about",
+               help="the voltage of the 'how long can it stay stalled' answer"),
+        Option("limit", "degC", default=150.0, metavar="CELSIUS", label="Winding temperature limit",
+               help="in °C, the temperature of that answer"),
+        Option("rise", "K", positive=True, default=100.0, metavar="KELVIN", label="Allowed winding rise",
+               help="of the 'current held indefinitely' answer"),
+    ),
+    reports=("K", "tau0", "R", "R_wc", "R_ca", "C_w", "C_c", "t_limit", "I_continuous", "R_hot"),
+    shaft="the stalled shaft where torque is measured (a bare motor: the motor shaft); R at 25 °C",
+    order=35,
+    settings=(
+        Setting("voltage", "V", "the supply's voltage, for files without a voltage column"),
+        Setting("magnet", "str", "magnet material: ferrite (default) or ndfeb"),
+        Setting("ambient", "float", "ambient temperature [°C] (default 25)"),
+    ),
+    characterize=characterize,
+    rig=RigRun("stall", "stall.csv", settings={"voltage": 6.0, "duration": 120.0}, order=35),
+)

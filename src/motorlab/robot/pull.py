@@ -1,0 +1,259 @@
+"""``motorlab robot pull``: bring the robot's logs home, byte for byte, and propose each one's analysis.
+
+What the robot serves on port 8080 (read from the projects' sources, commits named in docs/robot.md):
+
+* Road Runner 1.0 (road-runner-ftc ``RoadRunner/src/main/java/com/acmerobotics/roadrunner/ftc/FileServing.kt``,
+  ``TuningFiles``): for each ``FileType`` (``forward-ramp``, ``lateral-ramp``, ``angular-ramp``, ``accel``)
+  ``GET /tuning/<type>/latest.json`` answers the most recently modified file of
+  ``/sdcard/RoadRunner/tuning/<type>/`` with its name in the ``X-Filename`` header (a chunked body, no
+  length), or 404 with an empty body when there is none. Every file is also registered at
+  ``/tuning/<type>/<millis>.json``, but nothing lists them: only the latest of each type can be
+  reached without guessing names, so each pull adds the latest beside the earlier pulls in ``DIR``.
+* Road Runner's ``LogFiles``: ``GET /logs`` is an HTML list, newest first, of
+  ``<li><a href="/logs/download?file=NAME" download="NAME">NAME</a> (SIZE bytes)</li>``;
+  ``GET /logs/download?file=NAME`` sends the file (chunked, ``application/json`` whatever it holds). The
+  query string is split on ``&`` and ``=`` and not URL-decoded, so the name is sent as it is listed.
+* motorlab's own handler (``ftc/…/motorlab/MotorlabLogFiles.java``): ``GET /motorlab/logs`` answers JSON
+  ``{"folder": …, "files": [{"name", "bytes", "modified_ms"}, …]}`` and
+  ``GET /motorlab/logs/download?file=NAME`` the file with its ``Content-Length``.
+
+Files are written under ``DIR/tuning/<type>/``, ``DIR/logs/`` and ``DIR/motorlab/`` (the robot's own
+folders, so two types' ``<millis>.json`` never collide), through a temporary name and a rename: a file
+is either complete or absent. A file whose size differs from the size the robot listed is refused.
+"""
+
+from __future__ import annotations
+
+import html
+import json
+import os
+import re
+import tempfile
+import urllib.parse
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from motorlab import progress
+from motorlab.robot import RobotLinkError
+from motorlab.robot.http import Reply, RobotHttp
+
+#: Road Runner's ``TuningFiles.FileType`` base names (FileServing.kt).
+TUNING_TYPES = ("forward-ramp", "lateral-ramp", "angular-ramp", "accel")
+#: motorlab's handler routes (MotorlabLogFiles.java).
+MOTORLAB_LIST = "/motorlab/logs"
+MOTORLAB_DOWNLOAD = "/motorlab/logs/download"
+
+#: One entry of Road Runner's ``/logs`` page (LogFiles.registerRoutes in FileServing.kt).
+_LOG_ENTRY = re.compile(r'<li><a href="/logs/download\?file=([^"]*)" download="[^"]*">[^<]*</a> \((\d+) bytes\)</li>')
+#: A name the robot may give: one path component, no separators, nothing hidden.
+_SAFE_NAME = re.compile(r"^[^/\\\x00-\x1f]{1,255}$")
+
+
+@dataclass
+class PulledFile:
+    """One file brought back: where it came from and where it is, and what to analyse it with."""
+
+    source: str
+    path: Path
+    size: int
+    status: str
+    format: str | None = None
+    experiment: str | None = None
+    command: str | None = None
+    note: str | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"source": self.source, "path": str(self.path), "name": self.path.name, "bytes": self.size,
+                "status": self.status, "format": self.format, "experiment": self.experiment,
+                "command": self.command, "note": self.note}
+
+
+@dataclass
+class PullResult:
+    """What ``pull`` found: files, and the services the robot does not have (with what to do)."""
+
+    address: str
+    folder: Path
+    files: list[PulledFile] = field(default_factory=list)
+    missing: list[str] = field(default_factory=list)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"address": self.address, "folder": str(self.folder), "files": [f.to_dict() for f in self.files],
+                "missing": list(self.missing)}
+
+
+def _check_name(name: str, where: str) -> str:
+    if not _SAFE_NAME.match(name) or name in (".", "..") or name.startswith("."):
+        raise RobotLinkError(f"{where}: the robot named a file {name!r}, which is not a plain file name; not pulled")
+    return name
+
+
+def write_atomic(folder: Path, name: str, data: bytes) -> str:
+    """Write ``data`` to ``folder/name`` through a temporary file and a rename; ``"new"``, ``"same"`` or ``"replaced"``.
+
+    An existing file with the same bytes is left as it is. A different one is replaced (the robot's
+    newer copy of the same file, e.g. a log that was still being written at the last pull).
+    """
+    folder.mkdir(parents=True, exist_ok=True)
+    target = folder / name
+    if target.is_symlink() or (target.exists() and not target.is_file()):
+        raise RobotLinkError(f"{target}: exists and is not a regular file; not overwritten")
+    status = "new"
+    if target.exists():
+        if target.stat().st_size == len(data) and target.read_bytes() == data:
+            return "same"
+        status = "replaced"
+    fd, tmp = tempfile.mkstemp(prefix=f".{name}.", suffix=".part", dir=folder)
+    try:
+        with os.fdopen(fd, "wb") as out:
+            out.write(data)
+            out.flush()
+            os.fsync(out.fileno())
+        os.replace(tmp, target)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return status
+
+
+def _tuning(robot: RobotHttp, result: PullResult, out: Path) -> None:
+    found = 0
+    for kind in TUNING_TYPES:
+        reply = robot.get(f"/tuning/{kind}/latest.json")
+        if reply.status == 404:
+            continue
+        if reply.status != 200:
+            raise RobotLinkError(f"/tuning/{kind}/latest.json from {robot.address}: HTTP {reply.status}")
+        name = reply.headers.get("x-filename")
+        if not name:
+            raise RobotLinkError(f"/tuning/{kind}/latest.json from {robot.address}: no X-Filename header "
+                                 "(not Road Runner's FileServing.kt?)")
+        _check_name(name, f"/tuning/{kind}/latest.json")
+        _keep(result, out / "tuning" / kind, name, reply.body, f"/tuning/{kind}/latest.json")
+        found += 1
+    if not found:
+        result.missing.append(f"no Road Runner tuning files ({', '.join(TUNING_TYPES)}: 404): run a ramp logger "
+                              "(ForwardRampLogger …) first, or the robot has no Road Runner 1.0")
+
+
+def _listed(robot: RobotHttp, path: str) -> Reply | None:
+    reply = robot.get(path, max_bytes=8 << 20)
+    if reply.status == 404:
+        return None
+    if reply.status != 200:
+        raise RobotLinkError(f"{path} from {robot.address}: HTTP {reply.status}")
+    return reply
+
+
+def _flight_logs(robot: RobotHttp, result: PullResult, out: Path) -> None:
+    reply = _listed(robot, "/logs")
+    if reply is None:
+        result.missing.append("no FlightRecorder log list (/logs: 404): the robot has no Road Runner 1.0 "
+                              "(road-runner-ftc 0.1.8 or later serves it)")
+        return
+    entries = [(html.unescape(m.group(1)), int(m.group(2)))
+               for m in _LOG_ENTRY.finditer(reply.body.decode("utf-8", "replace"))]
+    with progress.task("Pulling FlightRecorder logs", total=len(entries), unit="file") as step:
+        for name, size in entries:
+            _check_name(name, "/logs")
+            query = name if re.fullmatch(r"[A-Za-z0-9._~-]+", name) else urllib.parse.quote(name)
+            path = f"/logs/download?file={query}"
+            got = robot.get(path)
+            if got.status != 200:
+                raise RobotLinkError(f"{path} from {robot.address}: HTTP {got.status} "
+                                     f"({got.body[:120].decode('utf-8', 'replace').strip()})")
+            note = _size_note(path, robot.address, size, len(got.body))
+            _keep(result, out / "logs", name, got.body, path, note)
+            step.advance(detail=name)
+
+
+def _size_note(path: str, address: str, listed: int, got: int) -> str | None:
+    if got < listed:
+        raise RobotLinkError(f"{path} from {address}: {got} of the {listed} bytes listed arrived (connection "
+                             "dropped?); nothing of it was kept: pull again")
+    if got > listed:  # FlightRecorder appends while an OpMode runs
+        return f"grew from {listed} to {got} bytes while pulling: an OpMode is writing it; pull again after it stops"
+    return None
+
+
+def _motorlab_logs(robot: RobotHttp, result: PullResult, out: Path) -> None:
+    reply = _listed(robot, MOTORLAB_LIST)
+    if reply is None:
+        result.missing.append(f"no motorlab log handler ({MOTORLAB_LIST}: 404): copy ftc/…/motorlab (with "
+                              "MotorlabLogFiles.java) into TeamCode to pull the OpModes' logs over Wi-Fi")
+        return
+    try:
+        listing = json.loads(reply.body)
+        entries = [(str(e["name"]), int(e["bytes"])) for e in listing["files"]]
+    except (ValueError, KeyError, TypeError):
+        raise RobotLinkError(f"{MOTORLAB_LIST} from {robot.address}: not motorlab's JSON file list") from None
+    with progress.task("Pulling motorlab logs", total=len(entries), unit="file") as step:
+        for name, size in entries:
+            _check_name(name, MOTORLAB_LIST)
+            path = f"{MOTORLAB_DOWNLOAD}?file={urllib.parse.quote(name)}"
+            got = robot.get(path)
+            if got.status != 200:
+                raise RobotLinkError(f"{path} from {robot.address}: HTTP {got.status}")
+            _keep(result, out / "motorlab", name, got.body, path, _size_note(path, robot.address, size, len(got.body)))
+            step.advance(detail=name)
+
+
+def _keep(result: PullResult, folder: Path, name: str, data: bytes, source: str, note: str | None = None) -> None:
+    status = write_atomic(folder, name, data)
+    result.files.append(PulledFile(source, folder / name, len(data), status, note=note))
+
+
+def propose_analysis(pulled: PulledFile) -> None:
+    """Fill in the file's format and the analysis proposed for it (as the app does for a dropped file)."""
+    from motorlab.errors import MotorlabError, OptionError
+    from motorlab.io import detect_format, read_any
+    from motorlab.proposal import propose
+
+    try:
+        fmt = detect_format(pulled.path)
+    except (MotorlabError, OSError, ValueError) as exc:
+        pulled.note = " ".join(f"{pulled.note or ''} not a log motorlab reads: {exc}".split())
+        return
+    pulled.format = fmt
+    signals: list[str] = []
+    declared = None
+    needs_cpr = False
+    try:
+        recording = read_any(pulled.path)
+        signals = list(recording.signals)
+        declared = str(recording.metadata.get("experiment") or "") or None
+    except OptionError as exc:  # Road Runner's files count ticks: the analysis needs --cpr
+        needs_cpr = "cpr" in str(exc)
+        if not needs_cpr:
+            pulled.note = " ".join(f"{pulled.note or ''} {exc}".split())
+    except (MotorlabError, OSError, ValueError) as exc:
+        pulled.note = " ".join(f"{pulled.note or ''} not readable as a log: {exc}".split())
+        return
+    pulled.experiment = propose(fmt, signals, declared)
+    pulled.command = (f"motorlab analyze {pulled.experiment} {pulled.path}"
+                      + (" --cpr <encoder counts per revolution>" if needs_cpr else ""))
+
+
+def pull(host: str, out: str | os.PathLike[str], *, http_port: int = 8080, timeout: float = 5.0) -> PullResult:
+    """Pull every file the robot serves into ``out`` and propose each one's analysis.
+
+    Raises
+    ------
+    RobotLinkError
+        No robot at the address, or a robot with none of the three services, or a transfer that broke
+        (what was complete before is kept; nothing half-written is left).
+    """
+    folder = Path(out)
+    if folder.exists() and not folder.is_dir():
+        raise RobotLinkError(f"{folder}: exists and is not a folder; give -o a folder")
+    robot = RobotHttp(host, http_port, timeout=timeout)
+    result = PullResult(robot.address, folder)
+    for part in (_tuning, _flight_logs, _motorlab_logs):
+        part(robot, result, folder)
+    if not result.files and len(result.missing) == 3:
+        raise RobotLinkError(f"{robot.address} answers but serves neither Road Runner's files nor motorlab's logs: "
+                             "install Road Runner 1.0 or copy ftc/…/motorlab into TeamCode, run an OpMode, pull again")
+    for pulled in result.files:
+        propose_analysis(pulled)
+    return result

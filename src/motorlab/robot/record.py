@@ -1,0 +1,300 @@
+"""``motorlab robot record``: init and start an OpMode through FTC Dashboard, record its telemetry, stop it.
+
+Safety, in this order of precedence:
+
+* nothing starts unless :func:`record` is called with the OpMode's name (the person's explicit
+  command); an OpMode already active on the robot is never replaced: the call refuses;
+* :meth:`Recorder.stop` (Ctrl-C, the app's Stop button, the time limit) sends ``STOP_OP_MODE`` at
+  once, from any thread: one WebSocket frame, well within 100 ms;
+* the connection is watched by the Dashboard browser's own heartbeat, ``GET_ROBOT_STATUS``, here every
+  0.2 s; no answer for :data:`LOST_AFTER` s counts as lost: the recorder reconnects (for up to
+  :data:`RECONNECT_FOR` s) only to send ``STOP_OP_MODE``, and says that the robot may still be running
+  when it cannot (an OpMode keeps running on the robot when the laptop's Wi-Fi drops: FTC Dashboard has
+  no watchdog; the Driver Station's STOP is the one that always works).
+
+The log is a CSV motorlab reads (:func:`motorlab.io.read_csv`): ``time_s`` from the packets' own robot
+timestamps (ms, relative to the first packet recorded), ``battery_V`` (the latest robot status's
+``batteryVoltage``, the largest hub input voltage), then one column per numeric telemetry key. A key
+named as a motorlab column (``voltage_V``, ``position_counts`` …, see :data:`ALIASES`) becomes that
+signal, so ``motorlab analyze feedforward LOG.csv --cpr N`` reads voltage and encoder position; every
+other key is kept as ``x_<key>`` (read, but no signal). Values are written exactly as the robot sent
+them (Dashboard sends every value as a string).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import re
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from motorlab.io.csv_table import COLUMNS, column_name
+from motorlab.robot import RobotLinkError
+from motorlab.robot.dashboard import Dashboard, is_idle
+
+#: Seconds without any message from Dashboard (it answers the 0.2 s status requests) = connection lost.
+LOST_AFTER = 1.0
+#: Seconds spent reconnecting after a loss, only to send STOP_OP_MODE.
+RECONNECT_FOR = 3.0
+#: Status requests per second while recording (the battery voltage column's rate).
+STATUS_RATE = 5.0
+#: Largest recording [s] and packets kept (a 100 Hz loop for 10 min).
+MAX_SECONDS = 600.0
+MAX_PACKETS = 100_000
+
+#: Telemetry key (lower case, spaces and dashes as underscores) -> motorlab column.
+ALIASES = {
+    "voltage": "voltage_V", "volts": "voltage_V", "applied_voltage": "voltage_V", "voltage_v": "voltage_V",
+    "command": "command_V", "command_v": "command_V",
+    "position": "position_counts", "counts": "position_counts", "encoder": "position_counts",
+    "encoder_counts": "position_counts", "ticks": "position_counts", "position_ticks": "position_counts",
+    "current": "current_A", "current_a": "current_A",
+    "battery": "battery_V", "battery_voltage": "battery_V",
+}
+
+
+def column_for(key: str) -> str:
+    """The CSV column a telemetry key is written as (a motorlab column, or ``x_<key>``)."""
+    known = column_name(key)
+    if known and COLUMNS[known][0] != "time":
+        return known
+    simple = re.sub(r"[\s\-/()]+", "_", key.strip().lower()).strip("_")
+    if simple in ALIASES:
+        return ALIASES[simple]
+    safe = re.sub(r"[^A-Za-z0-9_.]+", "_", key.strip()).strip("_") or "key"
+    return f"x_{safe}"
+
+
+@dataclass
+class Recording:
+    """Telemetry recorded so far: rows of (robot time [ms], battery [V], {key: value string})."""
+
+    opmode: str
+    rows: list[tuple[int, float, dict[str, str]]] = field(default_factory=list)
+    keys: list[str] = field(default_factory=list)
+    skipped: dict[str, str] = field(default_factory=dict)  # key -> a value that was not a number
+    stop_reason: str = ""
+    still_running: bool = False
+
+    def numeric_keys(self) -> list[str]:
+        return [k for k in self.keys if k not in self.skipped]
+
+
+class Recorder:
+    """One recording: :meth:`run` does it, :meth:`stop` ends it from any thread."""
+
+    def __init__(self, host: str, port: int, opmode: str, *, seconds: float = 30.0, timeout: float = 5.0,
+                 on_update: Callable[[Recording], None] | None = None) -> None:
+        if not (0 < seconds <= MAX_SECONDS) or not math.isfinite(seconds):
+            raise RobotLinkError(f"--seconds must be between 0 and {MAX_SECONDS:g}, got {seconds:g}")
+        self.host, self.port, self.seconds, self.timeout = host, port, float(seconds), timeout
+        self.data = Recording(opmode)
+        self.on_update = on_update
+        self._stop = threading.Event()
+        self._stop_reason = ""
+        self._lock = threading.Lock()
+        self._battery = float("nan")
+        self._recording = False
+        self.dash: Dashboard | None = None
+        self.state = "connecting"
+
+    def stop(self, reason: str = "stopped by the user") -> None:
+        """End the run now: ``STOP_OP_MODE`` is sent from this thread at once (if started)."""
+        with self._lock:
+            if not self._stop_reason:
+                self._stop_reason = reason
+            started = self._recording
+        self._stop.set()
+        if started and self.dash is not None:
+            with contextlib.suppress(RobotLinkError):  # the run loop sees the loss and reconnects to stop it
+                self.dash.stop_op_mode()
+
+    def _on_telemetry(self, packets: list[dict[str, Any]]) -> None:
+        if not self._recording:
+            return
+        with self._lock:
+            for packet in packets:
+                if not isinstance(packet, dict) or len(self.data.rows) >= MAX_PACKETS:
+                    continue
+                data = packet.get("data") or {}
+                stamp = packet.get("timestamp")
+                if not isinstance(data, dict) or not isinstance(stamp, int):
+                    continue
+                values = {str(k): str(v) for k, v in data.items()}
+                for key, value in values.items():
+                    if key not in self.data.keys:
+                        self.data.keys.append(key)
+                    if key not in self.data.skipped and not _is_number(value):
+                        self.data.skipped[key] = value
+                self.data.rows.append((stamp, self._battery, values))
+        if self.on_update is not None:
+            self.on_update(self.data)
+
+    def _start(self, dash: Dashboard) -> None:
+        names = [m["name"] for m in dash.op_modes()]
+        if self.data.opmode not in names:
+            close = [n for n in names if self.data.opmode.lower() in n.lower()][:5]
+            hint = f" (did you mean {', '.join(repr(n) for n in close)}?)" if close else f" ({len(names)} on the robot)"
+            raise RobotLinkError(f"the robot has no OpMode named {self.data.opmode!r}{hint}: give --opmode exactly as "
+                                 "the Driver Station lists it")
+        status = dash.status()
+        if not is_idle(status):
+            raise RobotLinkError(f"an OpMode is already active on the robot ({status.get('activeOpMode')}, "
+                                 f"{status.get('activeOpModeStatus')}): stop it on the Driver Station first")
+        self._battery = float(status.get("batteryVoltage", math.nan))
+        self.state = "init"
+        dash.init_op_mode(self.data.opmode)
+        self._wait_status(dash, lambda s: s.get("activeOpMode") == self.data.opmode, "initialise")
+        with self._lock:
+            self._recording = not self._stop.is_set()
+        if not self._recording:
+            dash.stop_op_mode()
+            return
+        self.state = "running"
+        dash.start_op_mode()
+
+    def _wait_status(self, dash: Dashboard, ok: Callable[[dict[str, Any]], bool], what: str) -> None:
+        deadline = time.monotonic() + self.timeout
+        while time.monotonic() < deadline and not self._stop.is_set():
+            status = dash.status()
+            if status.get("errorMessage"):
+                dash.stop_op_mode()
+                raise RobotLinkError(f"the robot reports an error: {status['errorMessage']}")
+            if ok(status):
+                return
+            time.sleep(0.05)
+        if not self._stop.is_set():
+            dash.stop_op_mode()
+            raise RobotLinkError(f"{self.data.opmode} did not {what} within {self.timeout:g} s; stop sent")
+
+    def _watch(self, dash: Dashboard) -> None:
+        """Until the time is up, Stop, or the connection is lost: poll the status (battery, heartbeat)."""
+        end = time.monotonic() + self.seconds
+        period = 1.0 / STATUS_RATE
+        while not self._stop.wait(period):
+            if time.monotonic() >= end:
+                self.stop(f"{self.seconds:g} s elapsed")
+                return
+            if dash.closed or time.monotonic() - dash.last_message > LOST_AFTER:
+                raise _Lost(dash.closed or f"no answer from {dash.address} for {LOST_AFTER:g} s")
+            try:
+                dash.send({"type": "GET_ROBOT_STATUS"})
+            except RobotLinkError as exc:
+                raise _Lost(str(exc)) from None
+            latest = dash._latest.get("RECEIVE_ROBOT_STATUS", (0, {}))[1].get("status") or {}
+            if isinstance(latest, dict):
+                self._battery = float(latest.get("batteryVoltage", self._battery))
+                if self._recording and latest.get("activeOpMode") not in (None, self.data.opmode):
+                    self.stop("the OpMode ended on the robot")
+                    return
+
+    def _stop_after_loss(self, why: str) -> None:
+        self.data.stop_reason = f"connection lost ({why})"
+        deadline = time.monotonic() + RECONNECT_FOR
+        while time.monotonic() < deadline:
+            try:
+                with Dashboard(self.host, self.port, timeout=1.0) as again:
+                    again.stop_op_mode()
+                    self.data.stop_reason += "; reconnected and sent STOP"
+                    return
+            except RobotLinkError:
+                time.sleep(0.2)
+        self.data.still_running = True
+        self.data.stop_reason += ("; could not reconnect: THE OPMODE MAY STILL BE RUNNING, press STOP on the "
+                                  "Driver Station")
+
+    def run(self) -> Recording:
+        """Connect, init and start the OpMode, record until stopped, stop it; the recording."""
+        dash = Dashboard(self.host, self.port, timeout=self.timeout, on_telemetry=self._on_telemetry)
+        self.dash = dash
+        dash.connect()
+        try:
+            self._start(dash)
+            if self._recording:
+                self._watch(dash)
+            if not self.data.stop_reason:
+                self.data.stop_reason = self._stop_reason or "stopped"
+            self._final_stop(dash)
+        except _Lost as lost:
+            self._recording = False
+            self._stop_after_loss(str(lost))
+        except BaseException:
+            if self._recording:  # Ctrl-C or a bug: stop the robot before anything else
+                try:
+                    dash.stop_op_mode()
+                except RobotLinkError:
+                    self._stop_after_loss("the connection closed")
+            raise
+        finally:
+            self._recording = False
+            self.state = "stopped"
+            dash.close()
+        return self.data
+
+    def _final_stop(self, dash: Dashboard) -> None:
+        if not self._recording:
+            return
+        dash.stop_op_mode()
+        time.sleep(0.25)  # the last telemetry batch (sent every ~100 ms) arrives
+        with self._lock:
+            self._recording = False
+
+
+class _Lost(Exception):
+    """The Dashboard connection went silent or closed while recording."""
+
+
+def _is_number(text: str) -> bool:
+    try:
+        return math.isfinite(float(text)) and "_" not in text
+    except ValueError:
+        return False
+
+
+def write_log(data: Recording, path: str | Path, *, host: str = "", cpr: float | None = None) -> dict[str, Any]:
+    """Write the recording as a CSV motorlab reads (temporary file + rename); a summary of what was written."""
+    from motorlab.io._output import write_text_atomic
+
+    keys = data.numeric_keys()
+    if not data.rows:
+        raise RobotLinkError(f"{data.opmode} sent no telemetry to FTC Dashboard ({data.stop_reason}): the OpMode must "
+                             "send packets (FtcDashboard.getInstance().sendTelemetryPacket, or MultipleTelemetry)")
+    if not keys:
+        bad = ", ".join(f"{k}={v!r}" for k, v in list(data.skipped.items())[:3])
+        raise RobotLinkError(f"no telemetry key of {data.opmode} is a number ({bad}): send numbers "
+                             "(packet.put(\"voltage\", v))")
+    columns = _columns(keys)
+    t0 = data.rows[0][0]
+    lines = [f"# source: FTC Dashboard {host}", f"# opmode: {data.opmode}", f"# stop_reason: {data.stop_reason}",
+             f"# robot_time_ms_at_zero: {t0}"]
+    if cpr is not None:
+        lines.append(f"# cpr: {cpr:g}")
+    lines += [f"# column {col}: telemetry key {key!r}" for key, col in zip(keys, columns, strict=True)]
+    lines.append(",".join(["time_s", "battery_V", *columns]))
+    written = 0
+    for stamp, battery, values in data.rows:
+        if any(values.get(k) is None or not _is_number(values[k]) for k in keys):
+            continue  # a packet without every numeric key (an init screen, a status line)
+        volts = repr(battery) if math.isfinite(battery) else "nan"
+        lines.append(",".join([f"{(stamp - t0) / 1000:.3f}", volts, *(values[k] for k in keys)]))
+        written += 1
+    if not written:
+        raise RobotLinkError(f"no telemetry packet of {data.opmode} holds every numeric key at once: nothing to write")
+    write_text_atomic(Path(path), "\n".join(lines) + "\n")
+    return {"rows": written, "columns": dict(zip(keys, columns, strict=True)),
+            "skipped": dict(data.skipped), "stop_reason": data.stop_reason, "still_running": data.still_running}
+
+
+def _columns(keys: list[str]) -> list[str]:
+    out: list[str] = []
+    for key in keys:
+        col = column_for(key)
+        while col in out or col in ("time_s", "battery_V"):
+            col = f"x_{col.removeprefix('x_')}_"
+        out.append(col)
+    return out

@@ -1,0 +1,187 @@
+"""Forecast a stall with a fitted heating model (``motorlab simulate stall --params FIT.json``).
+
+The model is what ``motorlab analyze stall --json`` wrote: R at 25 °C, the thermal network, K and τ₀
+when torque was measured, and where the fitted run started. The forecast holds a voltage on the
+stalled winding (i = V/R(T_w), :func:`motorlab.thermal.stall_response`) and says how long the winding
+takes to reach a limit, the current it holds indefinitely, and R hot against cold. Temperatures beyond
+the hottest the fit saw are extrapolation, and are said to be.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from motorlab.errors import InputError, OptionError
+from motorlab.thermal import (
+    WINDING_LIMIT,
+    ThermalModel,
+    continuous_current,
+    stall_response,
+    steady_stall_temperature,
+    time_to_temperature,
+)
+
+#: Most samples a forecast writes.
+MAX_FORECAST_SAMPLES = 2_000_000
+
+
+@dataclass(frozen=True)
+class StallModel:
+    """A fitted stall: R₂₅ [Ω], the thermal network, K [N·m/A] and τ₀ [N·m] (NaN without torque), the
+    initial winding temperature of the fitted run and the hottest winding temperature the fit saw [°C]."""
+
+    resistance: float
+    thermal: ThermalModel
+    torque_constant: float = math.nan
+    torque_offset: float = 0.0
+    magnet_applied: bool = True
+    initial_temperature: float = 25.0
+    hottest: float = math.inf
+    source: str = ""
+
+
+def load_fit(path: str | Path) -> StallModel:
+    """The model of an ``analyze stall --json`` file.
+
+    Raises
+    ------
+    InputError
+        Not such a file (one line naming it and what is missing).
+    """
+    try:
+        doc = json.loads(Path(path).read_text(encoding="utf-8-sig"))
+    except FileNotFoundError:
+        raise InputError("no such file", path=str(path)) from None
+    except (ValueError, UnicodeDecodeError, IsADirectoryError):
+        raise InputError("not a JSON file (give what 'motorlab analyze stall --json' wrote)", path=str(path)) from None
+    if not isinstance(doc, dict) or doc.get("experiment") != "stall":
+        raise InputError("not a stall fit: give what 'motorlab analyze stall --json' wrote", path=str(path))
+    params, details = doc.get("parameters", {}), doc.get("details", {})
+
+    def value(name: str) -> float:
+        entry = params.get(name)
+        v = entry.get("value") if isinstance(entry, dict) else None
+        return math.nan if v is None else float(v)
+
+    r = value("R")
+    network = dict(details.get("thermal") or {})
+    for name, key in (("R_wc", "winding_to_case"), ("R_ca", "case_to_ambient"), ("C_w", "winding_capacity"),
+                      ("C_c", "case_capacity")):
+        v = value(name)
+        if math.isfinite(v):
+            network[key] = v
+    if not math.isfinite(r) or not network:
+        raise InputError("the stall fit has no R or no thermal network", path=str(path))
+    try:
+        thermal = ThermalModel.from_dict(network)
+    except OptionError as exc:
+        raise InputError(exc.message, path=str(path)) from None
+    note = str((params.get("K") or {}).get("note", ""))
+    return StallModel(r, thermal, value("K"), value("tau0") if math.isfinite(value("tau0")) else 0.0,
+                      "magnets' coefficient applied" in note,
+                      float(details.get("initial_temperature_C") or thermal.ambient_temperature),
+                      float(details.get("max_winding_temperature_C") or math.inf), str(path))
+
+
+@dataclass
+class Forecast:
+    """A forecast stall: samples, the answers and the warnings."""
+
+    time: np.ndarray
+    current: np.ndarray
+    torque: np.ndarray
+    winding_temperature: np.ndarray
+    case_temperature: np.ndarray
+    answers: dict[str, Any] = field(default_factory=dict)
+    warnings: list[str] = field(default_factory=list)
+
+    def columns(self) -> dict[str, np.ndarray]:
+        """The CSV columns ``time_s, current_A, torque_Nm, winding_temperature_C, case_temperature_C``."""
+        return {"time_s": self.time, "current_A": self.current, "torque_Nm": self.torque,
+                "winding_temperature_C": self.winding_temperature, "case_temperature_C": self.case_temperature}
+
+
+def forecast(model: StallModel, voltage: float, duration: float, *, initial_temperature: float | None = None,
+             sample_interval: float = 0.1, limit: float = WINDING_LIMIT, rise: float = 100.0) -> Forecast:
+    """The fitted motor stalled at ``voltage`` [V] for ``duration`` [s], from the fitted run's start.
+
+    Raises
+    ------
+    OptionError
+        A voltage, duration, interval or temperature out of range.
+    """
+    if not (math.isfinite(voltage) and 0 < voltage <= 1000):
+        raise OptionError(f"the voltage (--voltage) must lie in (0, 1000] V, got {voltage!r}")
+    if not (math.isfinite(duration) and duration > 0):
+        raise OptionError(f"the duration (--duration) must be positive, got {duration!r} s")
+    if not (math.isfinite(sample_interval) and sample_interval > 0):
+        raise OptionError(f"the sample interval must be positive, got {sample_interval!r} s")
+    if duration / sample_interval > MAX_FORECAST_SAMPLES:
+        raise OptionError(f"{duration / sample_interval:.3g} samples is more than {MAX_FORECAST_SAMPLES:,}: "
+                          "shorten --duration or lengthen --sample-interval")
+    t0 = model.initial_temperature if initial_temperature is None else float(initial_temperature)
+    if not (math.isfinite(t0) and -60 <= t0 <= 400):
+        raise OptionError(f"the initial temperature must lie between −60 and 400 °C, got {t0!r}")
+    n = math.floor(duration / sample_interval + 1e-9)
+    t = np.append(np.arange(n + 1) * sample_interval, duration) if n * sample_interval < duration else (
+        np.arange(n + 1) * sample_interval)
+    run = stall_response(model.resistance, model.thermal, t, np.full(t.size, float(voltage)), winding=t0)
+    if math.isfinite(model.torque_constant):
+        beta = model.thermal.magnet_coefficient if model.magnet_applied else 0.0
+        torque = model.torque_constant * (1 + beta * (run.case_temperature - 25.0)) * run.current + model.torque_offset
+    else:
+        torque = np.full(t.size, np.nan)
+    out = Forecast(t, run.current, torque, run.winding_temperature, run.case_temperature)
+    out.answers = stall_answers(model, voltage, limit=limit, rise=rise, initial_temperature=t0)
+    hottest = float(np.max(run.winding_temperature))
+    if hottest > model.hottest + 1:
+        out.warnings.append(f"the forecast reaches {hottest:.0f} °C, {hottest - model.hottest:.0f} K beyond the "
+                            f"hottest winding temperature the fit saw ({model.hottest:.0f} °C): extrapolated")
+    if limit > model.hottest + 1:
+        out.warnings.append(f"the time to {limit:g} °C extrapolates the fit {limit - model.hottest:.0f} K beyond the "
+                            f"hottest winding temperature it saw ({model.hottest:.0f} °C)")
+    return out
+
+
+def stall_answers(model: StallModel, voltage: float, *, limit: float = WINDING_LIMIT, rise: float = 100.0,
+                  initial_temperature: float | None = None) -> dict[str, Any]:
+    """Time to ``limit`` at ``voltage``, the settling temperature, the current held for a ``rise``, R hot/cold."""
+    th = model.thermal
+    start = th.ambient_temperature if initial_temperature is None else initial_temperature
+    t_lim = time_to_temperature(model.resistance, th, voltage, limit, winding=start)
+    i_cont, v_cont = continuous_current(model.resistance, th, rise)
+    return {
+        "voltage_V": voltage,
+        "initial_temperature_C": start,
+        "limit_C": limit,
+        "time_to_limit_s": t_lim if math.isfinite(t_lim) else None,
+        "settles_at_C": steady_stall_temperature(model.resistance, th, voltage),
+        "rise_K": rise,
+        "continuous_current_A": i_cont,
+        "continuous_voltage_V": v_cont,
+        "R_cold_ohm": model.resistance * th.resistance_factor(th.ambient_temperature),
+        "R_hot_ohm": model.resistance * th.resistance_factor(limit),
+        "ambient_C": th.ambient_temperature,
+    }
+
+
+def answers_text(a: dict[str, Any]) -> list[str]:
+    """The answers in words."""
+    t = a["time_to_limit_s"]
+    first = (f"stalled at {a['voltage_V']:g} V from {a['initial_temperature_C']:.0f} °C, the winding reaches "
+             f"{a['limit_C']:g} °C after {t:.1f} s" if t is not None else
+             f"stalled at {a['voltage_V']:g} V the winding never reaches {a['limit_C']:g} °C: it settles at "
+             f"{a['settles_at_C']:.0f} °C")
+    return [
+        first,
+        f"held indefinitely with the winding {a['rise_K']:g} K above a {a['ambient_C']:g} °C ambient: a stall current "
+        f"of {a['continuous_current_A']:.3g} A ({a['continuous_voltage_V']:.3g} V at the terminals)",
+        f"R hot against cold: {a['R_hot_ohm']:.4g} Ω at {a['limit_C']:g} °C against {a['R_cold_ohm']:.4g} Ω at "
+        f"{a['ambient_C']:g} °C (+{100 * (a['R_hot_ohm'] / a['R_cold_ohm'] - 1):.0f} %)",
+    ]

@@ -1,0 +1,57 @@
+// Form fields from /api/schema, labelled in words. Shared fields (counts per revolution, wheel radius…)
+// read and write the one shared state, so what the student typed once is what every step uses.
+import { el, uid } from "./dom.js";
+import { prettyUnit } from "./format.js";
+import { choiceLabel, fieldLabel, helpWords } from "./words.js";
+import { SHARED_FIELDS, save, state } from "./store.js";
+
+export const isShared = (name) => SHARED_FIELDS.includes(name);
+
+// One field: label (words, unit), input, one-line help. values[name] holds what was typed.
+export function field(f, values, onChange, { note = "" } = {}) {
+  const id = uid(`field-${f.name}`);
+  const shared = isShared(f.name);
+  const current = shared ? (state.shared[f.name] ?? "") : (values[f.name] ?? "");
+  const set = (v) => {
+    if (shared) state.shared[f.name] = v; else values[f.name] = v;
+    save(); onChange && onChange(f.name, v);
+  };
+  let input;
+  if (f.kind === "flag") {
+    input = el("input", { type: "checkbox", id, name: f.name, checked: current === "true", onchange: (e) => set(e.target.checked ? "true" : "") });
+  } else if (f.kind === "choice") {
+    input = el("select", { id, name: f.name, onchange: (e) => set(e.target.value) });
+    input.append(el("option", { value: "", text: f.default !== null && f.default !== undefined ? `${choiceLabel(f.name, f.default)} (default)` : "automatic" }));
+    for (const c of f.choices) input.append(el("option", { value: String(c), text: choiceLabel(f.name, c), selected: String(c) === String(current) }));
+  } else {
+    const placeholder = f.default !== null && f.default !== undefined && f.default !== "" ? `default ${f.default}` : (f.unit ? `e.g. in ${prettyUnit(f.unit)}` : "");
+    input = el("input", { type: "text", id, name: f.name, value: current, placeholder, autocomplete: "off", spellcheck: "false",
+      inputmode: f.unit && f.unit !== "unit" ? "decimal" : undefined, oninput: (e) => set(e.target.value.trim()) });
+  }
+  const unit = f.unit && !["1", "count", "unit"].includes(f.unit) ? el("span", { class: "unit", text: ` in ${prettyUnit(f.unit)}` }) : null;
+  const label = el("label", { for: id }, fieldLabel(f), unit, f.required ? el("span", { class: "unit", text: " (needed)" }) : null);
+  const help = helpWords(f);
+  const extra = [note, shared ? "used in every step" : ""].filter(Boolean).join(" · ");
+  return el("div", { class: `field${f.kind === "flag" ? " flag" : ""}`, "data-field": f.name }, label, input,
+    help || extra ? el("small", { text: [help, extra].filter(Boolean).join(" · ") }) : null);
+}
+
+// The command-line arguments of the typed values (for FormData and the "same as a command" box).
+export function typedValues(fields, values) {
+  const out = [];
+  for (const f of fields) {
+    if (f.positional || f.kind === "file") continue;
+    const v = isShared(f.name) ? state.shared[f.name] : values[f.name];
+    if (v !== undefined && v !== null && String(v).trim() !== "") out.push([f.name, String(v).trim(), f.kind]);
+  }
+  return out;
+}
+
+export function appendValues(form, fields, values) {
+  for (const [name, v] of typedValues(fields, values)) form.append(name, v);
+  return form;
+}
+
+export function argvOf(fields, values) {
+  return typedValues(fields, values).map(([name, v, kind]) => (kind === "flag" ? `--${name}` : `--${name}=${v}`));
+}

@@ -1,0 +1,63 @@
+// Numbers for people: human-scaled units, the uncertainty in the same unit, "not determined" in words.
+const PREFIXES = [[1e9, "G"], [1e6, "M"], [1e3, "k"], [1, ""], [1e-3, "m"], [1e-6, "µ"], [1e-9, "n"]];
+// Units whose leading symbol takes an SI prefix (the rest of the unit is kept as is).
+const PREFIXABLE = /^(H|ohm|Ω|V|A|W|Hz|F|s|m|N\*m)$/;  // simple units only: "mV·s/rad" reads worse than 0.0123 V·s/rad
+const SUPERSCRIPT = { "-": "⁻", "0": "⁰", "1": "¹", "2": "²", "3": "³", "4": "⁴", "5": "⁵", "6": "⁶", "7": "⁷", "8": "⁸", "9": "⁹" };
+
+export function prettyUnit(unit) {
+  if (!unit || unit === "1") return "";
+  return String(unit).replace(/\bohm\b/g, "Ω").replace(/\*/g, "·").replace(/\^(-?\d+)/g, (_, p) => [...p].map((c) => SUPERSCRIPT[c]).join(""))
+    .replace(/\bdeg\b/g, "°");
+}
+
+function sig(x, digits) {
+  if (x === 0) return "0";
+  const s = Number(x.toPrecision(digits));
+  const abs = Math.abs(s);
+  if (abs >= 1e-3 && abs < 1e6) return String(s);
+  const [m, e] = s.toExponential(digits - 1).split("e");
+  return `${Number(m)} × 10${[...String(Number(e))].map((c) => SUPERSCRIPT[c]).join("")}`;
+}
+
+// The scale (power of 1000) that puts |x| in [1, 1000) for a prefixable unit.
+function prefixFor(x, unit) {
+  const m = PREFIXABLE.exec(unit || "");
+  if (!m || !Number.isFinite(x) || x === 0) return [1, ""];
+  if (m[1] === "s" && Math.abs(x) >= 1) return [1, ""];  // 12.8 s, not 12.8 ks for long times
+  if (m[1] === "g") return [1, ""];
+  for (const [f, p] of PREFIXES) if (Math.abs(x) >= f * 0.9995) return [f, p];
+  return PREFIXES[PREFIXES.length - 1];
+}
+
+function withPrefix(prefix, unit) {
+  if (!prefix) return prettyUnit(unit);
+  const u = String(unit).replace(/^ohm/, "Ω");
+  return prettyUnit(prefix + u);
+}
+
+// "690 ± 10 µH"; value null -> "not determined".
+export function quantity(value, stderr, unit) {
+  if (value === null || value === undefined || (typeof value === "number" && !Number.isFinite(value))) return "not determined";
+  if (typeof value !== "number") return `${value} ${prettyUnit(unit)}`.trim();
+  const [f, p] = prefixFor(value, unit);
+  const u = withPrefix(p, unit || "");
+  const v = value / f;
+  if (stderr === null || stderr === undefined || !Number.isFinite(stderr) || stderr <= 0) return `${sig(v, 4)} ${u}`.trim();
+  const e = stderr / f;
+  // the uncertainty to 2 significant digits, the value to the same decimal place
+  const place = Math.floor(Math.log10(e)) - 1;
+  const dec = Math.max(0, -place);
+  const round = (x) => (Math.abs(x) >= 1e-3 && Math.abs(x) < 1e6 ? (Math.round(x / 10 ** place) * 10 ** place).toFixed(dec) : sig(x, 3));
+  return `${round(v)} ± ${round(e)} ${u}`.trim();
+}
+
+export function number(value, digits = 4) {
+  if (value === null || value === undefined || (typeof value === "number" && !Number.isFinite(value))) return "not determined";
+  return typeof value === "number" ? sig(value, digits) : String(value);
+}
+
+// A time in seconds for people: "56 ms", "12.8 s".
+export function duration(seconds) {
+  if (seconds === null || seconds === undefined) return "not reached";
+  return quantity(seconds, null, "s");
+}

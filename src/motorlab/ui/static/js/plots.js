@@ -1,0 +1,76 @@
+// Interactive plots (Plotly, served by the app). Titles are headings above the plot, so the toolbar never
+// covers them; text is 12 px; legends sit below the axes so a phone keeps the full width for the data.
+import { el } from "./dom.js";
+import { prettyUnit } from "./format.js";
+
+const FONT = { size: 12, family: "system-ui, sans-serif" };
+const CONFIG = { responsive: true, displaylogo: false, modeBarButtonsToRemove: ["toImage", "sendDataToCloud"] };
+const narrow = () => window.innerWidth < 600;
+
+function base(height) {
+  return { height, font: FONT, margin: { t: 28, r: 12, b: 44, l: 58 }, legend: { orientation: "h", y: -0.22, font: FONT },
+    paper_bgcolor: "#fff", plot_bgcolor: "#fff" };
+}
+
+function figure(host, title, traces, layout) {
+  const div = el("div", { class: "plot-area" });
+  host.append(el("figure", { class: "plot" }, el("figcaption", { text: title }), div));
+  if (window.Plotly) window.Plotly.react(div, traces, layout, CONFIG);
+  return div;
+}
+
+export function raw(host, item) {
+  host.replaceChildren();
+  if (!item.signals || !item.signals.length) return;
+  const shown = item.signals.filter((s) => s.name !== "counts").slice(0, 4);
+  const n = shown.length;
+  const layout = { ...base(110 + 120 * n), grid: { rows: n, columns: 1, pattern: "independent" }, showlegend: false };
+  const traces = shown.map((s, k) => ({ x: item.time, y: s.y, name: s.name, mode: "lines", xaxis: k ? `x${k + 1}` : "x", yaxis: k ? `y${k + 1}` : "y" }));
+  shown.forEach((s, k) => {
+    layout[`xaxis${k ? k + 1 : ""}`] = { matches: k ? "x" : undefined, title: { text: k === n - 1 ? "time in s" : "" } };
+    layout[`yaxis${k ? k + 1 : ""}`] = { title: { text: `${s.name.replace(/_/g, " ")}${s.unit && s.unit !== "1" ? ` in ${prettyUnit(s.unit)}` : ""}`, font: FONT } };
+  });
+  figure(host, `${item.file}: the signals as read`, traces, layout);
+}
+
+// Data against the fitted model, residuals below. onSelect(points) gets the points picked with the box/lasso tool.
+export function panels(host, list, { onSelect } = {}) {
+  host.replaceChildren();
+  for (const p of list || []) {
+    const traces = [];
+    if (p.data) traces.push({ x: p.data.x, y: p.data.y, name: p.data.label || "measured", mode: "markers", marker: { size: 4 } });
+    if (p.model) traces.push({ x: p.model.x, y: p.model.y, name: p.model.label || "model", mode: "lines" });
+    for (const s of p.extra || []) if (s) traces.push({ x: s.x, y: s.y, name: s.label, mode: s.kind === "data" ? "markers" : "lines" });
+    const layout = { ...base(narrow() ? 360 : 420), xaxis: { title: { text: p.x_label } }, yaxis: { title: { text: p.y_label } }, dragmode: "zoom" };
+    if (p.same_x && p.data && p.model) {
+      const res = p.data.y.map((y, k) => (y === null || p.model.y[k] === null ? null : y - p.model.y[k]));
+      traces.push({ x: p.data.x, y: res, name: "residual", mode: "markers", marker: { size: 3 }, xaxis: "x2", yaxis: "y2" });
+      layout.height += 120;
+      layout.xaxis = { anchor: "y", showticklabels: false };
+      layout.yaxis.domain = [0.34, 1];
+      layout.xaxis2 = { matches: "x", anchor: "y2", title: { text: p.x_label } };
+      layout.yaxis2 = { domain: [0, 0.26], title: { text: "residual" }, anchor: "x2" };
+    }
+    const div = figure(host, p.title, traces, layout);
+    if (onSelect && div.on) div.on("plotly_selected", (ev) => onSelect(p, ev ? ev.points.filter((pt) => pt.curveNumber === 0) : []));
+  }
+}
+
+// The simulated closed loop: reference and response against time, and the voltage, for a step and a profile.
+export function response(host, curves, targetUnit) {
+  host.replaceChildren();
+  if (!curves) return;
+  const unit = prettyUnit(curves.unit || targetUnit || "");
+  for (const [title, c] of [["Step response (simulated)", curves.step], ["Following a motion profile (simulated)", curves.profile]]) {
+    const traces = [
+      { x: c.time, y: c.reference, name: "wanted", mode: "lines", line: { dash: "dash" } },
+      { x: c.time, y: c.output, name: "simulated", mode: "lines" },
+      { x: c.time, y: c.voltage, name: "voltage", mode: "lines", yaxis: "y2", line: { width: 1 } },
+    ];
+    const layout = { ...base(narrow() ? 300 : 340), xaxis: { title: { text: "time in s" } },
+      yaxis: { title: { text: `${curves.loop === "velocity" ? "speed" : "position"} in ${unit}` } },
+      yaxis2: { title: { text: "voltage in V" }, overlaying: "y", side: "right", showgrid: false } };
+    layout.margin.r = 50;
+    figure(host, title, traces, layout);
+  }
+}

@@ -1,0 +1,230 @@
+// Step "Your files and the fit": files recognised on upload (format and proposal beside each file, a reader's
+// refusal too), one analysis per kind of measurement, each with its own options, Run/Cancel, progress and result.
+import { $, commandBox, el, uid } from "../dom.js";
+import { post, run as runRequest, isAbort } from "../api.js";
+import { save, state } from "../store.js";
+import { argvOf, appendValues, field, isShared } from "../fields.js";
+import { EXPERIMENT_WORDS, plain } from "../words.js";
+import * as plots from "../plots.js";
+import { result as resultView } from "../results.js";
+
+// Options shown at once (the others under "More options"), besides required, shared and needed ones.
+const PRIMARY = { spindown: ["inertia", "disc-radius", "disc-thickness", "ratio"], feedforward: ["mechanism"], torque: ["arm"], terminal: ["inertia"] };
+const controllers = new Map();  // experiment -> AbortController of its running request (not kept in the state)
+
+export async function addFiles(t, files) {
+  const form = new FormData();
+  for (const f of files) form.append("file", f, f.name);
+  const found = await post("api/detect", form);
+  found.forEach((info, k) => {
+    t.files.push({ id: uid("file"), name: files[k].name, file: files[k], info, experiment: info.experiment || "", chosen: false });
+  });
+  save();
+}
+
+function proposalWords(info) {
+  if (/^roadrunner/.test(info.format || "")) return "Road Runner feedforward fit (kS, kV, kA)";
+  return EXPERIMENT_WORDS[info.experiment] || info.experiment;
+}
+
+function fileRow(ctx, entry) {
+  const t = ctx.state, info = entry.info || {};
+  const id = uid("exp");
+  const remove = el("button", { type: "button", class: "link", text: "remove", "aria-label": `Remove ${entry.name}`,
+    onclick: () => { t.files = t.files.filter((f) => f !== entry); save(); ctx.rerender(); } });
+  if (info.error && info.column) return columnQuestion(ctx, entry, remove);
+  if (info.error) {
+    return el("li", { class: "file refused" }, el("strong", { text: entry.name }), " ",
+      el("span", { class: "error", role: "alert", text: `${plain(info.error)}. Check this file, or choose another one.` }), " ", remove);
+  }
+  if (info.format === "session") {
+    return el("li", { class: "file" }, el("strong", { text: entry.name }), ": a session description. ",
+      el("a", { href: "#/bench/session", text: "Characterise motors on a bench with it" }), " ", remove);
+  }
+  const select = el("select", { id, onchange: (e) => { entry.experiment = e.target.value; entry.chosen = true; save(); ctx.rerender(); } });
+  for (const key of Object.keys(ctx.app.schema.analyze)) {
+    const words = EXPERIMENT_WORDS[key] || ctx.app.schema.analyze[key].label || key;
+    select.append(el("option", { value: key, text: key === info.experiment ? proposalWords(info) : words, selected: key === entry.experiment }));
+  }
+  const differs = entry.chosen && info.experiment && entry.experiment !== info.experiment;
+  return el("li", { class: "file", "data-file": entry.name },
+    el("strong", { text: entry.name }), el("span", { class: "format", text: ` ${info.format_words || info.format}` }),
+    el("div", { class: "proposal" }, el("span", { text: "Proposed: " }), el("span", { class: "proposed", text: proposalWords(info) })),
+    el("div", { class: "field inline" }, el("label", { for: id, text: "What this file measures" }), select),
+    differs ? el("p", { class: "small" }, `This file looks like ${proposalWords(info)}. `,
+      el("button", { type: "button", class: "link", text: "Use that", onclick: () => { entry.experiment = info.experiment; entry.chosen = false; save(); ctx.rerender(); } })) : null,
+    remove);
+}
+
+// "Which quantity is the column 'Load'?": the answer becomes a column rule ("Load=torque [oz*in]") the file
+// is read again with, and that every fit of the file passes on.
+function columnQuestion(ctx, entry, remove) {
+  const { column, quantities } = entry.info;
+  const [qid, uidUnit] = [uid("column"), uid("unit")];
+  const quantity = el("select", { id: qid }, el("option", { value: "", text: "choose…" }),
+    quantities.map((q) => el("option", { value: q, text: q === "skip" ? "nothing to read (leave it out)" : q.replace(/_/g, " ") })));
+  const unit = el("input", { type: "text", id: uidUnit, placeholder: "e.g. mA, oz*in, rpm", autocomplete: "off" });
+  const status = el("span", { role: "status" });
+  const apply = el("button", { type: "button", class: "primary", text: "Read the file again", onclick: async () => {
+    if (!quantity.value) { status.textContent = "choose what the column holds first"; return; }
+    entry.columns = [...(entry.columns || []), `${column}=${quantity.value}${unit.value.trim() ? ` [${unit.value.trim()}]` : ""}`];
+    status.textContent = "reading…";
+    try { await redetect(entry); save(); ctx.rerender(); } catch (e) { status.textContent = e.message; }
+  } });
+  return el("li", { class: "file refused", "data-file": entry.name }, el("strong", { text: entry.name }),
+    el("p", { class: "error", role: "alert", text: `motorlab does not know what the column “${column}” holds.` }),
+    el("div", { class: "options" },
+      el("div", { class: "field" }, el("label", { for: qid, text: `Which quantity is the column “${column}”?` }), quantity),
+      el("div", { class: "field" }, el("label", { for: uidUnit, text: "Its unit, if the header does not say" }), unit)),
+    el("div", { class: "actions" }, apply, status, remove));
+}
+
+async function redetect(entry) {
+  const form = new FormData();
+  form.append("file", entry.file, entry.name);
+  for (const rule of entry.columns || []) form.append("column", rule);
+  const [info] = await post("api/detect", form);
+  entry.info = info;
+  entry.experiment = entry.chosen ? entry.experiment : info.experiment || "";
+}
+
+const columnRules = (files) => files.flatMap((f) => f.columns || []);
+
+function groups(t) {
+  const out = new Map();
+  for (const f of t.files) {
+    if (!f.info || f.info.error || !f.experiment) continue;
+    if (!out.has(f.experiment)) out.set(f.experiment, []);
+    out.get(f.experiment).push(f);
+  }
+  return out;
+}
+
+function optionsForm(ctx, exp, files) {
+  const t = ctx.state;
+  const values = (t.options[exp] = t.options[exp] || {});
+  const fields = ctx.app.schema.analyze[exp].fields.filter((f) => !f.positional && f.kind !== "file");
+  const needs = new Set(files.flatMap((f) => (f.info && f.info.needs) || []));
+  const primary = fields.filter((f) => f.required || isShared(f.name) || needs.has(f.name) || (PRIMARY[exp] || []).includes(f.name));
+  const more = fields.filter((f) => !primary.includes(f));
+  const note = (f) => (f.name === "cpr" && needs.has("cpr") ? "this log counts encoder ticks: give the counts per revolution of its encoder (8192 for REV Through Bore dead wheels)" : "");
+  const box = el("div", { class: "options" }, primary.map((f) => field(f, values, null, { note: note(f) })));
+  return [fields, values, box, more.length ? el("details", { class: "more" }, el("summary", { text: "More options for this fit" }),
+    el("div", { class: "options" }, more.map((f) => field(f, values)))) : null];
+}
+
+async function runGroup(ctx, exp, files) {
+  const t = ctx.state;
+  const [fields, values] = [ctx.app.schema.analyze[exp].fields, t.options[exp] || {}];
+  const names = files.map((f) => f.name);
+  const make = () => {
+    const d = new FormData();
+    for (const f of files) d.append("file", f.file, f.name);
+    for (const rule of columnRules(files)) d.append("column", rule);
+    return appendValues(d, fields, values);
+  };
+  const run = (t.runs[exp] = { experiment: exp, files: names, status: "running", started: Date.now() });
+  const controller = new AbortController();
+  controllers.set(exp, controller);
+  ctx.rerender();
+  try {
+    const [answer, panels] = await Promise.all([
+      runRequest(`api/analyze/${encodeURIComponent(exp)}`, make(), { signal: controller.signal, onProgress: (p) => progress(exp, p) }),
+      post(`api/panels/${encodeURIComponent(exp)}`, make(), { signal: controller.signal }).catch((e) => (isAbort(e) ? Promise.reject(e) : [])),
+    ]);
+    Object.assign(run, { status: "done", result: answer, panels, finished: Date.now() });
+    t.gains.use[exp] = true;
+  } catch (e) {
+    Object.assign(run, isAbort(e) ? { status: "stopped" } : { status: "failed", error: e.message });
+  } finally {
+    controllers.delete(exp);
+    save();
+    ctx.rerender();
+  }
+}
+
+function progress(exp, p) {
+  const bar = $(`[data-group="${exp}"] progress`), text = $(`[data-group="${exp}"] .run-status`);
+  if (bar && p.total) { bar.max = p.total; bar.value = p.done || 0; }
+  if (text) text.textContent = `${p.what || "working"}${p.total ? `: ${p.done || 0} of ${p.total} ${p.unit || ""}` : ""}${p.detail ? ` (${p.detail})` : ""}`;
+}
+
+function groupCard(ctx, exp, files) {
+  const t = ctx.state, run = t.runs[exp];
+  const [fields, values, box, more] = optionsForm(ctx, exp, files);
+  const running = run && run.status === "running" && controllers.has(exp);
+  const runButton = el("button", { type: "button", class: "primary", text: running ? "Running…" : "Run the fit", disabled: running,
+    onclick: () => runGroup(ctx, exp, files) });
+  const cancel = el("button", { type: "button", text: "Cancel", hidden: !running, onclick: () => { const c = controllers.get(exp); if (c) c.abort(); } });
+  const card = el("section", { class: "card group", "data-group": exp },
+    el("h3", { text: /^roadrunner/.test((files[0].info || {}).format || "") ? "Road Runner feedforward fit (kS, kV, kA)" : EXPERIMENT_WORDS[exp] || exp }),
+    el("p", { class: "small", text: `From ${files.map((f) => f.name).join(", ")}` }),
+    box, more, commandBox(["analyze", exp, ...files.map((f) => f.name), ...columnRules(files).map((r) => `--column=${r}`), ...argvOf(fields, values)]),
+    el("div", { class: "actions" }, runButton, cancel, running ? el("progress", { "aria-label": "Progress of the fit" }) : null,
+      el("span", { class: "run-status", role: "status", text: running ? "fitting…" : run && run.status === "stopped" ? "cancelled" : "" })));
+  if (run && run.status === "failed") card.append(el("p", { class: "error", role: "alert", text: `${run.error}` }));
+  if (run && run.result) {
+    const same = run.files.join("\n") === files.map((f) => f.name).join("\n");
+    card.append(el("h4", { text: `Result from ${run.files.join(", ")}` }));
+    if (!same) card.append(el("p", { class: "small", text: "The files have changed since this result: run the fit again to update it." }));
+    card.append(...resultView(run.result));
+    const host = el("div", { class: "plots" });
+    card.append(host);
+    requestAnimationFrame(() => plots.panels(host, run.panels));
+  }
+  return card;
+}
+
+function motorPicker(ctx) {
+  const id = uid("motor");
+  const select = el("select", { id, onchange: (e) => {
+    const m = ctx.app.motors.find((x) => x.key === e.target.value);
+    state.shared.motor = e.target.value;
+    if (m) { state.shared.cpr = String(m.cpr); state.shared["gear-ratio"] = String(m.gear_ratio); }
+    save(); ctx.rerender();
+  } }, el("option", { value: "", text: "not in the list / dead wheels" }));
+  for (const m of ctx.app.motors) select.append(el("option", { value: m.key, text: `${m.name} (${m.cpr} counts per revolution)`, selected: m.key === state.shared.motor }));
+  return el("div", { class: "field" }, el("label", { for: id, text: "Motor" }), select,
+    el("small", { text: "fills in the counts per revolution of its built-in encoder; type them instead for another encoder" }));
+}
+
+export function render(host, ctx) {
+  const t = ctx.state;
+  host.append(el("h2", { text: ctx.task.title }), el("p", { class: "help", text: ctx.task.needs }));
+  const input = el("input", { type: "file", multiple: true, id: "task-files" });
+  const status = el("span", { role: "status" });
+  input.addEventListener("change", async () => {
+    const files = [...input.files];
+    if (!files.length) return;
+    status.textContent = "reading…";
+    try { await addFiles(t, files); ctx.rerender(); } catch (e) { status.textContent = e.message; }
+  });
+  const drop = el("label", { class: "drop", for: "task-files" }, el("span", { text: t.files.length ? "Add more files" : "Choose or drop your files" }), input);
+  drop.addEventListener("dragover", (e) => { e.preventDefault(); drop.classList.add("over"); });
+  drop.addEventListener("dragleave", () => drop.classList.remove("over"));
+  drop.addEventListener("drop", async (e) => { e.preventDefault(); drop.classList.remove("over"); await addFiles(t, [...e.dataTransfer.files]); ctx.rerender(); });
+  host.append(el("section", { class: "card" }, drop, status, motorPicker(ctx),
+    t.files.length ? el("ul", { class: "files" }, t.files.map((f) => fileRow(ctx, f))) : null));
+  const first = t.files.find((f) => f.info && f.info.signals && f.info.signals.length);
+  if (first) {
+    const raw = el("details", { class: "raw" }, el("summary", { text: `The signals in ${first.name}` }));
+    const area = el("div");
+    raw.append(area);
+    raw.addEventListener("toggle", () => { if (raw.open) plots.raw(area, first.info); });
+    host.append(raw);
+  }
+  for (const [exp, files] of groups(t)) host.append(groupCard(ctx, exp, files));
+  const done = Object.values(t.runs).some((r) => r.result);
+  host.append(el("nav", { class: "next" }, el("a", { class: `button${done ? " primary" : ""}`, href: `#/${ctx.task.key}/gains`, text: "Gains for your code →" })));
+}
+
+// Run every analysis that has no result for its current files (the gains step's "add that file").
+export async function runAll(ctx) {
+  const t = ctx.state;
+  const jobs = [];
+  for (const [exp, files] of groups(t)) {
+    const run = t.runs[exp];
+    if (!run || !run.result || run.files.join("\n") !== files.map((f) => f.name).join("\n")) jobs.push(runGroup(ctx, exp, files));
+  }
+  await Promise.all(jobs);
+}

@@ -1,0 +1,126 @@
+// Step "Your session and its report": a session (its .toml with its logs, its folder, or a zip) run as
+// `motorlab characterize`, with per-unit progress, then the results table, the fleet check and the report.
+import { $, download, el } from "../dom.js";
+import { run as runRequest, isAbort } from "../api.js";
+import { save } from "../store.js";
+import { quantity, number } from "../format.js";
+import { parameterWords, plain } from "../words.js";
+
+let controller = null;
+
+export function addSessionFiles(t, files) {
+  const list = [...files].map((f) => ({ name: f.name, path: f.webkitRelativePath || f.name, file: f }));
+  t.session = { files: list, body: null, status: "", error: "" };
+  save();
+}
+
+// The files the session description names (a quick look; the CLI reads it for real).
+async function namedFiles(entry) {
+  const text = await entry.file.text();
+  const names = [];
+  for (const line of text.split("\n")) {
+    const m = /^\s*(files|truth|spindown)\s*=\s*(.*)$/.exec(line.replace(/#.*$/, ""));
+    if (m) for (const q of m[2].matchAll(/"([^"]+)"|'([^']+)'/g)) names.push(q[1] || q[2]);
+  }
+  return names;
+}
+
+async function checkFiles(s, host) {
+  const toml = s.files.find((f) => /\.toml$/i.test(f.name));
+  if (!toml) {
+    if (!s.files.some((f) => /\.zip$/i.test(f.name))) host.textContent = "Choose the session's .toml file too (or one .zip of the session's folder).";
+    return;
+  }
+  const names = await namedFiles(toml);
+  const chosen = new Set(s.files.map((f) => f.name));
+  const missing = names.filter((n) => !chosen.has(n.split(/[\\/]/).pop()));
+  host.textContent = missing.length
+    ? `${toml.name} names ${missing.join(", ")}, not among the chosen files: choose ${missing.length > 1 ? "them" : "it"} too, or choose the session's folder.`
+    : `${toml.name} names ${names.length} file${names.length === 1 ? "" : "s"}: all chosen.`;
+}
+
+async function runSession(ctx) {
+  const t = ctx.state, s = t.session;
+  const form = new FormData();
+  for (const f of s.files) form.append("file", f.file, f.path);
+  s.status = "running"; s.error = ""; s.started = Date.now();
+  controller = new AbortController();
+  ctx.rerender();
+  const clock = setInterval(() => { const el2 = $(".session .run-status"); if (el2 && !el2.dataset.progress) el2.textContent = `running the analyses… ${Math.round((Date.now() - s.started) / 1000)} s`; }, 500);
+  try {
+    s.body = await runRequest("api/characterize", form, { signal: controller.signal, onProgress: progress });
+    s.status = "done";
+    t.gains.unit = "";
+  } catch (e) {
+    s.status = isAbort(e) ? "stopped" : "failed";
+    s.error = isAbort(e) ? "" : e.message;
+  } finally {
+    clearInterval(clock); controller = null; save(); ctx.rerender();
+  }
+}
+
+function progress(p) {
+  const bar = $(".session progress"), text = $(".session .run-status");
+  if (bar && p.total) { bar.max = p.total; bar.value = p.done || 0; }
+  if (text) { text.dataset.progress = "1"; text.textContent = `${p.what || "working"}: ${p.done || 0} of ${p.total || "?"} ${p.unit || ""}${p.detail ? ` (${p.detail})` : ""}`.replace(" of ? ", " "); }
+}
+
+function resultsTable(r) {
+  const names = [];
+  for (const unit of Object.values(r.units)) for (const n of Object.keys(unit.parameters || {})) if (!names.includes(n)) names.push(n);
+  const rows = Object.values(r.units).map((unit) => el("tr", {},
+    el("th", { scope: "row", text: unit.label }), el("td", { "data-label": "status", text: unit.status === "ok" ? "ok" : plain(unit.status) }),
+    names.map((n) => { const p = (unit.parameters || {})[n]; return el("td", { class: "num", "data-label": parameterWords(n).join(" "), text: p ? quantity(p.value, p.stderr, p.unit) : "not determined" }); })));
+  return el("table", { class: "wide", id: "session-table" }, el("caption", { text: "Each unit's parameters" }),
+    el("thead", {}, el("tr", {}, el("th", { text: "Unit" }), el("th", { text: "Status" }), names.map((n) => { const [w, s] = parameterWords(n); return el("th", { text: `${w} ${s}` }); }))),
+    el("tbody", {}, rows));
+}
+
+function fleetTable(r) {
+  const fleet = (r.fleet && r.fleet.parameters) || {};
+  const rows = Object.entries(fleet).map(([n, f]) => {
+    const flagged = Object.entries(f.z || {}).filter(([, z]) => Math.abs(z) > r.fleet.threshold).map(([u, z]) => `${u} (z = ${number(z, 3)})`);
+    const [w, s] = parameterWords(n);
+    return el("tr", {}, el("th", { scope: "row", text: `${w} ${s}` }), el("td", { "data-label": "units", text: String(f.n) }),
+      el("td", { class: "num", "data-label": "mean", text: quantity(f.mean, null, f.unit) }), el("td", { class: "num", "data-label": "spread", text: quantity(f.std, null, f.unit) }),
+      el("td", { "data-label": "unusual", text: flagged.join(", ") || "none" }));
+  });
+  return el("table", { class: "wide", id: "fleet-table" }, el("caption", { text: "Fleet check: which motor differs from the others?" }),
+    el("thead", {}, el("tr", {}, ["Parameter", "Units", "Mean", "Spread", "Unusual units"].map((h) => el("th", { text: h })))), el("tbody", {}, rows));
+}
+
+export function render(host, ctx) {
+  const t = ctx.state, s = t.session;
+  host.append(el("h2", { text: ctx.task.title }), el("p", { class: "help", text: ctx.task.needs }));
+  const pick = (input) => input.addEventListener("change", () => { if (input.files.length) { addSessionFiles(t, input.files); ctx.rerender(); } });
+  const files = el("input", { type: "file", multiple: true, id: "session-files" });
+  const folder = el("input", { type: "file", id: "session-folder", webkitdirectory: true });
+  pick(files); pick(folder);
+  const check = el("p", { class: "small", role: "status" });
+  const running = s && s.status === "running" && controller;
+  host.append(el("section", { class: "card session" },
+    el("label", { class: "drop", for: "session-files" }, el("span", { text: "Choose the session file (.toml) with its logs, or one .zip of its folder" }), files),
+    el("label", { class: "drop small", for: "session-folder" }, el("span", { text: "or choose the session's folder" }), folder),
+    s ? el("p", { class: "small", text: `Chosen: ${s.files.map((f) => f.path).join(", ")}` }) : null, check,
+    el("div", { class: "actions" },
+      el("button", { type: "button", class: "primary", text: running ? "Running…" : "Run the session", disabled: !s || running, onclick: () => runSession(ctx) }),
+      el("button", { type: "button", text: "Cancel", hidden: !running, onclick: () => controller && controller.abort() }),
+      running ? el("progress", { "aria-label": "Progress of the session" }) : null,
+      el("span", { class: "run-status", role: "status", text: s && s.status === "stopped" ? "cancelled" : "" })),
+    s && s.error ? el("p", { class: "error", role: "alert", text: s.error }) : null));
+  if (s && !s.body) checkFiles(s, check);
+  if (s && s.body) {
+    const r = s.body.results;
+    const out = el("section", { class: "card", id: "session-result" },
+      el("h3", { text: r.session && r.session.title ? r.session.title : "Results" }),
+      s.body.message ? el("p", { class: "error", text: `Some analyses failed: ${plain(s.body.message)}` }) : null,
+      el("div", { class: "scroll" }, resultsTable(r)), el("div", { class: "scroll" }, fleetTable(r)),
+      el("div", { class: "actions" },
+        el("button", { type: "button", text: "Download results.json", onclick: () => download("results.json", JSON.stringify(r, null, 2), "application/json") }),
+        el("button", { type: "button", text: "Download results.csv", onclick: () => download("results.csv", s.body.csv, "text/csv") }),
+        el("button", { type: "button", text: "Download the report", onclick: () => download("report.html", s.body.report_html, "text/html") })),
+      el("details", { class: "report" }, el("summary", { text: "The printable report" }), el("iframe", { title: "The report", sandbox: "", srcdoc: s.body.report_html })));
+    host.append(out);
+  }
+  host.append(el("nav", { class: "next" }, el("a", { class: `button${s && s.body ? " primary" : ""}`, href: `#/${ctx.task.key}/gains`, text: "Gains for your code →" })));
+}

@@ -1,0 +1,288 @@
+"""Issue 25's failures, one regression test each: power towers, integer literals of thousands of digits,
+cpr and scale factors outside any encoder, numpy warnings on successful runs, ``-o ""``, deep TOML,
+and argparse's refusals in the same words as every other.
+
+Each runs ``motorlab`` in process on small files the virtual rig writes, except the power towers:
+before the fix they never returned, so they run in a child process with a time limit.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from motorlab import cli, units
+from motorlab.errors import OptionError
+from motorlab.rig import VirtualRig
+from motorlab.units import parse_quantity
+
+HUGE = "9" * 5000  # beyond Python's 4,300-digit limit of integer conversion
+
+
+@pytest.fixture(scope="module")
+def rig(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
+    folder = tmp_path_factory.mktemp("rig25")
+    r = VirtualRig("neverest40", unit_seed=1, noise_seed=7)
+    runs = {
+        "terminal": r.run("terminal", folder / "terminal.csv"),
+        "lcr": r.run("lcr", folder / "lcr.csv"),
+        "amplifier": r.run("amplifier", folder / "amplifier.csv"),
+        "transient": r.run("transient", folder / "transient.csv", duration=1.0),
+        "sysid": r.run("sysid", folder / "sysid.json", quasistatic_duration=6.0, dynamic_duration=2.0),
+    }
+    out = {name: Path(run.paths[0]) for name, run in runs.items()}
+    from motorlab.rig.ftc import simulate_flight_log, simulate_ramp
+
+    simulate_ramp(folder / "ramp.json", seed=3)
+    simulate_flight_log(folder / "flight.log", duration=4.0, seed=3)
+    out["ramp"], out["flight"] = folder / "ramp.json", folder / "flight.log"
+    return out
+
+
+def run(capsys: pytest.CaptureFixture[str], *argv: object) -> tuple[int, str, str]:
+    try:
+        code = cli.main([str(a) for a in argv])
+    except SystemExit as exc:
+        code = exc.code if isinstance(exc.code, int) else 1
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def refused(capsys: pytest.CaptureFixture[str], *argv: object, mentions: str = "") -> str:
+    code, _, err = run(capsys, *argv)
+    assert code == 2, err
+    lines = err.strip().splitlines()
+    assert len(lines) == 1, err
+    assert lines[0].startswith("motorlab: error: "), err
+    assert "computation failed" not in err, err  # not the last-resort handler
+    assert mentions.lower() in err.lower(), err
+    return err
+
+
+# ---- power towers: bounded work wherever a quantity is parsed ------------------------------------------
+
+
+def _cli_in_child(argv: list[str], env: dict[str, str] | None = None) -> subprocess.Popen[str]:
+    return subprocess.Popen([sys.executable, "-m", "motorlab", *argv], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True, env={**os.environ, **(env or {})})
+
+
+def test_a_power_tower_is_refused_at_once_everywhere(rig, tmp_path: Path) -> None:
+    """Option, session file and MOTORLAB_MAX_INPUT_SIZE: each answered within seconds, one line, exit 2."""
+    session = tmp_path / "session.toml"
+    session.write_text('[motor]\ncatalog = "neverest40"\n[rig]\nlever_arm = "9**9**9 m"\n'
+                       f'[units.A.lcr]\nfiles = ["{rig["lcr"]}"]\n')
+    children = [
+        _cli_in_child(["analyze", "terminal", str(rig["terminal"]), "--K", "9**9**9 V*s/rad"]),
+        _cli_in_child(["characterize", str(session), "-o", str(tmp_path / "out")]),
+        _cli_in_child(["analyze", "lcr", str(rig["lcr"])], env={"MOTORLAB_MAX_INPUT_SIZE": "9**9**9"}),
+    ]
+    try:
+        results = [child.communicate(timeout=60) for child in children]
+    finally:
+        for child in children:
+            child.kill()
+    for child, (_out, err) in zip(children, results, strict=True):
+        assert child.returncode == 2, err
+        assert len(err.strip().splitlines()) == 1, err
+    assert "--K" in results[0][1]
+    assert "power of a power" in results[0][1]
+    assert f"{session}:4: rig.lever_arm" in results[1][1]
+    assert "MOTORLAB_MAX_INPUT_SIZE" in results[2][1]
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("text", ["9**9**9", "9^9^9 m", "2**(2**40) m", "(((((1))))) m", "m^1000", "1" * 300 + " m",
+                                  "9 ** 9 ** 9", "2**-9**9 m", "m**99999999", "(10^12)^12^12"])
+def test_expressions_beyond_a_unit_are_refused_without_evaluating(text: str) -> None:
+    start = time.perf_counter()
+    with pytest.raises(OptionError):
+        parse_quantity(text, "m", name="--arm")
+    assert time.perf_counter() - start < 1.0
+
+
+@pytest.mark.parametrize(("text", "unit", "value"), [
+    ("7.8 kg*m^2", "kg*m^2", 7.8), ("400 in*oz", "N*m", 400 * 0.0254 * 0.028349523125 * 9.80665),
+    ("130 rpm", "rad/s", 130 * 2 * 3.141592653589793 / 60), ("1.5 (m/s)^2", "m^2/s^2", 1.5), ("3 s**-1", "1/s", 3),
+    ("10^3 m", "m", 1000.0), ("-12 V", "V", -12.0), ("2 kg m^2", "kg*m^2", 2.0), ("12 mV", "V", 0.012),
+])
+def test_units_still_read(text: str, unit: str, value: float) -> None:
+    assert parse_quantity(text, unit) == pytest.approx(value)
+    units.check_expression(text)
+
+
+@pytest.mark.parametrize(("experiment", "option"), [("amplifier", "--nominal"), ("identify", "--R"),
+                                                    ("terminal", "--K-stderr")])
+def test_an_overflowing_quantity_option_is_one_line(experiment: str, option: str, rig, capsys) -> None:
+    """``--nominal '2**1024'`` raised OverflowError inside argparse: a traceback."""
+    files = {"amplifier": (rig["amplifier"],), "identify": (rig["transient"], "--cpr", "1120"),
+             "terminal": (rig["terminal"], "--K", "0.7")}[experiment]
+    for value in ("2**1024", "1e200^2 V", HUGE):
+        err = refused(capsys, "analyze", experiment, *files, option, value, mentions=option)
+        assert len(err) < 400
+
+
+# ---- integer literals of thousands of digits ----------------------------------------------------------
+
+
+def _with_huge_integer(source: Path, target: Path, old: str) -> int:
+    """``source`` with the first ``old`` replaced by a 5,000-digit integer; the 1-based line of it."""
+    text = source.read_text()
+    at = text.index(old)
+    target.write_text(text[:at] + HUGE + text[at + len(old):])
+    return text.count("\n", 0, at) + 1
+
+
+def test_sysid_json_with_a_huge_integer(rig, tmp_path: Path, capsys) -> None:
+    path = tmp_path / "sysid.json"
+    text = rig["sysid"].read_text()
+    doc = json.loads(text)
+    doc["sysid"] = True
+    doc["test"] = "Simple"
+    path.write_text(json.dumps(doc, indent=1).replace('"Simple"', HUGE, 1))
+    line = path.read_text()[: path.read_text().index(HUGE)].count("\n") + 1
+    refused(capsys, "analyze", "feedforward", path, mentions=f"{path}:{line}: an integer of 5000 digits")
+
+
+def test_roadrunner_ramp_with_a_huge_integer(rig, tmp_path: Path, capsys) -> None:
+    path = tmp_path / "ramp.json"
+    text = rig["ramp"].read_text()
+    key = text.index('"voltages"')
+    start = text.index("[", key) + 1
+    end = min(text.index(",", start), text.index("]", start))
+    line = _with_huge_integer(rig["ramp"], path, text[start:end])
+    refused(capsys, "analyze", "feedforward", path, "--cpr", "8192", mentions=f"{path}:{line}:")
+
+
+def test_tune_params_with_a_huge_integer(tmp_path: Path, capsys) -> None:
+    path = tmp_path / "params.json"
+    path.write_text('{"experiment": "feedforward",\n "parameters": {"kV": {"value": ' + HUGE + ', "unit": "V*s/rad"}}}')
+    refused(capsys, "tune", "velocity", "--params", path, mentions=f"{path}:2: an integer of 5000 digits")
+
+
+@pytest.mark.parametrize("digits", [5000, 400])
+def test_session_with_a_huge_integer(digits: int, rig, tmp_path: Path, capsys) -> None:
+    path = tmp_path / "session.toml"
+    path.write_text(f'[motor]\ncatalog = "neverest40"\n[rig]\nlever_arm = {"9" * digits}\n'
+                    f'[units.A.lcr]\nfiles = ["{rig["lcr"]}"]\n')
+    refused(capsys, "characterize", path, "-o", tmp_path / "out", mentions=f"{path}:4")
+    assert not (tmp_path / "out").exists()
+
+
+def test_truth_file_with_a_huge_integer(tmp_path: Path) -> None:
+    from motorlab.errors import SessionError
+    from motorlab.session import read_truth
+
+    path = tmp_path / "truth.json"
+    path.write_text('{"K":\n ' + HUGE + "}")
+    with pytest.raises(SessionError, match=r"truth.json:2: .*integer of 5000 digits"):
+        read_truth(path)
+
+
+# ---- cpr outside any encoder, in every reader and experiment -------------------------------------------
+
+
+@pytest.mark.parametrize(("name", "extra"), [("sysid", ()), ("ramp", ()), ("flight", ()), ("transient", ())])
+@pytest.mark.parametrize("cpr", ["1e-12", "0.5", "1e12"])
+def test_feedforward_refuses_an_impossible_cpr(name: str, extra: tuple[str, ...], cpr: str, rig, capsys) -> None:
+    """``--cpr 1e-12`` gave kV = 1.5e-17 V·s/rad and "R² 1.000000" at exit 0 for all but spindown."""
+    refused(capsys, "analyze", "feedforward", rig[name], "--cpr", cpr, *extra, mentions="--cpr")
+
+
+@pytest.mark.parametrize("cpr", ["1e-12", "0.5"])
+def test_every_counting_experiment_refuses_an_impossible_cpr(cpr: str, rig, capsys) -> None:
+    refused(capsys, "analyze", "identify", rig["transient"], "--cpr", cpr, mentions="--cpr")
+    refused(capsys, "analyze", "terminal", rig["terminal"], "--K", "0.7", "--cpr", cpr, mentions="--cpr")
+
+
+def test_a_csv_metadata_cpr_outside_any_encoder_is_refused_naming_the_file(rig, tmp_path: Path, capsys) -> None:
+    path = tmp_path / "transient.csv"
+    path.write_text(rig["transient"].read_text().replace("# cpr: 1120.0", "# cpr: 1e-12"))
+    refused(capsys, "analyze", "identify", path, mentions=str(path))
+
+
+def test_a_fractional_cpr_above_one_is_still_read(rig, capsys) -> None:
+    code, _, err = run(capsys, "analyze", "feedforward", rig["flight"], "--cpr", "537.7", "--json")
+    assert code == 0, err
+
+
+def test_units_per_rotation_outside_any_mechanism_is_refused(rig, tmp_path: Path, capsys) -> None:
+    doc = json.loads(rig["sysid"].read_text())
+    for value in (1e-300, 1e300):
+        doc["unitsPerRotation"] = value
+        path = tmp_path / "scaled.json"
+        path.write_text(json.dumps(doc))
+        refused(capsys, "analyze", "feedforward", path, mentions="unitsPerRotation")
+
+
+# ---- smaller ------------------------------------------------------------------------------------------
+
+
+def test_characterize_refuses_an_empty_output_name(rig, tmp_path: Path, capsys) -> None:
+    session = tmp_path / "session.toml"
+    session.write_text(f'[motor]\ncatalog = "neverest40"\n[units.A.lcr]\nfiles = ["{rig["lcr"]}"]\n')
+    refused(capsys, "characterize", session, "-o", "", mentions="-o")
+    assert not (tmp_path / "results").exists()
+
+
+@pytest.mark.parametrize("deep", ["array", "inline-table"])
+def test_a_toml_nested_a_thousand_deep_is_refused_with_its_line(deep: str, tmp_path: Path, capsys) -> None:
+    path = tmp_path / "session.toml"
+    body = {"array": "x = " + "[" * 1000 + "]" * 1000, "inline-table": "x = " + "{a = " * 1000 + "1" + "}" * 1000}[deep]
+    path.write_text('[motor]\ncatalog = "neverest40"\n\n' + body + "\n")
+    err = refused(capsys, "characterize", path, mentions=f"{path}:4")
+    assert "internal error" not in err
+
+
+def test_argparse_refusals_read_like_every_other(capsys) -> None:
+    err = refused(capsys, "analyze", "spindown", "x.txt", "--cpr", "abc", mentions="argument --cpr")
+    assert err.startswith("motorlab: error: analyze spindown: argument --cpr")
+    err = refused(capsys, "analyze", "lcr", mentions="the following arguments are required")
+    assert err.startswith("motorlab: error: analyze lcr: ")
+
+
+def test_the_app_still_reads_the_argparse_line() -> None:
+    from motorlab.ui.runner import Outcome
+
+    line = "motorlab: error: analyze spindown: argument --cpr: cannot read 'abc'"
+    assert Outcome(2, "", line + "\n").error_line() == "analyze spindown: argument --cpr: cannot read 'abc'"
+
+
+# ---- numpy warnings on successful runs -------------------------------------------------------------------
+
+
+def test_the_open_loop_score_of_huge_residuals_warns_nothing() -> None:
+    """``sysid_score.py: overflow encountered in square`` on runs that succeeded (pytest: warnings are errors)."""
+    import numpy as np
+
+    from motorlab.sysid_score import ScoreTest, score
+
+    t = np.linspace(0.0, 1.0, 50)
+    test = ScoreTest("fast-forward", t, np.full(50, 6.0), np.zeros(50), np.full(50, 1e200))
+    result = score((0.1, 1.0, 0.1), [test])
+    assert 1e199 < result.speed < 1e201
+    from motorlab.sysid_score import rms
+
+    assert rms(np.array([3.0, -4.0])) == pytest.approx(np.sqrt(12.5))
+
+
+def test_the_sysid_regression_on_a_repeated_time_warns_nothing() -> None:
+    """``feedforward.py: divide by zero`` from a time step of zero in the SysId-style regression."""
+    import numpy as np
+
+    from motorlab.feedforward import sysid_ols
+    from motorlab.recording import Recording
+
+    t = np.linspace(0.0, 2.0, 400)
+    t = np.insert(t, 200, t[200])  # one time twice: a step of zero
+    v = np.where(t < 1.0, 3.0, 6.0) + 0.5 * np.sin(7.0 * t)
+    position = np.cumsum(v + 0.1 * np.cos(3.0 * t)) * 5e-3
+    rec = Recording(time=t, signals={"voltage": v, "position": position}, source="rep.json")
+    gains = sysid_ols([rec])
+    assert all(np.isfinite(list(gains.values())))

@@ -1,0 +1,95 @@
+"""``motorlab robot pull`` against the emulated robot: byte for byte, proposals, and bad networks."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from motorlab.cli import main
+from motorlab.robot.emulator import EmulatedRobot, RobotFiles
+
+
+def _pull(robot: EmulatedRobot, out: Path, *extra: str) -> int:
+    return main(["robot", "pull", "--host", "127.0.0.1", "--http-port", str(robot.http_port), "-o", str(out), *extra])
+
+
+def test_pull_brings_back_every_reachable_file_byte_for_byte(
+        robot: EmulatedRobot, robot_files: RobotFiles, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "pulled"
+    assert _pull(robot, out, "--json") == 0
+    result = json.loads(capsys.readouterr().out)
+    newest_forward = max(robot_files.tuning["forward-ramp"], key=lambda p: p.stat().st_mtime)
+    lateral = robot_files.tuning["lateral-ramp"][0]
+    expected = {
+        out / "tuning" / "forward-ramp" / newest_forward.name: newest_forward,
+        out / "tuning" / "lateral-ramp" / lateral.name: lateral,
+        out / "logs" / robot_files.logs[0].name: robot_files.logs[0],
+        out / "motorlab" / robot_files.motorlab[0].name: robot_files.motorlab[0],
+    }
+    for pulled, original in expected.items():
+        assert pulled.read_bytes() == original.read_bytes(), pulled
+    written = sorted(p for p in out.rglob("*") if p.is_file())
+    assert written == sorted(expected)  # nothing else (no temporary file left), the older ramp unreachable
+    by_name = {Path(f["path"]).name: f for f in result["files"]}
+    assert by_name[newest_forward.name]["format"] == "roadrunner-ramp"
+    assert by_name[newest_forward.name]["experiment"] == "feedforward"
+    assert "--cpr" in by_name[newest_forward.name]["command"]
+    assert by_name[robot_files.logs[0].name]["format"] == "roadrunner-log"
+    assert by_name[robot_files.motorlab[0].name]["experiment"] == "spindown"
+    assert result["missing"] == []
+    assert {host for host, _ in robot.http_requests} == {"127.0.0.1"}
+
+    # A second pull keeps what is there and says so.
+    assert _pull(robot, out) == 0
+    assert capsys.readouterr().out.count("already there") == 4
+
+
+def test_no_robot_is_one_line_and_exit_2(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    with EmulatedRobot(lifetime=5) as gone:
+        port = gone.http_port
+    assert main(["robot", "pull", "--host", "127.0.0.1", "--http-port", str(port), "-o", str(tmp_path / "x")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err
+    assert "connection refused" in err
+    assert "--host" in err
+    assert not (tmp_path / "x").exists()
+
+
+def test_robot_without_road_runner_or_motorlab(robot_files: RobotFiles, tmp_path: Path,
+                                                capsys: pytest.CaptureFixture[str]) -> None:
+    with EmulatedRobot(robot_files, road_runner=False, motorlab_handler=False, dashboard=False, lifetime=20) as bare:
+        assert _pull(bare, tmp_path / "a") == 2
+    err = capsys.readouterr().err.strip()
+    assert "neither Road Runner's files nor motorlab's logs" in err
+    assert "\n" not in err
+    with EmulatedRobot(robot_files, road_runner=False, dashboard=False, lifetime=20) as ours_only:
+        assert _pull(ours_only, tmp_path / "b") == 0
+    out = capsys.readouterr().out
+    assert "no Road Runner tuning files" in out
+    assert "no FlightRecorder log list" in out
+    ours = robot_files.motorlab[0]
+    assert (tmp_path / "b" / "motorlab" / ours.name).read_bytes() == ours.read_bytes()
+
+
+@pytest.mark.parametrize("cut", [0, 1000, 70000])
+def test_wifi_dropped_mid_download_leaves_nothing_half_written(robot_files: RobotFiles, tmp_path: Path,
+                                                               capsys: pytest.CaptureFixture[str], cut: int) -> None:
+    out = tmp_path / "pulled"
+    with EmulatedRobot(robot_files, drop_after=cut, dashboard=False, lifetime=20) as flaky:
+        assert _pull(flaky, out) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err
+    assert "pull again" in err
+    leftovers = [p for p in out.rglob("*") if p.is_file()] if out.exists() else []
+    assert leftovers == []
+
+
+def test_output_that_is_a_file_is_refused(robot: EmulatedRobot, tmp_path: Path,
+                                          capsys: pytest.CaptureFixture[str]) -> None:
+    target = tmp_path / "file.txt"
+    target.write_text("keep me")
+    assert _pull(robot, target) == 2
+    assert "not a folder" in capsys.readouterr().err
+    assert target.read_text() == "keep me"

@@ -1,0 +1,177 @@
+"""Helpers of the browser tests: one headless Chromium, controls found as a person finds them.
+
+A person finds a field by its label's words, a button by its text, a link by its text; so do these
+helpers (never by id or CSS class). ``check_page`` asserts what every view must satisfy: no
+command-line flag outside a code box, every visible field named in words, nothing wider than the
+window.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import shutil
+import time
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
+CHROMEDRIVER = shutil.which("chromedriver")
+needs_browser = pytest.mark.skipif(
+    CHROMIUM is None or CHROMEDRIVER is None,
+    reason="needs Debian's chromium and chromium-driver (apt-get install chromium chromium-driver; .ci/run does)",
+)
+
+LAPTOP, PHONE = (1366, 768), (390, 844)
+FLAGS = (
+    "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+    "--disable-background-networking", "--disable-component-update", "--disable-sync", "--hide-scrollbars",
+)
+
+_FLAG_TEXT = re.compile(r"(?<![\w-])--[A-Za-z][\w-]*")
+
+#: Visible text outside code boxes, and visible fields without a name in words (run in the page).
+_AUDIT = """
+const visible = (e) => { const r = e.getBoundingClientRect(); const s = getComputedStyle(e);
+  return r.width > 0 && r.height > 0 && s.visibility !== 'hidden' && s.display !== 'none'; };
+const walker = document.createTreeWalker(document.body, NodeFilter.SHOW_TEXT);
+const texts = [];
+for (let n = walker.nextNode(); n; n = walker.nextNode()) {
+  const p = n.parentElement;
+  if (!p || p.closest('code, pre, script, style') || !visible(p)) continue;
+  if (n.textContent.trim()) texts.push(n.textContent.trim());
+}
+const nameOf = (e) => {
+  if (e.getAttribute('aria-label')) return e.getAttribute('aria-label');
+  const by = e.getAttribute('aria-labelledby');
+  if (by) return by.split(' ').map((i) => (document.getElementById(i) || {}).textContent || '').join(' ');
+  const labels = [...(e.labels || [])].map((l) => l.textContent).join(' ');
+  return labels;
+};
+const unnamed = [...document.querySelectorAll('input, select, textarea')].filter((e) => e.type !== 'hidden')
+  .filter((e) => visible(e) || (e.type === 'file' && e.labels && [...e.labels].some(visible)))
+  .map((e) => [e.outerHTML.slice(0, 120), nameOf(e).trim()]).filter(([, name]) => !/[A-Za-z]{3,}/.test(name));
+return [texts, unnamed, document.documentElement.scrollWidth, window.innerWidth];
+"""
+
+
+class Page:
+    """A browser tab on the app, driven by visible words."""
+
+    def __init__(self, driver: Any, url: str, shots: Path) -> None:
+        self.d, self.url, self.shots = driver, url, shots
+
+    # -- looking -------------------------------------------------------------------------------------
+    def wait(self, condition: Any, what: str, seconds: float = 90) -> Any:
+        deadline = time.monotonic() + seconds
+        while True:
+            try:
+                got = condition()
+            except Exception:
+                got = None
+            if got:
+                return got
+            if time.monotonic() > deadline:
+                said = self.d.execute_script(
+                    "return [...document.querySelectorAll('.error, [role=status], [role=alert]')]"
+                    ".map(e => e.textContent).filter(Boolean)")
+                pytest.fail(f"timed out waiting for {what}; the page says {said}")
+            time.sleep(0.1)
+
+    def text(self) -> str:
+        return str(self.d.find_element("tag name", "main").text)
+
+    def wait_text(self, words: str, seconds: float = 90) -> None:
+        self.wait(lambda: words in self.text(), f"the words {words!r}", seconds)
+
+    def _visible(self, xpath: str) -> list[Any]:
+        return [e for e in self.d.find_elements("xpath", xpath) if e.is_displayed()]
+
+    # -- doing ---------------------------------------------------------------------------------------
+    def open(self, size: tuple[int, int], *, fresh: bool = True) -> None:
+        self.d.set_window_size(*size)
+        self.d.get(f"{self.url}/")
+        self.wait(lambda: self.d.find_element("tag name", "body").get_attribute("data-ready") == "true", "the page")
+        if fresh:
+            self.click("start over")
+            self.wait(lambda: "kept from last time" not in self.text(), "a fresh start")
+
+    def click(self, words: str) -> None:
+        """Click the visible button, link or choice whose text holds ``words`` (the last one when several)."""
+        lower = words.lower()
+        upper = "ABCDEFGHIJKLMNOPQRSTUVWXYZ"
+        xpath = ("//*[self::button or self::a or self::label or self::summary]"
+                 f"[contains(translate(normalize-space(.), '{upper}', '{upper.lower()}'), {lower!r})]")
+        found = self.wait(lambda: self._visible(xpath), f"a control saying {words!r}")
+        target = found[-1]
+        self.d.execute_script("arguments[0].scrollIntoView({block: 'center'})", target)
+        target.click()
+
+    def field(self, words: str) -> Any:
+        """The visible input named ``words`` by its label (or aria-label)."""
+        lower = words.lower()
+
+        def find() -> Any:
+            for label in self._visible("//label"):
+                if lower in label.text.lower():
+                    control = label.get_attribute("for")
+                    if control:
+                        return self.d.find_element("id", control)
+            return None
+
+        return self.wait(find, f"a field labelled {words!r}")
+
+    def type(self, words: str, value: str) -> None:
+        box = self.field(words)
+        box.clear()
+        box.send_keys(value)
+
+    def choose(self, words: str, option: str) -> None:
+        from selenium.webdriver.support.ui import Select
+
+        Select(self.field(words)).select_by_visible_text(option)
+
+    def upload(self, words: str, *paths: Path) -> None:
+        """Choose files in the file box whose label holds ``words``."""
+        self.field(words).send_keys("\n".join(str(p) for p in paths))
+
+    # -- checking ------------------------------------------------------------------------------------
+    def check(self) -> None:
+        """No flag outside code boxes, every visible field named in words, nothing scrolls sideways."""
+        texts, unnamed, scroll_width, width = self.d.execute_script(_AUDIT)
+        flags = [t for t in texts if _FLAG_TEXT.search(t)]
+        assert not flags, f"command-line flags outside a code box: {flags[:5]}"
+        assert not unnamed, f"fields without a name in words: {unnamed[:5]}"
+        assert scroll_width <= width, f"the page is {scroll_width} px wide in a {width} px window"
+
+    def shot(self, name: str) -> None:
+        """A screenshot of the whole view (``MOTORLAB_UI_SCREENSHOTS=docs/img`` keeps them for the docs)."""
+        width = self.d.execute_script("return window.innerWidth")
+        height = self.d.execute_script("return document.body.scrollHeight")
+        size = self.d.get_window_size()
+        self.d.set_window_size(size["width"], min(max(int(height) + 120, 600), 3200))
+        time.sleep(0.3)
+        self.d.save_screenshot(str(self.shots / name))
+        self.d.set_window_size(size["width"], size["height"])
+        assert width
+
+
+def make_driver(profile: Path) -> Any:
+    from selenium import webdriver
+    from selenium.webdriver.chrome.service import Service
+
+    options = webdriver.ChromeOptions()
+    options.binary_location = str(CHROMIUM)
+    for flag in (*FLAGS, f"--user-data-dir={profile}"):
+        options.add_argument(flag)
+    driver = webdriver.Chrome(service=Service(executable_path=str(CHROMEDRIVER)), options=options)
+    driver.set_page_load_timeout(60)
+    return driver
+
+
+def shots_folder(tmp: Path) -> Path:
+    folder = Path(os.environ.get("MOTORLAB_UI_SCREENSHOTS") or tmp)
+    folder.mkdir(parents=True, exist_ok=True)
+    return folder
