@@ -50,6 +50,8 @@ from pathlib import Path
 import numpy as np
 
 SIZES = (10_000, 100_000, 1_000_000, 2_000_000)
+#: Samples of the scope waveform exports (a DS1054Z holds up to 24 Mpts a channel).
+WAVEFORM_SIZES = (12_000_000, 24_000_000)
 CPR = 1120
 
 _RUN = """
@@ -66,7 +68,8 @@ try:
     peak = int(status.split("VmHWM:")[1].split()[0]) / 1024
 except (OSError, IndexError, ValueError):
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-print(f"{elapsed:.3f} {peak:.1f} {code}", file=sys.stderr)
+usage = resource.getrusage(resource.RUSAGE_SELF)
+print(f"{elapsed:.3f} {peak:.1f} {code} {usage.ru_utime + usage.ru_stime:.3f}", file=sys.stderr)
 """
 
 
@@ -131,6 +134,31 @@ def _edges(path: Path, n: int) -> None:
     write_csv(path, {"time_ms": np.round(t * 1e3, 6)})
 
 
+def _rigol(path: Path, n: int) -> None:
+    """A Rigol DS1054Z export of ``n`` samples: one encoder channel (5 V logic, 8-bit steps, 20 mV noise)
+    of a bare motor spinning up at constant current from a hand start (2.4 s, 280 rising edges per turn)."""
+    increment, start = 2.4 / n, -0.2
+    gamma, accel, omega0, per_turn = 0.5, 40.0, 5.0, 280.0
+    rng = np.random.default_rng(1)
+    with open(path, "w", newline="\n") as handle:
+        handle.write(f"X,CH1,Start,Increment,\nSequence,Volt,{start:.6e},{increment:.6e},\n")
+        for a in range(0, n, 1 << 20):
+            k = np.arange(a, min(n, a + (1 << 20)))
+            t = (k * increment).clip(0.0)
+            theta = omega0 * (1 - np.exp(-gamma * t)) / gamma + accel / gamma * (t - (1 - np.exp(-gamma * t)) / gamma)
+            volts = np.where((theta * per_turn / (2 * math.pi)) % 1.0 < 0.5, 5.0, 0.0) + rng.normal(0, 0.02, k.size)
+            volts = np.round(volts / (10 / 256)) * (10 / 256)
+            rows = np.empty(2 * k.size, dtype=object)
+            rows[0::2], rows[1::2] = k.tolist(), volts.tolist()
+            handle.write(("%d,%.4e,\n" * k.size) % tuple(rows))
+
+
+def write_waveform(folder: Path, n: int) -> dict[str, tuple[list[str], list[str]]]:
+    """free-spinup on a scope waveform export of ``n`` samples."""
+    _rigol(folder / "waveform.csv", n)
+    return {"waveform": ([str(folder / "waveform.csv")], ["--K", "0.7", "--current", "0.5 A", "--cpr", str(CPR)])}
+
+
 def write_inputs(folder: Path, n: int) -> dict[str, tuple[list[str], list[str]]]:
     """Every analysis's file of ``n`` rows: experiment -> (paths, extra options)."""
     from motorlab.rig import VirtualRig
@@ -147,6 +175,9 @@ def write_inputs(folder: Path, n: int) -> dict[str, tuple[list[str], list[str]]]
     # A scope capture: four periods, n samples (a longer trace is a finer one, as on a real scope).
     rig.run("pulse", folder / "pulse.csv", period=2.0, periods=4, sample_interval=8.0 / n)
     out["pulse"] = ([str(folder / "pulse.csv")], ["--Ka", "1.96", "--K", "0.7"])
+    # The same time base with 24 periods (48 regions: the fit's parameters grow with the pulses).
+    rig.run("pulse", folder / "pulse24.csv", period=2.0, periods=24, sample_interval=48.0 / n)
+    out["pulse-24"] = ([str(folder / "pulse24.csv")], ["--Ka", "1.96", "--K", "0.7"])
     _edges(folder / "edges.csv", n)
     out["free-spinup"] = ([str(folder / "edges.csv")], ["--K", "0.7", "--current", "0.5 A", "--cpr", str(CPR)])
     _sysid(folder / "sysid.json", n, rng)
@@ -167,33 +198,37 @@ def write_inputs(folder: Path, n: int) -> dict[str, tuple[list[str], list[str]]]
     return out
 
 
-def measure(experiment: str, paths: list[str], options: list[str]) -> tuple[float, float, int]:
-    """Seconds, peak MiB and exit code of ``motorlab analyze EXPERIMENT PATHS OPTIONS --json``."""
+def measure(experiment: str, paths: list[str], options: list[str]) -> tuple[float, float, int, float]:
+    """Seconds, peak MiB, exit code and CPU seconds of ``motorlab analyze EXPERIMENT PATHS OPTIONS --json``."""
     env = {**os.environ, "MPLBACKEND": "Agg"}
-    argv = [sys.executable, "-c", _RUN, "analyze", experiment, *paths, *options, "--json"]
+    command = {"pulse-24": "pulse", "waveform": "free-spinup"}.get(experiment, experiment)
+    argv = [sys.executable, "-c", _RUN, "analyze", command, *paths, *options, "--json"]
     done = subprocess.run(argv, capture_output=True, text=True, env=env, timeout=1800, check=False)
-    last = (done.stderr.strip().splitlines() or ["nan nan -1"])[-1].split()
+    last = (done.stderr.strip().splitlines() or ["nan nan -1 nan"])[-1].split()
     try:
-        return float(last[0]), float(last[1]), int(last[2])
+        return float(last[0]), float(last[1]), int(last[2]), float(last[3])
     except (ValueError, IndexError):
-        return math.nan, math.nan, done.returncode
+        return math.nan, math.nan, done.returncode, math.nan
 
 
 def main() -> None:
-    args = [a for a in sys.argv[1:] if not a.startswith("--only")]
+    args = [a for a in sys.argv[1:] if not a.startswith("--")]
     only = next((a.split("=", 1)[1].split(",") for a in sys.argv[1:] if a.startswith("--only=")), None)
+    waves = next((a.split("=", 1)[1].split(",") for a in sys.argv[1:] if a.startswith("--waveform=")), None)
     sizes = [int(float(a)) for a in args] or list(SIZES)
-    print("analysis      rows        seconds   peak MiB  exit   (targets at 2M rows: <= 10 s, <= 500 MB)")
-    for n in sizes:
-        with tempfile.TemporaryDirectory() as tmp:
+    wave_sizes = [int(float(a)) for a in waves if a] if waves is not None else list(WAVEFORM_SIZES)
+    print("analysis      rows        seconds   cpu s   peak MiB  exit   (targets at 2M rows: <= 10 s, <= 500 MB)")
+    jobs = [(n, write_inputs) for n in sizes if only != ["waveform"]] + [(n, write_waveform) for n in wave_sizes]
+    for n, writer in jobs:
+        with tempfile.TemporaryDirectory() as tmp:  # in /tmp: the inputs are never kept
             t0 = time.perf_counter()
-            inputs = write_inputs(Path(tmp), n)
+            inputs = writer(Path(tmp), n)
             print(f"# {n} rows: inputs written in {time.perf_counter() - t0:.1f} s")
             for experiment, (paths, options) in inputs.items():
                 if only and experiment not in only:
                     continue
-                seconds, peak, code = measure(experiment, paths, options)
-                print(f"{experiment:12s} {n:>9,d}   {seconds:9.2f}  {peak:9.1f}  {code:4d}", flush=True)
+                seconds, peak, code, cpu = measure(experiment, paths, options)
+                print(f"{experiment:12s} {n:>10,d}   {seconds:9.2f}  {cpu:6.2f}  {peak:9.1f}  {code:4d}", flush=True)
 
 
 if __name__ == "__main__":

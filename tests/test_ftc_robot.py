@@ -228,3 +228,30 @@ def test_a_current_beyond_the_shunt_range_is_flagged(classes: Path, tmp_path: Pa
     assert any(line.startswith("WARNING") and "3.20 A" in line for line in summary["screen"])
     rec = read_ftc_log(summary["log"])
     assert float(np.max(rec.signals["current"])) == pytest.approx(3.2, rel=2e-3)
+
+
+def test_the_log_handler_serves_the_opmode_logs_to_robot_pull(classes: Path, tmp_path: Path) -> None:
+    """MotorlabLogFiles' handlers (registered as the SDK's @WebHandlerRegistrar does) behind a JVM web server on
+    127.0.0.1: ``motorlab robot pull`` lists and brings back every log byte for byte."""
+    from motorlab.cli import main
+
+    summary = run_sim(classes, tmp_path / "run", experiment="spindown", drive="hub", ina="no", seed=6)
+    folder = Path(summary["log"]).parent
+    (folder / "notes with spaces.txt").write_bytes(b"# not a log\r\n\x00\xff")
+    server = subprocess.Popen([str(JAVA), "-cp", str(classes), "org.firstinspires.ftc.teamcode.motorlab.sim.LogServer",
+                               str(folder), "60"], stdout=subprocess.PIPE, text=True)
+    try:
+        assert server.stdout is not None
+        port = server.stdout.readline().strip()
+        out = tmp_path / "pulled"
+        assert main(["robot", "pull", "--host", "127.0.0.1", "--http-port", port, "-o", str(out)]) == 0
+    finally:
+        server.terminate()
+        server.wait(10)
+        if server.stdout is not None:
+            server.stdout.close()
+    originals = sorted(p for p in folder.iterdir() if p.is_file())
+    assert len(originals) == 2
+    for original in originals:
+        assert (out / "motorlab" / original.name).read_bytes() == original.read_bytes()
+    assert sorted(p.name for p in (out / "motorlab").iterdir()) == [p.name for p in originals]

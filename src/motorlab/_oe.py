@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 from scipy import signal
 
+from motorlab import progress
 from motorlab._oe_noise import (  # noqa: F401 - re-exported
     COUNTING_HARMONICS,
     INFO_TOLERANCE,
@@ -667,40 +668,42 @@ def levenberg_marquardt(
     mu = 1e-3
     message = "maximum number of iterations reached"
     success = False
-    for _ in range(max_iterations):
-        g = j.T @ r
-        h = j.T @ j
-        diag = np.diag(h).copy()
-        diag = np.where(diag > 0, diag, 1.0)
-        # Parameters held at a bound by the gradient stay there (active set): a step computed for all
-        # and then clipped would crawl along the bound (a switch on its sample instant, f = 1).
-        free = ~(((x <= lower) & (g > 0)) | ((x >= upper) & (g < 0)))
-        accepted = False
-        for _ in range(12):
-            step = np.zeros_like(x)
-            try:
-                step[free] = -np.linalg.solve((h + mu * np.diag(diag))[np.ix_(free, free)], g[free])
-            except np.linalg.LinAlgError:
-                mu *= 10.0
-                continue
-            x_new = np.clip(x + step, lower, upper)
-            r_new = fun(x_new)
-            nfev += 1
-            cost_new = float(r_new @ r_new) if np.all(np.isfinite(r_new)) else np.inf
-            if cost_new < cost:
-                accepted = True
+    with progress.task("Fitting the model", total=max_iterations, unit="iterations") as report:
+        for _ in range(max_iterations):
+            report.advance(detail=f"χ² {cost:.6g}")
+            g = j.T @ r
+            h = j.T @ j
+            diag = np.diag(h).copy()
+            diag = np.where(diag > 0, diag, 1.0)
+            # Parameters held at a bound by the gradient stay there (active set): a step computed for all
+            # and then clipped would crawl along the bound (a switch on its sample instant, f = 1).
+            free = ~(((x <= lower) & (g > 0)) | ((x >= upper) & (g < 0)))
+            accepted = False
+            for _ in range(12):
+                step = np.zeros_like(x)
+                try:
+                    step[free] = -np.linalg.solve((h + mu * np.diag(diag))[np.ix_(free, free)], g[free])
+                except np.linalg.LinAlgError:
+                    mu *= 10.0
+                    continue
+                x_new = np.clip(x + step, lower, upper)
+                r_new = fun(x_new)
+                nfev += 1
+                cost_new = float(r_new @ r_new) if np.all(np.isfinite(r_new)) else np.inf
+                if cost_new < cost:
+                    accepted = True
+                    break
+                mu *= 4.0
+            if not accepted:
+                message = "no step lowers the cost"
+                success = True  # at a (local) minimum to the precision of the simulation
                 break
-            mu *= 4.0
-        if not accepted:
-            message = "no step lowers the cost"
-            success = True  # at a (local) minimum to the precision of the simulation
-            break
-        drop = (cost - cost_new) / max(cost, 1e-300)
-        x, r, cost = x_new, r_new, cost_new
-        j = jac(x)
-        mu = max(mu / 3.0, 1e-9)
-        if drop < ftol:
-            message = "relative cost reduction below tolerance"
-            success = True
-            break
+            drop = (cost - cost_new) / max(cost, 1e-300)
+            x, r, cost = x_new, r_new, cost_new
+            j = jac(x)
+            mu = max(mu / 3.0, 1e-9)
+            if drop < ftol:
+                message = "relative cost reduction below tolerance"
+                success = True
+                break
     return _Solution(x, r, j, nfev, success, message)

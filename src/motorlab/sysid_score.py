@@ -26,6 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from motorlab import progress
 from motorlab.errors import FitError, OptionError
 from motorlab.recording import Recording
 
@@ -137,8 +138,7 @@ def simulate_gains(ks: float, kv: float, ka: float, test: ScoreTest) -> tuple[np
             s = math.copysign(1.0, v)
         stop = n - 1
         if tau > 0:  # one block at a time: the exponentials stay within range
-            span = np.searchsorted(np.cumsum(dt[k:] / tau), _BLOCK_EXPONENT)
-            stop = min(n - 1, k + max(int(span), 1))
+            stop = min(n - 1, k + max(_block_span(dt, k, tau), 1))
         u = (volts[k:stop] - ks * s) / kv
         v_new, dist = _linear_block(v, dt[k:stop], u, tau)
         cross = np.flatnonzero(s * v_new <= 0.0)
@@ -155,6 +155,22 @@ def simulate_gains(ks: float, kv: float, ka: float, test: ScoreTest) -> tuple[np
         k += 1
     position = test.position[0] + np.concatenate([[0.0], np.cumsum(step_dist)])
     return speed, position
+
+
+def _block_span(dt: np.ndarray, k: int, tau: float) -> int:
+    """Steps from ``k`` until Σ dt/τ reaches :data:`_BLOCK_EXPONENT` (the remaining steps if never).
+
+    The running sum is taken over a window that grows until it holds the answer, not over every
+    remaining step (on a long log of short time constants that was n²/block work). A running sum is
+    summed in order, so each window's sums are those of the whole: the same answer.
+    """
+    window = 4096
+    while True:
+        part = np.cumsum(dt[k : k + window] / tau)
+        span = int(np.searchsorted(part, _BLOCK_EXPONENT))
+        if span < part.size or k + window >= dt.size:
+            return span
+        window *= 4
 
 
 def _stop_within_step(
@@ -258,26 +274,29 @@ def fit_gains(
     best: tuple[float, np.ndarray, Score] | None = None
     nfev = 0
     ns = sum(t.time.size for t in tests)
-    for start in starts:
-        x = np.array([float(start[0]), math.log(max(start[1], 1e-9)), math.log(max(start[2], 1e-9))])
-        current = score(_gains(x), tests)
-        for _ in range(rounds):
-            ws, wp = 1.0 / max(current.speed, 1e-300), math.sqrt(position_weight) / max(current.position, 1e-300)
+    with progress.task("Fitting the open-loop gains", total=len(starts) * rounds, unit="rounds") as report:
+        for number, start in enumerate(starts):
+            report.update(number * rounds, detail=f"start {number + 1} of {len(starts)}")
+            x = np.array([float(start[0]), math.log(max(start[1], 1e-9)), math.log(max(start[2], 1e-9))])
+            current = score(_gains(x), tests)
+            for _ in range(rounds):
+                report.advance()
+                ws, wp = 1.0 / max(current.speed, 1e-300), math.sqrt(position_weight) / max(current.position, 1e-300)
 
-            def fun(p: np.ndarray, ws: float = ws, wp: float = wp) -> np.ndarray:
-                rs, rp = residuals(_gains(p), tests)
-                return np.concatenate([ws * rs, wp * rp]) / math.sqrt(ns)
+                def fun(p: np.ndarray, ws: float = ws, wp: float = wp) -> np.ndarray:
+                    rs, rp = residuals(_gains(p), tests)
+                    return np.concatenate([ws * rs, wp * rp]) / math.sqrt(ns)
 
-            sol = least_squares(fun, x, x_scale=np.array([max(abs(x[0]), 0.05), 0.1, 0.3]), diff_step=1e-4,
-                                max_nfev=60, ftol=1e-6, xtol=1e-6)
-            nfev += int(sol.nfev)
-            new = score(_gains(sol.x), tests)
-            if not _objective(new, position_weight) < _objective(current, position_weight) - 1e-5:
-                break
-            x, current = sol.x, new
-        value = _objective(current, position_weight)
-        if math.isfinite(value) and (best is None or value < best[0]):
-            best = (value, x, current)
+                sol = least_squares(fun, x, x_scale=np.array([max(abs(x[0]), 0.05), 0.1, 0.3]), diff_step=1e-4,
+                                    max_nfev=60, ftol=1e-6, xtol=1e-6)
+                nfev += int(sol.nfev)
+                new = score(_gains(sol.x), tests)
+                if not _objective(new, position_weight) < _objective(current, position_weight) - 1e-5:
+                    break
+                x, current = sol.x, new
+            value = _objective(current, position_weight)
+            if math.isfinite(value) and (best is None or value < best[0]):
+                best = (value, x, current)
     if best is None:
         raise FitError("no three gains simulate these tests")
     gains = _gains(best[1])

@@ -306,39 +306,49 @@ def continuous_current(resistance: float, thermal: ThermalModel, rise: float = 1
 
 #: A log whose I²·R energy would warm the winding by more than this [K] is warned about.
 HEAT_WARNING_RISE = 10.0
+#: The network used for a log when the motor's own is not known: the catalogue's estimate for the
+#: 550-size motors of FTC gearmotors (``data/thermal.toml``, family ``can550``).
+DEFAULT_NETWORK = ThermalModel(winding_to_case=0.9, case_to_ambient=5.0, winding_capacity=20.0, case_capacity=150.0)
 
 
-def heat_warning(time: np.ndarray, current: np.ndarray, resistance: float, *, capacity: float | None = None,
-                 what: str = "this log") -> str | None:
-    """A warning when a log's I²·R energy implies a winding rise above :data:`HEAT_WARNING_RISE` K, else None.
+def log_rise(time: np.ndarray, current: np.ndarray, resistance: float,
+             thermal: ThermalModel = DEFAULT_NETWORK) -> tuple[float, float]:
+    """The I²·R energy [J] of a log and the largest rise of the winding [K] it causes in ``thermal``.
 
-    Parameters
-    ----------
-    time, current
-        The log's samples [s], [A].
-    resistance
-        The winding resistance [Ω] (fitted, or given).
-    capacity
-        Heat capacity of the winding [J/K]; default: an FTC gearmotor's armature, 40 J/K (an
-        estimate, docs/model.md "Heat").
-    what
-        How to name the log in the message.
+    The heat R·i² is averaged over bins of 0.1 s (or the samples, when sparser) and moved through the
+    network exactly; R is held (the rise it would add is second order for a warning).
     """
     t = np.asarray(time, dtype=float)
     i = np.asarray(current, dtype=float)
     ok = np.isfinite(t) & np.isfinite(i)
-    if np.count_nonzero(ok) < 2 or not (math.isfinite(resistance) and resistance > 0):
-        return None
     t, i = t[ok], i[ok]
-    energy = float(np.sum(0.5 * (i[1:] ** 2 + i[:-1] ** 2) * np.clip(np.diff(t), 0.0, None))) * resistance
-    c = DEFAULT_WINDING_CAPACITY if capacity is None else capacity
-    rise = energy / c
+    if t.size < 2 or not (math.isfinite(resistance) and resistance > 0):
+        return 0.0, 0.0
+    order = np.argsort(t, kind="stable")
+    t, i = t[order], i[order]
+    dt = np.clip(np.diff(t), 0.0, None)
+    heat = resistance * 0.5 * (i[1:] ** 2 + i[:-1] ** 2) * dt
+    edges = np.arange(t[0], t[-1] + 0.1, 0.1)
+    energy_bins = np.bincount(np.clip(np.searchsorted(edges, t[:-1], side="right") - 1, 0, None),
+                              weights=heat, minlength=edges.size)
+    tw = tc = thermal.ambient_temperature
+    peak = tw
+    for e in energy_bins.tolist():
+        tw, tc = thermal.step(tw, tc, e / 0.1, 0.1)
+        peak = max(peak, tw)
+    return float(np.sum(heat)), float(peak - thermal.ambient_temperature)
+
+
+def heat_warning(time: np.ndarray, current: np.ndarray, resistance: float, *, what: str = "this log",
+                 resistance_note: str = "", thermal: ThermalModel = DEFAULT_NETWORK) -> str | None:
+    """A warning when a log's I²·R heat warms the winding by more than :data:`HEAT_WARNING_RISE` K, else None."""
+    energy, rise = log_rise(time, current, resistance, thermal)
     if rise <= HEAT_WARNING_RISE:
         return None
-    return (f"{what} put {energy:.3g} J of I²·R heat into the winding (R = {resistance:.3g} Ω): up to "
-            f"{rise:.0f} K of rise for a {c:g} J/K winding, so R rose by up to {100 * COPPER_COEFFICIENT * rise:.0f} % "
-            "during the log; fit shorter logs, let the motor cool between runs, or fit the heating (analyze stall)")
-
-
-#: Heat capacity of an FTC gearmotor's winding node [J/K] when none is known (docs/model.md "Heat").
-DEFAULT_WINDING_CAPACITY = 40.0
+    note = f" ({resistance_note})" if resistance_note else ""
+    return (f"{what} put {energy:.3g} J of I²·R heat into the winding (R = {resistance:.3g} Ω{note}): about "
+            f"{rise:.0f} K of rise for a winding of {thermal.winding_capacity:g} J/K behind "
+            f"{thermal.winding_to_case:g} K/W (a 550-size FTC motor's estimate), so R rose by about "
+            f"{100 * COPPER_COEFFICIENT * rise:.0f} % during "
+            "it and the fit averages over a warming winding; let the motor cool between runs, or measure the "
+            "heating with a stall run (analyze stall)")

@@ -138,7 +138,12 @@ def test_cli(data_dir: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str])
     assert code == 0
     assert '"Kt_over_K"' in out
     assert figure.stat().st_size > 10_000
-    code, _out, err = _run(["analyze", "curve", str(path)], capsys)
+    code, out, _err = _run(["analyze", "curve", str(path), "--json"], capsys)  # 12 V = supplied power / current
+    assert code == 0
+    assert "supplied power / current, 12 V" in out
+    no_power = tmp_path / "no_power.csv"
+    no_power.write_bytes(b"Speed (RPM),Torque (N\xb7m),Current (A)\r\n0,0.43,52.6\r\n6000,0.2,25\r\n13000,0,1.8\r\n")
+    code, _out, err = _run(["analyze", "curve", str(no_power)], capsys)
     assert code == 2
     assert err.count("\n") == 1
     assert "--voltage" in err

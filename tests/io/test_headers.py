@@ -42,7 +42,10 @@ from motorlab.io.headers import column_mapping, normalise_unit, parse_column_map
         ("Speed (rev/min)", ("speed", "rpm")),
         ("Motor Speed [r/min]", ("speed", "rpm")),
         ("Zeit", None),
-        ("Power (W)", None),  # which power? the person says, with --column
+        ("Power (W)", ("output_power", "W")),  # a datasheet's "Power" is the shaft's
+        ("Input Output Power (W)", None),  # which power? the person says, with --column
+        ("Current (Amps)", ("current", "A")),
+        ("Torque (in-lbs)", ("torque", "lbf*in")),
         ("Voltage Current", None),
     ],
 )
@@ -191,3 +194,12 @@ def test_session_columns(tmp_path: Path) -> None:
     )
     with pytest.raises(SessionError, match=r"s.toml:\d+: .*unknown quantity"):
         load_session(tmp_path / "s.toml")
+
+
+def test_every_analysis_that_reads_a_csv_takes_column() -> None:
+    """--column on every analysis whose input may be a CSV (the app's column picker is built on it)."""
+    from motorlab.experiments import all_experiments
+
+    for name, exp in all_experiments().items():
+        if "csv" in exp.inputs.lower():
+            assert any(opt.kind == "columns" and opt.name == "column" for opt in exp.options), name

@@ -102,8 +102,10 @@ def test_session_zip_and_loose_files(page: Any, sim_session: Path, truth: dict[s
               "the FTC PIDF code from the session")
     page.check()
 
-    page.d.back()  # the session step, with its result kept; now the same session as loose files
+    page.d.back()  # the session step, with its result kept; now the same session as loose files, on a phone
     page.wait_text("Each unit's parameters")
+    page.d.set_window_size(*browser.PHONE)
+    page.check()
     loose = [sim_session / "session.toml", *sorted((sim_session / "A").iterdir())]
     page.upload("Choose the session file", *loose)
     page.wait_text("all chosen")
@@ -111,6 +113,8 @@ def test_session_zip_and_loose_files(page: Any, sim_session: Path, truth: dict[s
     page.wait_text("Each unit's parameters", 180)
     table = page.d.find_element("xpath", "//table[caption[contains(., \"Each unit's parameters\")]]").text
     assert "ok" in table
+    page.check()
+    page.d.set_window_size(*browser.LAPTOP)
 
 
 def test_sysid_to_wpilib_on_a_phone(page: Any, tmp_path: Path) -> None:
@@ -153,3 +157,17 @@ def test_dynamometer_csv_with_worded_headers(page: Any, tmp_path: Path) -> None:
     k, k_err = _value(page.text(), "Back-EMF constant K")
     assert abs(k - 0.35) < 4 * k_err + 0.001
     page.check()
+
+    # points picked on the plot with the box tool are left out and the fit runs again
+    from selenium.webdriver.common.action_chains import ActionChains
+
+    page.d.find_element("css selector", ".plots .modebar-btn[data-title='Box Select']").click()
+    area = page.d.find_element("css selector", ".plots .nsewdrag")
+    width, height = area.size["width"], area.size["height"]
+    ActionChains(page.d).move_to_element_with_offset(area, width // 6, -height // 2 + 3).click_and_hold() \
+        .move_by_offset(width // 3 - 6, height - 6).release().perform()
+    page.click("selected point")
+    page.wait_text("left out)")
+    k2, k2_err = _value(page.text(), "Back-EMF constant K")
+    assert abs(k2 - 0.35) < 4 * k2_err + 0.001
+    assert (tmp_path / "dyno.csv").read_text(encoding="utf-8").count("\n") == 21  # the file given is kept whole

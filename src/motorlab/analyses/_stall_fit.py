@@ -56,6 +56,7 @@ class HeatFit:
     case: list[np.ndarray]
     run_rms: list[float]  # relative RMS residual per run [-]
     log_covariance: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    prior: bool = False  # R_ca from the prior on the case's time constant (the runs could not tell it)
 
 
 def _thermal(values: Sequence[float], magnet: float, ambient: float) -> ThermalModel:
@@ -116,6 +117,19 @@ def _guess(runs: Sequence[StallData], reference: int, ambient: float) -> list[fl
     return [r25, 0.5, 2.0, c_w, 6.0 * c_w]
 
 
+#: The case's time constant R_ca·C_c a weak prior pulls towards when the runs cannot tell R_ca [s], and the
+#: prior's spread (a factor of 2.5 either way, in the logarithm). VEX's BAG runs give 840 s; a 550-size
+#: gearmotor's estimate (data/thermal.toml) 750 s.
+PRIOR_CASE_TIME_CONSTANT = 800.0
+PRIOR_LOG_SIGMA = math.log(2.5)
+
+
+def _needs_prior(fit: LeastSquares, hi: Sequence[float]) -> bool:
+    """R_ca is undetermined, uncertain by more than a factor e, or at its upper bound."""
+    k = SHARED.index("R_ca")
+    return bool(not fit.determined[k] or not fit.stderr[k] < 1.0 or fit.values[k] > hi[k] - 0.05)
+
+
 #: A run needs this many healthy samples to be the reference (its first sample must be a settled one).
 REFERENCE_SAMPLES = 30
 
@@ -167,6 +181,17 @@ def fit_heating(runs: Sequence[StallData], *, magnet: float, ambient: float) -> 
         raise FitError(f"{groups.size} healthy samples cannot determine {len(x0)} parameters")
     fit = fit_least_squares(residual, x0, names, bounds=(lo, hi), x_scale=[1.0] * len(x0), covariance="hac",
                             groups=groups, max_nfev=200 * len(x0))
+    prior = _needs_prior(fit, hi)
+    if prior:
+        # The runs cannot tell R_ca (too short for the case to approach its steady rise): a weak prior on the
+        # case's time constant R_ca·C_c keeps it physical, weighted as one sample of the fit's own scatter.
+        weight = max(fit.rmse, 1e-4) / PRIOR_LOG_SIGMA
+
+        def with_prior(x: np.ndarray) -> np.ndarray:
+            return np.append(residual(x), weight * (x[2] + x[4] - math.log(PRIOR_CASE_TIME_CONSTANT)))
+
+        fit = fit_least_squares(with_prior, list(fit.values), names, bounds=(lo, hi), x_scale=[1.0] * len(x0),
+                                covariance="hac", groups=np.append(groups, len(runs)), max_nfev=200 * len(x0))
     shared = np.exp(fit.values[: len(SHARED)])
     t0 = initial_of(fit.values)
     sims = simulate_runs(shared, t0, runs, magnet, ambient)
@@ -176,6 +201,7 @@ def fit_heating(runs: Sequence[StallData], *, magnet: float, ambient: float) -> 
         t0_se[j] = float(fit.stderr[len(SHARED) + k])
     rms = [float(np.sqrt(np.mean(((s[0] - r.current) / r.current) ** 2))) for s, r in zip(sims, runs, strict=True)]
     return HeatFit(
+        prior=prior,
         values=dict(zip(SHARED, map(float, shared), strict=True)),
         stderr={n: float(v * s) for n, v, s in zip(SHARED, shared, se_log, strict=True)},
         initial=t0, initial_stderr=t0_se, reference=reference, fit=fit,
@@ -255,17 +281,20 @@ def fit_torque(runs: Sequence[StallData], case: Sequence[np.ndarray], magnet: fl
 
 
 def current_dependence(tq: TorqueFit) -> str | None:
-    """A sentence when the torque per amp changes with current beyond its uncertainty (else None)."""
+    """A sentence when the torque per amp of the runs differs beyond its uncertainty (else None), with the
+    likely cause from how it goes with the current."""
     rows = sorted((r for r in tq.per_run if math.isfinite(r[2])), key=lambda r: r[0])
     if len(rows) < 2:
         return None
-    lo, hi = rows[0], rows[-1]
+    lo, hi = min(rows, key=lambda r: r[1]), max(rows, key=lambda r: r[1])
     diff = hi[1] - lo[1]
-    se = math.hypot(lo[2], hi[2])
-    if abs(diff) <= 3 * se or abs(diff) <= 0.03 * abs(lo[1]):
+    if diff <= 3 * math.hypot(lo[2], hi[2]) or diff <= 0.03 * lo[1]:
         return None
-    cause = ("saturation of the iron (armature reaction) at high current" if diff < 0 else
-             "brush friction taking a larger share of the torque at low current")
-    return (f"the torque per amp changes with current beyond its uncertainty: {lo[1]:.4g} ± {lo[2]:.1g} N·m/A at "
-            f"{lo[0]:.3g} A against {hi[1]:.4g} ± {hi[2]:.1g} N·m/A at {hi[0]:.3g} A ({100 * diff / lo[1]:+.0f} %): "
-            f"{cause}; K above is the fit over all currents")
+    trend = float(np.corrcoef([r[0] for r in rows], [r[1] for r in rows])[0, 1]) if len(rows) > 2 else (
+        1.0 if rows[-1][1] > rows[0][1] else -1.0)
+    cause = ("falling as the current rises: saturation of the iron (armature reaction) at high current" if trend < 0
+             else "rising with the current: brush friction taking a larger share of the torque at low current")
+    listing = ", ".join(f"{r[1]:.4g} at {r[0]:.3g} A" for r in rows)
+    return (f"the torque per amp changes between runs beyond its uncertainty, from {lo[1]:.4g} ± {lo[2]:.1g} to "
+            f"{hi[1]:.4g} ± {hi[2]:.1g} N·m/A ({100 * diff / lo[1]:.0f} %; by mean current: {listing}), {cause}; "
+            "K above is the fit over all currents")

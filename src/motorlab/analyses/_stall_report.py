@@ -137,6 +137,10 @@ def parameters_of(heat: HeatFit, torque: TorqueFit | None, extra: dict[str, Esti
     for k, name in enumerate(SHARED):
         determined = bool(heat.fit.determined[k]) and math.isfinite(heat.stderr[name])
         note = _NOTES[name] if determined else _NOTES[name] + ": the runs are too short to tell it"
+        if name == "R_ca" and heat.prior:
+            determined = False
+            note = (_NOTES[name] + f": the runs are too short to tell it; {heat.values[name]:.3g} K/W comes from a "
+                    "prior on the case's time constant R_ca·C_c ≈ 800 s (used by forecasts)")
         out[name] = Estimate(name, heat.values[name], heat.stderr[name], _UNITS[name], determined, note)
     out.update(extra)
     return out

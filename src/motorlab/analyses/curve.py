@@ -52,7 +52,8 @@ def curve(recordings: Recording | Sequence[Recording], *, voltage: float | None 
         [rad/s] at the motor shaft, and ``voltage`` [V] when the file has it.
     voltage
         The terminal voltage of every row [V], for files without a voltage column (VEX's curves are
-        at 12 V). Refused when a file has one.
+        at 12 V). Refused when a file has one. Without either, a file with supplied power and
+        current (VEX's exports) gives it as their ratio, when that is one value (within 1 %).
 
     Returns
     -------
@@ -77,7 +78,8 @@ def curve(recordings: Recording | Sequence[Recording], *, voltage: float | None 
         raise OptionError("no curve given")
     if voltage is not None and not (math.isfinite(voltage) and voltage > 0):
         raise OptionError(f"the voltage (--voltage) must be positive, got {voltage!r}")
-    current, torque, speed, volts = _rows(recs, voltage)
+    notes: list[str] = []
+    current, torque, speed, volts = _rows(recs, voltage, notes)
     source = " + ".join(sources_of(recs))
     if current.size < 3:
         raise FitError(f"{source}: a curve needs at least three rows, found {current.size}")
@@ -94,7 +96,7 @@ def curve(recordings: Recording | Sequence[Recording], *, voltage: float | None 
     parameters = _parameters(electrical, mechanical, several, speed, volts)
     model_current = (volts - parameters["K"].value * speed) / parameters["R"].value
     model_torque = _model_torque(mechanical, current, speed, several)
-    warnings = reader_warnings(recs) + _warnings(parameters, electrical, mechanical, volts, torque, several)
+    warnings = reader_warnings(recs) + notes + _warnings(parameters, electrical, mechanical, volts, torque, several)
     return FitResult(
         experiment="curve",
         parameters=parameters,
@@ -111,8 +113,24 @@ def curve(recordings: Recording | Sequence[Recording], *, voltage: float | None 
     )
 
 
-def _rows(recs: list[Recording], voltage: float | None) -> tuple[np.ndarray, ...]:
-    """Current, torque, speed and the voltage of every row, joined over the files (one-line errors)."""
+def _voltage_from_power(rec: Recording, notes: list[str]) -> np.ndarray:
+    """The terminal voltage of a curve without a voltage column: its supplied power / current when it has
+    both (VEX's exports: ``Supplied Power (W)`` = 12 V × current), held at one value; else a refusal."""
+    current = rec["current"]
+    if "input_power" in rec and np.all(current > 0):
+        ratio = rec["input_power"] / current
+        level = float(np.median(ratio))
+        if level > 0 and float(np.max(np.abs(ratio - level))) <= 0.01 * level:
+            notes.append(f"{rec.source}: no voltage column; the voltage is the supplied power / current, {level:.4g} V "
+                         "in every row (give --voltage to set it)")
+            return np.full(len(rec), level)
+    raise LogFormatError("this curve has no voltage column: give the voltage it was measured at with --voltage "
+                         "(VEX's curves: 12 V)", path=rec.source or None)
+
+
+def _rows(recs: list[Recording], voltage: float | None, notes: list[str]) -> tuple[np.ndarray, ...]:
+    """Current, torque, speed and the voltage of every row, joined over the files (one-line errors); what
+    was inferred goes into ``notes``."""
     parts: list[list[np.ndarray]] = [[], [], [], []]
     for rec in recs:
         have = ", ".join(sorted(rec.signals)) or "nothing"
@@ -131,8 +149,7 @@ def _rows(recs: list[Recording], voltage: float | None) -> tuple[np.ndarray, ...
         if "voltage" in rec:
             volts = rec["voltage"]
         elif voltage is None:
-            raise LogFormatError("this curve has no voltage column: give the voltage it was measured at with "
-                                 "--voltage (VEX's curves: 12 V)", path=rec.source or None)
+            volts = _voltage_from_power(rec, notes)
         else:
             volts = np.full(len(rec), float(voltage))
         current = rec["current"]

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from motorlab import progress
 from motorlab.analyses._common import (
     LIMITS,
     check_range,
@@ -250,10 +251,22 @@ def pulse(
     _check_options(recordings, calibration, skip=skip, tach_gain=tach_gain, friction=friction)
     gain = amplifier_gain * torque_constant  # torque per command volt [N·m/V]
     # An amplifier offset I0 acts as a command offset I0/Ka: τ = Ka·Km·(V + I0/Ka).
-    cut = _cut_recordings(recordings, amplifier_offset / amplifier_gain, skip=skip, tach_gain=tach_gain)
-    start = _slope_method(cut.accel, cut.coasts, gain)
-    table, best = compare_friction_models(cut.coasts, start.a2)
-    return _final_fit(cut, start, table, best, gain=gain, friction=friction, calibration=calibration)
+    return _fit_in_steps(recordings, calibration, amplifier_offset / amplifier_gain, gain=gain, skip=skip,
+                         tach_gain=tach_gain, friction=friction)
+
+
+def _fit_in_steps(recordings: list[Recording], calibration: _Calibration, command_offset: float, *, gain: float,
+                  skip: float, tach_gain: float | None, friction: str) -> FitResult:
+    """Cut the pulses, compare the friction models, fit every region: reported as three steps."""
+    with progress.task("Fitting the pulse response", total=3, unit="steps", detail="cutting the pulses") as step:
+        cut = _cut_recordings(recordings, command_offset, skip=skip, tach_gain=tach_gain)
+        start = _slope_method(cut.accel, cut.coasts, gain)
+        step.advance(detail=f"friction models on {len(cut.coasts)} coast-downs")
+        table, best = compare_friction_models(cut.coasts, start.a2)
+        step.advance(detail=f"every region of {len(cut.accel)} pulses")
+        result = _final_fit(cut, start, table, best, gain=gain, friction=friction, calibration=calibration)
+        step.advance()
+    return result
 
 
 @dataclass(frozen=True)
@@ -316,6 +329,8 @@ def _check_options(
         raise OptionError(f"friction model must be auto, viscous, coulomb or both, got {friction!r}")
     if tach_gain is not None and not (math.isfinite(tach_gain) and tach_gain > 0):
         raise OptionError(f"the tachometer gain must be positive, got {tach_gain} V·s/rad")
+    check_range(tach_gain, "the tachometer gain (--tach-gain)", *LIMITS["K"][:2], "V·s/rad",
+                why="a tachometer is a small DC generator: its gain is a motor's K")
     if not recordings:
         raise OptionError("no recording given")
     if not math.isfinite(amplifier_offset):

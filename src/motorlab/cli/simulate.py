@@ -14,6 +14,7 @@ from collections.abc import Callable
 from typing import Any
 
 from motorlab.cli.common import nonnegative_int, positive_int, quantity
+from motorlab.cli.simulate_stall import add_stall
 from motorlab.errors import OptionError
 
 #: Sub-command help per experiment (seed section it reproduces).
@@ -182,6 +183,7 @@ def register(subparsers: Any) -> None:
 
     _add_roadrunner_ramp(sub)
     _add_session(sub)
+    add_stall(sub)
 
 
 def _add_session(sub: Any) -> None:

@@ -19,11 +19,13 @@ from __future__ import annotations
 
 import importlib
 import math
+import os
 import pkgutil
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
+from motorlab import progress
 from motorlab.errors import OptionError
 from motorlab.units import format_unit, parse_quantity
 
@@ -297,7 +299,10 @@ class Experiment:
         from motorlab.io.headers import column_mapping
 
         check_distinct(paths)
-        with column_mapping(values.get("columns")):  # --column: every CSV read by the run honours it
+        names = ", ".join(os.path.basename(str(p)) for p in paths)
+        # --column: every CSV read by the run honours it. The task shows the analysis under way (the
+        # readers and the long fits report their own steps inside it).
+        with column_mapping(values.get("columns")), progress.task(f"Analysing {names}", detail=self.name):
             result = self.run([str(p) for p in paths], dict(values))
         if self.shaft:
             result.details.setdefault("shaft", self.shaft)

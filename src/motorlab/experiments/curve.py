@@ -34,7 +34,7 @@ EXPERIMENT = Experiment(
     options=(
         Option("voltage", "V", positive=True, metavar="VOLTS", label="Terminal voltage of the curve",
                help="the voltage every row was measured at, e.g. 12 for VEX's curves; needed when the file "
-                    "has no voltage column"),
+                    "has no voltage column nor supplied power"),
         COLUMN,
     ),
     reports=("K", "R", "Kt", "Kt_over_K", "I_free", "friction_torque", "b", "Tf"),

@@ -41,7 +41,9 @@ def run(paths: list[str], v: dict[str, Any]) -> Any:
         result.parameters.update(
             motor_estimates(result, resistance=v["resistance"], torque_constant=v["torque_constant"])
         )
-    return result
+    from motorlab.analyses._heat import add_heat_warning
+
+    return add_heat_warning(result, runs, resistance=v["resistance"])
 
 
 def characterize(ctx: Any) -> Any:

@@ -23,8 +23,11 @@ def run(paths: list[str], v: dict[str, Any]) -> Any:
     if json_runs and cpr is not None:  # a JSON file logs its own units: cpr counts per logged rotation
         apply_cpr(json_runs, cpr)
         cpr = None  # the readers of counts logs keep theirs in metadata["cpr"]
-    return identify(runs, resistance=v["resistance"], torque_constant=v["torque_constant"], cpr=cpr,
-                    use_current=v["use_current"])
+    from motorlab.analyses._heat import add_heat_warning
+
+    result = identify(runs, resistance=v["resistance"], torque_constant=v["torque_constant"], cpr=cpr,
+                      use_current=v["use_current"])
+    return add_heat_warning(result, runs, resistance=v["resistance"])
 
 
 def characterize(ctx: Any) -> Any:

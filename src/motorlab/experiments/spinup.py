@@ -26,12 +26,15 @@ def run(paths: list[str], v: dict[str, Any]) -> Any:
 
         coast = common.read_position_log(v["spindown"], cpr=v["cpr"], current_unit=v["current_unit"])
         spindown_result = spindown(coast, cpr=v["cpr"])
-    return spinup(
+    from motorlab.analyses._heat import add_heat_warning
+
+    result = spinup(
         recording, inertia=inertia, inertia_stderr=inertia_se, cpr=v["cpr"],
         viscous_friction=v["b"], viscous_friction_stderr=v["b_stderr"],
         coulomb_friction=v["Tf"], coulomb_friction_stderr=v["Tf_stderr"],
         spindown_result=spindown_result, start=v["start"], end=v["end"],
     )
+    return add_heat_warning(result, [recording])
 
 
 def characterize(ctx: Any) -> Any:

@@ -5,6 +5,7 @@ from __future__ import annotations
 from typing import Any
 
 from motorlab.experiments import Experiment, Option, RigRun, Setting
+from motorlab.experiments._shared import COLUMN
 from motorlab.thermal import MAGNET_COEFFICIENTS
 
 
@@ -59,6 +60,7 @@ EXPERIMENT = Experiment(
                help="in °C, the temperature of that answer"),
         Option("rise", "K", positive=True, default=100.0, metavar="KELVIN", label="Allowed winding rise",
                help="of the 'current held indefinitely' answer"),
+        COLUMN,
     ),
     reports=("K", "tau0", "R", "R_wc", "R_ca", "C_w", "C_c", "t_limit", "I_continuous", "R_hot"),
     shaft="the stalled shaft where torque is measured (a bare motor: the motor shaft); R at 25 °C",

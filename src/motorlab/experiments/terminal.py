@@ -23,11 +23,16 @@ def run(paths: list[str], v: dict[str, Any]) -> Any:
 
     if not paths:
         raise OptionError("give the CSV file(s) of steady currents and frequencies")
-    return terminal(
-        _read(paths, v["cpr"]), torque_constant=v["K"], cpr=v["cpr"], torque_constant_stderr=v["K_stderr"],
+    from motorlab.analyses._heat import add_heat_warning
+
+    rows = _read(paths, v["cpr"])
+    result = terminal(
+        rows, torque_constant=v["K"], cpr=v["cpr"], torque_constant_stderr=v["K_stderr"],
         coulomb_friction=v["Tf"], coulomb_friction_stderr=v["Tf_stderr"], current_stderr=v["current_stderr"],
         frequency_stderr=v["frequency_stderr"],
     )
+    # Seed 1 waits at each setting for the terminal velocity: about half a minute per reading.
+    return add_heat_warning(result, rows if isinstance(rows, list) else [rows], hold=30.0)
 
 
 def characterize(ctx: Any) -> Any:

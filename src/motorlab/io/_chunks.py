@@ -79,6 +79,7 @@ def line_chunks(name: str, offset: int, first_line: int, *, what: str) -> Iterat
             if not block:
                 if carry:
                     yield Chunk(carry, line, True)
+                step.update(round(done / 1e6, 1))
                 return
             data = carry + block if carry else block
             cut = data.rfind(b"\n") + 1

@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from motorlab import progress
 from motorlab.errors import LogFormatError, OptionError
 from motorlab.units import registry
 
@@ -515,10 +516,12 @@ def fast_table(text: TextFile, first_line: int, ncol: int, delimiter: str | None
         return None
     values = np.empty(nonblank.size * ncol)
     filled = 0
-    with warnings.catch_warnings():
+    with warnings.catch_warnings(), progress.task(f"Reading {os.path.basename(text.path)}", unit="MB",
+                                                  total=round(len(raw) / 1e6, 1)) as step:
         warnings.simplefilter("error")  # a token C cannot read ("1e", "+-") stops the parse: slow path
         at = begin
         while at < end:
+            step.update(round(at / 1e6, 1))
             stop = raw.rfind(b"\n", at, min(at + _CHUNK, end)) + 1 if at + _CHUNK < end else end
             if stop <= at:
                 stop = end if raw.find(b"\n", at, end) < 0 else raw.find(b"\n", at, end) + 1
@@ -534,6 +537,7 @@ def fast_table(text: TextFile, first_line: int, ncol: int, delimiter: str | None
                 return None
             values[filled : filled + parsed.size] = parsed
             filled += parsed.size
+        step.update(round(len(raw) / 1e6, 1))
     if filled != values.size or not np.all(np.isfinite(values)):
         return None
     return Table(values.reshape(nonblank.size, ncol), nonblank.astype(int) + first_line, truncated)

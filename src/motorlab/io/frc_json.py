@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import difflib
 import math
+import os
 import re
 import warnings
 from dataclasses import dataclass
@@ -18,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from motorlab import progress
 from motorlab.errors import LogFormatError, OptionError
 from motorlab.io._text import PathArg, load_json, read_bytes, unit_factor
 from motorlab.recording import Recording
@@ -104,7 +106,7 @@ def _parse_rows(segment: bytes) -> np.ndarray | None:
     return values.reshape(opens.size, ncol)
 
 
-def _extract_tests(raw: bytes) -> tuple[bytes, dict[str, _Parsed]]:
+def _extract_tests(raw: bytes, name: str = "") -> tuple[bytes, dict[str, _Parsed]]:
     """The four tests' arrays parsed by numpy, and ``raw`` with each replaced by ``[]`` (lines kept).
 
     A 2M-row SysId file as Python lists would take about 1 GB; as arrays it takes 64 MB. A test
@@ -114,31 +116,33 @@ def _extract_tests(raw: bytes) -> tuple[bytes, dict[str, _Parsed]]:
     parsed: dict[str, _Parsed] = {}
     pieces: list[bytes] = []
     at = 0
-    for match in _TEST_START.finditer(raw):
-        if match.start() < at:
-            continue
-        end = _TEST_END.search(raw, match.end())
-        if end is None:
-            break
-        start = match.start(2)
-        segment = raw[start : end.end()]
-        rows = _parse_rows(segment)
-        if rows is None:
-            continue
-        base = raw.count(b"\n", 0, start) + 1
-        codes = np.frombuffer(segment, dtype=np.uint8)
-        newlines = np.flatnonzero(codes == ord("\n"))
-        row_starts = np.flatnonzero(codes == ord("["))[1:]
-        lines = base + np.searchsorted(newlines, row_starts)
-        parsed[match.group(1).decode("ascii")] = _Parsed(rows, lines.astype(int))
-        pieces += [raw[at:start], b"[" + b"\n" * newlines.size + b"]"]
-        at = end.end()
+    with progress.task(f"Reading {os.path.basename(name)}", total=round(len(raw) / 1e6, 1), unit="MB") as report:
+        for match in _TEST_START.finditer(raw):
+            if match.start() < at:
+                continue
+            report.update(round(match.start() / 1e6, 1), detail=match.group(1).decode("ascii"))
+            end = _TEST_END.search(raw, match.end())
+            if end is None:
+                break
+            start = match.start(2)
+            segment = raw[start : end.end()]
+            rows = _parse_rows(segment)
+            if rows is None:
+                continue
+            base = raw.count(b"\n", 0, start) + 1
+            codes = np.frombuffer(segment, dtype=np.uint8)
+            newlines = np.flatnonzero(codes == ord("\n"))
+            row_starts = np.flatnonzero(codes == ord("["))[1:]
+            lines = base + np.searchsorted(newlines, row_starts)
+            parsed[match.group(1).decode("ascii")] = _Parsed(rows, lines.astype(int))
+            pieces += [raw[at:start], b"[" + b"\n" * newlines.size + b"]"]
+            at = end.end()
     return b"".join([*pieces, raw[at:]]), parsed
 
 
 def _load(path: PathArg) -> tuple[str, dict[str, Any], str]:
     name, raw = read_bytes(path)
-    raw, parsed = _extract_tests(raw.removeprefix(b"\xef\xbb\xbf"))
+    raw, parsed = _extract_tests(raw.removeprefix(b"\xef\xbb\xbf"), name)
     if not raw.strip():
         raise LogFormatError("the file is empty", path=name)
     if b"\0" in raw:

@@ -125,6 +125,9 @@ _TOKEN_UNIT = {
     "rpm": "rpm", "%": "percent", "°c": "degC", "ºc": "degC", "degc": "degC", "c": "degC", "°f": "degF",
     "f": "degF", "k": "kelvin", "n.m": "N*m", "n-m": "N*m", "oz-in": "ozf*in", "oz.in": "ozf*in",
     "in-oz": "ozf*in", "in-lb": "lbf*in", "ft-lb": "lbf*ft", "rad/s": "rad/s", "1": "dimensionless",
+    "amps": "A", "amp": "A", "amperes": "A", "ampere": "A", "a": "A", "ma": "mA", "milliamps": "mA",
+    "volts": "V", "volt": "V", "v": "V", "mv": "mV",
+    "in-lbs": "lbf*in", "lb-in": "lbf*in", "lbs-in": "lbf*in", "ft-lbs": "lbf*ft", "lb-ft": "lbf*ft",
     "rev/min": "rpm", "r/min": "rpm", "rev/s": "revolution/s", "rps": "revolution/s", "r/s": "revolution/s",
 }
 #: Masses that stand for weights in a torque unit (oz·in, kg·cm on gearmotor sheets): their force units.
@@ -248,6 +251,7 @@ def normalise_unit(text: str) -> str:
     if low in _TOKEN_UNIT:
         return _TOKEN_UNIT[low]
     unit = re.sub(r"\s*[·⋅•∙×]\s*|\s*\.\s*(?=[A-Za-z])", "*", unit)  # N · m, N·m, N.m
+    unit = re.sub(r"\blbs\b", "lb", unit)
     unit = unit.replace("Ω", "ohm").replace("µ", "u").replace("μ", "u").replace("²", "^2").replace("°", "deg")
     unit = re.sub(r"(?<=[A-Za-z])(\s+|-)(?=[A-Za-z])", "*", unit)  # "N m", "kgf-cm"
     return unit
@@ -296,9 +300,9 @@ def worded_column(field: str) -> tuple[str, str | None] | None:
     tokens = _WORD.findall(words.lower())
     found: list[tuple[str, str | None]] = []
     if "power" in tokens:
-        kinds = {_POWER_KINDS[t] for t in tokens if t in _POWER_KINDS}
+        kinds = {_POWER_KINDS[t] for t in tokens if t in _POWER_KINDS} or {"output_power"}  # a datasheet's "Power"
         if len(kinds) != 1:
-            return None  # "Power (W)": which power? the person says, with --column
+            return None  # "Input Output Power": which? the person says, with --column
         found.append((kinds.pop(), None))
     else:
         for token in tokens:
@@ -356,7 +360,8 @@ def unknown_column_message(field: str, rules: Sequence[ColumnRule]) -> str:
     hint = field.strip() or "HEADER"
     text = (f"column {shown!r} names no quantity motorlab knows: map it with --column \"{hint}=QUANTITY\" "
             f"(QUANTITY one of {', '.join(QUANTITIES)}, optionally with a unit: \"{hint}=current [mA]\"; "
-            f"or \"{hint}=skip\"), or name it like time_s, current_A (docs/formats.md)")
+            f"or \"{hint}=skip\"; in a session file: columns = {{ \"{hint}\" = \"QUANTITY\" }}), or name it like "
+            "time_s, current_A (docs/formats.md)")
     if rules:
         text += f"; the mapping given ({'; '.join(unused) or 'none'}) names no column {shown!r}"
     return text

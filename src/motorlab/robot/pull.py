@@ -150,7 +150,7 @@ def _flight_logs(robot: RobotHttp, result: PullResult, out: Path) -> None:
     reply = _listed(robot, "/logs")
     if reply is None:
         result.missing.append("no FlightRecorder log list (/logs: 404): the robot has no Road Runner 1.0 "
-                              "(road-runner-ftc 0.1.8 or later serves it)")
+                              "(its FileServing.kt serves the FlightRecorder logs)")
         return
     entries = [(html.unescape(m.group(1)), int(m.group(2)))
                for m in _LOG_ENTRY.finditer(reply.body.decode("utf-8", "replace"))]

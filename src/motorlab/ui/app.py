@@ -25,7 +25,7 @@ from starlette.responses import FileResponse, JSONResponse, Response, StreamingR
 from starlette.routing import Mount, Route
 from starlette.staticfiles import StaticFiles
 
-from motorlab.ui import runner, schema, uploads
+from motorlab.ui import robot, runner, schema, uploads
 
 #: Options the page never passes on from a client (they name output paths; the app sets them).
 _REFUSED_FIELDS = {"plot", "output", "o", "json", "emit-file"}
@@ -445,6 +445,7 @@ def create_app(*, host: str = "127.0.0.1", port: int = 8765, token: str | None =
         Route("/api/tune/figure", tune_figure, methods=["POST"]),
         Route("/api/tune/response", tune_response, methods=["POST"]),
         Route("/api/characterize", characterize, methods=["POST"]),
+        *robot.routes(),  # the robot link (issue 24): motorlab.ui.robot
     ]
     runner.POOL.fill()  # warm child processes, ready before the first click
     return Guard(Starlette(routes=routes), hosts=allowed_hosts(host, port), token=token, max_body=max_body)

@@ -47,7 +47,17 @@ export function quantity(value, stderr, unit) {
   // the uncertainty to 2 significant digits, the value to the same decimal place
   const place = Math.floor(Math.log10(e)) - 1;
   const dec = Math.max(0, -place);
-  const round = (x) => (Math.abs(x) >= 1e-3 && Math.abs(x) < 1e6 ? (Math.round(x / 10 ** place) * 10 ** place).toFixed(dec) : sig(x, 3));
+  // fixed decimals while they stay readable (0.125318 ± 0.000015), else one power of ten for both:
+  // (9.612 ± 0.012) × 10⁻⁵
+  const fixed = place >= -7 && Math.abs(v) < 1e6 && (Math.abs(v) >= 1e-4 || v === 0);
+  if (!fixed) {
+    const p10 = Math.floor(Math.log10(Math.abs(v) || e));
+    const [sv, se] = [v / 10 ** p10, e / 10 ** p10];
+    const pl = Math.floor(Math.log10(se)) - 1, d = Math.max(0, -pl);
+    const r = (x) => (Math.round(x / 10 ** pl) * 10 ** pl).toFixed(d);
+    return `(${r(sv)} ± ${r(se)}) × 10${[...String(p10)].map((c) => SUPERSCRIPT[c]).join("")} ${u}`.trim();
+  }
+  const round = (x) => (Math.round(x / 10 ** place) * 10 ** place).toFixed(dec);
   return `${round(v)} ± ${round(e)} ${u}`.trim();
 }
 

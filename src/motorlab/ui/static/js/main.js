@@ -8,6 +8,7 @@ import * as choose from "./steps/choose.js";
 import * as fit from "./steps/fit.js";
 import * as session from "./steps/session.js";
 import * as gains from "./steps/gains.js";
+import "./steps/robot.js";  // the robot link: registers its task and steps (docs/robot.md)
 
 registerStep("choose", choose);
 registerStep("fit", fit);

@@ -4,7 +4,7 @@ import { el } from "./dom.js";
 import { prettyUnit } from "./format.js";
 
 const FONT = { size: 12, family: "system-ui, sans-serif" };
-const CONFIG = { responsive: true, displaylogo: false, modeBarButtonsToRemove: ["toImage", "sendDataToCloud"] };
+const CONFIG = { responsive: true, displaylogo: false, displayModeBar: true, modeBarButtonsToRemove: ["toImage", "sendDataToCloud"] };
 const narrow = () => window.innerWidth < 600;
 
 function base(height) {
@@ -52,7 +52,9 @@ export function panels(host, list, { onSelect } = {}) {
       layout.yaxis2 = { domain: [0, 0.26], title: { text: "residual" }, anchor: "x2" };
     }
     const div = figure(host, p.title, traces, layout);
-    if (onSelect && div.on) div.on("plotly_selected", (ev) => onSelect(p, ev ? ev.points.filter((pt) => pt.curveNumber === 0) : []));
+    // the measured points and their residuals share indices: a selection on either names the same rows
+    const selectable = new Set([0, p.same_x && p.data && p.model ? traces.length - 1 : 0]);
+    if (onSelect && div.on) div.on("plotly_selected", (ev) => onSelect(p, ev ? [...new Set(ev.points.filter((pt) => selectable.has(pt.curveNumber)).map((pt) => pt.pointIndex))] : []));
   }
 }
 

@@ -4,17 +4,18 @@ import { number, prettyUnit, quantity } from "./format.js";
 import { parameterWords, plain } from "./words.js";
 
 export function parameterTable(parameters, shaft) {
+  const notes = Object.values(parameters || {}).some((p) => p && p.note);
   const rows = Object.entries(parameters || {}).map(([key, p]) => {
     const [name, symbol] = parameterWords(key);
     const determined = p.determined !== false && p.value !== null && p.value !== undefined;
     return el("tr", { "data-name": key },
       el("th", { scope: "row" }, name, symbol ? el("span", { class: "symbol", text: ` ${symbol}` }) : null),
       el("td", { class: "num value", "data-label": "value", text: determined ? quantity(p.value, p.stderr, p.unit) : "not determined" }),
-      el("td", { class: "note", text: plain(p.note || "") }));
+      notes ? el("td", { class: "note", text: plain(p.note || "") }) : null);
   });
   return el("table", { class: "params" },
-    el("caption", { text: shaft ? `At the ${shaft}` : "The parameters" }),
-    el("thead", {}, el("tr", {}, el("th", { scope: "col", text: "Parameter" }), el("th", { scope: "col", text: "Value" }), el("th", { scope: "col", text: "Note" }))),
+    el("caption", { text: shaft ? `At ${/^(the|a|an) /i.test(shaft) ? "" : "the "}${shaft}` : "The parameters" }),
+    el("thead", {}, el("tr", {}, el("th", { scope: "col", text: "Parameter" }), el("th", { scope: "col", text: "Value" }), notes ? el("th", { scope: "col", text: "Note" }) : null)),
     el("tbody", {}, rows));
 }
 

@@ -17,7 +17,7 @@ export async function addFiles(t, files) {
   for (const f of files) form.append("file", f, f.name);
   const found = await post("api/detect", form);
   found.forEach((info, k) => {
-    t.files.push({ id: uid("file"), name: files[k].name, file: files[k], info, experiment: info.experiment || "", chosen: false });
+    t.files.push({ id: `file-${Date.now().toString(36)}-${Math.random().toString(36).slice(2, 8)}`, name: files[k].name, file: files[k], info, experiment: info.experiment || "", chosen: false });
   });
   save();
 }
@@ -90,12 +90,14 @@ async function redetect(entry) {
 
 const columnRules = (files) => files.flatMap((f) => f.columns || []);
 
-function groups(t) {
+// One fit per file, except an FTC log split over several files (testFile.txt + testFile2.txt), which is one run.
+export function groups(t) {
   const out = new Map();
   for (const f of t.files) {
     if (!f.info || f.info.error || !f.experiment) continue;
-    if (!out.has(f.experiment)) out.set(f.experiment, []);
-    out.get(f.experiment).push(f);
+    const key = f.info.format === "ftc-log" ? f.experiment : `${f.experiment}:${f.id}`;
+    if (!out.has(key)) out.set(key, []);
+    out.get(key).push(f);
   }
   return out;
 }
@@ -107,56 +109,56 @@ function optionsForm(ctx, exp, files) {
   const needs = new Set(files.flatMap((f) => (f.info && f.info.needs) || []));
   const primary = fields.filter((f) => f.required || isShared(f.name) || needs.has(f.name) || (PRIMARY[exp] || []).includes(f.name));
   const more = fields.filter((f) => !primary.includes(f));
-  const note = (f) => (f.name === "cpr" && needs.has("cpr") ? "this log counts encoder ticks: give the counts per revolution of its encoder (8192 for REV Through Bore dead wheels)" : "");
+  const note = (f) => (f.name === "cpr" && needs.has("cpr") ? "needed: this log counts encoder ticks" : "");
   const box = el("div", { class: "options" }, primary.map((f) => field(f, values, null, { note: note(f) })));
   return [fields, values, box, more.length ? el("details", { class: "more" }, el("summary", { text: "More options for this fit" }),
     el("div", { class: "options" }, more.map((f) => field(f, values)))) : null];
 }
 
-async function runGroup(ctx, exp, files) {
-  const t = ctx.state;
+async function runGroup(ctx, key, files) {
+  const t = ctx.state, exp = files[0].experiment;
   const [fields, values] = [ctx.app.schema.analyze[exp].fields, t.options[exp] || {}];
   const names = files.map((f) => f.name);
   const make = () => {
     const d = new FormData();
-    for (const f of files) d.append("file", f.file, f.name);
+    for (const f of files) d.append("file", f.excluded && f.excluded.length ? f.trimmed || f.file : f.file, f.name);
     for (const rule of columnRules(files)) d.append("column", rule);
     return appendValues(d, fields, values);
   };
-  const run = (t.runs[exp] = { experiment: exp, files: names, status: "running", started: Date.now() });
+  const run = (t.runs[key] = { experiment: exp, files: names, status: "running", started: Date.now() });
   const controller = new AbortController();
-  controllers.set(exp, controller);
+  controllers.set(key, controller);
   ctx.rerender();
   try {
     const [answer, panels] = await Promise.all([
-      runRequest(`api/analyze/${encodeURIComponent(exp)}`, make(), { signal: controller.signal, onProgress: (p) => progress(exp, p) }),
+      runRequest(`api/analyze/${encodeURIComponent(exp)}`, make(), { signal: controller.signal, onProgress: (p) => progress(key, p) }),
       post(`api/panels/${encodeURIComponent(exp)}`, make(), { signal: controller.signal }).catch((e) => (isAbort(e) ? Promise.reject(e) : [])),
     ]);
-    Object.assign(run, { status: "done", result: answer, panels, finished: Date.now() });
-    t.gains.use[exp] = true;
+    Object.assign(run, { status: "done", result: answer, panels, finished: Date.now(), excluded: files.reduce((n, f) => n + (f.excluded || []).length, 0) });
+    t.gains.use[key] = true;
   } catch (e) {
     Object.assign(run, isAbort(e) ? { status: "stopped" } : { status: "failed", error: e.message });
   } finally {
-    controllers.delete(exp);
+    controllers.delete(key);
     save();
     ctx.rerender();
   }
 }
 
-function progress(exp, p) {
-  const bar = $(`[data-group="${exp}"] progress`), text = $(`[data-group="${exp}"] .run-status`);
+function progress(key, p) {
+  const bar = $(`[data-group="${key}"] progress`), text = $(`[data-group="${key}"] .run-status`);
   if (bar && p.total) { bar.max = p.total; bar.value = p.done || 0; }
   if (text) text.textContent = `${p.what || "working"}${p.total ? `: ${p.done || 0} of ${p.total} ${p.unit || ""}` : ""}${p.detail ? ` (${p.detail})` : ""}`;
 }
 
-function groupCard(ctx, exp, files) {
-  const t = ctx.state, run = t.runs[exp];
+function groupCard(ctx, key, files) {
+  const t = ctx.state, run = t.runs[key], exp = files[0].experiment;
   const [fields, values, box, more] = optionsForm(ctx, exp, files);
-  const running = run && run.status === "running" && controllers.has(exp);
+  const running = run && run.status === "running" && controllers.has(key);
   const runButton = el("button", { type: "button", class: "primary", text: running ? "Running…" : "Run the fit", disabled: running,
-    onclick: () => runGroup(ctx, exp, files) });
-  const cancel = el("button", { type: "button", text: "Cancel", hidden: !running, onclick: () => { const c = controllers.get(exp); if (c) c.abort(); } });
-  const card = el("section", { class: "card group", "data-group": exp },
+    onclick: () => runGroup(ctx, key, files) });
+  const cancel = el("button", { type: "button", text: "Cancel", hidden: !running, onclick: () => { const c = controllers.get(key); if (c) c.abort(); } });
+  const card = el("section", { class: "card group", "data-group": key },
     el("h3", { text: /^roadrunner/.test((files[0].info || {}).format || "") ? "Road Runner feedforward fit (kS, kV, kA)" : EXPERIMENT_WORDS[exp] || exp }),
     el("p", { class: "small", text: `From ${files.map((f) => f.name).join(", ")}` }),
     box, more, commandBox(["analyze", exp, ...files.map((f) => f.name), ...columnRules(files).map((r) => `--column=${r}`), ...argvOf(fields, values)]),
@@ -165,14 +167,56 @@ function groupCard(ctx, exp, files) {
   if (run && run.status === "failed") card.append(el("p", { class: "error", role: "alert", text: `${run.error}` }));
   if (run && run.result) {
     const same = run.files.join("\n") === files.map((f) => f.name).join("\n");
-    card.append(el("h4", { text: `Result from ${run.files.join(", ")}` }));
+    const left = files.reduce((n, f) => n + (f.excluded || []).length, 0);
+    card.append(el("h4", { text: `Result from ${run.files.join(", ")}${run.excluded ? ` (${run.excluded} point${run.excluded > 1 ? "s" : ""} left out)` : ""}` }));
+    if (left) card.append(el("p", { class: "small" }, `${left} point${left > 1 ? "s are" : " is"} left out of the fit. `,
+      el("button", { type: "button", class: "link", text: "Put them back", onclick: () => { for (const f of files) f.excluded = []; save(); runGroup(ctx, key, files); } })));
     if (!same) card.append(el("p", { class: "small", text: "The files have changed since this result: run the fit again to update it." }));
     card.append(...resultView(run.result));
     const host = el("div", { class: "plots" });
-    card.append(host);
-    requestAnimationFrame(() => plots.panels(host, run.panels));
+    const exclude = el("div", { class: "actions exclude" });
+    const table = files.length === 1 && (files[0].info || {}).format === "csv";
+    card.append(table ? el("p", { class: "small", text: "To leave points out: pick the box or lasso tool above a plot, select the points, then fit again." }) : "", exclude, host);
+    requestAnimationFrame(() => plots.panels(host, run.panels, { onSelect: (panel, indices) => offerExclusion(ctx, key, files, panel, indices, exclude) }));
   }
   return card;
+}
+
+// The data rows of a small table file (the points of its fit, one per row, when nothing was thinned).
+function dataRows(lines) {
+  const rows = [];
+  let header = false;
+  lines.forEach((line, k) => {
+    const t = line.trim();
+    if (!t || t.startsWith("#")) return;
+    if (!header && /[A-Za-z]/.test(t.replace(/[eE][+-]?\d/g, ""))) { header = true; return; }
+    header = true;
+    rows.push(k);
+  });
+  return rows;
+}
+
+// Points selected on a fit's plot: leave their rows out of a copy of the file (the file itself is kept) and fit again.
+async function offerExclusion(ctx, key, files, panel, indices, host) {
+  host.replaceChildren();
+  if (!indices.length) return;
+  const entry = files.length === 1 ? files[0] : null;
+  const current = entry && entry.excluded && entry.excluded.length && entry.trimmed ? entry.trimmed : entry && entry.file;
+  const text = entry ? await current.text() : "";
+  const lines = text.split(/\r?\n/);
+  const rows = dataRows(lines);
+  const n = panel.data ? panel.data.x.length : -1;
+  if (!entry || rows.length !== n) {
+    host.append(el("p", { class: "small", text: "Points can be left out of a fit of one table file whose every row is a point (an LCR, torque or terminal-speed table); this fit's points come from a longer log." }));
+    return;
+  }
+  host.append(el("button", { type: "button", class: "primary", text: `Leave out the ${indices.length} selected point${indices.length > 1 ? "s" : ""} and fit again`, onclick: () => {
+    const drop = new Set(indices.map((i) => rows[i]));
+    entry.excluded = [...(entry.excluded || []), ...[...drop].map((k) => lines[k])];  // the rows left out, as they were
+    entry.trimmed = new Blob([lines.filter((_, k) => !drop.has(k)).join("\n")], { type: "text/plain" });
+    save();
+    runGroup(ctx, key, files);
+  } }));
 }
 
 function motorPicker(ctx) {
@@ -213,7 +257,7 @@ export function render(host, ctx) {
     raw.addEventListener("toggle", () => { if (raw.open) plots.raw(area, first.info); });
     host.append(raw);
   }
-  for (const [exp, files] of groups(t)) host.append(groupCard(ctx, exp, files));
+  for (const [key, files] of groups(t)) host.append(groupCard(ctx, key, files));
   const done = Object.values(t.runs).some((r) => r.result);
   host.append(el("nav", { class: "next" }, el("a", { class: `button${done ? " primary" : ""}`, href: `#/${ctx.task.key}/gains`, text: "Gains for your code →" })));
 }
@@ -222,9 +266,9 @@ export function render(host, ctx) {
 export async function runAll(ctx) {
   const t = ctx.state;
   const jobs = [];
-  for (const [exp, files] of groups(t)) {
-    const run = t.runs[exp];
-    if (!run || !run.result || run.files.join("\n") !== files.map((f) => f.name).join("\n")) jobs.push(runGroup(ctx, exp, files));
+  for (const [key, files] of groups(t)) {
+    const run = t.runs[key];
+    if (!run || !run.result || run.files.join("\n") !== files.map((f) => f.name).join("\n")) jobs.push(runGroup(ctx, key, files));
   }
   await Promise.all(jobs);
 }

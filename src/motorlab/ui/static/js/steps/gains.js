@@ -7,7 +7,7 @@ import { argvOf, appendValues, field, isShared } from "../fields.js";
 import { duration, number, prettyUnit, quantity } from "../format.js";
 import { GAIN_WORDS, MEASURED_BY, parameterWords, plain, targetLabel } from "../words.js";
 import * as plots from "../plots.js";
-import { addFiles, runAll } from "./fit.js";
+import { addFiles, groups, runAll } from "./fit.js";
 
 const OWN = ["loop", "kv", "ka", "ks", "params", "target", "emit", "unit"];
 const PRIMARY = ["cpr", "wheel-radius", "units"];
@@ -26,10 +26,12 @@ function sources(ctx) {
       out.push({ name: "results.json", label: `the session's unit ${unit}`, doc: body.results, parameters: body.results.units[unit].parameters || {}, unit });
     }
   } else {
-    for (const [exp, run] of Object.entries(t.runs)) {
-      if (!run.result || t.gains.use[exp] === false) continue;
+    const live = new Set(groups(t).keys());  // results of files still chosen, for what they are now said to measure
+    let k = 0;
+    for (const [key, run] of Object.entries(t.runs)) {
+      if (!run.result || t.gains.use[key] === false || !live.has(key)) continue;
       const one = Array.isArray(run.result) ? run.result[0] : run.result;
-      out.push({ name: `${exp}.json`, label: run.files.join(", "), doc: run.result, parameters: one.parameters || {}, exp });
+      out.push({ name: `${run.experiment}-${++k}.json`, label: run.files.join(", "), doc: run.result, parameters: one.parameters || {}, key });
     }
   }
   const typed = Object.entries(t.gains.typed || {}).filter(([, v]) => v !== "" && Number.isFinite(parseFloat(v)));
@@ -178,12 +180,13 @@ export function render(host, ctx) {
   const model = el("section", { class: "card" }, el("h3", { text: "The motor model, from" }));
   if (!list.length) model.append(el("p", { text: "No result yet: ", }, el("a", { href: `#/${ctx.task.key}/${ctx.task.steps[0][0]}`, text: "go back and run the fit" }), ", or type values below."));
   if (ctx.task.key !== "bench") {
-    for (const [exp, run] of Object.entries(t.runs)) {
-      if (!run.result) continue;
+    const live = new Set(groups(t).keys());
+    for (const [key, run] of Object.entries(t.runs)) {
+      if (!run.result || !live.has(key)) continue;
       const id = uid("use");
       const one = Array.isArray(run.result) ? run.result[0] : run.result;
       const names = Object.keys(one.parameters || {}).map((k) => parameterWords(k)[1] || k).join(", ");
-      model.append(el("div", { class: "field flag" }, el("input", { type: "checkbox", id, checked: g.use[exp] !== false, onchange: (e) => { g.use[exp] = e.target.checked; save(); ctx.rerender(); } }),
+      model.append(el("div", { class: "field flag" }, el("input", { type: "checkbox", id, checked: g.use[key] !== false, onchange: (e) => { g.use[key] = e.target.checked; save(); ctx.rerender(); } }),
         el("label", { for: id, text: `${run.files.join(", ")} (${names})` })));
     }
   } else if (list.length) {

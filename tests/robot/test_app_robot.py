@@ -1,0 +1,98 @@
+"""The app's robot link (motorlab.ui.robot) against the emulated robot: pull, record with Stop, send and restore."""
+
+from __future__ import annotations
+
+import copy
+import json
+import time
+import warnings
+from pathlib import Path
+
+import pytest
+
+with warnings.catch_warnings():  # starlette ≥ 0.48 prefers httpx2 for its test client; httpx works the same here
+    warnings.simplefilter("ignore")
+    from starlette.testclient import TestClient
+
+from motorlab.robot.config import leaves
+from motorlab.robot.dashboard import STOP_TAG
+from motorlab.robot.emulator import EmulatedRobot, RobotFiles
+from motorlab.ui.app import create_app
+
+
+@pytest.fixture
+def client() -> TestClient:
+    return TestClient(create_app(host="127.0.0.1", port=8765), base_url="http://127.0.0.1:8765")
+
+
+def test_connect_to_the_robot_pulls_and_serves_the_files(client: TestClient, robot: EmulatedRobot,
+                                                         robot_files: RobotFiles) -> None:
+    answer = client.post("/api/robot/pull", data={"host": "127.0.0.1", "http-port": str(robot.http_port)})
+    assert answer.status_code == 200, answer.text
+    files = answer.json()["files"]
+    assert {f["name"] for f in files} >= {robot_files.logs[0].name, robot_files.motorlab[0].name}
+    served = {p.name: p for p in [*robot_files.logs, *robot_files.motorlab]}
+    for kind in robot_files.tuning.values():
+        served.update({p.name: p for p in kind})
+    for f in files:
+        assert client.get("/" + f["url"]).content == served[f["name"]].read_bytes()
+    assert client.get("/api/robot/files/1/../../etc/passwd").status_code == 404
+    refused = client.post("/api/robot/pull", data={"host": "127.0.0.1", "http-port": "1"})
+    assert refused.status_code == 400
+    assert "connection refused" in refused.json()["error"]
+
+
+def test_record_live_and_stop(client: TestClient, robot: EmulatedRobot) -> None:
+    port = str(robot.dashboard_port)
+    listed = client.get("/api/robot/opmodes", params={"host": "127.0.0.1", "dashboard-port": port}).json()
+    assert "motorlab: quasistatic ramp" in [m["name"] for m in listed["opmodes"]]
+    assert client.get("/api/robot/record").json()["state"] == "idle"
+    start = client.post("/api/robot/record/start", data={"host": "127.0.0.1", "dashboard-port": port,
+                                                         "opmode": "motorlab: quasistatic ramp", "seconds": "20",
+                                                         "cpr": "537.6"})
+    assert start.status_code == 200, start.text
+    deadline = time.monotonic() + 10
+    live: dict = {}
+    while time.monotonic() < deadline:
+        live = client.get("/api/robot/record").json()
+        if live["rows"] > 30:
+            break
+        time.sleep(0.1)
+    assert live["state"] == "running"
+    assert "voltage" in live["series"]
+    assert len(live["time"]) == len(live["series"]["voltage"])
+    assert client.post("/api/robot/record/start", data={"opmode": "x"}).status_code == 409  # one at a time
+    pressed = time.monotonic()
+    client.post("/api/robot/record/stop")
+    while robot.active != STOP_TAG and time.monotonic() - pressed < 1:
+        time.sleep(0.002)
+    assert time.monotonic() - pressed < 0.1
+    while client.get("/api/robot/record").json()["state"] != "stopped" and time.monotonic() < deadline:
+        time.sleep(0.05)
+    done = client.get("/api/robot/record").json()
+    assert done["stop_reason"] == "stopped from the app"
+    assert done["summary"]["columns"]["voltage"] == "voltage_V"
+    log = client.get("/" + done["log"]).text
+    assert "# cpr: 537.6" in log
+    assert "time_s,battery_V,voltage_V,position_counts,x_velocity" in log
+
+
+def test_send_to_the_robot_and_put_back(client: TestClient, robot: EmulatedRobot, tmp_path: Path) -> None:
+    fit = json.dumps({"parameters": {"kS": {"value": 0.3, "unit": "V"}, "kV": {"value": 0.125, "unit": "V*s/rad"},
+                                     "kA": {"value": 0.0124, "unit": "V*s^2/rad"}}}).encode()
+    fields = {"host": "127.0.0.1", "dashboard-port": str(robot.dashboard_port), "target": "roadrunner", "cpr": "8192"}
+    before = copy.deepcopy(robot.config)
+    plan = client.post("/api/robot/push/plan", data=fields, files={"params": ("fit.json", fit)})
+    assert plan.status_code == 200, plan.text
+    assert [c["path"] for c in plan.json()["changes"]] == [f"MecanumDrive.PARAMS.{k}" for k in ("kS", "kV", "kA")]
+    assert robot.config == before  # a plan writes nothing
+    unconfirmed = client.post("/api/robot/push/apply", data=fields, files={"params": ("fit.json", fit)})
+    assert unconfirmed.status_code == 400
+    assert robot.config == before
+    done = client.post("/api/robot/push/apply", data={**fields, "confirm": "yes"}, files={"params": ("fit.json", fit)})
+    assert done.status_code == 200, done.text
+    assert done.json()["verified"]
+    assert leaves(robot.config)["MecanumDrive.PARAMS.kS"][1] == pytest.approx(0.3, rel=1e-9)
+    back = client.post("/api/robot/push/restore", data=fields)
+    assert back.status_code == 200, back.text
+    assert robot.config == before
