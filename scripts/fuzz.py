@@ -29,6 +29,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests" / "fuzz"))
 
+from fuzz_app import app_case, app_client  # noqa: E402
 from fuzz_cases import case_for  # noqa: E402
 from fuzz_corpus import build  # noqa: E402
 from fuzz_harness import GOOD, Case, Outcome, run, warm  # noqa: E402
@@ -96,6 +97,52 @@ def replay(folder: Path, time_limit: float) -> int:
     return 0 if outcome.verdict in GOOD else 1
 
 
+def _tally(state: dict, seed: str, verdict: str, seconds: float, peak: float) -> None:
+    state["verdicts"][verdict] = state["verdicts"].get(verdict, 0) + 1
+    by_seed = state["by_seed"].setdefault(seed, {})
+    by_seed[verdict] = by_seed.get(verdict, 0) + 1
+    state["seconds"] += seconds
+    state["max_case_seconds"] = max(state["max_case_seconds"], seconds)
+    if peak == peak:  # not NaN
+        state["max_peak_rss_mb"] = max(state["max_peak_rss_mb"], peak)
+
+
+def _cli_case(index: int, args: argparse.Namespace, seeds: list, state: dict, scratch: Path) -> None:
+    case = case_for(index, args.seed, seeds, args.out / "corpus")
+    outcome = run(case, scratch, time_limit=args.time_limit)
+    _tally(state, case.seed, outcome.verdict, outcome.seconds, outcome.peak_rss_mb)
+    if outcome.verdict not in GOOD:
+        folder = _save_failure(args.out, index, case, outcome)
+        state["failures"].append(f"{folder.name}: {case.seed}: {case.mutation[:80]}: {outcome.detail[:160]}")
+        print(f"case {index}: {outcome.verdict}: {case.seed}: {case.mutation[:80]}: {outcome.detail[:200]}", flush=True)
+
+
+def _app_case(index: int, args: argparse.Namespace, seeds: list, state: dict) -> None:
+    """An app request (fuzz_app.py); a failure is saved as what was sent and what came back.
+
+    The app's client runs an event-loop thread: it lives only for this request, so that no thread
+    exists when the next CLI case forks.
+    """
+    from fuzz_mutate import RandomChooser
+
+    start = time.perf_counter()
+    try:
+        with app_client() as client:
+            verdict, detail, what = app_case(client, args.out / "corpus", seeds,
+                                             RandomChooser(f"app:{args.seed}:{index}"))
+    except Exception as exc:  # the client itself failed: the app broke the connection
+        verdict, detail, what = "app-exception", f"{type(exc).__name__}: {exc}"[:300], "?"
+    _tally(state, "app", verdict, time.perf_counter() - start, float("nan"))
+    if verdict not in GOOD:
+        folder = args.out / "failures" / f"{index:06d}-{verdict}"
+        folder.mkdir(parents=True, exist_ok=True)
+        (folder / "outcome.txt").write_text(
+            f"verdict: {verdict}\ndetail: {detail}\nsent: {what}\nreplay: the app case of seed {args.seed}, "
+            f"case {index}: fuzz_app.app_case(client, corpus, seeds, RandomChooser('app:{args.seed}:{index}'))\n")
+        state["failures"].append(f"{folder.name}: app: {what[:80]}: {detail[:160]}")
+        print(f"case {index}: {verdict}: app: {what[:80]}: {detail[:200]}", flush=True)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--cases", type=int, default=10_000)
@@ -106,6 +153,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--replay", type=Path)
     parser.add_argument("--summary", action="store_true")
     parser.add_argument("--only", help="only seeds whose name contains this")
+    parser.add_argument("--app-every", type=int, default=20, help="every N-th case is an app request (0: none)")
     args = parser.parse_args(argv)
     if args.replay:
         return replay(args.replay, args.time_limit)
@@ -124,20 +172,10 @@ def main(argv: list[str] | None = None) -> int:
     try:
         while state["next"] < args.cases and time.monotonic() < deadline:
             index = state["next"]
-            case = case_for(index, args.seed, seeds, args.out / "corpus")
-            outcome = run(case, scratch, time_limit=args.time_limit)
-            state["verdicts"][outcome.verdict] = state["verdicts"].get(outcome.verdict, 0) + 1
-            by_seed = state["by_seed"].setdefault(case.seed, {})
-            by_seed[outcome.verdict] = by_seed.get(outcome.verdict, 0) + 1
-            state["seconds"] += outcome.seconds
-            state["max_case_seconds"] = max(state["max_case_seconds"], outcome.seconds)
-            if outcome.peak_rss_mb == outcome.peak_rss_mb:  # not NaN
-                state["max_peak_rss_mb"] = max(state["max_peak_rss_mb"], outcome.peak_rss_mb)
-            if outcome.verdict not in GOOD:
-                folder = _save_failure(args.out, index, case, outcome)
-                state["failures"].append(f"{folder.name}: {case.seed}: {case.mutation[:80]}: {outcome.detail[:160]}")
-                print(f"case {index}: {outcome.verdict}: {case.seed}: {case.mutation[:80]}: {outcome.detail[:200]}",
-                      flush=True)
+            if args.app_every and index % args.app_every == args.app_every - 1:
+                _app_case(index, args, seeds, state)
+            else:
+                _cli_case(index, args, seeds, state, scratch)
             state["next"] = index + 1
             if index % 10 == 0:
                 _write_state(state_path, state)

@@ -30,6 +30,7 @@ from typing import TYPE_CHECKING, Any
 
 from matplotlib.figure import Figure
 
+from motorlab.report_thermal import thermal_section
 from motorlab.results import Estimate, FitResult
 from motorlab.units import format_unit
 
@@ -194,6 +195,7 @@ def render_report(result: Characterization, *, figures: bool = True) -> str:
         _fleet_section(result),
         _gearbox_section(result),
         _curves_section(result, figures=figures),
+        thermal_section(result),
         _gains_section(result, figures=figures),
     ]
     parts += [_unit_section(unit, figures=figures) for unit in result.units.values()]
@@ -256,6 +258,8 @@ def _nav(result: Characterization) -> str:
         ("gearbox", "The gearbox: Kt against Ke"),
         ("curves", "Motor curves"),
     ]
+    if any("stall" in unit.fits for unit in result.units.values()):
+        items.append(("thermal", "Heat"))
     if result.gains:
         items.append(("gains", "Controller gains"))
     items += [(f"unit-{u}", f"Unit {r.spec.display_name}") for u, r in result.units.items()]

@@ -286,3 +286,20 @@ def test_the_sysid_regression_on_a_repeated_time_warns_nothing() -> None:
     rec = Recording(time=t, signals={"voltage": v, "position": position}, source="rep.json")
     gains = sysid_ols([rec])
     assert all(np.isfinite(list(gains.values())))
+
+
+# ---- other scale factors ---------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("value", ["1e-300", "1e300"])
+def test_scale_factors_outside_any_rig_are_refused(value: str, rig, tmp_path: Path, capsys) -> None:
+    """A gear ratio or a tachometer gain of 1e-300 gave an answer at exit 0 (or would scale J absurdly)."""
+    torque = VirtualRig("neverest40", unit_seed=1, noise_seed=7).run("torque", tmp_path / "torque.csv").paths[0]
+    refused(capsys, "analyze", "torque", torque, "--K", "0.7", "--ratio", value, mentions="--ratio")
+    pulse = VirtualRig("neverest40", unit_seed=1, noise_seed=7).run("pulse", tmp_path / "pulse.csv").paths[0]
+    refused(capsys, "analyze", "pulse", pulse, "--Ka", "1.96", "--K", "0.7", "--tach-gain", value,
+            mentions="--tach-gain")
+    spindown = VirtualRig("neverest40", unit_seed=1, noise_seed=7).run(
+        "spindown", tmp_path / "spindown.txt", on_time=5.0, coast_time=10.0).paths[0]
+    refused(capsys, "analyze", "spindown", spindown, "--cpr", "1120", "--disc-radius", "75 mm",
+            "--disc-thickness", "50 mm", "--ratio", value, mentions="--ratio")

@@ -11,11 +11,8 @@ endpoints are fuzzed through Starlette's TestClient on ``create_app``.
 
 from __future__ import annotations
 
-import io
-import json
 import os
 import sys
-import zipfile
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any, TypeVar
@@ -26,6 +23,7 @@ from hypothesis import strategies as st
 
 sys.path.insert(0, str(Path(__file__).parent))
 
+from fuzz_app import app_case, app_client
 from fuzz_cases import make_case, pick_seed
 from fuzz_corpus import Seed, build, shared_real
 from fuzz_harness import GOOD, run, warm
@@ -135,74 +133,45 @@ def test_every_special_file_and_mutator_is_exercised(corpus) -> None:
 
 @pytest.fixture(scope="module")
 def client() -> Any:
-    import warnings
-
-    with warnings.catch_warnings():  # starlette would rather have "httpx2"; httpx is what the project installs
-        warnings.simplefilter("ignore")
-        from starlette.testclient import TestClient
-
-    from motorlab.ui.app import create_app
-
-    with TestClient(create_app(), base_url="http://127.0.0.1:8765") as test_client:
+    with app_client() as test_client:
         yield test_client
-
-
-def _assert_app_kept(response: Any, what: str) -> None:
-    assert response.status_code < 500, f"{what}: {response.status_code} {response.text[:500]}"
-    if response.headers.get("content-type", "").startswith("application/json"):
-        body = json.loads(response.text, parse_constant=lambda name: pytest.fail(f"{what}: {name} in the JSON"))
-        if response.status_code >= 400:
-            assert isinstance(body.get("error"), str), (what, body)
-            assert "\n" not in body["error"], (what, body)
-            assert "Traceback" not in body["error"], (what, body)
-            assert body["error"].strip(), what
-
-
-APP_FORMS = ("analyze", "detect", "tune", "characterize", "garbage-body", "zip")
 
 
 @settings(FUZZ.__class__(FUZZ, max_examples=5 if not LONG else 120))
 @given(data=st.data())
 def test_app_uploads(data: st.DataObject, client, corpus) -> None:
-    """Mutated uploads, fields and bodies to every upload endpoint: 200 with JSON, or 4xx {"error": one line}."""
+    """Mutated uploads, file names, fields and bodies to every upload endpoint: 2xx JSON, or 4xx {"error": one line}."""
     folder, seeds = corpus
-    c = HypothesisChooser(data)
-    form = c.choice(list(APP_FORMS))
-    fast = [s for s in _fast(seeds) if s.command[0] == "analyze" and s.files and not s.real]
-    seed = c.choice(fast)
-    name = seed.files[0]
-    content = (folder / name).read_bytes()
-    if c.choice([True, True, False]):
-        mutator = c.choice(sorted(mutators_for(seed.kind)))
-        content = mutators_for(seed.kind)[mutator](content, c)
-    filename = c.choice([name, "../../etc/passwd", "", ".hidden.csv", "a" * 300 + ".csv", "x\x00y.csv", "é.csv"])
-    fields = {opt[2:]: val for opt, val in zip(seed.options[::2], seed.options[1::2], strict=False)}
-    if c.choice([False, True]):
-        fields[c.choice(["cpr", "K", "inertia", "current", "plot", "output", "no-such"])] = c.choice(
-            ["9**9**9", "2**1024", "1e-12", "", "nan", "-1", "\x00"])
-    what = f"{form} {seed.name} {filename!r} {fields}"
-    if form == "garbage-body":
-        response = client.post(f"/api/analyze/{seed.command[1]}", content=content[:5000],
-                               headers={"content-type": c.choice(["multipart/form-data; boundary=x",
-                                                                  "application/json", "text/plain"])})
-    elif form == "zip":
-        buffer = io.BytesIO()
-        with zipfile.ZipFile(buffer, "w") as zf:
-            zf.writestr(c.choice([name, "../evil.csv", "/abs.csv", "d/" * 50 + "x.csv"]), content)
-        raw = buffer.getvalue()
-        raw = raw if c.choice([True, False]) else mutators_for("binary")["flip-bytes"](raw, c)
-        response = client.post("/api/detect", files=[("file", ("logs.zip", raw))])
-    elif form == "detect":
-        response = client.post("/api/detect", files=[("file", (filename, content))])
-    elif form == "tune":
-        response = client.post("/api/tune", files=[("params", ("params.json", content))],
-                               data={"kv": c.choice(["0.12", "9**9**9", "nan"])})
-    elif form == "characterize":
-        toml = (folder / "session.toml").read_bytes()
-        toml = mutators_for("toml")[c.choice(sorted(mutators_for("toml")))](toml, c)
-        files = [("file", ("session.toml", toml))] + [("file", (n, (folder / n).read_bytes()))
-                                                       for n in ("lcr.csv", "terminal.csv", "torque.csv")]
-        response = client.post("/api/characterize", files=files)
-    else:
-        response = client.post(f"/api/analyze/{seed.command[1]}", files=[("file", (filename, content))], data=fields)
-    _assert_app_kept(response, what)
+    verdict, detail, what = app_case(client, folder, seeds, HypothesisChooser(data))
+    if os.environ.get("FUZZ_VERBOSE"):
+        print(f"\napp {verdict:9} {what}: {detail[:100]}")
+    assert verdict in GOOD, f"{verdict}: {detail}\n  {what}"
+
+
+def test_the_judge_catches_every_broken_promise(tmp_path: Path) -> None:
+    """The oracle itself: each way of breaking the promise gets its verdict (a judge that passes all is no judge)."""
+    from fuzz_harness import Case, judge
+
+    case = Case(seed="s", mutation="m", argv=["analyze", "lcr", "a.csv", "--json"], blame="a.csv", json_output=True)
+    before = {"a.csv": "h1"}
+
+    def verdict(code: int, out: str = "", err: str = "", after: dict[str, str] | None = None,
+                temp: list[Path] | None = None) -> str:
+        return judge(case, code, out, err, before, after or dict(before), temp or [], tmp_path)[0]
+
+    good = '{"parameters": {"R": {"value": 1.0}}, "warnings": []}'
+    assert verdict(0, good) == "ok"
+    assert verdict(2, err="motorlab: error: a.csv:3: not a number\n") == "refused"
+    assert verdict(1, err="motorlab: internal error: KeyError\n") == "internal-error"
+    assert verdict(2, err="Traceback (most recent call last):\n  x\nValueError\n") == "traceback"
+    assert verdict(2, err="motorlab: error: not a number\n") == "unnamed-file"
+    assert verdict(2, err="motorlab: error: a.csv: x\nmotorlab: error: y\n") == "not-one-line"
+    assert verdict(0, good, after={"a.csv": "h2"}) == "modified-input"
+    assert verdict(0, good, after={**before, "b.png": "h"}) == "stray-output"
+    assert verdict(0, good, temp=[tmp_path / "tmpabc"]) == "stray-output"
+    assert verdict(2, err="motorlab: error: a.csv: x\n", after={**before, "out.csv": "h"}) == "stray-output"
+    assert verdict(0, '{"parameters": {"R": {"value": NaN}}}') == "bad-json"
+    assert verdict(0, '{"parameters": {"R": {"value": -1.0}}, "warnings": []}') == "unwarned-physics"
+    assert verdict(0, '{"parameters": {"R": {"value": -1.0}}, "warnings": ["R < 0: leads swapped?"]}') == "ok"
+    assert verdict(0, good, err="motorlab: warning: RuntimeWarning: overflow (x.py:3)\n") == "python-warning"
+    assert verdict(3, good) == "bad-exit"

@@ -203,3 +203,57 @@ def test_dashboard_client_reads_status_and_opmodes(robot: EmulatedRobot) -> None
         assert dash.config() == robot.config
     with pytest.raises(RobotLinkError, match="not connected"):
         dash.stop_op_mode()
+
+
+def test_ctrl_c_stops_the_robot_and_keeps_the_log(robot: EmulatedRobot, tmp_path: Path) -> None:
+    import signal
+    import subprocess
+    import sys
+
+    log = tmp_path / "run.csv"
+    proc = subprocess.Popen([sys.executable, "-m", "motorlab", "robot", "record", "--host", "127.0.0.1",
+                             "--dashboard-port", str(robot.dashboard_port), "--opmode", OPMODE, "--seconds", "60",
+                             "-o", str(log)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 30
+        while robot.status != "RUNNING" and time.monotonic() < deadline:
+            time.sleep(0.01)
+        time.sleep(0.5)
+        assert robot.status == "RUNNING"
+        pressed = time.monotonic()
+        proc.send_signal(signal.SIGINT)
+        while robot.active != STOP_TAG and time.monotonic() - pressed < 2.0:
+            time.sleep(0.001)
+        latency = time.monotonic() - pressed
+        _, err = proc.communicate(timeout=20)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+    assert robot.active == STOP_TAG
+    assert latency < 0.1, latency
+    assert proc.returncode == 0, err
+    assert "Ctrl-C" in log.read_text()
+
+
+def test_telemetry_without_numbers_is_one_line(tmp_path: Path) -> None:
+    from motorlab.robot.record import Recording, write_log
+
+    data = Recording("Words", rows=[(1000, 12.5, {"state": "ramping"}), (1010, 12.5, {"state": "done"})],
+                     keys=["state"], skipped={"state": "ramping"}, stop_reason="1 s elapsed")
+    with pytest.raises(RobotLinkError, match="no telemetry key of Words is a number"):
+        write_log(data, tmp_path / "x.csv")
+    with pytest.raises(RobotLinkError, match="sent no telemetry"):
+        write_log(Recording("Quiet", stop_reason="1 s elapsed"), tmp_path / "x.csv")
+    assert not (tmp_path / "x.csv").exists()
+
+
+@pytest.mark.parametrize(("key", "column"), [
+    ("voltage", "voltage_V"), ("Applied Voltage", "voltage_V"), ("voltage_V", "voltage_V"),
+    ("battery voltage", "battery_V"), ("position", "position_counts"), ("encoder position", "position_counts"),
+    ("position_rad", "position_rad"), ("velocity", "x_velocity"), ("loop time (ms)", "x_loop_time_ms"),
+])
+def test_telemetry_keys_become_columns(key: str, column: str) -> None:
+    from motorlab.robot.record import column_for
+
+    assert column_for(key) == column

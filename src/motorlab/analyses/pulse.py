@@ -329,6 +329,8 @@ def _check_options(
         raise OptionError(f"friction model must be auto, viscous, coulomb or both, got {friction!r}")
     if tach_gain is not None and not (math.isfinite(tach_gain) and tach_gain > 0):
         raise OptionError(f"the tachometer gain must be positive, got {tach_gain} V·s/rad")
+    check_range(tach_gain, "the tachometer gain (--tach-gain)", *LIMITS["K"][:2], "V·s/rad",
+                why="a tachometer is a small DC generator: its gain is a motor's K")
     if not recordings:
         raise OptionError("no recording given")
     if not math.isfinite(amplifier_offset):

@@ -22,6 +22,7 @@ from motorlab.analyses._common import (
     EXACT_LINE_WARNING,
     StraightLine,
     check_limits,
+    check_range,
     check_stderr_limit,
     concatenate,
     fit_straight_line,
@@ -306,6 +307,7 @@ def _panel(current: np.ndarray, tau: np.ndarray, model_tau: np.ndarray, k_value:
 def _check_gearbox_options(ratio: float, motor_constant: float | None, motor_constant_stderr: float) -> None:
     if not (math.isfinite(ratio) and ratio > 0):
         raise OptionError(f"the gear ratio (--ratio) must be positive, got {ratio}")
+    check_range(ratio, "the gear ratio (--ratio)", 1e-4, 1e4, "", why="a gearbox reduces by at most a few thousand")
     if motor_constant is None and (ratio != 1.0 or motor_constant_stderr != 0.0):
         given = "the gear ratio (--ratio)" if ratio != 1.0 else "K's standard error (--K-stderr)"
         raise OptionError(f"{given} is used only with the motor's K (--K), to report the gearbox efficiency: "

@@ -143,23 +143,29 @@ def run_record(args: argparse.Namespace) -> int:
 
     recorder = Recorder(args.host, args.dashboard_port, args.opmode, seconds=args.seconds, timeout=args.timeout)
     outcome: dict[str, Any] = {}
+    done = threading.Event()  # not Thread.join: a join interrupted by Ctrl-C can return early afterwards (CPython)
 
     def work() -> None:
         try:
             outcome["data"] = recorder.run()
-        except BaseException as exc:
+        except BaseException as exc:  # handed to the main thread
             outcome["error"] = exc
+        finally:
+            done.set()
 
     thread = threading.Thread(target=work, name="motorlab-record", daemon=True)
     print(f"recording {args.opmode!r} on {args.host}:{args.dashboard_port} for up to {args.seconds:g} s "
           "(Ctrl-C stops the robot)", file=sys.stderr)
     thread.start()
     try:
-        while thread.is_alive():
-            thread.join(0.05)
+        while not done.wait(0.05):
+            pass
     except KeyboardInterrupt:
         recorder.stop("Ctrl-C")
-        thread.join(RECONNECT_WAIT)
+        done.wait(RECONNECT_WAIT)
+    if not done.is_set():
+        raise RobotLinkError("the recorder did not finish after Ctrl-C: THE OPMODE MAY STILL BE RUNNING, press STOP "
+                             "on the Driver Station")
     if "error" in outcome:
         raise outcome["error"]
     summary = write_log(outcome["data"], args.output, host=f"{args.host}:{args.dashboard_port}", cpr=args.cpr)

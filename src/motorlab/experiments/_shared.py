@@ -40,11 +40,20 @@ INERTIA = (
 )
 
 
+#: Speed ratios a rig's gear train can have (a 3,700:1 FTC planetary stack, with margin both ways).
+RATIO_RANGE = (1e-4, 1e4)
+
+
 def inertia_of(values: Mapping[str, Any]) -> tuple[float | None, float | None]:
     """The inertia [kg·m²] and its standard error from ``inertia`` or the disc options (or None)."""
     disc = values.get("disc_radius") is not None or values.get("disc_thickness") is not None
     if values.get("inertia") is not None and disc:
         raise OptionError("give either --inertia or the flywheel disc (--disc-radius, --disc-thickness), not both")
+    if values.get("ratio") is not None:
+        from motorlab.analyses._common import check_range
+
+        check_range(values["ratio"], "the flywheel to encoder speed ratio (--ratio)", *RATIO_RANGE, "",
+                    why="a gear train steps speed up or down by at most a few thousand")
     if disc:
         if values.get("disc_radius") is None or values.get("disc_thickness") is None:
             raise OptionError("a flywheel disc needs both --disc-radius and --disc-thickness")

@@ -198,8 +198,8 @@ def _close(a: Any, b: float, kind: str) -> bool:
     return x == b or abs(x - b) <= NUMERIC_TYPES.get(kind, 1e-12) * max(abs(x), abs(b))
 
 
-def verify(before: dict[str, Any], after: dict[str, Any], changes: list[Change], *, old: bool = False) -> None:
-    """The read-back tree holds the new values and every other leaf is as it was."""
+def verify(before: dict[str, Any], after: dict[str, Any], changes: list[Change], *, old: bool = False) -> list[str]:
+    """The read-back tree holds the new values (else :class:`RobotLinkError`); other leaves that moved, named."""
     flat_before, flat_after = leaves(before), leaves(after)
     for change in changes:
         want = change.old if old else change.new
@@ -209,9 +209,10 @@ def verify(before: dict[str, Any], after: dict[str, Any], changes: list[Change],
                                  "value (an OpMode that sets it? a final field?); check it in FTC Dashboard")
     written = {c.path for c in changes}
     moved = [p for p in flat_before if p not in written and flat_after.get(p) != flat_before[p]]
-    if moved:
-        raise RobotLinkError(f"other fields changed on the robot while writing ({', '.join(moved[:5])}): "
-                             "someone else is editing the config? check it in FTC Dashboard")
+    if moved:  # not motorlab's doing (it sent only its leaves): an OpMode or another client changes them
+        return [f"other fields changed on the robot meanwhile ({', '.join(moved[:5])}): not motorlab's writing "
+                "(an OpMode or another Dashboard client?); check them in FTC Dashboard"]
+    return []
 
 
 def save_state(path: Path, address: str, target: str, changes: list[Change]) -> None:

@@ -203,7 +203,10 @@ class Dashboard:
         """Send ``SAVE_CONFIG`` with ``diff``; the tree the server sends back after applying it."""
         mark = self._mark()
         self.send({"type": "SAVE_CONFIG", "configDiff": diff})
-        self.wait("RECEIVE_CONFIG", after=mark, timeout=timeout)
+        # FtcDashboard answers a save by sending the new tree to every client (withConfigRoot →
+        # updateConfig); read it back with GET_CONFIG in any case.
+        with contextlib.suppress(RobotLinkError):
+            self.wait("RECEIVE_CONFIG", after=mark, timeout=min(self.timeout, 2.0) if timeout is None else timeout)
         return self.config(timeout)
 
     def init_op_mode(self, name: str) -> None:

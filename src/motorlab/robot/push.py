@@ -102,7 +102,7 @@ def apply(dash: Dashboard, push_plan: PushPlan, state: Path, *, while_running: b
     fresh = plan(before, {c.name: c.path for c in push_plan.changes}, {c.name: c.new for c in push_plan.changes})
     save_state(state, address or dash.address, push_plan.target, fresh)
     after = dash.save_config(diff_tree(fresh))
-    verify(before, after, fresh)
+    push_plan.notes.extend(verify(before, after, fresh))
     return after
 
 

@@ -66,6 +66,10 @@ def column_for(key: str) -> str:
     simple = re.sub(r"[\s\-/()]+", "_", key.strip().lower()).strip("_")
     if simple in ALIASES:
         return ALIASES[simple]
+    if "volt" in simple and "batt" not in simple:  # "appliedVoltage", "motor voltage (V)"
+        return "voltage_V"
+    if any(word in simple for word in ("position", "ticks", "encoder")):  # "encoder position", "leftTicks"
+        return "position_counts"
     safe = re.sub(r"[^A-Za-z0-9_.]+", "_", key.strip()).strip("_") or "key"
     return f"x_{safe}"
 
@@ -79,6 +83,7 @@ class Recording:
     keys: list[str] = field(default_factory=list)
     skipped: dict[str, str] = field(default_factory=dict)  # key -> a value that was not a number
     stop_reason: str = ""
+    stop_reason_note: str = ""
     still_running: bool = False
 
     def numeric_keys(self) -> list[str]:
@@ -100,6 +105,7 @@ class Recorder:
         self._lock = threading.Lock()
         self._battery = float("nan")
         self._recording = False
+        self._seen_active = False
         self.dash: Dashboard | None = None
         self.state = "connecting"
 
@@ -123,8 +129,9 @@ class Recorder:
                     continue
                 data = packet.get("data") or {}
                 stamp = packet.get("timestamp")
-                if not isinstance(data, dict) or not isinstance(stamp, int):
+                if not isinstance(data, dict) or isinstance(stamp, bool) or not isinstance(stamp, int | float):
                     continue
+                stamp = int(stamp)
                 values = {str(k): str(v) for k, v in data.items()}
                 for key, value in values.items():
                     if key not in self.data.keys:
@@ -149,7 +156,8 @@ class Recorder:
         self._battery = float(status.get("batteryVoltage", math.nan))
         self.state = "init"
         dash.init_op_mode(self.data.opmode)
-        self._wait_status(dash, lambda s: s.get("activeOpMode") == self.data.opmode, "initialise")
+        self._seen_active = self._wait_status(dash, lambda s: s.get("activeOpMode") == self.data.opmode,
+                                              "initialise", str(status.get("errorMessage") or ""))
         with self._lock:
             self._recording = not self._stop.is_set()
         if not self._recording:
@@ -158,19 +166,25 @@ class Recorder:
         self.state = "running"
         dash.start_op_mode()
 
-    def _wait_status(self, dash: Dashboard, ok: Callable[[dict[str, Any]], bool], what: str) -> None:
+    def _wait_status(self, dash: Dashboard, ok: Callable[[dict[str, Any]], bool], what: str, error: str) -> bool:
+        """Wait for the status ``ok`` takes; False when it never came but nothing else is active either
+        (a status that does not name OpModes: the run goes on, said in the stop reason)."""
         deadline = time.monotonic() + self.timeout
+        status: dict[str, Any] = {}
         while time.monotonic() < deadline and not self._stop.is_set():
             status = dash.status()
-            if status.get("errorMessage"):
-                dash.stop_op_mode()
-                raise RobotLinkError(f"the robot reports an error: {status['errorMessage']}")
+            if status.get("errorMessage") and status.get("errorMessage") != error:
+                dash.stop_op_mode()  # a new error since INIT (the robot's older global error is not ours)
+                raise RobotLinkError(f"the robot reports an error: {status['errorMessage']}; stop sent")
             if ok(status):
-                return
+                return True
             time.sleep(0.05)
-        if not self._stop.is_set():
+        if not self._stop.is_set() and not is_idle(status):
             dash.stop_op_mode()
-            raise RobotLinkError(f"{self.data.opmode} did not {what} within {self.timeout:g} s; stop sent")
+            raise RobotLinkError(f"{self.data.opmode} did not {what} within {self.timeout:g} s "
+                                 f"({status.get('activeOpMode')} is active); stop sent")
+        self.data.stop_reason_note = f"the robot's status never showed {self.data.opmode}"
+        return False
 
     def _watch(self, dash: Dashboard) -> None:
         """Until the time is up, Stop, or the connection is lost: poll the status (battery, heartbeat)."""
@@ -189,7 +203,7 @@ class Recorder:
             latest = dash._latest.get("RECEIVE_ROBOT_STATUS", (0, {}))[1].get("status") or {}
             if isinstance(latest, dict):
                 self._battery = float(latest.get("batteryVoltage", self._battery))
-                if self._recording and latest.get("activeOpMode") not in (None, self.data.opmode):
+                if self._recording and self._seen_active and latest.get("activeOpMode") not in (None, self.data.opmode):
                     self.stop("the OpMode ended on the robot")
                     return
 
@@ -219,6 +233,8 @@ class Recorder:
                 self._watch(dash)
             if not self.data.stop_reason:
                 self.data.stop_reason = self._stop_reason or "stopped"
+            if self.data.stop_reason_note:
+                self.data.stop_reason += f" ({self.data.stop_reason_note})"
             self._final_stop(dash)
         except _Lost as lost:
             self._recording = False

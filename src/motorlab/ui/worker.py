@@ -171,10 +171,11 @@ def _curve(resp: Any, per: float) -> dict[str, Any]:
 
 
 def response(argv: Sequence[str]) -> dict[str, Any]:
-    """The step and profile responses of ``motorlab tune ARG...`` as curves.
+    """The step and profile responses of ``motorlab tune ARG...`` as curves, with the tune JSON.
 
-    The CLI's own ``run`` designs the loop (so the options mean exactly what they mean there); the
-    :class:`~motorlab.control.tune.TuneResult` it computes is caught on its way to the printing.
+    The CLI's own ``run`` designs the loop (so the options mean exactly what they mean there) and
+    prints its JSON (returned under ``"tune"``: the page needs one run for the gains and the plot);
+    the :class:`~motorlab.control.tune.TuneResult` it computes is caught on its way to the printing.
     """
     import contextlib
     import io
@@ -183,7 +184,7 @@ def response(argv: Sequence[str]) -> dict[str, Any]:
     from motorlab.cli import build_parser
 
     args = build_parser().parse_args(["tune", *argv])
-    args.json, args.emit, args.plot = False, None, None
+    args.json, args.plot = True, None
     caught: list[Any] = []
     design = cli_tune.tune
 
@@ -191,9 +192,10 @@ def response(argv: Sequence[str]) -> dict[str, Any]:
         caught.append(design(*a, **k))
         return caught[-1]
 
+    printed = io.StringIO()
     cli_tune.tune = catch  # type: ignore[assignment]
     try:
-        with contextlib.redirect_stdout(io.StringIO()):
+        with contextlib.redirect_stdout(printed):
             cli_tune.run(args)
     finally:
         cli_tune.tune = design  # type: ignore[assignment]
@@ -201,6 +203,7 @@ def response(argv: Sequence[str]) -> dict[str, Any]:
     per = result._display_per_radian()
     quantity = "velocity" if result.gains.loop == "velocity" else "position"
     return {
+        "tune": json.loads(printed.getvalue()),  # what `motorlab tune ... --json` prints, so one run gives both
         "loop": result.gains.loop,
         "unit": result.target.units[quantity],
         "step": _curve(result.step, per),

@@ -153,10 +153,9 @@ async function compute(ctx, out, list) {
   out.status.textContent = "computing the gains…";
   out.error.textContent = "";
   try {
-    const [d, curves] = await Promise.all([
-      runRequest("api/tune", tuneForm(ctx, list, { emit: g.language }), { signal }),
-      post("api/tune/response", tuneForm(ctx, list), { signal }).catch((e) => (isAbort(e) ? Promise.reject(e) : null)),
-    ]);
+    // one run gives the gains (the CLI's tune JSON) and the simulated responses to plot
+    const curves = await post("api/tune/response", tuneForm(ctx, list, { emit: g.language }), { signal });
+    const d = curves.tune || await runRequest("api/tune", tuneForm(ctx, list, { emit: g.language }), { signal });
     g.last = d; save();
     out.result.replaceChildren(gainsTable(d),
       el("ul", { class: "notes" }, [...d.conversion, ...d.notes].map((n) => el("li", { text: plain(n) }))),

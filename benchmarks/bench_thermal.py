@@ -1,0 +1,55 @@
+"""Heat (issue 23): targets
+
+- a 300 s locked-rotor run fits (analyze stall) in under 2 s;
+- a forecast (simulate stall --params) in under 0.2 s;
+- the heated simulator: 300 s of a stalled motor on the virtual dynamometer (for reference).
+
+Runs on a real 300 s export (VEX's BAG at 4 V) when ../shared/data/real/dyno is beside the clone, else on a
+simulated one.
+"""
+
+from __future__ import annotations
+
+import json
+import tempfile
+import time
+from pathlib import Path
+
+from motorlab.analyses.stall import stall
+from motorlab.experiments.stall import read_runs
+from motorlab.rig import VirtualRig
+from motorlab.stall_forecast import forecast, load_fit
+
+HERE = Path(__file__).resolve().parents[1]
+REAL = [HERE.parent / "shared/data/real/dyno", HERE.parent.parent / "shared/data/real/dyno"]
+
+
+def best_of(n: int, fn) -> float:
+    times = []
+    for _ in range(n):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return min(times)
+
+
+def main() -> None:
+    with tempfile.TemporaryDirectory() as tmp:
+        rig = VirtualRig("neverest40", noise_seed=1)
+        t_rig = best_of(1, lambda: rig.stall(Path(tmp) / "s.csv", voltage=6.0, duration=300.0))
+        real = next((d / "bag-locked-rotor-data-4v-20151207.csv" for d in REAL if d.is_dir()), None)
+        path = str(real) if real is not None else str(Path(tmp) / "s.csv")
+        rec = read_runs([path])[0]
+        result = stall(rec)
+        t_fit = best_of(3, lambda: stall(rec))
+        fit = Path(tmp) / "fit.json"
+        fit.write_text(json.dumps(result.to_dict()))
+        model = load_fit(fit)
+        t_fc = best_of(5, lambda: forecast(model, 12.0, 300.0))
+    print(f"fit of a 300 s stall run ({Path(path).name}, {result.n_points} samples): {t_fit:8.3f} s   (target < 2 s)")
+    print(f"forecast, 300 s at 0.1 s with the answers:          {t_fc * 1e3:8.1f} ms  (target < 200 ms)")
+    print(f"virtual dynamometer, 300 s stalled and heating:     {t_rig:8.2f} s")
+
+
+if __name__ == "__main__":
+    main()
