@@ -345,3 +345,10 @@ def test_free_spinup_without_a_cpr_names_the_file(tmp_path: Path, capsys) -> Non
     path = Path(run_.paths[0])
     path.write_text("".join(line for line in path.read_text().splitlines(keepends=True) if "cpr" not in line))
     refused(capsys, "analyze", "free-spinup", path, "--K", "0.7", "--current", "0.5 A", mentions=f"{path}: the file")
+
+
+def test_a_blank_output_name_is_refused(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys) -> None:
+    """Found by the fuzz run: ``simulate -o ' '`` wrote a file named by one space."""
+    monkeypatch.chdir(tmp_path)
+    refused(capsys, "simulate", "torque", "--motor", "neverest40", "-o", " ", mentions="blank")
+    assert list(tmp_path.iterdir()) == []

@@ -316,8 +316,12 @@ def judge(case: Case, code: int, stdout: str, stderr: str, before: dict[str, str
     if changed:
         return "modified-input", ", ".join(changed[:3])
     created = sorted(set(after) - set(before))
-    allowed = [o.rstrip("/") for o in case.outputs if o.strip(" ./")]
-    stray = [n for n in created if not any(n == o or n.startswith(o + "/") or o.startswith(n + "/") for o in allowed)]
+    if any(o.strip() in (".", "./") for o in case.outputs):
+        allowed = [""]  # the folder itself is the output folder asked for: anything new is an output
+    else:
+        allowed = [o.rstrip("/") for o in case.outputs if o.strip(" ./")]
+    stray = [n for n in created if not any(o == "" or n == o or n.startswith(o + "/") or o.startswith(n + "/")
+                                           for o in allowed)]
     hidden = [n for n in created if Path(n).name.startswith(".") or ".tmp" in Path(n).name]
     if temp:
         return "stray-output", f"left in the temporary folder: {', '.join(p.name for p in temp[:3])}"

@@ -47,8 +47,10 @@ def check_writable_target(path: PathArg) -> None:
     Raises
     ------
     OptionError
-        Naming the path and what it is.
+        Naming the path and what it is; an empty or blank name ("-o ' '": a typo, not a file name).
     """
+    if not os.path.basename(os.fspath(path)).strip():
+        raise OptionError(f"{os.fspath(path)!r}: the output file name is empty or blank")
     try:
         info = os.stat(path)  # through a symbolic link: what it points to counts
     except OSError:
