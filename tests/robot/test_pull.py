@@ -93,3 +93,19 @@ def test_output_that_is_a_file_is_refused(robot: EmulatedRobot, tmp_path: Path,
     assert _pull(robot, target) == 2
     assert "not a folder" in capsys.readouterr().err
     assert target.read_text() == "keep me"
+
+
+def test_a_half_written_file_on_the_robot_comes_back_as_it_is(tmp_path: Path,
+                                                              capsys: pytest.CaptureFixture[str]) -> None:
+    """A ramp file cut short on the robot (the OpMode killed while saving) is pulled byte for byte and named as
+    not readable, with the reader's reason; nothing is repaired or dropped."""
+    folder = tmp_path / "sdcard"
+    folder.mkdir()
+    cut = folder / "1732521600000.json"
+    cut.write_bytes(b'{\n  "type" : "MECANUM",\n  "forwardEncPositions" : [ {\n    "times" : [ 0.01, 0.02')
+    with EmulatedRobot(RobotFiles({"forward-ramp": [cut]}), dashboard=False, lifetime=20) as robot:
+        assert _pull(robot, tmp_path / "out", "--json") == 0
+    entry = json.loads(capsys.readouterr().out)["files"][0]
+    assert (tmp_path / "out" / "tuning" / "forward-ramp" / cut.name).read_bytes() == cut.read_bytes()
+    assert entry["command"] is None
+    assert "not" in entry["note"]

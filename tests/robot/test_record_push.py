@@ -234,3 +234,26 @@ def test_ctrl_c_stops_the_robot_and_keeps_the_log(robot: EmulatedRobot, tmp_path
     assert latency < 0.1, latency
     assert proc.returncode == 0, err
     assert "Ctrl-C" in log.read_text()
+
+
+def test_telemetry_without_numbers_is_one_line(tmp_path: Path) -> None:
+    from motorlab.robot.record import Recording, write_log
+
+    data = Recording("Words", rows=[(1000, 12.5, {"state": "ramping"}), (1010, 12.5, {"state": "done"})],
+                     keys=["state"], skipped={"state": "ramping"}, stop_reason="1 s elapsed")
+    with pytest.raises(RobotLinkError, match="no telemetry key of Words is a number"):
+        write_log(data, tmp_path / "x.csv")
+    with pytest.raises(RobotLinkError, match="sent no telemetry"):
+        write_log(Recording("Quiet", stop_reason="1 s elapsed"), tmp_path / "x.csv")
+    assert not (tmp_path / "x.csv").exists()
+
+
+@pytest.mark.parametrize(("key", "column"), [
+    ("voltage", "voltage_V"), ("Applied Voltage", "voltage_V"), ("voltage_V", "voltage_V"),
+    ("battery voltage", "battery_V"), ("position", "position_counts"), ("encoder position", "position_counts"),
+    ("position_rad", "position_rad"), ("velocity", "x_velocity"), ("loop time (ms)", "x_loop_time_ms"),
+])
+def test_telemetry_keys_become_columns(key: str, column: str) -> None:
+    from motorlab.robot.record import column_for
+
+    assert column_for(key) == column
