@@ -1,39 +1,24 @@
-"""Scale (issue 14): time and peak memory of every analysis on logs of 10k, 100k, 1M and 2M rows.
+"""Scale (issues 14 and 25): time and peak memory of every analysis on logs of 10k to 2M rows and on
+scope waveform exports of 12 and 24 Mpts.
 
-Targets: any analysis on 2M rows within 10 s and 500 MB peak resident memory. Each run is
-``motorlab analyze EXPERIMENT FILE --json`` in a fresh Python process (so the peak is the command's
-own, imports included); the files are written first, in the formats a real rig writes:
+Targets: any analysis on 2M rows within 10 s and 500 MB peak resident memory; a 24 Mpt waveform
+export through free-spinup within 20 s and 500 MB. Each run is ``motorlab analyze EXPERIMENT FILE
+--json`` in a fresh Python process (so the peak is the command's own, imports included); the files
+are written first, into a temporary folder under /tmp (never kept), in the formats a real rig writes:
 
 - spindown, spinup: FTC OpMode logs from the exact simulator (flywheel rig, 1 ms log period);
 - identify: the virtual rig's transient CSV (1 kHz); pulse: its scope CSV (four periods of 2 s);
+  pulse-24: the same with 24 periods (48 regions, 51 fitted parameters);
 - free-spinup: scope cursor times of n rising edges of a constant-current spin-up (closed form);
 - feedforward: a SysId JSON whose four tests follow the feedforward model (closed form, 10 ms rows);
-- terminal, lcr, torque, amplifier, tachometer: tables of n readings around the model's line.
+- terminal, lcr, torque, amplifier, tachometer: tables of n readings around the model's line;
+- waveform: free-spinup on a Rigol DS1054Z export of n samples of one encoder channel.
 
-    python benchmarks/bench_scale.py [SIZES...] [--only spindown,identify]
+    python benchmarks/bench_scale.py [SIZES...] [--only=spindown,identify] [--waveform=12e6,24e6]
 
-prints one table row per analysis and size: seconds, peak MiB (VmHWM of the command's own process,
-imports included: about 115 MiB of it is Python, numpy, scipy and pint) and the exit code.
-
-Measured on the project's shared 2-core machine (seconds, peak MiB), after issue 14:
-
-    analysis        10k          100k         1M           2M
-    spindown     1.2 / 122    2.5 / 158    2.8 / 228    4.9 / 310
-    spinup       0.9 / 118    1.3 / 144    2.2 / 205    2.7 / 302
-    identify     1.1 / 128    2.9 / 168    8.2 / 241   10.0 / 291
-    pulse        1.3 / 121    3.4 / 161    5.8 / 193    4.5 / 236
-    free-spinup  1.0 / 117    1.4 / 132    1.8 / 297    1.5 / 185 (after the scope fast path)
-    feedforward  1.1 / 121    2.0 / 195    4.5 / 245    4.9 / 383
-    terminal     1.2 / 114    1.4 / 129    2.7 / 273    2.6 / 433
-    lcr          1.2 / 114    1.0 / 131    2.8 / 304    2.8 / 496
-    torque       1.0 / 114    1.5 / 128    4.1 / 258    4.1 / 405
-    amplifier    1.0 / 114    1.0 / 128    1.5 / 250    2.6 / 388
-    tachometer   1.6 / 114    1.2 / 128    1.5 / 258    2.8 / 403
-
-Time grows about linearly with the rows read (the readers parse in C; the time-series fits see at
-most 50 000 block means); memory grows linearly, about 100–190 bytes per row at 2M rows above the
-115 MiB of imports (the tables' analyses keep a dozen n-long arrays). Before: identify 42 s and
-3.0 GB, lcr 5.9 GB, terminal 2.6 GB, pulse 203 s on 2M rows (the issue's figures).
+prints one table row per analysis and size: wall seconds, CPU seconds, peak MiB (VmHWM of the
+command's own process, imports included: about 85–115 MiB of it is Python, numpy, scipy and pint)
+and the exit code. The figures of issue 25, before and after, are in docs/formats.md ("Large files").
 """
 
 from __future__ import annotations

@@ -347,9 +347,13 @@ def characterize(
         Per-unit fits, combined parameters, disagreements, failures, truth (simulated sessions)
         and the fleet summary.
     """
+    from motorlab import progress as reports
+
     units: dict[str, UnitResult] = {}
-    for name, spec in session.units.items():
-        units[name] = _characterize_unit(session, spec, progress)
+    with reports.task("Characterising the units", total=len(session.units), unit="unit") as task:
+        for name, spec in session.units.items():
+            units[name] = _characterize_unit(session, spec, _reporting(task, len(units), progress))
+            task.update(len(units), detail=f"unit {spec.display_name} done")
     threshold = DEFAULT_THRESHOLD if session.fleet_threshold is None else session.fleet_threshold
     fleet = fleet_summary(
         {n: u.estimates() for n, u in units.items()},
@@ -362,6 +366,18 @@ def characterize(
     if control:
         result.gains = _controller_gains(result, plot=figures)
     return result
+
+
+def _reporting(task: Any, done: int, progress: Progress | None) -> Progress:
+    """A ``progress(unit, experiment)`` callback that also reports through :mod:`motorlab.progress`."""
+
+    def report(unit: str, experiment: str) -> None:
+        if experiment:
+            task.update(done, detail=f"unit {unit}: {experiment}")
+        if progress is not None:
+            progress(unit, experiment)
+
+    return report
 
 
 def _characterize_unit(session: Session, spec: UnitSpec, progress: Progress | None) -> UnitResult:

@@ -351,13 +351,16 @@ def speed_lag(gains: Gains, tests: Sequence[ScoreTest], *, max_rows: int = 40) -
     """
     sims = [simulate_gains(gains[0], gains[1], gains[2], t)[0] for t in tests]
     errors = []
-    for k in range(max_rows + 1):
-        num = sum(float(np.sum((t.velocity[k:] - s[:s.size - k]) ** 2)) for t, s in zip(tests, sims, strict=True))
-        den = sum(max(t.time.size - k, 0) for t in tests)
-        errors.append(math.sqrt(num / max(den, 1)))
+    with np.errstate(over="ignore", invalid="ignore"):  # absurd speeds: an infinite error, not a warning
+        for k in range(max_rows + 1):  # a test shorter than the shift adds nothing (not a mismatched slice)
+            num = sum(float(np.sum((t.velocity[k:] - s[: max(s.size - k, 0)]) ** 2))
+                      for t, s in zip(tests, sims, strict=True))
+            den = sum(max(t.time.size - k, 0) for t in tests)
+            errors.append(math.sqrt(num / den) if den else math.inf)
     best = int(np.argmin(errors))
     dt = float(np.median(np.concatenate([np.diff(t.time) for t in tests])))
-    return best * dt, errors[best] / errors[0] if errors[0] > 0 else 1.0
+    ratio = errors[best] / errors[0] if 0 < errors[0] < math.inf else 1.0
+    return best * dt, ratio
 
 
 def residual_diagnostics(gains: Gains, tests: Sequence[ScoreTest]) -> dict[str, float]:

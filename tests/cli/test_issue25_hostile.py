@@ -68,28 +68,44 @@ def refused(capsys: pytest.CaptureFixture[str], *argv: object, mentions: str = "
 # ---- power towers: bounded work wherever a quantity is parsed ------------------------------------------
 
 
-def _cli_in_child(argv: list[str], env: dict[str, str] | None = None) -> subprocess.Popen[str]:
-    return subprocess.Popen([sys.executable, "-m", "motorlab", *argv], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True, env={**os.environ, **(env or {})})
+_THREE_RUNS = """
+import contextlib, io, json, os, sys
+from motorlab import cli
+out = []
+for argv, env in json.loads(sys.argv[1]):
+    os.environ.update(env)
+    err = io.StringIO()
+    with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+        try:
+            code = cli.main(argv)
+        except SystemExit as exc:
+            code = exc.code
+    for key in env:
+        del os.environ[key]
+    out.append([code, err.getvalue()])
+print(json.dumps(out))
+"""
 
 
 def test_a_power_tower_is_refused_at_once_everywhere(rig, tmp_path: Path) -> None:
-    """Option, session file and MOTORLAB_MAX_INPUT_SIZE: each answered within seconds, one line, exit 2."""
+    """Option, session file and MOTORLAB_MAX_INPUT_SIZE: each answered at once, one line, exit 2.
+
+    In one child process with a time limit: before the fix, pint evaluated 9**9**9 and never returned.
+    """
     session = tmp_path / "session.toml"
     session.write_text('[motor]\ncatalog = "neverest40"\n[rig]\nlever_arm = "9**9**9 m"\n'
                        f'[units.A.lcr]\nfiles = ["{rig["lcr"]}"]\n')
-    children = [
-        _cli_in_child(["analyze", "terminal", str(rig["terminal"]), "--K", "9**9**9 V*s/rad"]),
-        _cli_in_child(["characterize", str(session), "-o", str(tmp_path / "out")]),
-        _cli_in_child(["analyze", "lcr", str(rig["lcr"])], env={"MOTORLAB_MAX_INPUT_SIZE": "9**9**9"}),
+    runs = [
+        (["analyze", "terminal", str(rig["terminal"]), "--K", "9**9**9 V*s/rad"], {}),
+        (["characterize", str(session), "-o", str(tmp_path / "out")], {}),
+        (["analyze", "lcr", str(rig["lcr"])], {"MOTORLAB_MAX_INPUT_SIZE": "9**9**9"}),
     ]
-    try:
-        results = [child.communicate(timeout=60) for child in children]
-    finally:
-        for child in children:
-            child.kill()
-    for child, (_out, err) in zip(children, results, strict=True):
-        assert child.returncode == 2, err
+    done = subprocess.run([sys.executable, "-c", _THREE_RUNS, json.dumps(runs)], capture_output=True, text=True,
+                          timeout=120, check=False, env={**os.environ, "MPLBACKEND": "Agg"})
+    assert done.returncode == 0, done.stderr
+    results = json.loads(done.stdout)
+    for code, err in results:
+        assert code == 2, err
         assert len(err.strip().splitlines()) == 1, err
     assert "--K" in results[0][1]
     assert "power of a power" in results[0][1]
@@ -303,3 +319,29 @@ def test_scale_factors_outside_any_rig_are_refused(value: str, rig, tmp_path: Pa
         "spindown", tmp_path / "spindown.txt", on_time=5.0, coast_time=10.0).paths[0]
     refused(capsys, "analyze", "spindown", spindown, "--cpr", "1120", "--disc-radius", "75 mm",
             "--disc-thickness", "50 mm", "--ratio", value, mentions="--ratio")
+
+
+def test_the_speed_lag_of_tests_shorter_than_the_shift(tmp_path: Path, capsys) -> None:
+    """Found by the fuzz run: a truncated .wpilog left a 25-row test, and the lag search sliced past it
+    (``ValueError: operands could not be broadcast``, an internal error)."""
+    import numpy as np
+
+    from motorlab.sysid_score import ScoreTest, speed_lag
+
+    t = np.linspace(0.0, 0.5, 25)
+    test = ScoreTest("dynamic-forward", t, np.full(25, 6.0), 0.5 * t**2, t.copy())
+    lag, ratio = speed_lag((0.1, 1.0, 0.1), [test], max_rows=40)
+    assert lag >= 0.0
+    assert 0.0 < ratio <= 1.0
+    failure = Path(__file__).parents[1] / "data" / "fuzz" / "truncated-sysid.wpilog"
+    code, _out, err = run(capsys, "analyze", "feedforward", failure, "--json")
+    assert code in (0, 2), err
+    assert "internal error" not in err
+
+
+def test_free_spinup_without_a_cpr_names_the_file(tmp_path: Path, capsys) -> None:
+    """Found by the fuzz run: a cursor-time file that lost its '# cpr:' line got a refusal naming no file."""
+    run_ = VirtualRig("neverest40", unit_seed=1, noise_seed=7).free_spinup(tmp_path / "edges.csv")
+    path = Path(run_.paths[0])
+    path.write_text("".join(line for line in path.read_text().splitlines(keepends=True) if "cpr" not in line))
+    refused(capsys, "analyze", "free-spinup", path, "--K", "0.7", "--current", "0.5 A", mentions=f"{path}: the file")

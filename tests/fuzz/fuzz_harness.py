@@ -370,7 +370,9 @@ def _judge_outputs(case: Case, stdout: str, verdict: str, work: Path) -> tuple[s
 
 
 def _judge_session(case: Case, verdict: str, work: Path) -> tuple[str, str]:
-    given = [case.argv[k + 1] for k, a in enumerate(case.argv[:-1]) if a in ("-o", "--output")]
+    given = [case.argv[k + 1] if a in ("-o", "--output") else a.split("=", 1)[1]
+             for k, a in enumerate(case.argv) if (a in ("-o", "--output") and k + 1 < len(case.argv))
+             or a.startswith(("--output=", "-o="))]
     out = given[-1] if given else None  # argparse keeps the last
     if out is None:
         return verdict, ""

@@ -246,3 +246,14 @@ def test_telemetry_without_numbers_is_one_line(tmp_path: Path) -> None:
     with pytest.raises(RobotLinkError, match="sent no telemetry"):
         write_log(Recording("Quiet", stop_reason="1 s elapsed"), tmp_path / "x.csv")
     assert not (tmp_path / "x.csv").exists()
+
+
+@pytest.mark.parametrize(("key", "column"), [
+    ("voltage", "voltage_V"), ("Applied Voltage", "voltage_V"), ("voltage_V", "voltage_V"),
+    ("battery voltage", "battery_V"), ("position", "position_counts"), ("encoder position", "position_counts"),
+    ("position_rad", "position_rad"), ("velocity", "x_velocity"), ("loop time (ms)", "x_loop_time_ms"),
+])
+def test_telemetry_keys_become_columns(key: str, column: str) -> None:
+    from motorlab.robot.record import column_for
+
+    assert column_for(key) == column

@@ -99,9 +99,12 @@ def test_hostile_file_gets_a_4xx_json_error(server: Any, name: str) -> None:
     _alive(server)
 
 
-def test_file_names_stay_inside_the_private_folder(server: Any, tmp_path: Path) -> None:
+def test_file_names_stay_inside_the_private_folder(server: Any, tmp_path: Path,
+                                                  monkeypatch: pytest.MonkeyPatch) -> None:
     import tempfile
 
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path / "tmp"))  # not /tmp: other test runs share it
+    (tmp_path / "tmp").mkdir()
     before = set(os.listdir(tempfile.gettempdir()))
     names = ["../../escape.txt", "/etc/passwd", "..\\..\\win.txt", "a/../../b.txt", "..", ""]
     files = [("file", (n, b"time,position\n")) for n in names]
@@ -260,11 +263,11 @@ def test_schema_is_the_descriptions_and_agrees_with_the_cli_parsers() -> None:
 def test_time_limit_ends_the_command(server: Any, sim_session: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     from motorlab.ui import runner
 
-    monkeypatch.setattr(runner, "TIME_LIMIT", 0.2)  # shorter than Python's own start-up
+    monkeypatch.setattr(runner, "TIME_LIMIT", 0.05)  # shorter than reading its job and the file
     with open(sim_session / "A" / "lcr.csv", "rb") as handle:
         response = httpx.post(f"{server.url}/api/analyze/lcr", files=[("file", ("lcr.csv", handle))], timeout=60)
     assert response.status_code == 422
-    assert "0.2 s" in response.json()["error"]
+    assert "0.05 s" in response.json()["error"]
     monkeypatch.undo()
     _alive(server)
 

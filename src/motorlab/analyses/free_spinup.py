@@ -67,7 +67,8 @@ def _checked_options(
             raise OptionError(f"the file's '# cpr:' line: {exc.message}", path=edges.source or None) from None
     if edges_per_revolution is None:
         if cpr is None:
-            raise OptionError("give the encoder's counts per revolution (--cpr) or --edges-per-rev")
+            raise OptionError("the file has no '# cpr:' line: give the encoder's counts per revolution (--cpr) or "
+                              "--edges-per-rev", path=edges.source or None)
         edges_per_revolution = cpr / 4.0
     return se, cpr, edges_per_revolution
 

@@ -104,39 +104,20 @@ def report_failures(result: Any, paths: dict[str, Any]) -> int:
 
 
 def run_with_progress(session: Any, *, quiet: bool = False, figures: bool = True) -> Any:
-    """:func:`motorlab.characterize.characterize` with a rich progress bar on stderr (unless quiet)."""
-    from rich.console import Console
+    """:func:`motorlab.characterize.characterize`; it reports its progress through :mod:`motorlab.progress`.
 
+    The CLI's reporter shows a bar on a terminal (after 2 s), or JSON lines for the app
+    (``MOTORLAB_PROGRESS=json``, which ``--quiet`` leaves on: the app runs the command quiet).
+    """
+    import os
+
+    from motorlab import progress
     from motorlab.characterize import characterize
 
-    console = Console(stderr=True)
-    if quiet or not console.is_terminal:
-        # A progress bar is for people: redirected, it would only leave a blank line in the log.
-        return characterize(session, figures=figures)
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
-
-    total = sum(len(u.experiments) for u in session.units.values())
-    with Progress(
-        TextColumn("[bold]{task.description}"),
-        BarColumn(),
-        MofNCompleteColumn(),
-        TimeElapsedColumn(),
-        console=console,
-        transient=True,
-    ) as progress:
-        task = progress.add_task("characterising", total=total)
-        started = {"count": 0}
-
-        def step(unit: str, experiment: str) -> None:
-            if experiment:
-                if started["count"]:
-                    progress.advance(task)
-                started["count"] += 1
-                progress.update(task, description=f"unit {unit}: {experiment}")
-
-        result = characterize(session, progress=step, figures=figures)
-        progress.update(task, completed=total)
-    return result
+    if quiet and os.environ.get("MOTORLAB_PROGRESS") != "json":
+        with progress.reporting(None):
+            return characterize(session, figures=figures)
+    return characterize(session, figures=figures)
 
 
 def print_table(result: Any, *, truth: bool = True) -> None:

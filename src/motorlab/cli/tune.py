@@ -65,7 +65,7 @@ def run(args: argparse.Namespace) -> int:
         qp=args.qp,
         qv=args.qv,
         r=args.r,
-        period=args.period,
+        period=TARGET_INFO[args.target].period if args.period is None else args.period,
         delay=TARGET_INFO[args.target].delay if args.delay is None else args.delay,
         rise_time=args.rise_time,
         overshoot=args.overshoot,

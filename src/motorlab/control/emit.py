@@ -58,6 +58,10 @@ def emit_snippet(tg: TargetGains, language: str = "java") -> str:
         raise OptionError(f"unknown language {language!r} (expected one of {', '.join(LANGUAGES)})")
     if language == "python" and (tg.target.startswith("ftc") or tg.target in ("roadrunner", "pedro")):
         raise OptionError("FTC SDK OpModes are written in Java or Kotlin: use --emit java or --emit kotlin")
+    if language != "java" and tg.target in ("phoenix5", "spark", "spark-data-port"):
+        raise OptionError(f"the {tg.target} snippet is Java (the vendor's examples): use --emit java")
+    if language == "kotlin" and tg.target == "phoenix6":
+        raise OptionError("the phoenix6 snippet is Java or Python: use --emit java or --emit python")
     c = _comment(language)
     vel = tg.loop == "velocity"
     head = [
@@ -73,6 +77,10 @@ def emit_snippet(tg: TargetGains, language: str = "java") -> str:
         body = _roadrunner(tg, language)
     elif tg.target == "pedro":
         body = _pedro(tg, language)
+    elif tg.target in ("phoenix6", "phoenix5", "spark", "spark-data-port"):
+        from motorlab.control.emit_vendors import vendor_snippet
+
+        body = vendor_snippet(tg, language)
     else:
         consts = [("kP", "kP", g["kP"]), ("kI", "kI", g["kI"]), ("kD", "kD", g["kD"])]
         consts += [("kS", "kS", ff["kS"]), ("kV", "kV", ff["kV"]), ("kA", "kA", ff["kA"])]

@@ -34,6 +34,9 @@ Targets
     ``TankDrive.Params`` has the same feedforward fields (no ``lateralInPerTick``) but follows paths
     with RAMSETE (``ramseteZeta``, ``ramseteBBar``: the quickstart's values are kept, motorlab does not
     derive them); its turn controller gains ``turnGain``, ``turnVelGain`` take the heading gains' values.
+``phoenix6``, ``phoenix5``, ``spark``, ``spark-data-port``
+    CTRE and REV smart motor controllers, with WPILib SysId's feedback presets' unit conversions,
+    periods and measurement delays (:mod:`motorlab.control.presets`).
 ``pedro``
     Pedro Pathing's tuner constants (Pedro-Pathing/PedroPathing ``MecanumConstants``,
     ``FollowerConstants``; Quickstart ``Tuning.java``): ``xVelocity`` [in/s], the forward speed at full
@@ -58,9 +61,11 @@ from typing import Any
 
 from motorlab.control.design import Feedforward, Gains
 from motorlab.control.plant import MechanismUnits
+from motorlab.control.presets import PRESETS, preset_gains
 from motorlab.errors import OptionError
 
-TARGETS = ("volts", "wpilib", "ftc-power", "ftc-pidf", "roadrunner", "pedro")
+TARGETS = ("volts", "wpilib", "ftc-power", "ftc-pidf", "roadrunner", "pedro", "phoenix6", "phoenix5", "spark",
+           "spark-data-port")
 
 
 @dataclass(frozen=True)
@@ -70,7 +75,8 @@ class TargetInfo:
     ``label`` names it in words, ``units`` says what its gains are in, ``needs`` lists the options
     it cannot do without (``cpr``, ``wheel-radius``), ``loops`` the loops it runs, ``languages``
     the ``--emit`` languages it has snippets for, ``delay`` its measurement delay [s] when
-    ``--delay`` is not given (SysId's presets).
+    ``--delay`` is not given and ``period`` its controller period [s] when ``--period`` is not
+    (SysId's presets, :mod:`motorlab.control.presets`).
     """
 
     key: str
@@ -80,10 +86,12 @@ class TargetInfo:
     loops: tuple[str, ...] = ("velocity", "position")
     languages: tuple[str, ...] = ("java", "kotlin", "python")
     delay: float = 0.0
+    period: float = 0.02
 
     def to_dict(self) -> dict[str, Any]:
         return {"key": self.key, "label": self.label, "units": self.units, "needs": list(self.needs),
-                "loops": list(self.loops), "languages": list(self.languages), "delay": self.delay}
+                "loops": list(self.loops), "languages": list(self.languages), "delay": self.delay,
+                "period": self.period}
 
 
 _FTC = ("java", "kotlin")
@@ -100,6 +108,19 @@ TARGET_INFO: dict[str, TargetInfo] = {t.key: t for t in (
     TargetInfo("roadrunner", "Road Runner 1.0 drive", "volts per encoder tick", needs=("cpr",), languages=_FTC),
     TargetInfo("pedro", "Pedro Pathing follower", "inches and motor power", needs=("wheel-radius",),
                languages=_FTC),
+    TargetInfo("phoenix6", "CTRE Phoenix 6 (TalonFX, Kraken)", "volts per rotation, rotations per second",
+               languages=("java", "python"), delay=PRESETS["phoenix6"].measurement_delay,
+               period=PRESETS["phoenix6"].period),
+    TargetInfo("phoenix5", "CTRE Phoenix 5 (Talon SRX, Victor SPX), native units",
+               "output (1023 = full) per encoder tick, ticks per 100 ms", needs=("cpr",), languages=("java",),
+               delay=PRESETS["phoenix5"].measurement_delay, period=PRESETS["phoenix5"].period),
+    TargetInfo("spark", "REV SPARK MAX / SPARK Flex, the brushless motor's own encoder",
+               "duty cycle per rotation, per RPM", languages=("java",), delay=PRESETS["spark"].measurement_delay,
+               period=PRESETS["spark"].period),
+    TargetInfo("spark-data-port", "REV SPARK MAX / SPARK Flex, an encoder on the data or brushed-encoder port",
+               "duty cycle per rotation, per RPM", languages=("java",),
+               delay=PRESETS["spark-data-port"].measurement_delay,
+               period=PRESETS["spark-data-port"].period),
 )}
 
 #: Metres per inch.
@@ -237,6 +258,10 @@ def to_target(
         }
         g_user, ff_user = gains.scaled(n).to_dict(), feedforward.scaled(n).to_dict()
         return TargetGains(target, loop, g_user, ff_user, unit_map, conv, [], feedforward, gains.period, voltage)
+    if target in PRESETS:
+        g, ff, unit_map, conv, notes = preset_gains(gains, feedforward, target, units, voltage)
+        applied = Feedforward(feedforward.kS, feedforward.kV, feedforward.kA if target == "phoenix6" else 0.0)
+        return TargetGains(target, loop, g, ff, unit_map, conv, notes, applied, gains.period, voltage)
     if target == "roadrunner":
         return _roadrunner(gains, feedforward, units, voltage, geometry or {})
     if target == "pedro":

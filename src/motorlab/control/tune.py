@@ -121,7 +121,9 @@ class TuneResult:
         }
 
     def _display_per_radian(self) -> float:
-        if self.target.target.startswith("ftc") or self.target.target == "roadrunner":
+        if self.target.target in ("phoenix6", "spark", "spark-data-port"):
+            return 1 / (2 * math.pi)  # rotations
+        if self.target.target.startswith("ftc") or self.target.target in ("roadrunner", "phoenix5"):
             return (self.units.cpr or 2 * math.pi) / (2 * math.pi)
         if self.target.target == "pedro":
             return self.units.per_radian / 0.0254  # inches

@@ -51,8 +51,9 @@ def tune_options(targets: tuple[str, ...]) -> tuple[Option, ...]:
                label="Velocity error tolerance", help="LQR: the velocity error the loop may keep, in the length unit"),
         Option("r", "V", positive=True, default=7.0, group=_DESIGN, label="Control effort tolerance",
                help="LQR: the voltage the loop may spend on an error"),
-        Option("period", "s", positive=True, default=0.02, group=_DESIGN, label="Controller period",
-               help="how often the controller runs"),
+        Option("period", "s", positive=True, group=_DESIGN, label="Controller period",
+               help="how often the controller runs; left empty: the target's (20 ms; 1 ms on a CTRE or REV "
+                    "controller, as SysId's presets)"),
         Option("delay", "s", nonnegative=True, group=_DESIGN, label="Measurement delay",
                help="how late the measurement reaches the controller; left empty: the target's own (as "
                     "SysId's presets), 0 for volts"),

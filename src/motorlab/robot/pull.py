@@ -44,8 +44,10 @@ TUNING_TYPES = ("forward-ramp", "lateral-ramp", "angular-ramp", "accel")
 MOTORLAB_LIST = "/motorlab/logs"
 MOTORLAB_DOWNLOAD = "/motorlab/logs/download"
 
-#: One entry of Road Runner's ``/logs`` page (LogFiles.registerRoutes in FileServing.kt).
-_LOG_ENTRY = re.compile(r'<li><a href="/logs/download\?file=([^"]*)" download="[^"]*">[^<]*</a> \((\d+) bytes\)</li>')
+#: One entry of Road Runner's ``/logs`` page (LogFiles.registerRoutes in FileServing.kt):
+#: ``<li><a href="/logs/download?file=NAME" download="NAME">NAME</a> (SIZE bytes)</li>``; read loosely
+#: (the link, then the size if it follows) so that a page written a little differently still lists its files.
+_LOG_ENTRY = re.compile(r'href="/logs/download\?file=([^"]*)"[^>]*>[^<]*</a>(?:\s*\((\d+) bytes\))?')
 #: A name the robot may give: one path component, no separators, nothing hidden.
 _SAFE_NAME = re.compile(r"^[^/\\\x00-\x1f]{1,255}$")
 
@@ -152,7 +154,7 @@ def _flight_logs(robot: RobotHttp, result: PullResult, out: Path) -> None:
         result.missing.append("no FlightRecorder log list (/logs: 404): the robot has no Road Runner 1.0 "
                               "(its FileServing.kt serves the FlightRecorder logs)")
         return
-    entries = [(html.unescape(m.group(1)), int(m.group(2)))
+    entries = [(html.unescape(m.group(1)), int(m.group(2)) if m.group(2) else None)
                for m in _LOG_ENTRY.finditer(reply.body.decode("utf-8", "replace"))]
     with progress.task("Pulling FlightRecorder logs", total=len(entries), unit="file") as step:
         for name, size in entries:
@@ -168,7 +170,9 @@ def _flight_logs(robot: RobotHttp, result: PullResult, out: Path) -> None:
             step.advance(detail=name)
 
 
-def _size_note(path: str, address: str, listed: int, got: int) -> str | None:
+def _size_note(path: str, address: str, listed: int | None, got: int) -> str | None:
+    if listed is None:
+        return None
     if got < listed:
         raise RobotLinkError(f"{path} from {address}: {got} of the {listed} bytes listed arrived (connection "
                              "dropped?); nothing of it was kept: pull again")

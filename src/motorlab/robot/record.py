@@ -66,6 +66,10 @@ def column_for(key: str) -> str:
     simple = re.sub(r"[\s\-/()]+", "_", key.strip().lower()).strip("_")
     if simple in ALIASES:
         return ALIASES[simple]
+    if "volt" in simple and "batt" not in simple:  # "appliedVoltage", "motor voltage (V)"
+        return "voltage_V"
+    if any(word in simple for word in ("position", "ticks", "encoder")):  # "encoder position", "leftTicks"
+        return "position_counts"
     safe = re.sub(r"[^A-Za-z0-9_.]+", "_", key.strip()).strip("_") or "key"
     return f"x_{safe}"
 

@@ -8,9 +8,11 @@ form whose fields are named as the CLI's long options and run the CLI itself
 
 from __future__ import annotations
 
+import asyncio
+import contextlib
 import json
 import secrets
-from collections.abc import Awaitable, Callable, MutableMapping
+from collections.abc import AsyncIterator, Awaitable, Callable, Coroutine, MutableMapping
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -19,7 +21,7 @@ from starlette.applications import Starlette
 from starlette.datastructures import UploadFile
 from starlette.exceptions import HTTPException
 from starlette.requests import Request
-from starlette.responses import FileResponse, JSONResponse, Response
+from starlette.responses import FileResponse, JSONResponse, Response, StreamingResponse
 from starlette.routing import Mount, Route
 from starlette.staticfiles import StaticFiles
 
@@ -33,6 +35,10 @@ _STATUS = {2: 400, 124: 422}
 
 Scope = MutableMapping[str, Any]
 ASGIApp = Callable[[Scope, Callable[[], Awaitable[Any]], Callable[[Any], Awaitable[None]]], Awaitable[None]]
+
+
+#: The media type of a streamed answer (``Accept: application/x-ndjson``): one JSON object a line.
+NDJSON = "application/x-ndjson"
 
 
 def _error(message: str, status: int = 400) -> JSONResponse:
@@ -102,12 +108,93 @@ async def _argv(request: Request, folder: Path, head: list[str], fields: list[di
     return runner.build_argv(head, fields, values, files.get("file", []))
 
 
+async def _until_disconnect(request: Request, work: Coroutine[Any, Any, runner.Outcome]) -> runner.Outcome | None:
+    """``work``'s outcome, or None when the client went away first (``work`` is cancelled: its child ends)."""
+    task = asyncio.ensure_future(work)
+
+    async def disconnected() -> None:
+        while (await request.receive())["type"] != "http.disconnect":
+            pass
+
+    watcher = asyncio.ensure_future(disconnected())
+    try:
+        await asyncio.wait({task, watcher}, return_when=asyncio.FIRST_COMPLETED)
+    finally:
+        watcher.cancel()
+        if not task.done():
+            task.cancel()
+        with contextlib.suppress(asyncio.CancelledError):
+            await asyncio.gather(task, watcher, return_exceptions=True)
+    return None if task.cancelled() else task.result()
+
+
+Finish = Callable[[runner.Outcome], Response]
+
+
+def _line(obj: Any) -> bytes:
+    return (json.dumps(obj, separators=(",", ":"), allow_nan=False) + "\n").encode()
+
+
+def _as_line(response: Response) -> bytes:
+    """The last line of a stream from the answer the request would get without streaming."""
+    body = json.loads(bytes(response.body))
+    if response.status_code == 200:
+        return _line({"result": body})
+    return _line({"error": body["error"], "status": response.status_code})
+
+
+async def _ndjson(stack: contextlib.ExitStack, argv: list[str], cwd: str, slot: str,
+                  finish: Finish) -> AsyncIterator[bytes]:
+    """``{"progress": {...}}`` lines while the command runs, then ``{"result": ...}`` or ``{"error", "status"}``.
+
+    The response's task is cancelled when the client goes away (Starlette listens for the
+    disconnect): the command's child process is ended then, and the request's folder removed.
+    """
+    reports: asyncio.Queue[dict[str, Any]] = asyncio.Queue()
+    task = asyncio.ensure_future(runner.run_cli(argv, cwd=cwd, slot=slot, on_progress=reports.put_nowait))
+    try:
+        while not task.done():
+            get = asyncio.ensure_future(reports.get())
+            await asyncio.wait({task, get}, return_when=asyncio.FIRST_COMPLETED)
+            if get.done():
+                yield _line({"progress": get.result()})
+            else:
+                get.cancel()
+        while not reports.empty():
+            yield _line({"progress": reports.get_nowait()})
+        yield _as_line(finish(task.result()))
+    finally:
+        if not task.done():
+            task.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await task
+        stack.close()
+
+
+async def _execute(request: Request, stack: contextlib.ExitStack, argv: list[str], folder: Path, *,
+                   slot: str = "short", finish: Finish | None = None) -> Response:
+    """Run ``motorlab argv`` in ``folder`` and answer: the CLI's JSON, or a stream of it with progress.
+
+    ``stack`` holds the request's folder: closed here, or by the stream when it ends.
+    """
+    done = finish or _outcome_response
+    if NDJSON in request.headers.get("accept", ""):
+        moved = stack.pop_all()
+        return StreamingResponse(_ndjson(moved, argv, str(folder), slot, done), media_type=NDJSON,
+                                 headers={"cache-control": "no-store", "x-accel-buffering": "no"})
+    outcome = await _until_disconnect(request, runner.run_cli(argv, cwd=str(folder), slot=slot))
+    if outcome is None:
+        return _error("the client went away; the command was stopped", 499)
+    return done(outcome)
+
+
 async def _run_command(request: Request, head: list[str], fields: list[dict[str, Any]], extra: list[str]) -> Response:
-    with uploads.private_folder() as folder:
+    with contextlib.ExitStack() as stack:
+        folder = stack.enter_context(uploads.private_folder())
         argv = await _argv(request, folder, head, fields)
         if isinstance(argv, Response):
             return argv
-        return _outcome_response(await runner.run_cli([*argv, *extra], cwd=str(folder)))
+        return await _execute(request, stack, [*argv, *extra], folder)
 
 
 def _experiment_fields(request: Request) -> list[dict[str, Any]] | Response:
@@ -186,7 +273,8 @@ def _session_file(files: list[str], values: dict[str, list[str]]) -> str | None:
 
 async def characterize(request: Request) -> Response:
     """A whole session (its TOML and logs, or one zip) → results.json, results.csv and report.html."""
-    with uploads.private_folder() as folder:
+    with contextlib.ExitStack() as stack:
+        folder = stack.enter_context(uploads.private_folder())
         try:
             values, files = await _save_form(request, folder)
         except uploads.UploadError as exc:
@@ -205,17 +293,20 @@ async def characterize(request: Request) -> Response:
             return _error(f"--{refused[0]}: the app sets this option itself")
         out = folder / "_results"
         argv = [*runner.build_argv(["characterize"], fields, values, [session]), "--quiet", f"--output={out}"]
-        outcome = await runner.run_cli(argv, cwd=str(folder))
-        if outcome.code not in (0, 3):
-            return _outcome_response(outcome)
-        body = {
-            "exit_code": outcome.code,
-            "message": outcome.error_line() if outcome.code else "",
-            "results": json.loads((out / "results.json").read_text(encoding="utf-8")),
-            "csv": (out / "results.csv").read_text(encoding="utf-8"),
-            "report_html": (out / "report.html").read_text(encoding="utf-8"),
-        }
-        return JSONResponse(body)
+
+        def finish(outcome: runner.Outcome) -> Response:
+            if outcome.code not in (0, 3):
+                return _outcome_response(outcome)
+            body = {
+                "exit_code": outcome.code,
+                "message": outcome.error_line() if outcome.code else "",
+                "results": json.loads((out / "results.json").read_text(encoding="utf-8")),
+                "csv": (out / "results.csv").read_text(encoding="utf-8"),
+                "report_html": (out / "report.html").read_text(encoding="utf-8"),
+            }
+            return JSONResponse(body)
+
+        return await _execute(request, stack, argv, folder, slot="session", finish=finish)
 
 
 async def api_schema(request: Request) -> Response:
@@ -356,6 +447,7 @@ def create_app(*, host: str = "127.0.0.1", port: int = 8765, token: str | None =
         Route("/api/characterize", characterize, methods=["POST"]),
         *robot.routes(),  # the robot link (issue 24): motorlab.ui.robot
     ]
+    runner.POOL.fill()  # warm child processes, ready before the first click
     return Guard(Starlette(routes=routes), hosts=allowed_hosts(host, port), token=token, max_body=max_body)
 
 

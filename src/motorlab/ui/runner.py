@@ -1,34 +1,60 @@
-"""Run the ``motorlab`` CLI for the app: argv from form fields, a child process, a time limit.
+"""Run the ``motorlab`` CLI for the app: argv from form fields, a warm child process, a time limit.
 
 The app never re-implements a command: it builds the argv the user would type (long option names,
-values as typed, units included) and runs ``python -m motorlab`` on it in a child process, so the
+values as typed, units included) and runs the CLI's own ``main`` on it in a child process, so the
 answer is the CLI's own, byte for byte. A child process (not a thread) because an analysis can be
-stopped only by ending its process: a hostile or huge file gets its time-limit error while the
-event loop keeps serving other requests. A semaphore bounds how many run at once.
+stopped only by ending its process: a hostile or huge file gets its time-limit error, a client that
+went away ends its command, while the event loop keeps serving other requests.
+
+Warm workers: a child process pays Python's start-up and the imports of numpy, scipy, matplotlib
+and motorlab (about 1 s; several on a busy machine) before it can work. :class:`Pool` keeps
+:data:`SPARES` children started ahead (:mod:`motorlab.ui.warm`: imported, waiting for one job on
+stdin); a command takes one, runs in it, and the process exits, so nothing of one request survives
+into the next. The spares are replaced when no command runs (on a two-core laptop a replacement
+importing scipy would slow the commands running); a burst that uses them up runs the rest in fresh
+``python -P -m motorlab`` processes, which import only what their command needs.
+
+Slots: sessions (``characterize``, many seconds) and short commands (one analysis, gains, the
+page's plots) have separate semaphores, so a short analysis never waits behind running sessions.
 """
 
 from __future__ import annotations
 
 import asyncio
+import atexit
+import contextlib
+import json
 import os
+import subprocess
 import sys
+import tempfile
+import threading
 import weakref
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import IO, Any
 
 #: Seconds one command may run before it is ended.
 TIME_LIMIT = 120.0
 
-#: Child processes at once (the others wait their turn).
+#: Short commands (an analysis, gains, plots) at once; the others wait their turn.
 CONCURRENCY = max(1, min(4, os.cpu_count() or 1))
 
+#: Sessions (``characterize``) at once, in their own slots.
+SESSIONS = max(1, min(2, (os.cpu_count() or 1) // 2))
+
+#: Warm child processes kept ready (0, or env ``MOTORLAB_UI_WARM=0``: a fresh ``python -m`` per command).
+SPARES = 2
+
 _TRUE = {"1", "true", "on", "yes"}
+
+#: Environment variables a child must not inherit from the app's own environment.
+_SCRUBBED = ("MOTORLAB_TRACEBACK", "MOTORLAB_PROGRESS")
 
 
 @dataclass(frozen=True)
 class Outcome:
-    """What a command printed and returned."""
+    """What a command printed and returned (progress lines, when streamed, are not in ``stderr``)."""
 
     code: int
     stdout: str
@@ -74,36 +100,174 @@ def build_argv(
     return argv
 
 
-_slots: weakref.WeakKeyDictionary[asyncio.AbstractEventLoop, asyncio.Semaphore] = weakref.WeakKeyDictionary()
+def _child_env() -> dict[str, str]:
+    env = {**os.environ, "MPLBACKEND": "Agg", "PYTHONIOENCODING": "utf-8"}
+    for name in _SCRUBBED:
+        env.pop(name, None)
+    return env
 
 
-def _semaphore() -> asyncio.Semaphore:
-    """The slots of the running event loop (a semaphore belongs to one loop; tests run several servers)."""
+def _warm_enabled() -> bool:
+    return SPARES > 0 and os.environ.get("MOTORLAB_UI_WARM", "1") not in ("0", "false", "no")
+
+
+class Pool:
+    """Warm child processes (:mod:`motorlab.ui.warm`), shared by every event loop of the process."""
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self._spares: list[subprocess.Popen[bytes]] = []
+        self.started = 0  # warm processes started so far (for tests and benchmarks)
+        atexit.register(self.close)
+
+    def _spawn(self) -> subprocess.Popen[bytes]:
+        self.started += 1
+        return subprocess.Popen(
+            [sys.executable, "-P", "-m", "motorlab.ui.warm"], cwd=tempfile.gettempdir(), env=_child_env(),
+            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+        )
+
+    def fill(self) -> None:
+        """Start spares until :data:`SPARES` are ready (or starting)."""
+        if not _warm_enabled():
+            return
+        with self._lock:
+            self._spares = [p for p in self._spares if p.poll() is None]
+            while len(self._spares) < SPARES:
+                self._spares.append(self._spawn())
+
+    def take(self) -> subprocess.Popen[bytes] | None:
+        """A warm process for one job, or None when none is ready (the caller starts a fresh one)."""
+        with self._lock:
+            while self._spares:
+                proc = self._spares.pop(0)
+                if proc.poll() is None:
+                    return proc
+            return None
+
+    def close(self) -> None:
+        """End the spares (at exit; they also end by themselves when the app's end of their stdin closes)."""
+        with self._lock:
+            spares, self._spares = self._spares, []
+        for proc in spares:
+            with contextlib.suppress(OSError):
+                proc.kill()
+            proc.wait()
+            for pipe in (proc.stdin, proc.stdout, proc.stderr):
+                if pipe is not None:
+                    pipe.close()
+
+
+POOL = Pool()
+
+_slots: weakref.WeakKeyDictionary[asyncio.AbstractEventLoop, dict[str, asyncio.Semaphore]] = weakref.WeakKeyDictionary()
+
+
+def _semaphore(slot: str) -> asyncio.Semaphore:
+    """The ``slot``'s semaphore on the running event loop (a semaphore belongs to one loop)."""
     loop = asyncio.get_running_loop()
     if loop not in _slots:
-        _slots[loop] = asyncio.Semaphore(CONCURRENCY)
-    return _slots[loop]
+        _slots[loop] = {"short": asyncio.Semaphore(CONCURRENCY), "session": asyncio.Semaphore(SESSIONS)}
+    return _slots[loop][slot]
 
 
-async def run_module(module: str, argv: Sequence[str], *, cwd: str, time_limit: float | None = None) -> Outcome:
-    """Run ``python -m module argv...`` in ``cwd``; end it after ``time_limit`` (default :data:`TIME_LIMIT`) seconds."""
-    limit = TIME_LIMIT if time_limit is None else time_limit
-    env = {**os.environ, "MPLBACKEND": "Agg", "PYTHONIOENCODING": "utf-8"}
-    env.pop("MOTORLAB_TRACEBACK", None)
-    async with _semaphore():
-        proc = await asyncio.create_subprocess_exec(
-            sys.executable, "-m", module, *argv, cwd=cwd, env=env,
-            stdin=asyncio.subprocess.DEVNULL, stdout=asyncio.subprocess.PIPE, stderr=asyncio.subprocess.PIPE,
+#: Commands running now (their processes), for tests: a cancelled request leaves none behind.
+RUNNING: set[subprocess.Popen[bytes]] = set()
+
+
+def _start(module: str, argv: Sequence[str], cwd: str, env: Mapping[str, str]) -> subprocess.Popen[bytes]:
+    """A child running ``module argv`` in ``cwd``: a warm one given the job, or a fresh ``python -P -m``."""
+    proc = POOL.take() if _warm_enabled() else None
+    if proc is None:  # a burst used the spares up: a fresh process imports only what its command needs
+        return subprocess.Popen(
+            [sys.executable, "-P", "-m", module, *argv], cwd=cwd, env={**_child_env(), **env},
+            stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
         )
+    job = json.dumps({"module": module, "argv": list(argv), "cwd": cwd, "env": dict(env)}) + "\n"
+    stdin = proc.stdin
+    assert stdin is not None
+
+    def send() -> None:  # a thread: the child reads its job only once its imports are done
         try:
-            out, err = await asyncio.wait_for(proc.communicate(), timeout=limit)
+            stdin.write(job.encode())
+        except OSError:
+            pass  # ended before it read its job (killed): its outcome says so
+        finally:
+            with contextlib.suppress(OSError):
+                stdin.close()
+
+    threading.Thread(target=send, daemon=True).start()
+    return proc
+
+
+async def _reader(pipe: IO[bytes]) -> tuple[asyncio.StreamReader, asyncio.BaseTransport]:
+    loop = asyncio.get_running_loop()
+    reader = asyncio.StreamReader(limit=1 << 24)
+    transport, _ = await loop.connect_read_pipe(lambda: asyncio.StreamReaderProtocol(reader), pipe)
+    return reader, transport
+
+
+async def _collect(proc: subprocess.Popen[bytes], on_progress: Callable[[dict[str, Any]], None] | None) -> tuple[
+        bytes, bytes]:
+    """Read the child's stdout and stderr to their end; progress lines go to ``on_progress``, not stderr."""
+    assert proc.stdout is not None
+    assert proc.stderr is not None
+    out_reader, out_transport = await _reader(proc.stdout)
+    err_reader, err_transport = await _reader(proc.stderr)
+    try:
+        async def errors() -> bytes:
+            kept = bytearray()
+            while line := await err_reader.readline():
+                if on_progress is not None and line.startswith(b'{"progress"'):
+                    with contextlib.suppress(ValueError):
+                        on_progress(json.loads(line)["progress"])
+                        continue
+                kept += line
+            return bytes(kept)
+
+        out, err = await asyncio.gather(out_reader.read(), errors())
+        while proc.poll() is None:  # both pipes closed: the process is exiting
+            await asyncio.sleep(0.005)
+        return out, err
+    finally:
+        out_transport.close()
+        err_transport.close()
+
+
+async def run_module(
+    module: str, argv: Sequence[str], *, cwd: str, time_limit: float | None = None, slot: str = "short",
+    on_progress: Callable[[dict[str, Any]], None] | None = None,
+) -> Outcome:
+    """Run ``python -m module argv...`` in ``cwd``; end it after ``time_limit`` (default :data:`TIME_LIMIT`) s.
+
+    ``slot`` is ``"short"`` or ``"session"``. With ``on_progress`` the child reports progress
+    (``MOTORLAB_PROGRESS=json``) and each report's dict is handed to it while the command runs. A
+    cancelled call (the client went away) ends the child at once.
+    """
+    limit = TIME_LIMIT if time_limit is None else time_limit
+    env = {"MOTORLAB_PROGRESS": "json"} if on_progress is not None else {}
+    async with _semaphore(slot):
+        proc = _start(module, argv, cwd, env)
+        RUNNING.add(proc)
+        try:
+            out, err = await asyncio.wait_for(_collect(proc, on_progress), timeout=limit)
         except TimeoutError:
-            proc.kill()
-            await proc.wait()
             return Outcome(124, "", f"motorlab: error: the command took longer than {limit:g} s and was stopped")
+        finally:
+            # Synchronous first: a cancelled request may be cancelled again at the next await.
+            running = proc.poll() is None
+            if running:
+                proc.kill()
+            RUNNING.discard(proc)
+            if not RUNNING:  # idle: replace the spares used (not while commands run: they need the CPU)
+                POOL.fill()
+            if running:  # reap it (in a thread: Popen.wait blocks)
+                with contextlib.suppress(asyncio.CancelledError):
+                    await asyncio.shield(asyncio.get_running_loop().run_in_executor(None, proc.wait))
     return Outcome(int(proc.returncode or 0), out.decode("utf-8", "replace"), err.decode("utf-8", "replace"))
 
 
-async def run_cli(argv: Sequence[str], *, cwd: str, time_limit: float | None = None) -> Outcome:
+async def run_cli(argv: Sequence[str], *, cwd: str, time_limit: float | None = None, slot: str = "short",
+                  on_progress: Callable[[dict[str, Any]], None] | None = None) -> Outcome:
     """Run ``motorlab argv...`` (the CLI's own entry, :func:`motorlab.cli.main`) in a child process."""
-    return await run_module("motorlab", argv, cwd=cwd, time_limit=time_limit)
+    return await run_module("motorlab", argv, cwd=cwd, time_limit=time_limit, slot=slot, on_progress=on_progress)

@@ -1,0 +1,139 @@
+"""Streamed answers (``Accept: application/x-ndjson``), cancelled requests and the warm workers."""
+
+from __future__ import annotations
+
+import asyncio
+import io
+import json
+import time
+import zipfile
+from pathlib import Path
+from typing import Any
+
+import httpx
+import pytest
+
+from motorlab.ui import runner
+
+STREAM = {"Accept": "application/x-ndjson"}
+
+
+def _zip(folder: Path) -> bytes:
+    buffer = io.BytesIO()
+    with zipfile.ZipFile(buffer, "w") as zf:
+        for path in folder.rglob("*"):
+            if path.is_file():
+                zf.write(path, f"bench/{path.relative_to(folder)}")
+    return buffer.getvalue()
+
+
+def _lines(response: httpx.Response) -> list[dict[str, Any]]:
+    assert response.headers["content-type"].startswith("application/x-ndjson")
+    return [json.loads(line) for line in response.text.splitlines()]
+
+
+def test_a_streamed_analysis_ends_with_exactly_the_plain_answer(server: Any, sim_session: Path) -> None:
+    log = (sim_session / "A" / "spindown.txt").read_bytes()
+    files = [("file", ("spindown.txt", log))]
+    plain = httpx.post(f"{server.url}/api/analyze/spindown", files=files, data={"cpr": "1120"}, timeout=120)
+    streamed = httpx.post(f"{server.url}/api/analyze/spindown", files=files, data={"cpr": "1120"}, headers=STREAM,
+                          timeout=120)
+    assert plain.status_code == streamed.status_code == 200
+    lines = _lines(streamed)
+    assert all(set(line) == {"progress"} for line in lines[:-1])
+    assert lines[-1] == {"result": plain.json()}  # the CLI's --json, as one line
+
+    bad = [("file", ("typo.txt", log.replace(b"\n1", b"\nx", 1) if b"\n1" in log else b"garbage"))]
+    plain_bad = httpx.post(f"{server.url}/api/analyze/spindown", files=bad, data={"cpr": "1120"}, timeout=120)
+    streamed_bad = httpx.post(f"{server.url}/api/analyze/spindown", files=bad, data={"cpr": "1120"}, headers=STREAM,
+                              timeout=120)
+    assert plain_bad.status_code == 400
+    assert _lines(streamed_bad)[-1] == {"error": plain_bad.json()["error"], "status": 400}
+    # Refused before any command runs: the plain 4xx answer, streamed or not.
+    unknown = httpx.post(f"{server.url}/api/analyze/nope", files=files, headers=STREAM, timeout=60)
+    assert unknown.status_code == 404
+    assert "nope" in unknown.json()["error"]
+
+
+def test_a_streamed_session_reports_its_units_then_its_results(server: Any, sim_session: Path) -> None:
+    body = _zip(sim_session)
+    plain = httpx.post(f"{server.url}/api/characterize", files=[("file", ("bench.zip", body))], timeout=300)
+    streamed = httpx.post(f"{server.url}/api/characterize", files=[("file", ("bench.zip", body))], headers=STREAM,
+                          timeout=300)
+    assert plain.status_code == streamed.status_code == 200
+    lines = _lines(streamed)
+    progress = [line["progress"] for line in lines if "progress" in line]
+    units = [p for p in progress if p["unit"] == "unit"]
+    assert units, progress
+    assert units[0]["total"] == 1
+    assert set(units[0]) == {"what", "done", "total", "unit", "detail", "finished"}
+    assert units[-1]["finished"]
+    assert units[-1]["done"] == 1
+    result = lines[-1]["result"]
+    assert result["exit_code"] == 0
+    assert _without_folder(result["results"]) == _without_folder(plain.json()["results"])
+    assert result["csv"] == plain.json()["csv"]
+
+
+def _without_folder(results: dict[str, Any]) -> str:
+    """The results with the request's private folder (a new one per request) left out of its paths."""
+    import re
+
+    return re.sub(r"[^\"]*motorlab-ui-[^/\"]*/", "", json.dumps(results, sort_keys=True))
+
+
+def _wait_until(condition: Any, seconds: float) -> bool:
+    deadline = time.monotonic() + seconds
+    while time.monotonic() < deadline:
+        if condition():
+            return True
+        time.sleep(0.02)
+    return bool(condition())
+
+
+@pytest.mark.parametrize("streamed", [True, False])
+def test_a_client_that_goes_away_ends_its_command(server: Any, sim_session: Path, streamed: bool) -> None:
+    import socket
+
+    assert _wait_until(lambda: not runner.RUNNING, 120)
+    request = httpx.Request("POST", f"{server.url}/api/characterize",
+                            files=[("file", ("bench.zip", _zip(sim_session)))], headers=STREAM if streamed else {})
+    head = "POST /api/characterize HTTP/1.1\r\n" + "".join(f"{k}: {v}\r\n" for k, v in request.headers.items())
+    with socket.create_connection((server.host, server.port)) as sock:  # the page's fetch, then aborted
+        sock.sendall(head.encode("latin-1") + b"\r\n" + request.read())
+        assert _wait_until(lambda: bool(runner.RUNNING), 60), "the command did not start"
+        children = set(runner.RUNNING)
+    assert _wait_until(lambda: not runner.RUNNING, 5), "the command kept running after the client went away"
+    assert all(child.wait(timeout=5) < 0 for child in children)  # ended by a signal, not finished
+
+
+def test_the_time_limit_ends_a_command_in_a_warm_worker(server: Any, sim_session: Path,
+                                                        monkeypatch: pytest.MonkeyPatch) -> None:
+    runner.POOL.fill()
+    monkeypatch.setattr(runner, "TIME_LIMIT", 0.5)  # a session takes seconds
+    response = httpx.post(f"{server.url}/api/characterize", files=[("file", ("bench.zip", _zip(sim_session)))],
+                          timeout=120)
+    assert response.status_code == 422
+    assert "0.5 s" in response.json()["error"]
+
+
+def test_warm_workers_answer_as_a_fresh_process(sim_session: Path, tmp_path: Path,
+                                                monkeypatch: pytest.MonkeyPatch) -> None:
+    (tmp_path / "lcr.csv").write_bytes((sim_session / "A" / "lcr.csv").read_bytes())
+    argv = ["analyze", "lcr", "lcr.csv", "--json"]
+
+    async def both() -> tuple[runner.Outcome, runner.Outcome]:
+        runner.POOL.fill()
+        warm = await runner.run_cli(argv, cwd=str(tmp_path))
+        monkeypatch.setenv("MOTORLAB_UI_WARM", "0")
+        cold = await runner.run_cli(argv, cwd=str(tmp_path))
+        return warm, cold
+
+    warm, cold = asyncio.run(both())
+    assert warm.code == cold.code == 0
+    assert warm.stdout == cold.stdout  # byte for byte
+    assert warm.stderr == cold.stderr
+    # An uploaded file named like a module is never imported (python -P: the folder is not on sys.path).
+    (tmp_path / "json.py").write_text("raise SystemExit('imported an upload')\n")
+    again = asyncio.run(runner.run_cli(argv, cwd=str(tmp_path)))
+    assert again.stdout == cold.stdout
