@@ -205,6 +205,8 @@ class FitResult:
             lines.append(f"    R²               = {self.r2:.6f}")
         lines.append("[[Parameters]]")
         lines.extend(f"    {est}" for est in self.parameters.values())
+        if self.details.get("R_temperature"):
+            lines.append(f"    (temperature of R: {self.details['R_temperature']})")
         pairs = self.correlations(min_correl)
         if pairs:
             lines.append(f"[[Correlations]] (unreported correlations are < {min_correl})")

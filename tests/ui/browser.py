@@ -152,6 +152,7 @@ class Page:
         height = self.d.execute_script("return document.body.scrollHeight")
         size = self.d.get_window_size()
         self.d.set_window_size(size["width"], min(max(int(height) + 120, 600), 3200))
+        self.d.execute_script("window.scrollTo(0, 0)")
         time.sleep(0.3)
         self.d.save_screenshot(str(self.shots / name))
         self.d.set_window_size(size["width"], size["height"])

@@ -221,6 +221,8 @@ def _print_tables(results: Sequence[FitResult]) -> None:
         console.print("fit: " + ", ".join(stats))
         if "shaft" in result.details:
             console.print(f"shaft: {result.details['shaft']}")
+        if result.details.get("R_temperature"):
+            console.print(f"temperature of R: {result.details['R_temperature']}", markup=False)
         input_model = result.details.get("input_model")
         if isinstance(input_model, dict) and input_model.get("text"):  # identify: the voltage between samples
             console.print(f"input model: {input_model['text']}", markup=False)

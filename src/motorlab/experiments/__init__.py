@@ -32,6 +32,9 @@ from motorlab.units import format_unit, parse_quantity
 if TYPE_CHECKING:
     from motorlab.results import Estimate, FitResult
 
+#: At what temperature an R holds when the analysis does not know the winding's (every one but stall).
+R_AS_MEASURED = ("R holds at the winding's temperature during the measurement, which was not measured: copper's "
+                 "R rises 0.393 % per kelvin, so a warm winding reads high (analyze stall gives R at 25 °C)")
 #: Kinds of option value: a number with a unit (pint), one of some words, true/false, paths, a whole
 #: number, a plain number (its unit depends on other options, e.g. tune's kV per ``--units``), text.
 KINDS = ("quantity", "choice", "flag", "files", "int", "number", "text", "columns")
@@ -306,6 +309,9 @@ class Experiment:
             result = self.run([str(p) for p in paths], dict(values))
         if self.shaft:
             result.details.setdefault("shaft", self.shaft)
+        if any(name in result.parameters for name in ("R", "R_dc")):
+            # Every R says at what temperature it holds (analyze stall: 25 °C; the others: as measured).
+            result.details.setdefault("R_temperature", R_AS_MEASURED)
         result.check_physics()  # also what the run added after the analysis made its result
         return result
 

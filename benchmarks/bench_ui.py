@@ -1,0 +1,152 @@
+"""The browser app's speed (issue 22, point 7): click → result, gains, a short analysis beside sessions.
+
+Targets: a 30 000-row spin-down posted to ``/api/analyze/spindown`` answers in ≤ 1.0 s; gains
+(``/api/tune``) in ≤ 0.5 s; a short analysis is not queued behind running sessions; an 8-unit
+session's results table in ≤ 10 s. The app runs in this process (uvicorn in a thread) with its warm
+workers, and the same requests are timed with ``MOTORLAB_UI_WARM=0`` (a fresh ``python -m`` per
+command, as before the warm workers). Wall time depends on the machine's load: the load average is
+printed with the figures.
+
+    python benchmarks/bench_ui.py            # all
+    python benchmarks/bench_ui.py quick      # without the 8-unit session
+"""
+
+from __future__ import annotations
+
+import os
+import socket
+import sys
+import tempfile
+import threading
+import time
+from pathlib import Path
+from typing import Any
+
+import httpx
+import uvicorn
+
+
+def _long_spindown(folder: Path) -> Path:
+    """A spin-down log of about 30 000 rows (the OpMode logging every 1.7 ms)."""
+    from dataclasses import replace
+
+    from motorlab.rig import VirtualRig
+    from motorlab.rig.instruments import Instruments, LoggingLoop
+
+    instruments = Instruments(logger=replace(LoggingLoop(), period=0.0017))
+    path = folder / "spindown.txt"
+    VirtualRig("neverest40", unit_seed=1, noise_seed=2, instruments=instruments).spindown(path, coast_time=60.0)
+    return path
+
+
+def _serve() -> tuple[uvicorn.Server, str]:
+    from motorlab.ui.app import create_app
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = int(s.getsockname()[1])
+    server = uvicorn.Server(uvicorn.Config(create_app(host="127.0.0.1", port=port), host="127.0.0.1", port=port,
+                                           log_level="warning", lifespan="off"))
+    threading.Thread(target=server.run, daemon=True).start()
+    while not server.started:
+        time.sleep(0.02)
+    return server, f"http://127.0.0.1:{port}"
+
+
+def _timed(fn: Any) -> tuple[float, Any]:
+    t0 = time.perf_counter()
+    out = fn()
+    return time.perf_counter() - t0, out
+
+
+def _wait_for_spares(seconds: float = 60.0) -> None:
+    from motorlab.ui import runner
+
+    runner.POOL.fill()
+    time.sleep(min(seconds, 12.0))  # the spares import numpy, scipy, matplotlib, motorlab
+
+
+def _analysis(url: str, log: Path) -> float:
+    data = log.read_bytes()
+    dt, r = _timed(lambda: httpx.post(f"{url}/api/analyze/spindown", files=[("file", ("spindown.txt", data))],
+                                      data={"cpr": "1120"}, timeout=300))
+    assert r.status_code == 200, r.text
+    return dt
+
+
+def _gains(url: str) -> float:
+    fields = {"loop": "velocity", "kv": "0.12", "ka": "0.01", "ks": "0.3", "target": "roadrunner", "cpr": "8192",
+              "emit": "java"}
+    dt, r = _timed(lambda: httpx.post(f"{url}/api/tune", data=fields, timeout=300))
+    assert r.status_code == 200, r.text
+    return dt
+
+
+def _session_zip(units: int, folder: Path) -> bytes:
+    import io
+    import zipfile
+
+    from motorlab.simulated_session import write_simulated_session
+
+    write_simulated_session("neverest40", out_dir=folder, units=units, seed=3)
+    buffer = io.BytesIO()
+    with zipfile.ZipFile(buffer, "w") as zf:
+        for path in folder.rglob("*"):
+            if path.is_file():
+                zf.write(path, str(path.relative_to(folder)))
+    return buffer.getvalue()
+
+
+def _session(url: str, body: bytes) -> float:
+    dt, r = _timed(lambda: httpx.post(f"{url}/api/characterize", files=[("file", ("s.zip", body))], timeout=900))
+    assert r.status_code == 200, r.text
+    return dt
+
+
+def _beside_sessions(url: str, log: Path, body: bytes) -> float:
+    """A short analysis while two sessions run."""
+    threads = [threading.Thread(target=_session, args=(url, body)) for _ in range(2)]
+    for t in threads:
+        t.start()
+    time.sleep(1.0)
+    dt = _analysis(url, log)
+    for t in threads:
+        t.join()
+    return dt
+
+
+def main() -> None:
+    quick = "quick" in sys.argv[1:]
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp)
+        log = _long_spindown(folder)
+        rows = sum(1 for _ in log.open())
+        small = _session_zip(1, folder / "small")
+        print(f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} CPUs; spin-down log of {rows} rows")
+        _server, url = _serve()
+        for mode in ("warm", "cold"):
+            os.environ["MOTORLAB_UI_WARM"] = "1" if mode == "warm" else "0"
+            if mode == "warm":
+                _wait_for_spares()
+            analysis = []
+            for _ in range(3):
+                analysis.append(_analysis(url, log))
+                if mode == "warm":
+                    _wait_for_spares(3.0)
+            gains = []
+            for _ in range(3):
+                gains.append(_gains(url))
+                if mode == "warm":
+                    _wait_for_spares(3.0)
+            print(f"{mode}: 30k-row spin-down click → result {min(analysis):.2f} s (best of 3; target ≤ 1.0 s); "
+                  f"gains {min(gains):.2f} s (target ≤ 0.5 s)")
+        os.environ["MOTORLAB_UI_WARM"] = "1"
+        _wait_for_spares()
+        print(f"a short analysis beside two running sessions: {_beside_sessions(url, log, small):.2f} s")
+        if not quick:
+            body = _session_zip(8, folder / "eight")
+            print(f"8-unit session, results.json + report.html: {_session(url, body):.1f} s (target ≤ 10 s table)")
+
+
+if __name__ == "__main__":
+    main()
