@@ -125,6 +125,7 @@ def simulate_gains(ks: float, kv: float, ka: float, test: ScoreTest) -> tuple[np
     step_dist = np.zeros(max(n - 1, 0))
     speed[0] = test.velocity[0]
     threshold = max(ks, 0.0)
+    ordered = bool(np.all(dt >= 0.0))  # (readers refuse time going backwards; the score does not rely on it)
     k = 0
     while k < n - 1:
         v = speed[k]
@@ -138,9 +139,12 @@ def simulate_gains(ks: float, kv: float, ka: float, test: ScoreTest) -> tuple[np
             s = math.copysign(1.0, v)
         stop, stiff = n - 1, False
         if tau > 0:  # one block at a time: the exponentials stay within range
-            span = _block_span(dt, k, tau)
-            stiff = span == 0  # rows each of many time constants: the speed settles within each
-            stop = min(n - 1, k + (_stiff_span(dt, k, tau) if stiff else span))
+            if ordered:  # Σ dt/τ from row k is (t − t_k)/τ: the block's end found by bisection
+                span = int(np.searchsorted(t, t[k] + _BLOCK_EXPONENT * tau)) - k - 1
+            else:
+                span = _block_span(dt, k, tau)
+            stiff = span <= 0 and dt[k] >= _BLOCK_EXPONENT * tau  # rows each of many time constants: each settles
+            stop = min(n - 1, k + (_stiff_span(dt, k, tau) if stiff else max(span, 1)))
         u = (volts[k:stop] - ks * s) / kv
         v_new, dist = (_stiff_block if stiff else _linear_block)(v, dt[k:stop], u, tau)
         cross = np.flatnonzero(s * v_new <= 0.0)
