@@ -278,7 +278,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--replay", type=Path)
     parser.add_argument("--summary", action="store_true")
     parser.add_argument("--only", help="only seeds whose name contains this")
-    parser.add_argument("--app-every", type=int, default=20, help="every N-th case is an app request (0: none)")
+    parser.add_argument("--app-every", type=int, default=40,
+                        help="every N-th case is an app request (0: none; default 40: a request starts a Python "
+                             "process for its command, the cost of some fifteen CLI cases)")
     args = parser.parse_args(argv)
     if args.replay:
         return replay(args.replay, args.time_limit)
