@@ -17,14 +17,24 @@ Usage::
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
+import multiprocessing
 import os
+import resource
 import shlex
+import shutil
+import signal
 import sys
 import tempfile
 import time
 from collections import Counter
 from pathlib import Path
+from typing import Any
+
+# One BLAS thread a case: on a shared 2-core machine more threads only add CPU time (set before numpy).
+for _name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_name, "1")
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests" / "fuzz"))
@@ -83,6 +93,13 @@ def summary(state: dict) -> str:
     lines += [f"  {name}: {count}" for name, count in verdicts.most_common()]
     lines.append(f"time: {state['seconds'] / 60:.1f} min; slowest case {state['max_case_seconds']:.1f} s; "
                  f"largest peak RSS {state['max_peak_rss_mb']:.0f} MB")
+    if state.get("wall_seconds"):
+        lines.append(f"since the timing was kept ({state['timed_cases']} cases): {state['wall_seconds'] / 60:.1f} min "
+                     f"of wall time, {60 * state['timed_cases'] / state['wall_seconds']:.1f} cases/min, "
+                     f"{state['cpu_seconds'] / max(state['timed_cases'], 1):.2f} CPU s a case")
+    slow = sorted(state.get("seconds_by_seed", {}).items(), key=lambda kv: -kv[1])[:8]
+    if slow:
+        lines.append("case time by seed (s): " + ", ".join(f"{name} {sec:.0f}" for name, sec in slow))
     for failure in state["failures"][-20:]:
         lines.append(f"  failure {failure}")
     return "\n".join(lines)
@@ -97,27 +114,41 @@ def replay(folder: Path, time_limit: float) -> int:
     return 0 if outcome.verdict in GOOD else 1
 
 
-def _tally(state: dict, seed: str, verdict: str, seconds: float, peak: float) -> None:
+def _tally(state: dict, result: dict) -> None:
+    seed, verdict, seconds, peak = result["seed"], result["verdict"], result["seconds"], result["peak"]
     state["verdicts"][verdict] = state["verdicts"].get(verdict, 0) + 1
     by_seed = state["by_seed"].setdefault(seed, {})
     by_seed[verdict] = by_seed.get(verdict, 0) + 1
     state["seconds"] += seconds
+    timing = state.setdefault("seconds_by_seed", {})
+    timing[seed] = timing.get(seed, 0.0) + seconds
+    state["cpu_seconds"] = state.get("cpu_seconds", 0.0) + result.get("cpu", 0.0)
     state["max_case_seconds"] = max(state["max_case_seconds"], seconds)
     if peak == peak:  # not NaN
         state["max_peak_rss_mb"] = max(state["max_peak_rss_mb"], peak)
+    if result.get("failure"):
+        state["failures"].append(result["failure"])
 
 
-def _cli_case(index: int, args: argparse.Namespace, seeds: list, state: dict, scratch: Path) -> None:
+def _children_cpu() -> float:
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
+
+
+def _cli_case(index: int, args: argparse.Namespace, seeds: list, scratch: Path) -> dict:
     case = case_for(index, args.seed, seeds, args.out / "corpus")
+    cpu = _children_cpu()
     outcome = run(case, scratch, time_limit=args.time_limit)
-    _tally(state, case.seed, outcome.verdict, outcome.seconds, outcome.peak_rss_mb)
+    result = {"seed": case.seed, "verdict": outcome.verdict, "seconds": outcome.seconds,
+              "peak": outcome.peak_rss_mb, "cpu": _children_cpu() - cpu}
     if outcome.verdict not in GOOD:
         folder = _save_failure(args.out, index, case, outcome)
-        state["failures"].append(f"{folder.name}: {case.seed}: {case.mutation[:80]}: {outcome.detail[:160]}")
+        result["failure"] = f"{folder.name}: {case.seed}: {case.mutation[:80]}: {outcome.detail[:160]}"
         print(f"case {index}: {outcome.verdict}: {case.seed}: {case.mutation[:80]}: {outcome.detail[:200]}", flush=True)
+    return result
 
 
-def _app_case(index: int, args: argparse.Namespace, seeds: list, state: dict) -> None:
+def _app_case(index: int, args: argparse.Namespace, seeds: list) -> dict:
     """An app request (fuzz_app.py); a failure is saved as what was sent and what came back.
 
     The app's client runs an event-loop thread: it lives only for this request, so that no thread
@@ -126,21 +157,114 @@ def _app_case(index: int, args: argparse.Namespace, seeds: list, state: dict) ->
     from fuzz_mutate import RandomChooser
 
     start = time.perf_counter()
+    cpu = time.process_time() + _children_cpu()
     try:
         with app_client() as client:
             verdict, detail, what = app_case(client, args.out / "corpus", seeds,
                                              RandomChooser(f"app:{args.seed}:{index}"))
     except Exception as exc:  # the client itself failed: the app broke the connection
         verdict, detail, what = "app-exception", f"{type(exc).__name__}: {exc}"[:300], "?"
-    _tally(state, "app", verdict, time.perf_counter() - start, float("nan"))
+    result = {"seed": "app", "verdict": verdict, "seconds": time.perf_counter() - start, "peak": float("nan"),
+              "cpu": time.process_time() + _children_cpu() - cpu}
     if verdict not in GOOD:
         folder = args.out / "failures" / f"{index:06d}-{verdict}"
         folder.mkdir(parents=True, exist_ok=True)
         (folder / "outcome.txt").write_text(
             f"verdict: {verdict}\ndetail: {detail}\nsent: {what}\nreplay: the app case of seed {args.seed}, "
             f"case {index}: fuzz_app.app_case(client, corpus, seeds, RandomChooser('app:{args.seed}:{index}'))\n")
-        state["failures"].append(f"{folder.name}: app: {what[:80]}: {detail[:160]}")
+        result["failure"] = f"{folder.name}: app: {what[:80]}: {detail[:160]}"
         print(f"case {index}: {verdict}: app: {what[:80]}: {detail[:200]}", flush=True)
+    return result
+
+
+def _worker(conn: Any, args: argparse.Namespace, seeds: list) -> None:
+    """A forked worker: runs the case numbers it is sent, answers each with its result, until None."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # the main process decides when the run stops
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    scratch = Path(tempfile.mkdtemp(prefix="motorlab-fuzz-"))
+    try:
+        while True:
+            try:
+                index = conn.recv()
+            except EOFError:  # the main process is gone
+                break
+            if index is None:
+                break
+            if args.app_every and index % args.app_every == args.app_every - 1:
+                result = _app_case(index, args, seeds)
+            else:
+                result = _cli_case(index, args, seeds, scratch)
+            conn.send((index, result))
+    finally:
+        shutil.rmtree(scratch, ignore_errors=True)
+        conn.close()
+
+
+def run_cases(args: argparse.Namespace, seeds: list, state: dict, state_path: Path) -> None:
+    """Cases ``state["next"]`` on, in ``args.jobs`` forked workers, tallied in case order (resumable).
+
+    The run stops dispatching at ``--cases``, after ``--minutes``, or on SIGTERM / Ctrl-C; the cases
+    under way finish and are counted, so ``state.json`` always means "every case before next is done".
+    """
+    from multiprocessing.connection import wait
+
+    stop = {"now": False}
+
+    def _stop(signum: int, frame: Any) -> None:
+        stop["now"] = True
+        print("stopping: the cases under way finish, then the state is saved", flush=True)
+
+    previous = {sig: signal.signal(sig, _stop) for sig in (signal.SIGTERM, signal.SIGINT)}
+    ctx = multiprocessing.get_context("fork")
+    workers = []
+    for _ in range(max(args.jobs, 1)):
+        mine, theirs = ctx.Pipe()
+        proc = ctx.Process(target=_worker, args=(theirs, args, seeds))
+        proc.start()
+        theirs.close()
+        workers.append((proc, mine))
+    deadline = time.monotonic() + 60.0 * args.minutes
+    to_send, done, busy = state["next"], {}, {}
+    wall, last = state.get("wall_seconds", 0.0), time.monotonic()
+    try:
+        while True:
+            for _proc, conn in workers:
+                if conn not in busy and to_send < args.cases and time.monotonic() < deadline and not stop["now"]:
+                    conn.send(to_send)
+                    busy[conn] = to_send
+                    to_send += 1
+            if not busy:
+                break
+            for conn in wait(list(busy), timeout=5.0):
+                try:
+                    index, result = conn.recv()
+                except (EOFError, OSError):  # a worker died: its case is run again next time
+                    to_send = min(to_send, busy.pop(conn))
+                    continue
+                del busy[conn]
+                done[index] = result
+            while state["next"] in done:
+                _tally(state, done.pop(state["next"]))
+                state["next"] += 1
+                state["timed_cases"] = state.get("timed_cases", 0) + 1
+                wall, last = wall + time.monotonic() - last, time.monotonic()
+                state["wall_seconds"] = wall
+                if state["next"] % 10 == 0:
+                    _write_state(state_path, state)
+            alive = [w for w in workers if w[0].is_alive()]
+            if len(alive) < len(workers):
+                workers = alive
+                if not workers:
+                    break
+    finally:
+        for _proc, conn in workers:
+            with contextlib.suppress(OSError):
+                conn.send(None)
+        for proc, _conn in workers:
+            proc.join(30)
+        _write_state(state_path, state)
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -149,7 +273,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--minutes", type=float, default=90.0, help="stop after this long (default 90)")
     parser.add_argument("--out", type=Path, default=ROOT / "out" / "fuzz")
-    parser.add_argument("--time-limit", type=float, default=60.0, help="seconds per case (default 60)")
+    parser.add_argument("--time-limit", type=float, default=60.0, help="CPU seconds per case (default 60)")
+    parser.add_argument("--jobs", type=int, default=1, help="cases run at once, in forked workers (default 1)")
     parser.add_argument("--replay", type=Path)
     parser.add_argument("--summary", action="store_true")
     parser.add_argument("--only", help="only seeds whose name contains this")
@@ -167,23 +292,7 @@ def main(argv: list[str] | None = None) -> int:
     warm()
     if args.only:
         seeds = [s for s in seeds if args.only in s.name]
-    deadline = time.monotonic() + 60.0 * args.minutes
-    scratch = Path(tempfile.mkdtemp(prefix="motorlab-fuzz-"))
-    try:
-        while state["next"] < args.cases and time.monotonic() < deadline:
-            index = state["next"]
-            if args.app_every and index % args.app_every == args.app_every - 1:
-                _app_case(index, args, seeds, state)
-            else:
-                _cli_case(index, args, seeds, state, scratch)
-            state["next"] = index + 1
-            if index % 10 == 0:
-                _write_state(state_path, state)
-    finally:
-        _write_state(state_path, state)
-        import shutil
-
-        shutil.rmtree(scratch, ignore_errors=True)
+    run_cases(args, seeds, state, state_path)
     print(summary(state))
     return 0
 

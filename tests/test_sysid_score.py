@@ -79,6 +79,27 @@ def test_negative_ks_and_zero_ka():
         score((0.1, 0.0, 0.1), [test])
 
 
+def test_rows_of_many_time_constants_are_simulated_in_blocks(monkeypatch):
+    """kA → 0 (a fit explores it): each row settles; the speed follows the voltage, not row by row in Python.
+
+    A 150-row wpilog took 13 s of CPU in the fuzz run (case 1262): every row was a block of its own.
+    """
+    import motorlab.sysid_score as sysid_score
+
+    calls = []
+    for name in ("_linear_block", "_stiff_block"):
+        original = getattr(sysid_score, name)
+        monkeypatch.setattr(sysid_score, name, lambda *a, _f=original: calls.append(1) or _f(*a))
+    t = np.arange(5000) * 0.01
+    volts = 2.0 + np.sin(t)
+    test = ScoreTest("x", t, volts, np.zeros(t.size), np.zeros(t.size))
+    speed, position = simulate_gains(0.3, 2.0, 1e-9, test)
+    assert len(calls) <= 5
+    np.testing.assert_allclose(speed[1:], (volts[:-1] - 0.3) / 2.0, rtol=1e-12)
+    step = (volts[:-1] - 0.3) / 2.0 * np.diff(t)  # each row's distance at its settled speed (τ ≪ dt)
+    np.testing.assert_allclose(position[1:], np.cumsum(step), rtol=1e-6)
+
+
 def test_fit_round_trip_with_noise():
     """Tests simulated with known gains, noisy speed and position: the fit finds them within its errors."""
     truth = (0.25, 1.8, 0.3)

@@ -140,13 +140,14 @@ def regression_start(logs: list[_oe.Log], mechanism: str, *, lag: float = 0.0) -
             speed = _oe.initial_speed_guess(log) if log.moving_at_start else 0.0
             sim = _oe._simulate_log(model, beta, log, speed, 0.0)
             weight = log.position_factor(max(log.resolution, 1e-9) / math.sqrt(12.0)) ** 2
-            miss = sim["position"] - log.position
-            cost += float(np.sum(weight * (miss - np.average(miss, weights=weight)) ** 2))
+            with np.errstate(over="ignore", invalid="ignore"):  # a start that runs away costs inf: not kept
+                miss = sim["position"] - log.position
+                cost += float(np.sum(weight * (miss - np.average(miss, weights=weight)) ** 2))
         if math.isfinite(cost) and (best is None or cost < best[0]):
             best = (cost, beta)
     if best is None:
-        assert error is not None
-        raise error
+        raise error or FitError("cannot find a starting point: the model simulated from every regression start "
+                                "runs beyond any finite angle (check the log's time, voltage and position columns)")
     return best[1]
 
 

@@ -352,3 +352,10 @@ def test_a_blank_output_name_is_refused(tmp_path: Path, monkeypatch: pytest.Monk
     monkeypatch.chdir(tmp_path)
     refused(capsys, "simulate", "torque", "--motor", "neverest40", "-o", " ", mentions="blank")
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_log_no_regression_start_can_simulate_is_refused(capsys) -> None:
+    """Found by the long fuzz run (case 1370): a .wpilog with a range of its records repeated; every
+    regression start simulated beyond a float, and an ``assert`` ended the run (exit 1)."""
+    failure = Path(__file__).parents[1] / "data" / "fuzz" / "duplicated-range-sysid.wpilog"
+    refused(capsys, "analyze", "feedforward", failure, "--json", mentions="duplicated-range-sysid.wpilog: cannot find")

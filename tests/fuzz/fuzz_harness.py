@@ -96,6 +96,15 @@ def warm() -> None:
             importlib.import_module(info.name)
     with contextlib.suppress(Exception):
         import matplotlib.pyplot  # noqa: F401  (the figures of --plot)
+    # What a command sets up on first use, once here rather than in every forked case (half a second
+    # of CPU a case: the pint registry alone): the unit registry, the parser, the motor catalog.
+    with contextlib.suppress(Exception):
+        from motorlab import catalog, cli, units
+
+        for text, unit in (("0.5 A", "A"), ("12.2 kg*m^2", "kg*m^2"), ("400 in*oz", "N*m"), ("130 rpm", "rad/s")):
+            units.parse_quantity(text, unit)
+        cli.build_parser()
+        catalog.list_motors()
 
 
 # ---- setting up the folder ------------------------------------------------------------------------

@@ -101,7 +101,8 @@ def build_argv(
 
 
 def _child_env() -> dict[str, str]:
-    env = {**os.environ, "MPLBACKEND": "Agg", "PYTHONIOENCODING": "utf-8"}
+    env = {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",  # as the CLI (cli/__init__)
+           **os.environ, "MPLBACKEND": "Agg", "PYTHONIOENCODING": "utf-8"}
     for name in _SCRUBBED:
         env.pop(name, None)
     return env
