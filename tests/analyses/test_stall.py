@@ -11,7 +11,7 @@ import pytest
 from tests.conftest import find_dyno_dir
 
 from motorlab.analyses.stall import stall
-from motorlab.errors import LogFormatError
+from motorlab.errors import InputError, LogFormatError
 from motorlab.experiments.stall import read_runs
 from motorlab.io.csv_table import read_csv, write_csv
 from motorlab.rig import VirtualRig
@@ -147,6 +147,36 @@ def test_brush_contact_run_is_flagged_not_forecast() -> None:
     assert "%" in flagged[0]
     assert " W" in flagged[0]
     assert any("torque per amp changes between runs" in w and "saturation" in w for w in result.warnings)
+
+
+@needs_real
+@pytest.mark.parametrize("until", [None, 120.0])
+def test_brush_contact_run_alone_is_flagged_and_not_forecast(tmp_path: Path, until: float | None) -> None:
+    rec = read_runs([str(REAL / "mini-cim-locked-rotor-data-2v-20151209.csv")])[0]
+    result = stall(rec, until=until)
+    flagged = [w for w in result.warnings if "heating does not explain" in w]
+    assert len(flagged) == 1
+    text = flagged[0]
+    assert "brush contact" in text
+    rise = float(text.split("its resistance rose ")[1].split(" %")[0])
+    assert 60 <= rise <= 90  # R +70-80 % on ~22 W
+    watts = float(text.split(" W falling")[0].rsplit(" ", 1)[1])
+    assert 20 <= watts <= 26
+    assert result.details["unexplained"] == text
+    assert not result["C_w"].determined
+    assert not result["t_limit"].determined
+    (tmp_path / "fit.json").write_text(json.dumps(result.to_dict()))
+    with pytest.raises(InputError, match="no forecast from this fit"):
+        load_fit(tmp_path / "fit.json")
+
+
+@needs_real
+@pytest.mark.parametrize("name", sorted(p.name for p in REAL.glob("*-locked-rotor-data-*.csv")
+                                        if "mini-cim-locked-rotor-data-2v" not in p.name))
+def test_every_other_real_run_alone_is_explained_by_heating(name: str) -> None:
+    result = stall(read_runs([str(REAL / name)]))
+    assert "unexplained" not in result.details, result.details.get("unexplained")
+    assert not any("heating does not explain" in w for w in result.warnings)
 
 
 @needs_real
