@@ -73,6 +73,15 @@ def test_a_streamed_session_reports_its_units_then_its_results(server: Any, sim_
     assert result["exit_code"] == 0
     assert _without_folder(result["results"]) == _without_folder(plain.json()["results"])
     assert result["csv"] == plain.json()["csv"]
+    # Results first: the table came in a line of its own while the report's figures were being drawn.
+    partial = [k for k, line in enumerate(lines) if "partial" in line]
+    assert len(partial) == 1, [list(line) for line in lines]
+    early = lines[partial[0]]["partial"]
+    assert early["results"] == result["results"]
+    assert early["csv"] == result["csv"]
+    report = [k for k, line in enumerate(lines) if line.get("progress", {}).get("what") == "Drawing the report"]
+    assert report
+    assert report[-1] > partial[0]  # sections still drawn after the table was sent
 
 
 def _without_folder(results: dict[str, Any]) -> str:
@@ -137,3 +146,49 @@ def test_warm_workers_answer_as_a_fresh_process(sim_session: Path, tmp_path: Pat
     (tmp_path / "json.py").write_text("raise SystemExit('imported an upload')\n")
     again = asyncio.run(runner.run_cli(argv, cwd=str(tmp_path)))
     assert again.stdout == cold.stdout
+
+
+def _group(pgid: int) -> list[int]:
+    """The processes of a process group (Linux's /proc; zombies not counted)."""
+    found = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except (OSError, IndexError):
+            continue
+        if int(fields[2]) == pgid and fields[0] != "Z":
+            found.append(int(stat.parent.name))
+    return found
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="reads the process table from /proc")
+def test_ending_a_session_ends_the_processes_analysing_its_units(tmp_path: Path) -> None:
+    from motorlab.simulated_session import write_simulated_session
+
+    toml = write_simulated_session("neverest40", out_dir=tmp_path, units=2, seed=4,
+                                   experiments=("identify", "feedforward"))
+    started: list[Any] = []
+    start = runner._start
+
+    def keep(*args: Any) -> Any:
+        started.append(start(*args))
+        return started[-1]
+
+    async def run_then_cancel() -> list[int]:
+        task = asyncio.ensure_future(runner.run_cli(["characterize", str(toml), "--quiet", "--processes=2"],
+                                                    cwd=str(tmp_path), slot="session"))
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline and not (started and len(_group(started[0].pid)) >= 3):
+            await asyncio.sleep(0.05)
+        members = _group(started[0].pid)
+        task.cancel()  # as when the client goes away
+        with pytest.raises(asyncio.CancelledError):
+            await task
+        return members
+
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(runner, "_start", keep)
+        members = asyncio.run(run_then_cancel())
+    assert len(members) >= 3, "the session's units were not analysed in processes of their own"
+    # At once: without ending the group, each would finish the unit it is analysing (seconds) first.
+    assert _wait_until(lambda: not _group(started[0].pid), 1.0), "processes of the session outlived it"

@@ -25,6 +25,7 @@ import atexit
 import contextlib
 import json
 import os
+import signal
 import subprocess
 import sys
 import tempfile
@@ -108,6 +109,20 @@ def _child_env() -> dict[str, str]:
     return env
 
 
+#: Each command runs in a process group of its own (POSIX), so that ending it also ends the processes it
+#: started (``characterize`` analyses units in a small pool of processes: :mod:`motorlab.parallel`).
+_OWN_GROUP: dict[str, Any] = {"start_new_session": True} if os.name == "posix" else {}
+
+
+def end(proc: subprocess.Popen[bytes]) -> None:
+    """End a command at once: its whole process group (POSIX), or the process."""
+    if _OWN_GROUP:
+        with contextlib.suppress(ProcessLookupError, PermissionError):
+            os.killpg(proc.pid, signal.SIGKILL)
+    with contextlib.suppress(OSError):
+        proc.kill()
+
+
 def _warm_enabled() -> bool:
     return SPARES > 0 and os.environ.get("MOTORLAB_UI_WARM", "1") not in ("0", "false", "no")
 
@@ -125,7 +140,7 @@ class Pool:
         self.started += 1
         return subprocess.Popen(
             [sys.executable, "-P", "-m", "motorlab.ui.warm"], cwd=tempfile.gettempdir(), env=_child_env(),
-            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, **_OWN_GROUP,
         )
 
     def fill(self) -> None:
@@ -150,9 +165,8 @@ class Pool:
         """End the spares (at exit; they also end by themselves when the app's end of their stdin closes)."""
         with self._lock:
             spares, self._spares = self._spares, []
-        for proc in spares:
-            with contextlib.suppress(OSError):
-                proc.kill()
+        for proc in [*spares, *RUNNING]:  # the commands still running too: they are in groups of their own
+            end(proc)
             proc.wait()
             for pipe in (proc.stdin, proc.stdout, proc.stderr):
                 if pipe is not None:
@@ -182,7 +196,7 @@ def _start(module: str, argv: Sequence[str], cwd: str, env: Mapping[str, str]) -
     if proc is None:  # a burst used the spares up: a fresh process imports only what its command needs
         return subprocess.Popen(
             [sys.executable, "-P", "-m", module, *argv], cwd=cwd, env={**_child_env(), **env},
-            stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+            stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE, **_OWN_GROUP,
         )
     job = json.dumps({"module": module, "argv": list(argv), "cwd": cwd, "env": dict(env)}) + "\n"
     stdin = proc.stdin
@@ -258,7 +272,7 @@ async def run_module(
             # Synchronous first: a cancelled request may be cancelled again at the next await.
             running = proc.poll() is None
             if running:
-                proc.kill()
+                end(proc)
             RUNNING.discard(proc)
             if not RUNNING:  # idle: replace the spares used (not while commands run: they need the CPU)
                 POOL.fill()
