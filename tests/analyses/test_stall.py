@@ -40,6 +40,16 @@ FAILURES = {
 }
 
 
+#: What each failing run shows after its cut, with the time [s] (the supply's limit, the winding opening).
+LATER = {
+    "am-9015-locked-rotor-data-12v": ("current limit at 5.2 s", "open winding) at 10.1 s"),
+    "bag-locked-rotor-data-10v": ("current limit at 40.6 s",),
+    "bag-locked-rotor-data-12v": ("current limit at 19.6 s",),
+    "mini-cim-locked-rotor-data-10v": ("current limit at 100.2 s", "open winding) at 107.0 s"),
+    "mini-cim-locked-rotor-data-12v": ("current limit at 41.7 s",),
+}
+
+
 def _runs(tmp: Path, seed: int) -> list:
     rig = VirtualRig("neverest40", unit_seed=seed, noise_seed=seed)
     a = rig.stall(tmp / f"a{seed}.csv", voltage=6.0, duration=150.0)
@@ -128,6 +138,11 @@ def test_real_exports_read_cut_and_fit(motor: str) -> None:
     for key, row in rows.items():
         if key not in FAILURES:
             assert row["cause"] == "healthy to the end", key
+    for key, events in LATER.items():
+        if key.startswith(motor + "-"):
+            cut = next(w for w in result.warnings if key in w and "cut at" in w)
+            for event in events:
+                assert event in cut.split("afterwards:")[1], (key, event)
     # R at 25 °C within 10 % of V/I at the first full sample of the coolest run (the reference).
     coolest = min((r for r in result.details["runs"] if r["heating explains it"] and r["healthy samples"] >= 30),
                   key=lambda r: r["initial winding temperature (°C)"])
@@ -147,6 +162,18 @@ def test_brush_contact_run_is_flagged_not_forecast() -> None:
     assert "%" in flagged[0]
     assert " W" in flagged[0]
     assert any("torque per amp changes between runs" in w and "saturation" in w for w in result.warnings)
+
+
+@needs_real
+def test_dynamometer_exports_keep_their_single_sample_events() -> None:
+    # am-9015 12 V line 16: the supply sags to 9.178 V for one sample (its current limit); 6 V line 131: the
+    # current of a failing winding jumps to 16.97 A for one sample. Events of the run, not failed reads.
+    for name, line in (("am-9015-locked-rotor-data-12v-20151210.csv", 16), ("am-9015-locked-rotor-data-6v-20151210.csv",
+                                                                           131)):
+        rec = read_runs([str(REAL / name)])[0]
+        assert line in rec.lines.tolist()
+        assert "glitch" not in " ".join(rec.metadata["warnings"])
+        assert "events of the run" in rec.metadata["glitch_screening"]
 
 
 @needs_real

@@ -12,6 +12,7 @@ measured, gives K = τ/i (the magnets' coefficient applied at the case temperatu
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from typing import Any
@@ -190,6 +191,9 @@ def _mark_unexplained(result: FitResult, why: str) -> None:
                                               note=f"{est.note}: heating does not explain the run (see the warnings)")
     for row in result.details["runs"]:
         row["heating explains it"] = False
+        row["winding at the cut (°C)"] = None
+    # the temperatures of a network heating does not explain are not the winding's: not stated
+    result.warnings[:] = [re.sub(r"; the winding was at about -?\d+ °C", "", w) for w in result.warnings]
 
 
 def _with_case_uncertainty(torque: TorqueFit, data: list[StallData], heat: HeatFit) -> TorqueFit:
