@@ -125,3 +125,22 @@ def test_combine_precision_and_disagreement() -> None:
     assert combined is not None
     assert not combined.estimate.determined
     assert combine("K", {}) == (None, [])
+
+
+def test_units_analysed_in_two_processes_give_the_same_results(session_dir: Path, result) -> None:  # type: ignore[no-untyped-def]
+    from motorlab import progress
+
+    told: list[tuple[str, str]] = []
+    seen: list[progress.Progress] = []
+    session = load_session(session_dir / "session.toml")
+    with progress.reporting(seen.append):
+        shared = characterize(session, control=False, figures=False, processes=2,
+                              progress=lambda unit, experiment: told.append((unit, experiment)))
+    assert json.dumps(shared.to_dict(), sort_keys=True) == json.dumps(result.to_dict(), sort_keys=True)
+    # Each unit's experiments, told from the processes that ran them, in each unit's order.
+    for unit in ("A", "B", "C"):
+        assert [e for u, e in told if u == unit] == [*EXPERIMENTS, ""]
+    units = [p for p in seen if p.what == "Characterising the units"]
+    assert units[-1].finished
+    assert units[-1].done == units[-1].total == 3
+    assert any(p.detail.startswith("unit ") and ": " in p.detail for p in units)  # the experiment running

@@ -113,3 +113,15 @@ def test_report_renders_in_headless_chromium(document: str, tmp_path: Path) -> N
     height = int.from_bytes(data[20:24], "big")
     assert (width, height) == (1200, 2500)
     assert len(data) > 50_000  # a page of tables and figures, not a blank screenshot
+
+
+def test_report_drawn_in_two_processes_is_the_same_document(result, document: str) -> None:  # type: ignore[no-untyped-def]
+    from motorlab import progress
+
+    seen: list[progress.Progress] = []
+    with progress.reporting(seen.append):
+        shared = render_report(result, processes=2)
+    assert shared == document  # each section drawn once, in whichever process, put back in order
+    drawing = [p for p in seen if p.what == "Drawing the report"]
+    assert drawing[-1].finished
+    assert drawing[-1].done == drawing[-1].total == 5  # the curves, three units, the gains

@@ -203,7 +203,7 @@ class Characterization:
             "notes": list(self.notes),
         }
         if self.gains is not None:
-            out["gains"] = jsonable({k: v for k, v in self.gains.items() if k != "figure"})
+            out["gains"] = jsonable({k: v for k, v in self.gains.items() if k not in ("figure", "results")})
         return out
 
 
@@ -324,7 +324,8 @@ ADAPTERS: dict[str, Callable[[_UnitContext], FitResult]] = {
 
 
 def characterize(
-    session: Session, *, progress: Progress | None = None, control: bool = True, figures: bool = True
+    session: Session, *, progress: Progress | None = None, control: bool = True, figures: bool = True,
+    processes: int = 1,
 ) -> Characterization:
     """Run every analysis a session has files for and combine the results.
 
@@ -339,7 +340,10 @@ def characterize(
         Also compute controller gains for the fleet's median parameters when
         :mod:`motorlab.control` is available.
     figures
-        Draw the step-response figure of the gains (for the report).
+        Draw the step-response figure of the gains now (otherwise the report draws it when it needs it).
+    processes
+        Analyse the units in up to this many processes (:func:`motorlab.parallel.map_in_processes`;
+        the units are independent, the fleet is compared once all are done).
 
     Returns
     -------
@@ -347,13 +351,27 @@ def characterize(
         Per-unit fits, combined parameters, disagreements, failures, truth (simulated sessions)
         and the fleet summary.
     """
+    from motorlab import parallel
     from motorlab import progress as reports
 
-    units: dict[str, UnitResult] = {}
-    with reports.task("Characterising the units", total=len(session.units), unit="unit") as task:
-        for name, spec in session.units.items():
-            units[name] = _characterize_unit(session, spec, _reporting(task, len(units), progress))
-            task.update(len(units), detail=f"unit {spec.display_name} done")
+    specs = list(session.units.values())
+    with reports.task("Characterising the units", total=len(specs), unit="unit") as task:
+        done = [0]
+
+        def told(message: tuple[str, str]) -> None:
+            unit, experiment = message
+            if experiment:
+                task.update(done[0], detail=f"unit {unit}: {experiment}")
+            if progress is not None:
+                progress(unit, experiment)
+
+        def finished(index: int, result: UnitResult) -> None:
+            done[0] += 1
+            task.update(done[0], detail=f"unit {result.spec.display_name} done")
+
+        found = parallel.map_in_processes(_unit_job, [(session, spec) for spec in specs], processes=processes,
+                                          on_message=told, on_result=finished)
+    units = {spec.name: unit for spec, unit in zip(specs, found, strict=True)}
     threshold = DEFAULT_THRESHOLD if session.fleet_threshold is None else session.fleet_threshold
     fleet = fleet_summary(
         {n: u.estimates() for n, u in units.items()},
@@ -368,16 +386,12 @@ def characterize(
     return result
 
 
-def _reporting(task: Any, done: int, progress: Progress | None) -> Progress:
-    """A ``progress(unit, experiment)`` callback that also reports through :mod:`motorlab.progress`."""
+def _unit_job(item: tuple[Session, UnitSpec]) -> UnitResult:
+    """One unit's analyses (run by :func:`motorlab.parallel.map_in_processes`), telling each step."""
+    from motorlab import parallel
 
-    def report(unit: str, experiment: str) -> None:
-        if experiment:
-            task.update(done, detail=f"unit {unit}: {experiment}")
-        if progress is not None:
-            progress(unit, experiment)
-
-    return report
+    session, spec = item
+    return _characterize_unit(session, spec, lambda unit, experiment: parallel.tell((unit, experiment)))
 
 
 def _characterize_unit(session: Session, spec: UnitSpec, progress: Progress | None) -> UnitResult:
@@ -472,6 +486,7 @@ def _controller_gains(result: Characterization, *, plot: bool = True) -> dict[st
         "position": summary.get("position"),
         "text": summary.get("text", ""),
         "figure": summary.get("figure"),
+        "results": summary.get("results"),  # the designs, for the report to draw their figure later
     }
 
 

@@ -34,7 +34,7 @@ from typing import Any
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from motorlab import _oe, held_input
+from motorlab import _oe, held_input, identify_thermal
 from motorlab.decimate import driven_log
 from motorlab.errors import FitError, OptionError
 from motorlab.fitting import MAX_RELATIVE_STDERR
@@ -59,6 +59,7 @@ from motorlab.oe_runs import (  # noqa: F401 - public names re-exported (they we
 )
 from motorlab.recording import Recording
 from motorlab.results import Estimate, FitResult
+from motorlab.thermal import ThermalModel
 from motorlab.units import SI_UNITS, format_unit
 
 
@@ -71,6 +72,10 @@ def identify(
     torque_constant: float | None = None,
     cpr: float | None = None,
     use_current: bool = True,
+    thermal: bool = False,
+    motor: str | None = None,
+    network: ThermalModel | None = None,
+    initial_temperature: float | None = None,
 ) -> FitResult:
     """Identify the motor from logs of applied voltage, encoder angle and (optionally) current.
 
@@ -90,6 +95,10 @@ def identify(
         otherwise taken from the file or from the smallest step of the angle).
     use_current
         Fit the current when every run has one (False: use only voltage and angle).
+    thermal, motor, network, initial_temperature
+        Fit the winding's temperature as a state (needs current; :mod:`motorlab.identify_thermal`): R, K at
+        25 °C; the network a catalogue ``motor``'s, one given, else the log's motor's or a 550-size one's;
+        each run starts at ``initial_temperature`` [°C] (default: the ambient's).
 
     Returns
     -------
@@ -116,16 +125,16 @@ def identify(
     instants are fixed there. ``details["cramer_rao_bound"]``: the Cramér–Rao bound of this log
     with those nuisance parameters, and each standard error over it (also in each estimate's note).
 
-    Otherwise the logged voltage's noise reaches the simulated current (errors in the input variable): the
-    current is weighted by its measured noise plus that, and the first-order bias it causes (mostly
-    in L and R) is removed (:func:`motorlab._oe.input_noise_bias`). Standard errors propagate the
-    measured noises — voltage through the plant, current, and counting errors correlated as a
-    quantiser of unknown phase makes them — through the linearised fit
-    (:func:`motorlab._oe.noise_propagation_covariance`); the Newey–West covariance of the residuals
-    is used when these noises do not explain the residuals.
+    Otherwise the logged voltage's noise reaches the simulated current (errors in the input variable): the current
+    is weighted by its measured noise plus that, and the first-order bias it causes (mostly in L and R) is removed
+    (:func:`motorlab._oe.input_noise_bias`). Standard errors propagate the measured noises — voltage through the
+    plant, current, and counting errors correlated as a quantiser of unknown phase makes them — through the
+    linearised fit (:func:`motorlab._oe.noise_propagation_covariance`); the Newey–West covariance of the
+    residuals is used when these noises do not explain the residuals.
     """
     recs = _checked_recordings(recordings, resistance=resistance, torque_constant=torque_constant, cpr=cpr)
     with_current = use_current and all("current" in r for r in recs)
+    heated = identify_thermal.wanted(thermal or network is not None, with_current=with_current)
     if not with_current:
         return _identify_without_current(recs, resistance=resistance, torque_constant=torque_constant, cpr=cpr,
                                          note_missing=use_current and any("current" in r for r in recs))
@@ -133,13 +142,17 @@ def identify(
     p0, lower, upper, scale = _start_and_bounds(logs)
     dt = min(log.dt for log in logs)
     sigma, current_noise, voltage_noise = _noise_weights(logs, np.clip(p0, lower, upper), dt)
+    heat = identify_thermal.copper_drop(recs, logs, motor=motor, network=network, initial=initial_temperature,
+                                        resistance=float(np.clip(p0, lower, upper)[1])) if heated else None
+    wrap = heat.wrap if heat is not None else identify_thermal.unchanged
 
     def sample_held(start: np.ndarray) -> _oe.Fit:
-        return _oe.fit_output_error(MotorModel(), logs, np.clip(start, lower, upper), lower=lower, upper=upper,
+        return _oe.fit_output_error(wrap(MotorModel()), logs, np.clip(start, lower, upper), lower=lower, upper=upper,
                                     scale=scale, sigma=sigma, current_noise=current_noise)
 
     fit, input_details = _input_model(recs, logs, sample_held, np.clip(p0, lower, upper), lower=lower, upper=upper,
-                                      scale=scale, sigma_position=sigma["position"], current_noise=current_noise)
+                                      scale=scale, sigma_position=sigma["position"], current_noise=current_noise,
+                                      wrap=wrap)
     if input_details["model"] != "sample-held":
         sigma["current"] = current_noise
     values = fit.values[:6]
@@ -147,12 +160,19 @@ def identify(
     stderr = np.sqrt(np.clip(np.diag(cov), 0.0, None))
     params = _motor_estimates(fit, values, stderr, l_floor=lower[2], dt=dt)
     warnings.extend(_fit_warnings(fit, logs, values, resistance=resistance, torque_constant=torque_constant))
+    corr = _correlation(cov, stderr)
+    details = _details(fit, values, p0, sigma, input_details, current_noise=current_noise, voltage_noise=voltage_noise)
+    _bound_details(fit, logs, params, details, weight_current=sigma["current"], current_noise=current_noise)
+    identify_thermal.annotate(heat, params, details, warnings)
+    return _result("identify", params, corr, list(MOTOR_NAMES), logs, fit, warnings, details)
+
+
+def _correlation(cov: np.ndarray, stderr: np.ndarray) -> np.ndarray:
+    """The correlation matrix of a covariance (1 on the diagonal, NaN where a standard error is 0)."""
     with np.errstate(invalid="ignore", divide="ignore"):
         corr = cov / np.outer(stderr, stderr)
     np.fill_diagonal(corr, 1.0)
-    details = _details(fit, values, p0, sigma, input_details, current_noise=current_noise, voltage_noise=voltage_noise)
-    _bound_details(fit, logs, params, details, weight_current=sigma["current"], current_noise=current_noise)
-    return _result("identify", params, corr, list(MOTOR_NAMES), logs, fit, warnings, details)
+    return corr
 
 
 def _checked_recordings(recordings: Recording | Sequence[Recording], *, resistance: float | None,
@@ -282,6 +302,7 @@ def _motor_estimates(fit: _oe.Fit, values: np.ndarray, stderr: np.ndarray, *, l_
 def _input_model(
     recs: list[Recording], logs: list[_oe.Log], sample_held: Callable[[np.ndarray], _oe.Fit], p0: np.ndarray, *,
     lower: np.ndarray, upper: np.ndarray, scale: np.ndarray, sigma_position: float, current_noise: float,
+    wrap: Callable[[_oe.OEModel], _oe.OEModel] = lambda model: model,
 ) -> tuple[_oe.Fit, dict[str, Any]]:
     """Refit with held levels and switch instants as nuisance parameters when the drive holds levels.
 
@@ -290,7 +311,8 @@ def _input_model(
     located switch sits on its sample instant (within 3σ) the switch instants are fixed there: with
     exact levels that is the sample-held fit (``sample_held(start)``, also used when the drive does not
     hold levels); with noisy levels the levels stay free.
-    Returns the fit to report and ``details["input_model"]``.
+    ``wrap`` changes the held-level models as ``sample_held`` changes its own (the winding's heat, identify
+    --thermal). Returns the fit to report and ``details["input_model"]``.
     """
     checks = [held_input.detect_held(rec.signals["voltage"], log.current) if log.uniform
               else (None, "non-uniform sample times") for rec, log in zip(recs, logs, strict=True)]
@@ -301,7 +323,7 @@ def _input_model(
     helds = [h for h in held if h is not None]
     exact = all(h.sigma == 0 for h in helds)
     sigma = {"position": sigma_position, "current": current_noise}
-    model = held_input.HeldMotorModel(logs, helds, free_switch=True)
+    model: Any = wrap(held_input.HeldMotorModel(logs, helds, free_switch=True))
     z0, lo, hi, sc = model.start_and_bounds(p0, lower, upper, scale)
     free = _oe.fit_output_error(model, logs, z0, lower=lo, upper=hi, scale=sc, sigma=sigma,
                                 current_noise=current_noise)
@@ -317,7 +339,7 @@ def _input_model(
         return sample_held(free.values[:6]), {"model": "sample-held", **info,
                      "text": "held levels switching on sample instants, exact voltage: held over each sample as logged"}
     if on is True:
-        fixed = held_input.HeldMotorModel(logs, helds, free_switch=False)
+        fixed: Any = wrap(held_input.HeldMotorModel(logs, helds, free_switch=False))
         z1, lo1, hi1, sc1 = fixed.start_and_bounds(free.values[:6], lower, upper, scale)
         z1[6:] = [v for name, v in zip(free.names, free.values, strict=False) if name.startswith("level")]
         refit = _oe.fit_output_error(fixed, logs, z1, lower=lo1, upper=hi1, scale=sc1, sigma=sigma,

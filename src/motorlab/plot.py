@@ -124,13 +124,10 @@ def plot_fit(result: FitResult, *, fig: Figure | None = None) -> Figure:
     note_lines = notes.count("\n") + 1 if notes else 0
     note_height = 0.18 * note_lines + (0.2 if notes else 0.0)
     if fig is None:
-        fig = Figure(figsize=(9.0, sum(heights) + 0.9 + note_height))
+        fig = Figure(figsize=(9.0, sum(heights) + (n - 1) * PANEL_GAP + 1.4 + note_height))
     else:
         fig.clear()
-    height = fig.get_figheight()
-    bottom = min(0.4, (note_height + 0.05) / height) if notes else 0.0
-    fig.set_layout_engine("constrained", rect=(0.0, bottom, 1.0, 1.0 - bottom), h_pad=0.08)
-    grid = fig.add_gridspec(n, 1, height_ratios=heights)
+    grid = fig.add_gridspec(n, 1, height_ratios=heights, **_margins(fig, n, top=0.8, bottom=0.55 + note_height))
     for k, panel in enumerate(panels):
         _draw_panel(fig, grid[k], panel)
     title = result.experiment
@@ -141,6 +138,24 @@ def plot_fit(result: FitResult, *, fig: Figure | None = None) -> Figure:
     if notes:
         fig.text(0.01, 0.01, notes, fontsize=7, va="bottom", ha="left", color="0.25")
     return fig
+
+
+#: Margins of a fit figure [in]: room for the y labels at the left, the panel titles and x labels between panels.
+LEFT_MARGIN, RIGHT_MARGIN, PANEL_GAP = 1.0, 0.25, 0.8
+
+
+def _margins(fig: Figure, n: int, *, top: float, bottom: float) -> dict[str, float]:
+    """A fixed layout (margins in inches) for ``n`` panels in a column, as gridspec keywords.
+
+    Constrained layout found the same margins by measuring every tick label of every axis, which
+    took about half of the time a figure took to save (a session's report draws a hundred).
+    """
+    width, height = fig.get_figwidth(), fig.get_figheight()
+    top_f = max(0.5, 1.0 - top / height)
+    bottom_f = min(bottom / height, top_f - 0.1)
+    cell = max((top_f - bottom_f) * height - (n - 1) * PANEL_GAP, 0.1 * n) / n
+    return {"left": min(LEFT_MARGIN / width, 0.3), "right": 1.0 - min(RIGHT_MARGIN / width, 0.1),
+            "top": top_f, "bottom": bottom_f, "hspace": PANEL_GAP / cell}
 
 
 def _footnote(result: FitResult, width: int = 150) -> str:
@@ -177,6 +192,7 @@ def plot_motor_curves(
     *,
     ax: Axes | None = None,
     catalog: Any | None = None,
+    size: tuple[float, float] = (8.0, 5.0),
 ) -> Figure:
     """Speed, current, output power and efficiency against output torque at ``voltage``.
 
@@ -192,6 +208,8 @@ def plot_motor_curves(
     catalog
         Optional second motor (e.g. the catalogue's data-sheet parameters), drawn dashed for
         comparison; anything with ``curves(voltage)`` or a ``params`` attribute that has it.
+    size
+        Width and height [in] of a new figure (a fixed layout leaves room for the labels).
 
     Returns
     -------
@@ -206,8 +224,13 @@ def plot_motor_curves(
     """
     if not (isinstance(voltage, int | float) and math.isfinite(voltage) and voltage != 0):
         raise OptionError(f"the voltage for motor curves must be a non-zero number, got {voltage!r}")
+    own = ax is None
     if ax is None:
-        fig = Figure(figsize=(8.0, 5.0), layout="constrained")
+        fig = Figure(figsize=size)
+        width, height = size
+        # Fixed margins [in]: three value axes stacked at the right, the legend below the axes.
+        right = width - 0.7 - (width - 0.75 - 0.7) * 0.24 / 1.24
+        fig.subplots_adjust(left=0.75 / width, right=right / width, top=1 - 0.4 / height, bottom=1.05 / height)
         ax = fig.add_subplot()
     else:
         parent = ax.get_figure()
@@ -249,6 +272,10 @@ def plot_motor_curves(
         handles += h
         labels += lab
     # Below the axes, not on them: inside, the legend hid the current line's top and the stall point.
-    ax.legend(handles, labels, fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncols=4,
-              frameon=False)
+    if own:  # centred under the figure's width (the axes leave room at the right for the value axes)
+        ax.legend(handles, labels, fontsize=7, loc="lower center", bbox_to_anchor=(0.5, 0.01),
+                  bbox_transform=fig.transFigure, ncols=4, frameon=False)
+    else:
+        ax.legend(handles, labels, fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncols=4,
+                  frameon=False)
     return fig

@@ -163,6 +163,8 @@ class Terminal:
         self._bar.update(self._ids[key], completed=p.done, total=p.total, description=label, count=count)
         if p.finished:
             self._bar.remove_task(self._ids.pop(key))
+            if not self._ids:  # nothing under way: stop the bar's refresh thread (a later task starts it again)
+                self.close()
 
     def close(self) -> None:
         if self._bar is not None:

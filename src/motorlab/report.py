@@ -20,6 +20,7 @@ URIs, so the file reads offline and can be mailed. All text from files and fits 
 from __future__ import annotations
 
 import base64
+import functools
 import html
 import io
 import json
@@ -162,7 +163,7 @@ def _figure_html(fig: Figure | None, caption: str, alt: str) -> str:
 # ---------------------------------------------------------------------------------------------
 # Sections
 # ---------------------------------------------------------------------------------------------
-def render_report(result: Characterization, *, figures: bool = True) -> str:
+def render_report(result: Characterization, *, figures: bool = True, processes: int = 1) -> str:
     """The report as one HTML document.
 
     Parameters
@@ -171,15 +172,26 @@ def render_report(result: Characterization, *, figures: bool = True) -> str:
         What :func:`motorlab.characterize.characterize` returned.
     figures
         Draw and embed the figures (False gives a quick text-only report).
+    processes
+        Draw the sections with figures (the motor curves, the gains, each unit's fits) in up to this
+        many processes (:func:`motorlab.parallel.map_in_processes`); each figure is drawn once.
 
     Returns
     -------
     str
         A complete, self-contained HTML5 document.
     """
-    from motorlab import __version__
+    from motorlab import __version__, parallel
+    from motorlab import progress as reports
 
     s = result.session
+    keys = ["curves", *(f"unit:{name}" for name in result.units), "gains"]  # the longest first
+    with reports.task("Drawing the report", total=len(keys), unit="section") as task:
+        drawn = parallel.map_in_processes(
+            functools.partial(_render_section, result, figures), keys, processes=processes if figures else 1,
+            on_result=lambda _index, _html: task.advance(),
+        )
+    sections = dict(zip(keys, drawn, strict=True))
     parts = [
         "<!DOCTYPE html>",
         '<html lang="en"><head><meta charset="utf-8">',
@@ -194,28 +206,41 @@ def render_report(result: Characterization, *, figures: bool = True) -> str:
         _issues(result),
         _fleet_section(result),
         _gearbox_section(result),
-        _curves_section(result, figures=figures),
+        sections["curves"],
         thermal_section(result),
-        _gains_section(result, figures=figures),
+        sections["gains"],
     ]
-    parts += [_unit_section(unit, figures=figures) for unit in result.units.values()]
+    parts += [sections[f"unit:{name}"] for name in result.units]
     parts.append(_methods_section())
     parts.append("</body></html>")
     return "\n".join(p for p in parts if p)
 
 
-def write_report(result: Characterization, path: str | Path, *, figures: bool = True) -> Path:
+def _render_section(result: Characterization, figures: bool, key: str) -> str:
+    """One section of the report that draws figures: ``"curves"``, ``"gains"`` or ``"unit:NAME"``."""
+    if key == "curves":
+        return _curves_section(result, figures=figures)
+    if key == "gains":
+        return _gains_section(result, figures=figures)
+    return _unit_section(result.units[key.split(":", 1)[1]], figures=figures)
+
+
+def write_report(result: Characterization, path: str | Path, *, figures: bool = True, processes: int = 1) -> Path:
     """Write :func:`render_report`'s HTML to ``path`` (UTF-8) and return the path."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     from motorlab.io._output import write_text_atomic
 
-    write_text_atomic(path, render_report(result, figures=figures))
+    write_text_atomic(path, render_report(result, figures=figures, processes=processes))
     return path
 
 
-def write_outputs(result: Characterization, out_dir: str | Path, *, report: bool = True) -> dict[str, Path]:
-    """Write ``results.json``, ``results.csv`` and (by default) ``report.html`` into ``out_dir``.
+def write_outputs(result: Characterization, out_dir: str | Path, *, report: bool = True,
+                  processes: int = 1) -> dict[str, Path]:
+    """Write ``results.json`` and ``results.csv``, then (by default) ``report.html``, into ``out_dir``.
+
+    The numbers come first: ``results.json`` is complete (written atomically) before the report's
+    first figure is drawn, so a front end can show the table while the figures follow.
 
     Returns
     -------
@@ -228,10 +253,10 @@ def write_outputs(result: Characterization, out_dir: str | Path, *, report: bool
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     paths = {"json": out / "results.json", "csv": out / "results.csv"}
-    write_text_atomic(paths["json"], json.dumps(result.to_dict(), indent=2, allow_nan=False) + "\n")
     write_csv(result, paths["csv"])
+    write_text_atomic(paths["json"], json.dumps(result.to_dict(), indent=2, allow_nan=False) + "\n")
     if report:
-        paths["html"] = write_report(result, out / "report.html")
+        paths["html"] = write_report(result, out / "report.html", processes=processes)
     return paths
 
 
@@ -553,8 +578,7 @@ def _curves_figure(params: Any, voltage: float, motor: Any) -> Figure | None:
     from motorlab.plot import plot_motor_curves
 
     reference = OutputCurves(motor.nominal_params(), motor.gearbox().efficiency) if motor is not None else None
-    fig = plot_motor_curves(params, voltage, catalog=reference)
-    fig.set_size_inches(6.4, 4.0)
+    fig = plot_motor_curves(params, voltage, catalog=reference, size=(6.4, 4.0))
     if motor is not None and fig.axes:
         ax_speed = fig.axes[0]
         ax_speed.plot(
@@ -584,12 +608,23 @@ def _gains_section(result: Characterization, *, figures: bool) -> str:
         "WPILib SysId's LQR defaults (velocity and position loops, 20 ms period):</p>"
         f"<pre>{_e(text)}</pre>"
     )
-    fig = gains.get("figure") if figures else None
-    if isinstance(fig, Figure):
+    fig = gains_figure(result) if figures else None
+    if fig is not None:
         body += _figure_html(
             fig, "Closed-loop step responses with these gains (nonlinear motor model)", "step response"
         )
     return f'<section id="gains"><h2>Controller gains</h2>{body}</section>'
+
+
+def gains_figure(result: Characterization) -> Figure | None:
+    """The step responses of the session's gains, drawn once (when :func:`characterize` did not draw them)."""
+    gains = result.gains or {}
+    if gains.get("figure") is None and gains.get("results"):
+        from motorlab.control.tune import summary_figure
+
+        gains["figure"] = summary_figure(gains["results"])
+    fig = gains.get("figure")
+    return fig if isinstance(fig, Figure) else None
 
 
 def _short(value: Any) -> str:

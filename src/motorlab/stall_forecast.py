@@ -63,6 +63,10 @@ def load_fit(path: str | Path) -> StallModel:
     if not isinstance(doc, dict) or doc.get("experiment") != "stall":
         raise InputError("not a stall fit: give what 'motorlab analyze stall --json' wrote", path=str(path))
     params, details = doc.get("parameters", {}), doc.get("details", {})
+    if isinstance(details, dict) and details.get("unexplained"):
+        raise InputError("no forecast from this fit: heating does not explain the run it was fitted to (its "
+                         "resistance rose more than its heat allows: brush contact, see the fit's warnings); fit a "
+                         "healthy run with 'motorlab analyze stall'", path=str(path))
 
     def value(name: str) -> float:
         entry = params.get(name)

@@ -11,7 +11,7 @@ import pytest
 from tests.conftest import find_dyno_dir
 
 from motorlab.analyses.stall import stall
-from motorlab.errors import LogFormatError
+from motorlab.errors import InputError, LogFormatError
 from motorlab.experiments.stall import read_runs
 from motorlab.io.csv_table import read_csv, write_csv
 from motorlab.rig import VirtualRig
@@ -37,6 +37,16 @@ FAILURES = {
     "mini-cim-locked-rotor-data-2v": (300.9, "supply cut"),
     "mini-cim-locked-rotor-data-4v": (299.9, "supply cut"),
     "mini-cim-locked-rotor-data-6v": (300.4, "supply cut"),
+}
+
+
+#: What each failing run shows after its cut, with the time [s] (the supply's limit, the winding opening).
+LATER = {
+    "am-9015-locked-rotor-data-12v": ("current limit at 5.2 s", "open winding) at 10.1 s"),
+    "bag-locked-rotor-data-10v": ("current limit at 40.6 s",),
+    "bag-locked-rotor-data-12v": ("current limit at 19.6 s",),
+    "mini-cim-locked-rotor-data-10v": ("current limit at 100.2 s", "open winding) at 107.0 s"),
+    "mini-cim-locked-rotor-data-12v": ("current limit at 41.7 s",),
 }
 
 
@@ -128,6 +138,11 @@ def test_real_exports_read_cut_and_fit(motor: str) -> None:
     for key, row in rows.items():
         if key not in FAILURES:
             assert row["cause"] == "healthy to the end", key
+    for key, events in LATER.items():
+        if key.startswith(motor + "-"):
+            cut = next(w for w in result.warnings if key in w and "cut at" in w)
+            for event in events:
+                assert event in cut.split("afterwards:")[1], (key, event)
     # R at 25 °C within 10 % of V/I at the first full sample of the coolest run (the reference).
     coolest = min((r for r in result.details["runs"] if r["heating explains it"] and r["healthy samples"] >= 30),
                   key=lambda r: r["initial winding temperature (°C)"])
@@ -147,6 +162,48 @@ def test_brush_contact_run_is_flagged_not_forecast() -> None:
     assert "%" in flagged[0]
     assert " W" in flagged[0]
     assert any("torque per amp changes between runs" in w and "saturation" in w for w in result.warnings)
+
+
+@needs_real
+def test_dynamometer_exports_keep_their_single_sample_events() -> None:
+    # am-9015 12 V line 16: the supply sags to 9.178 V for one sample (its current limit); 6 V line 131: the
+    # current of a failing winding jumps to 16.97 A for one sample. Events of the run, not failed reads.
+    for name, line in (("am-9015-locked-rotor-data-12v-20151210.csv", 16), ("am-9015-locked-rotor-data-6v-20151210.csv",
+                                                                           131)):
+        rec = read_runs([str(REAL / name)])[0]
+        assert line in rec.lines.tolist()
+        assert "glitch" not in " ".join(rec.metadata["warnings"])
+        assert "events of the run" in rec.metadata["glitch_screening"]
+
+
+@needs_real
+@pytest.mark.parametrize("until", [None, 120.0])
+def test_brush_contact_run_alone_is_flagged_and_not_forecast(tmp_path: Path, until: float | None) -> None:
+    rec = read_runs([str(REAL / "mini-cim-locked-rotor-data-2v-20151209.csv")])[0]
+    result = stall(rec, until=until)
+    flagged = [w for w in result.warnings if "heating does not explain" in w]
+    assert len(flagged) == 1
+    text = flagged[0]
+    assert "brush contact" in text
+    rise = float(text.split("its resistance rose ")[1].split(" %")[0])
+    assert 60 <= rise <= 90  # R +70-80 % on ~22 W
+    watts = float(text.split(" W falling")[0].rsplit(" ", 1)[1])
+    assert 20 <= watts <= 26
+    assert result.details["unexplained"] == text
+    assert not result["C_w"].determined
+    assert not result["t_limit"].determined
+    (tmp_path / "fit.json").write_text(json.dumps(result.to_dict()))
+    with pytest.raises(InputError, match="no forecast from this fit"):
+        load_fit(tmp_path / "fit.json")
+
+
+@needs_real
+@pytest.mark.parametrize("name", sorted(p.name for p in REAL.glob("*-locked-rotor-data-*.csv")
+                                        if "mini-cim-locked-rotor-data-2v" not in p.name))
+def test_every_other_real_run_alone_is_explained_by_heating(name: str) -> None:
+    result = stall(read_runs([str(REAL / name)]))
+    assert "unexplained" not in result.details, result.details.get("unexplained")
+    assert not any("heating does not explain" in w for w in result.warnings)
 
 
 @needs_real

@@ -246,7 +246,8 @@ def test_schema_is_the_descriptions_and_agrees_with_the_cli_parsers() -> None:
 
     def options(p: argparse.ArgumentParser) -> dict[str, argparse.Action]:
         return {(a.option_strings[0] if a.option_strings else a.dest): a for a in p._actions
-                if a.dest not in {"help", "json", "plot", "each", "emit", "output", "quiet", "no_report"}}
+                if a.dest not in {"help", "json", "plot", "each", "emit", "output", "quiet", "no_report",
+                                  "processes"}}
 
     analyze = next(a for a in commands["analyze"]._actions if isinstance(a, argparse._SubParsersAction)).choices
     pairs = [(options(analyze[n]), s["analyze"][n]["fields"]) for n in s["analyze"]]

@@ -73,6 +73,15 @@ def test_a_streamed_session_reports_its_units_then_its_results(server: Any, sim_
     assert result["exit_code"] == 0
     assert _without_folder(result["results"]) == _without_folder(plain.json()["results"])
     assert result["csv"] == plain.json()["csv"]
+    # Results first: the table came in a line of its own while the report's figures were being drawn.
+    partial = [k for k, line in enumerate(lines) if "partial" in line]
+    assert len(partial) == 1, [list(line) for line in lines]
+    early = lines[partial[0]]["partial"]
+    assert early["results"] == result["results"]
+    assert early["csv"] == result["csv"]
+    report = [k for k, line in enumerate(lines) if line.get("progress", {}).get("what") == "Drawing the report"]
+    assert report
+    assert report[-1] > partial[0]  # sections still drawn after the table was sent
 
 
 def _without_folder(results: dict[str, Any]) -> str:
@@ -137,3 +146,95 @@ def test_warm_workers_answer_as_a_fresh_process(sim_session: Path, tmp_path: Pat
     (tmp_path / "json.py").write_text("raise SystemExit('imported an upload')\n")
     again = asyncio.run(runner.run_cli(argv, cwd=str(tmp_path)))
     assert again.stdout == cold.stdout
+
+
+def _group(pgid: int) -> list[int]:
+    """The processes of a process group (Linux's /proc; zombies not counted)."""
+    found = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except (OSError, IndexError):
+            continue
+        if int(fields[2]) == pgid and fields[0] != "Z":
+            found.append(int(stat.parent.name))
+    return found
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="reads the process table from /proc")
+def test_ending_a_session_ends_the_processes_analysing_its_units(tmp_path: Path) -> None:
+    from motorlab.simulated_session import write_simulated_session
+
+    toml = write_simulated_session("neverest40", out_dir=tmp_path, units=2, seed=4,
+                                   experiments=("identify", "feedforward"))
+    started: list[Any] = []
+    start = runner._start
+
+    def keep(*args: Any) -> Any:
+        started.append(start(*args))
+        return started[-1]
+
+    async def run_then_cancel() -> list[int]:
+        task = asyncio.ensure_future(runner.run_cli(["characterize", str(toml), "--quiet", "--processes=2"],
+                                                    cwd=str(tmp_path), slot="session"))
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline and not (started and len(_group(started[0].pid)) >= 3):
+            await asyncio.sleep(0.05)
+        members = _group(started[0].pid)
+        task.cancel()  # as when the client goes away
+        with pytest.raises(asyncio.CancelledError):
+            await task
+        return members
+
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(runner, "_start", keep)
+        members = asyncio.run(run_then_cancel())
+    assert len(members) >= 3, "the session's units were not analysed in processes of their own"
+    # At once: without ending the group, each would finish the unit it is analysing (seconds) first.
+    assert _wait_until(lambda: not _group(started[0].pid), 1.0), "processes of the session outlived it"
+
+
+def test_gains_are_recomputed_in_one_resident_worker(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    argv = ["tune", "velocity", "--kv=0.12", "--ka=0.01", "--ks=0.3", "--target=roadrunner", "--cpr=8192",
+            "--emit=java", "--json"]
+
+    async def changes() -> tuple[list[runner.Outcome], int, runner.Outcome, runner.Outcome]:
+        worker = runner.resident()
+        await worker.start()
+        assert worker.ready
+        started = runner.POOL.started
+        answers = [await runner.run_cli([*argv[:2], f"--kv={kv}", *argv[3:]], cwd=str(tmp_path))
+                   for kv in (0.12, 0.13, 0.14)]
+        assert runner.POOL.started == started  # no new process for a change of the gains
+        jobs = worker.jobs
+        refused = await runner.run_cli([*argv, "--cpr=-3"], cwd=str(tmp_path))  # the CLI's refusal, as text
+        monkeypatch.setenv("MOTORLAB_UI_WARM", "0")
+        fresh = await runner.run_cli([*argv[:2], "--kv=0.14", *argv[3:]], cwd=str(tmp_path))
+        worker.close()
+        return answers, jobs, refused, fresh
+
+    answers, jobs, refused, fresh = asyncio.run(changes())
+    assert jobs == 3
+    assert all(a.code == 0 for a in answers)
+    kv = [json.loads(a.stdout)["feedforward"]["kV"] for a in answers]
+    assert kv == sorted(set(kv))  # each change answered with its own gains
+    assert answers[-1].stdout == fresh.stdout  # byte for byte what a fresh `motorlab tune` prints
+    assert refused.code == 2
+    assert "cpr" in refused.error_line()
+
+
+def test_a_resident_job_past_its_time_limit_ends_the_worker(tmp_path: Path) -> None:
+    async def late() -> tuple[runner.Outcome, bool]:
+        worker = runner.resident()
+        await worker.start()
+        assert worker.ready
+        proc = worker.proc
+        outcome = await runner.run_cli(["tune", "velocity", "--kv=0.12", "--json"], cwd=str(tmp_path),
+                                       time_limit=0.0001)
+        ended = proc is not None and proc.poll() is not None
+        worker.close()
+        return outcome, ended
+
+    outcome, ended = asyncio.run(late())
+    assert outcome.code == 124
+    assert ended

@@ -12,6 +12,7 @@ measured, gives K = τ/i (the magnets' coefficient applied at the case temperatu
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from typing import Any
@@ -42,6 +43,10 @@ MIN_SAMPLES = 5
 #: heating does not explain it.
 UNEXPLAINED_FACTOR = 4.0
 UNEXPLAINED_RMS = 0.03
+#: The winding's thermal time constant R_wc·C_w below which a fitted network is no armature's [s]: the
+#: copper and iron of a real one reach the case in 6–60 s (VEX's BAG, mini-CIM and AndyMark 9015 runs),
+#: a 550-size FTC motor's estimate is 18 s. A fit that needs less is chasing a rise heat cannot make.
+MIN_WINDING_TIME_CONSTANT = 2.0
 
 
 @dataclass
@@ -152,7 +157,7 @@ def stall(
             warnings.append(f"{r.source}: only {max(r.end - r.start, 0)} healthy samples before the cut: left out")
     if not used:
         raise FitError("no run has a healthy stretch of at least 5 samples to fit")
-    heat, excluded = _fit_with_exclusions([runs[k] for k in used], beta, ambient, warnings)
+    heat, excluded, unexplained = _fit_with_exclusions([runs[k] for k in used], beta, ambient, warnings)
     data = [runs[k].data() for k in used]
     fitted = [j for j in range(len(used)) if j not in excluded]
     # The torque against the heating model's current, not the measured one: the model's is free of the
@@ -167,9 +172,28 @@ def stall(
         note = current_dependence(torque)
         if note:
             warnings.append(note)
-    return _result(runs, used, fitted, heat, torque, warnings, recs,
-                   {"beta": beta, "ambient": ambient, "answer_voltage": answer_voltage, "limit": limit,
-                    "rise": rise, "until": until, "magnet": magnet if magnet_coefficient is None else "given"})
+    result = _result(runs, used, fitted, heat, torque, warnings, recs,
+                     {"beta": beta, "ambient": ambient, "answer_voltage": answer_voltage, "limit": limit,
+                      "rise": rise, "until": until, "magnet": magnet if magnet_coefficient is None else "given"})
+    if unexplained:
+        _mark_unexplained(result, unexplained)
+    return result
+
+
+def _mark_unexplained(result: FitResult, why: str) -> None:
+    """Every run fitted is one heating does not explain: the network and the answers are not determined, and a
+    forecast (``simulate stall``) refuses this fit (``details["unexplained"]``)."""
+    result.details["unexplained"] = why
+    for name in ("R_wc", "R_ca", "C_w", "C_c", "t_limit", "I_continuous"):
+        est = result.parameters.get(name)
+        if est is not None:
+            result.parameters[name] = replace(est, determined=False,
+                                              note=f"{est.note}: heating does not explain the run (see the warnings)")
+    for row in result.details["runs"]:
+        row["heating explains it"] = False
+        row["winding at the cut (°C)"] = None
+    # the temperatures of a network heating does not explain are not the winding's: not stated
+    result.warnings[:] = [re.sub(r"; the winding was at about -?\d+ °C", "", w) for w in result.warnings]
 
 
 def _with_case_uncertainty(torque: TorqueFit, data: list[StallData], heat: HeatFit) -> TorqueFit:
@@ -199,11 +223,28 @@ def _magnet(magnet: str, coefficient: float | None) -> float:
 
 
 def _fit_with_exclusions(runs: list[Run], beta: float, ambient: float,
-                         warnings: list[str]) -> tuple[HeatFit, list[int]]:
-    """The heating fit, leaving out (and naming) a run that heating does not explain (with ≥ 3 runs)."""
+                         warnings: list[str]) -> tuple[HeatFit, list[int], str]:
+    """The heating fit, leaving out (and naming) a run that heating does not explain: with ≥ 3 runs the one
+    that fits far worse than the others; with one or two, a run the fit misses by more than
+    :data:`UNEXPLAINED_RMS`, or a network whose winding time constant is no armature's. The third value is
+    the warning when no run is left that heating explains (a lone run), else ""."""
     data = [r.data() for r in runs]
     heat = fit_heating(data, magnet=beta, ambient=ambient)
     excluded: list[int] = []
+    if len(data) < 3:
+        tau_w = heat.values["R_wc"] * heat.values["C_w"]
+        failing = [j for j, rms in enumerate(heat.run_rms)
+               if rms > UNEXPLAINED_RMS or (tau_w < MIN_WINDING_TIME_CONSTANT and data[j].time.size >= 30)]
+        if len(failing) == len(data):  # nothing to compare with: say so, and what the run's own heat allows
+            text = " ".join(_lone_unexplained(data[j], heat, j) for j in failing)
+            warnings.append(text)
+            return heat, excluded, text
+        if failing:
+            keep = [j for j in range(len(data)) if j not in failing]
+            excluded.extend(failing)
+            heat = fit_heating([data[j] for j in keep], magnet=beta, ambient=ambient)
+            warnings.extend(_unexplained(data[j], heat) for j in failing)
+        return heat, excluded, ""
     if len(data) >= 3:
         rms = np.array(heat.run_rms)
         bad = int(np.argmax(rms))
@@ -213,7 +254,29 @@ def _fit_with_exclusions(runs: list[Run], beta: float, ambient: float,
             keep = [j for j in range(len(data)) if j != bad]
             heat = fit_heating([data[j] for j in keep], magnet=beta, ambient=ambient)
             warnings.append(_unexplained(data[bad], heat))
-    return heat, excluded
+    return heat, excluded, ""
+
+
+def _lone_unexplained(run: StallData, heat: HeatFit, pos: int) -> str:
+    """The warning for a run that heating does not explain, from its own figures: the rise of R against the
+    energy put in, the heating fit's miss and the winding its best network would need."""
+    r_meas = run.voltage / run.current
+    n = max(3, run.time.size // 20)
+    r0, r1 = float(np.median(r_meas[:n])), float(np.median(r_meas[-n:]))
+    power = run.voltage * run.current
+    p0, p1 = float(np.median(power[:n])), float(np.median(power[-n:]))
+    energy = float(np.trapezoid(power, run.time))
+    rise = (r1 / r0 - 1) / heat.thermal.resistance_coefficient
+    i0 = float(np.median(run.current[:n]))
+    tau_w = heat.values["R_wc"] * heat.values["C_w"]
+    return (f"{run.source}: heating does not explain this run: its resistance rose {100 * (r1 / r0 - 1):.0f} % "
+            f"({r0:.3g} -> {r1:.3g} Ω, {rise:.0f} K if it were the copper warming) on {p0:.3g} W falling to "
+            f"{p1:.3g} W ({energy / 1e3:.3g} kJ in {float(run.time[-1]):.0f} s); the best heating model misses the "
+            f"current by {100 * heat.run_rms[pos]:.1f} % "
+            f"RMS (a healthy run: under 2 %) and needs a winding of {heat.values['C_w']:.2g} J/K that reaches its case "
+            f"in {tau_w:.2g} s (real armatures: 10–100 J/K, 6–60 s); likely cause: brush contact (at {i0:.3g} A, a low "
+            "current for this winding, the contact resistance of brushes on the commutator grows), not heat. No "
+            "thermal network from it, and no forecast")
 
 
 def _unexplained(run: StallData, heat: HeatFit) -> str:

@@ -36,7 +36,20 @@ def register(subparsers: Any) -> None:
     )
     parser.add_argument("--no-report", action="store_true", help="write results.json and results.csv only")
     parser.add_argument("--quiet", action="store_true", help="no progress bar and no table")
+    add_processes_option(parser)
     parser.set_defaults(func=run)
+
+
+def add_processes_option(parser: argparse.ArgumentParser) -> None:
+    """``--processes N``: how many processes analyse the units and draw the report."""
+    from motorlab.cli.common import positive_int
+    from motorlab.parallel import default_processes
+
+    parser.add_argument(
+        "--processes", type=positive_int, default=default_processes(), metavar="N",
+        help="analyse the units, then draw the report's figures, in up to N processes at once "
+        "(default: %(default)s; 1 runs everything in this process)",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -61,8 +74,8 @@ def run(args: argparse.Namespace) -> int:
                 for path in spec.files:
                     if path.suffix.lower() == ".csv" and path.is_file() and _is_table(path):
                         check_header(path)
-    result = run_with_progress(session, quiet=args.quiet, figures=not args.no_report)
-    paths = write_outputs(result, out_dir, report=not args.no_report)
+    result = run_with_progress(session, quiet=args.quiet, processes=args.processes)
+    paths = write_outputs(result, out_dir, report=not args.no_report, processes=args.processes)
     if not args.quiet:
         print_table(result)
     for kind in ("json", "csv", "html"):
@@ -103,11 +116,12 @@ def report_failures(result: Any, paths: dict[str, Any]) -> int:
     return EXIT_PARTIAL
 
 
-def run_with_progress(session: Any, *, quiet: bool = False, figures: bool = True) -> Any:
+def run_with_progress(session: Any, *, quiet: bool = False, figures: bool = False, processes: int = 1) -> Any:
     """:func:`motorlab.characterize.characterize`; it reports its progress through :mod:`motorlab.progress`.
 
     The CLI's reporter shows a bar on a terminal (after 2 s), or JSON lines for the app
-    (``MOTORLAB_PROGRESS=json``, which ``--quiet`` leaves on: the app runs the command quiet).
+    (``MOTORLAB_PROGRESS=json``, which ``--quiet`` leaves on: the app runs the command quiet). No
+    figure is drawn here (``figures``): the numbers are written first, the report draws its figures.
     """
     import os
 
@@ -116,8 +130,8 @@ def run_with_progress(session: Any, *, quiet: bool = False, figures: bool = True
 
     if quiet and os.environ.get("MOTORLAB_PROGRESS") != "json":
         with progress.reporting(None):
-            return characterize(session, figures=figures)
-    return characterize(session, figures=figures)
+            return characterize(session, figures=figures, processes=processes)
+    return characterize(session, figures=figures, processes=processes)
 
 
 def print_table(result: Any, *, truth: bool = True) -> None:

@@ -45,6 +45,9 @@ def register(subparsers: Any) -> None:
         metavar="FACTOR",
         help="factor applied to the worn unit's gearbox efficiency (default 0.8)",
     )
+    from motorlab.cli.characterize import add_processes_option
+
+    add_processes_option(parser)
     parser.set_defaults(func=run)
 
 
@@ -159,7 +162,7 @@ def run(args: argparse.Namespace) -> int:
     from rich.console import Console
 
     from motorlab.cli.characterize import print_table, report_failures, run_with_progress
-    from motorlab.report import write_outputs
+    from motorlab.report import gains_figure, write_outputs
     from motorlab.session import load_session
     from motorlab.simulated_session import write_simulated_session
 
@@ -175,16 +178,16 @@ def run(args: argparse.Namespace) -> int:
         )
     console.print(f"simulated session: {toml}")
     session = load_session(toml)
-    result = run_with_progress(session)
-    with console.status("writing the report"):
-        paths = write_outputs(result, out)
-        gains = result.gains or {}
-        figure = gains.get("figure")
-        if figure is not None:
-            from motorlab.plot import save_figure
+    result = run_with_progress(session, processes=args.processes)
+    # No spinner here: its thread would keep the report's figures from being drawn in forked processes.
+    paths = write_outputs(result, out, processes=args.processes)
+    gains = result.gains or {}
+    figure = gains_figure(result)
+    if figure is not None:
+        from motorlab.plot import save_figure
 
-            save_figure(figure, out / "step_response.png")
-            paths["step"] = out / "step_response.png"
+        save_figure(figure, out / "step_response.png")
+        paths["step"] = out / "step_response.png"
     print_table(result)
     print_gearbox_table(result)
     print_experiment_table(result)

@@ -456,21 +456,24 @@ def tune_summary(
         f"fastest profile at {voltage:g} V: v_max = {lim.max_velocity * per:.4g} {mech.short}/s, "
         f"a_max = {lim.max_acceleration * per:.4g} {mech.short}/s² (free speed {lim.free_speed * per:.4g})"
     )
-    fig = None
-    if plot:
-        import matplotlib.pyplot as plt
-
-        fig = plt.figure(figsize=(9, 6.5))
-        axes = fig.subplots(2, 1)
-        for ax, (loop, res) in zip(axes, results.items(), strict=True):
-            disp = res._display_per_radian()
-            plot_response(res.step, ax=ax, per_radian=disp, unit=res.target.units["position"])
-            ax.set_title(ax.get_title().replace(f"{loop} step", f"{loop} step with LQR gains", 1), fontsize=10)
-        fig.tight_layout()
     return {
         "velocity": results["velocity"].to_dict(),
         "position": results["position"].to_dict(),
         "text": "\n".join(lines),
-        "figure": fig,
+        "figure": summary_figure(results) if plot else None,
         "results": results,
     }
+
+
+def summary_figure(results: dict[str, TuneResult]) -> Any:
+    """The step responses of :func:`tune_summary`'s loops, one above the other (a matplotlib Figure)."""
+    import matplotlib.pyplot as plt
+
+    fig = plt.figure(figsize=(9, 6.5))
+    axes = fig.subplots(2, 1)
+    for ax, (loop, res) in zip(axes, results.items(), strict=True):
+        disp = res._display_per_radian()
+        plot_response(res.step, ax=ax, per_radian=disp, unit=res.target.units["position"])
+        ax.set_title(ax.get_title().replace(f"{loop} step", f"{loop} step with LQR gains", 1), fontsize=10)
+    fig.tight_layout()
+    return fig

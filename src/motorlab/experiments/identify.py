@@ -4,10 +4,19 @@ from __future__ import annotations
 
 from typing import Any
 
-from motorlab.experiments import Experiment, Option, RigRun
+from motorlab.experiments import Experiment, Option, RigRun, Setting
 from motorlab.experiments._shared import COLUMN
 
 PARAMETERS = ("K", "R", "L", "J", "b", "Tf")
+
+
+def thermal_motors() -> list[str]:
+    """The catalogue's motors with thermal figures (``data/thermal.toml``)."""
+    import tomllib
+    from importlib import resources
+
+    text = resources.files("motorlab").joinpath("data/thermal.toml").read_text(encoding="utf-8")
+    return [m for family in tomllib.loads(text).get("families", {}).values() for m in family.get("motors", ())]
 
 
 def run(paths: list[str], v: dict[str, Any]) -> Any:
@@ -26,7 +35,10 @@ def run(paths: list[str], v: dict[str, Any]) -> Any:
     from motorlab.analyses._heat import add_heat_warning
 
     result = identify(runs, resistance=v["resistance"], torque_constant=v["torque_constant"], cpr=cpr,
-                      use_current=v["use_current"])
+                      use_current=v["use_current"], thermal=v["thermal"], motor=v["motor"],
+                      initial_temperature=v["initial_temperature"])
+    if v["thermal"]:  # the heat is in the model: its figure is among the warnings already
+        return result
     return add_heat_warning(result, runs, resistance=v["resistance"])
 
 
@@ -37,7 +49,10 @@ def characterize(ctx: Any) -> Any:
     cpr = ctx.cpr
     runs = read_runs(ctx.files, cpr=cpr)
     if all(run.has("current") for run in runs):
-        return identify(runs, cpr=cpr)
+        heat = str(ctx.setting("thermal") or "").strip()  # "yes", or the catalogue motor whose figures to use
+        return identify(runs, cpr=cpr, thermal=bool(heat) and heat.lower() not in ("no", "false"),
+                        motor=None if heat.lower() in ("", "yes", "true", "no", "false") else heat,
+                        initial_temperature=ctx.setting("initial_temperature"))
     # Without current the feedforward gains need R (and K to separate K from b) from elsewhere.
     r, k = ctx.estimate("R"), ctx.estimate("K")
     return identify(
@@ -61,9 +76,24 @@ EXPERIMENT = Experiment(
                help="if known (a spin-down); separates K from b when the log has no current"),
         Option("no-current", kind="flag", default=True, dest="use_current", label="Ignore the current column",
                help="fit the voltage and the angle only"),
+        Option("thermal", kind="flag", default=False, label="Fit the winding's temperature",
+               help="R and K at 25 °C, with the winding's temperature integrated from the log's heat as a state of the "
+                    "model (needs the current)"),
+        Option("motor", kind="choice", choices=tuple(thermal_motors()), metavar="NAME",
+               label="Motor whose thermal figures to use",
+               help="with the winding's temperature: the catalogue's thermal network of this motor; without it, the "
+                    "one the log names, else a 550-size motor's"),
+        Option("initial-temperature", "degC", metavar="CELSIUS", label="Winding temperature at the start",
+               help="with the winding's temperature: in °C, the winding's and case's at the log's start; without "
+                    "it, the ambient's"),
         COLUMN,
     ),
     reports=PARAMETERS,
+    settings=(
+        Setting("thermal", "str", "fit the winding's temperature as a state: \"yes\" (the network of the motor the "
+                "log names), or the catalogue motor whose thermal figures to use"),
+        Setting("initial_temperature", "float", "with thermal: the winding's temperature at the log's start [°C]"),
+    ),
     shaft="output, what the log drove, per unit of K·i",
     order=70,
     contributes={name: name for name in PARAMETERS},

@@ -181,7 +181,16 @@ def read_csv(path: PathArg, *, cpr: float | None = None, columns: Any = None) ->
     if data.shape[0] == 0:
         raise LogFormatError("no data rows after the header", path=name, line=header_no)
     del text, table  # the file's bytes are not needed any more (a 2M-row table: 100 MB)
-    return _assemble(name, data, line_arr, warnings, header, targets, used, metadata, comments, cpr)
+    # A header in words only (Time,Amps,Volts,Torque 6V (N · m)) is an instrument's export (a dynamometer's
+    # DAQ), not a robot's log of sensor reads: a sample that jumps away and back there is an event of the run
+    # (a current limit reached, turns shorting, brushes arcing), which the analyses name; only values beyond
+    # any measurement are excluded from it.
+    worded = all(column_name(f) is None for f in header if f.strip() and not f.startswith(EXTRA_PREFIX))
+    if worded:
+        metadata["glitch_screening"] = ("values beyond any measurement only: an instrument's export in words, "
+                                        "whose single-sample excursions are events of the run")
+    return _assemble(name, data, line_arr, warnings, header, targets, used, metadata, comments, cpr,
+                     spikes=not worded)
 
 
 def _parse_rows(
@@ -228,6 +237,8 @@ def _assemble(
     metadata: dict[str, Any],
     comments: list[str],
     cpr: float | None,
+    *,
+    spikes: bool = True,
 ) -> Recording:
     """Columns to SI signals, time checked, cpr applied: the Recording of :func:`read_csv`."""
     signals: dict[str, np.ndarray] = {}
@@ -271,7 +282,8 @@ def _assemble(
             "warnings": warnings,
         }
     )
-    return screen_glitches(Recording(time=time, signals=signals, metadata=metadata, source=name, lines=line_arr))
+    return screen_glitches(Recording(time=time, signals=signals, metadata=metadata, source=name, lines=line_arr),
+                           spikes=spikes)
 
 
 def check_header(path: PathArg, columns: Any = None) -> None:

@@ -76,7 +76,7 @@ def _spikes(x: np.ndarray) -> np.ndarray:
     return np.concatenate(found)
 
 
-def screen_glitches(recording: Recording) -> Recording:
+def screen_glitches(recording: Recording, *, spikes: bool = True) -> Recording:
     """The recording without its single-sample glitches; each one named in ``metadata["warnings"]``.
 
     Parameters
@@ -84,6 +84,9 @@ def screen_glitches(recording: Recording) -> Recording:
     recording
         As a reader returns it (``lines`` give the file lines; ``metadata["file_starts"]`` is kept
         consistent for split FTC logs).
+    spikes
+        Also exclude samples that jump away from both neighbours and back (False: only values beyond any
+        measurement; a dynamometer's export, whose single-sample excursions are events of the run).
 
     Returns
     -------
@@ -126,9 +129,9 @@ def screen_glitches(recording: Recording) -> Recording:
             bad.setdefault(index, f"{name} = {values[index]:.6g} is beyond any measurement")
         if name == "time":
             continue
-        spikes = _spikes(values) if absurd.size == 0 else np.empty(0, dtype=int)
-        if 0 < spikes.size <= allowed:
-            for index in spikes.tolist():
+        jumps = _spikes(values) if absurd.size == 0 and spikes else np.empty(0, dtype=int)
+        if 0 < jumps.size <= allowed:
+            for index in jumps.tolist():
                 bad.setdefault(index, f"{name} = {values[index]:.6g} jumps away from its neighbours and back")
     if not bad or len(bad) > allowed or len(bad) >= n - 1:
         return recording

@@ -27,8 +27,8 @@ from starlette.staticfiles import StaticFiles
 
 from motorlab.ui import robot, runner, schema, uploads
 
-#: Options the page never passes on from a client (they name output paths; the app sets them).
-_REFUSED_FIELDS = {"plot", "output", "o", "json", "emit-file"}
+#: Options the page never passes on from a client (output paths, the number of processes: the app sets them).
+_REFUSED_FIELDS = {"plot", "output", "o", "json", "emit-file", "processes"}
 
 #: CLI exit code -> HTTP status.
 _STATUS = {2: 400, 124: 422}
@@ -143,23 +143,32 @@ def _as_line(response: Response) -> bytes:
     return _line({"error": body["error"], "status": response.status_code})
 
 
+#: Looks, while a command runs, for an early part of its answer (a session's table before its report).
+Peek = Callable[[], dict[str, Any] | None]
+
+
 async def _ndjson(stack: contextlib.ExitStack, argv: list[str], cwd: str, slot: str,
-                  finish: Finish) -> AsyncIterator[bytes]:
+                  finish: Finish, peek: Peek | None = None) -> AsyncIterator[bytes]:
     """``{"progress": {...}}`` lines while the command runs, then ``{"result": ...}`` or ``{"error", "status"}``.
 
-    The response's task is cancelled when the client goes away (Starlette listens for the
-    disconnect): the command's child process is ended then, and the request's folder removed.
+    With ``peek``, it is asked four times a second until it gives something, which is sent as a
+    line of its own (``{"partial": ...}``, once) before the command ends. The response's task is
+    cancelled when the client goes away (Starlette listens for the disconnect): the command's child
+    process is ended then, and the request's folder removed.
     """
     reports: asyncio.Queue[dict[str, Any]] = asyncio.Queue()
     task = asyncio.ensure_future(runner.run_cli(argv, cwd=cwd, slot=slot, on_progress=reports.put_nowait))
     try:
         while not task.done():
             get = asyncio.ensure_future(reports.get())
-            await asyncio.wait({task, get}, return_when=asyncio.FIRST_COMPLETED)
+            await asyncio.wait({task, get}, return_when=asyncio.FIRST_COMPLETED, timeout=0.25 if peek else None)
             if get.done():
                 yield _line({"progress": get.result()})
             else:
                 get.cancel()
+            if peek is not None and not task.done() and (early := peek()) is not None:
+                peek = None
+                yield _line({"partial": early})
         while not reports.empty():
             yield _line({"progress": reports.get_nowait()})
         yield _as_line(finish(task.result()))
@@ -172,7 +181,7 @@ async def _ndjson(stack: contextlib.ExitStack, argv: list[str], cwd: str, slot: 
 
 
 async def _execute(request: Request, stack: contextlib.ExitStack, argv: list[str], folder: Path, *,
-                   slot: str = "short", finish: Finish | None = None) -> Response:
+                   slot: str = "short", finish: Finish | None = None, peek: Peek | None = None) -> Response:
     """Run ``motorlab argv`` in ``folder`` and answer: the CLI's JSON, or a stream of it with progress.
 
     ``stack`` holds the request's folder: closed here, or by the stream when it ends.
@@ -180,7 +189,7 @@ async def _execute(request: Request, stack: contextlib.ExitStack, argv: list[str
     done = finish or _outcome_response
     if NDJSON in request.headers.get("accept", ""):
         moved = stack.pop_all()
-        return StreamingResponse(_ndjson(moved, argv, str(folder), slot, done), media_type=NDJSON,
+        return StreamingResponse(_ndjson(moved, argv, str(folder), slot, done, peek), media_type=NDJSON,
                                  headers={"cache-control": "no-store", "x-accel-buffering": "no"})
     outcome = await _until_disconnect(request, runner.run_cli(argv, cwd=str(folder), slot=slot))
     if outcome is None:
@@ -272,7 +281,11 @@ def _session_file(files: list[str], values: dict[str, list[str]]) -> str | None:
 
 
 async def characterize(request: Request) -> Response:
-    """A whole session (its TOML and logs, or one zip) → results.json, results.csv and report.html."""
+    """A whole session (its TOML and logs, or one zip) → results.json, results.csv and report.html.
+
+    Streamed (NDJSON), the results table comes first, as ``{"partial": {"results", "csv"}}``, as soon
+    as the CLI has written it; the report's figures follow in the last line.
+    """
     with contextlib.ExitStack() as stack:
         folder = stack.enter_context(uploads.private_folder())
         try:
@@ -306,7 +319,15 @@ async def characterize(request: Request) -> Response:
             }
             return JSONResponse(body)
 
-        return await _execute(request, stack, argv, folder, slot="session", finish=finish)
+        def table() -> dict[str, Any] | None:
+            """results.json and results.csv once written (atomically, the csv first), the report still drawing."""
+            try:
+                return {"results": json.loads((out / "results.json").read_text(encoding="utf-8")),
+                        "csv": (out / "results.csv").read_text(encoding="utf-8")}
+            except (OSError, ValueError):
+                return None
+
+        return await _execute(request, stack, argv, folder, slot="session", finish=finish, peek=table)
 
 
 async def api_schema(request: Request) -> Response:

@@ -17,9 +17,10 @@ export async function post(url, form, { signal } = {}) {
   return parse(await fetch(url, { method: "POST", body: form, signal }));
 }
 
-// POST with `Accept: application/x-ndjson`: progress lines go to onProgress, the last line is the answer.
+// POST with `Accept: application/x-ndjson`: progress lines go to onProgress, an early part of the answer
+// (a session's table before its report) to onPartial, the last line is the answer.
 // A server that does not stream answers with plain JSON, which is read as before.
-export async function run(url, form, { signal, onProgress } = {}) {
+export async function run(url, form, { signal, onProgress, onPartial } = {}) {
   const response = await fetch(url, { method: "POST", body: form, signal, headers: { Accept: "application/x-ndjson" } });
   const type = response.headers.get("content-type") || "";
   if (!type.includes("ndjson") || !response.body) return parse(response);
@@ -31,6 +32,7 @@ export async function run(url, form, { signal, onProgress } = {}) {
     if (!line.trim()) return;
     const msg = JSON.parse(line);
     if (msg.progress && onProgress) onProgress(msg.progress);
+    else if (msg.partial && onPartial) onPartial(msg.partial);
     else if ("result" in msg) answer = msg;
     else if ("error" in msg) answer = msg;
   };

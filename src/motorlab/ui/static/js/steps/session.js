@@ -43,12 +43,14 @@ async function runSession(ctx) {
   const t = ctx.state, s = t.session;
   const form = new FormData();
   for (const f of s.files) form.append("file", f.file, f.path);
-  s.status = "running"; s.error = ""; s.started = Date.now();
+  s.status = "running"; s.error = ""; s.started = Date.now(); s.body = null; sessionStep = null;
   controller = new AbortController();
   ctx.rerender();
   const clock = setInterval(() => { const el2 = $(".session .run-status"); if (el2 && !el2.dataset.progress) el2.textContent = `running the analyses… ${Math.round((Date.now() - s.started) / 1000)} s`; }, 500);
   try {
-    s.body = await runRequest("api/characterize", form, { signal: controller.signal, onProgress: progress });
+    // The table comes first (onPartial), the report with its figures follows in the answer.
+    const onPartial = (part) => { s.body = { ...part, report_html: null }; save(); ctx.rerender(); };
+    s.body = await runRequest("api/characterize", form, { signal: controller.signal, onProgress: progress, onPartial });
     s.status = "done";
     t.gains.unit = "";
   } catch (e) {
@@ -59,10 +61,17 @@ async function runSession(ctx) {
   }
 }
 
+// The session's own steps (units done of total, the experiment running; then the report's sections) are
+// shown; the steps inside one analysis (a fit's iterations) only until the first of them arrives.
+let sessionStep = null;
 function progress(p) {
+  const own = p.unit === "unit" || p.unit === "section";
+  if (!own && sessionStep) return;
+  if (own) sessionStep = p;
   const bar = $(".session progress"), text = $(".session .run-status");
   if (bar && p.total) { bar.max = p.total; bar.value = p.done || 0; }
-  if (text) { text.dataset.progress = "1"; text.textContent = `${p.what || "working"}: ${p.done || 0} of ${p.total || "?"} ${p.unit || ""}${p.detail ? ` (${p.detail})` : ""}`.replace(" of ? ", " "); }
+  const counted = p.total ? `${p.done || 0} of ${p.total} ${p.unit}${p.total === 1 ? "" : "s"} done` : "";
+  if (text) { text.dataset.progress = "1"; text.textContent = `${p.what || "working"}: ${counted}${p.detail ? ` (${p.detail})` : ""}`; }
 }
 
 function resultsTable(r) {
@@ -118,8 +127,10 @@ export function render(host, ctx) {
       el("div", { class: "actions" },
         el("button", { type: "button", text: "Download results.json", onclick: () => download("results.json", JSON.stringify(r, null, 2), "application/json") }),
         el("button", { type: "button", text: "Download results.csv", onclick: () => download("results.csv", s.body.csv, "text/csv") }),
-        el("button", { type: "button", text: "Download the report", onclick: () => download("report.html", s.body.report_html, "text/html") })),
-      el("details", { class: "report" }, el("summary", { text: "The printable report" }), el("iframe", { title: "The report", sandbox: "", srcdoc: s.body.report_html })));
+        s.body.report_html ? el("button", { type: "button", text: "Download the report", onclick: () => download("report.html", s.body.report_html, "text/html") }) : null),
+      s.body.report_html
+        ? el("details", { class: "report" }, el("summary", { text: "The printable report" }), el("iframe", { title: "The report", sandbox: "", srcdoc: s.body.report_html }))
+        : el("p", { class: "small", role: "status", id: "report-status", text: running ? "The report with its figures is being drawn; it follows here." : "The report was not finished." }));
     host.append(out);
   }
   host.append(el("nav", { class: "next" }, el("a", { class: `button${s && s.body ? " primary" : ""}`, href: `#/${ctx.task.key}/gains`, text: "Gains for your code →" })));
