@@ -192,3 +192,49 @@ def test_ending_a_session_ends_the_processes_analysing_its_units(tmp_path: Path)
     assert len(members) >= 3, "the session's units were not analysed in processes of their own"
     # At once: without ending the group, each would finish the unit it is analysing (seconds) first.
     assert _wait_until(lambda: not _group(started[0].pid), 1.0), "processes of the session outlived it"
+
+
+def test_gains_are_recomputed_in_one_resident_worker(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    argv = ["tune", "velocity", "--kv=0.12", "--ka=0.01", "--ks=0.3", "--target=roadrunner", "--cpr=8192",
+            "--emit=java", "--json"]
+
+    async def changes() -> tuple[list[runner.Outcome], int, runner.Outcome, runner.Outcome]:
+        worker = runner.resident()
+        await worker.start()
+        assert worker.ready
+        started = runner.POOL.started
+        answers = [await runner.run_cli([*argv[:2], f"--kv={kv}", *argv[3:]], cwd=str(tmp_path))
+                   for kv in (0.12, 0.13, 0.14)]
+        assert runner.POOL.started == started  # no new process for a change of the gains
+        jobs = worker.jobs
+        refused = await runner.run_cli([*argv, "--cpr=-3"], cwd=str(tmp_path))  # the CLI's refusal, as text
+        monkeypatch.setenv("MOTORLAB_UI_WARM", "0")
+        fresh = await runner.run_cli([*argv[:2], "--kv=0.14", *argv[3:]], cwd=str(tmp_path))
+        worker.close()
+        return answers, jobs, refused, fresh
+
+    answers, jobs, refused, fresh = asyncio.run(changes())
+    assert jobs == 3
+    assert all(a.code == 0 for a in answers)
+    kv = [json.loads(a.stdout)["feedforward"]["kV"] for a in answers]
+    assert kv == sorted(set(kv))  # each change answered with its own gains
+    assert answers[-1].stdout == fresh.stdout  # byte for byte what a fresh `motorlab tune` prints
+    assert refused.code == 2
+    assert "cpr" in refused.error_line()
+
+
+def test_a_resident_job_past_its_time_limit_ends_the_worker(tmp_path: Path) -> None:
+    async def late() -> tuple[runner.Outcome, bool]:
+        worker = runner.resident()
+        await worker.start()
+        assert worker.ready
+        proc = worker.proc
+        outcome = await runner.run_cli(["tune", "velocity", "--kv=0.12", "--json"], cwd=str(tmp_path),
+                                       time_limit=0.0001)
+        ended = proc is not None and proc.poll() is not None
+        worker.close()
+        return outcome, ended
+
+    outcome, ended = asyncio.run(late())
+    assert outcome.code == 124
+    assert ended

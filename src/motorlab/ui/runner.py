@@ -136,11 +136,13 @@ class Pool:
         self.started = 0  # warm processes started so far (for tests and benchmarks)
         atexit.register(self.close)
 
-    def _spawn(self) -> subprocess.Popen[bytes]:
+    def spawn(self, *args: str) -> subprocess.Popen[bytes]:
+        """A new warm process (``python -P -m motorlab.ui.warm ARGS``); its stderr is not read (``--serve``)."""
         self.started += 1
         return subprocess.Popen(
-            [sys.executable, "-P", "-m", "motorlab.ui.warm"], cwd=tempfile.gettempdir(), env=_child_env(),
-            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, **_OWN_GROUP,
+            [sys.executable, "-P", "-m", "motorlab.ui.warm", *args], cwd=tempfile.gettempdir(), env=_child_env(),
+            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL if args else subprocess.PIPE,
+            **_OWN_GROUP,
         )
 
     def fill(self) -> None:
@@ -150,7 +152,7 @@ class Pool:
         with self._lock:
             self._spares = [p for p in self._spares if p.poll() is None]
             while len(self._spares) < SPARES:
-                self._spares.append(self._spawn())
+                self._spares.append(self.spawn())
 
     def take(self) -> subprocess.Popen[bytes] | None:
         """A warm process for one job, or None when none is ready (the caller starts a fresh one)."""
@@ -184,6 +186,118 @@ def _semaphore(slot: str) -> asyncio.Semaphore:
     if loop not in _slots:
         _slots[loop] = {"short": asyncio.Semaphore(CONCURRENCY), "session": asyncio.Semaphore(SESSIONS)}
     return _slots[loop][slot]
+
+
+#: Jobs a resident worker runs (``(module, first argument)``): the gains and their curves, computed from
+#: typed numbers in a fraction of a second, recomputed at each change of an option on the page.
+RESIDENT_JOBS = {("motorlab", "tune"), ("motorlab.ui.worker", "response")}
+
+#: Nice value of sessions' processes: the CPU goes to short commands first (a session's table is
+#: seconds away anyway; an analysis or a change of the gains is waited for).
+SESSION_NICENESS = 10
+
+
+class Resident:
+    """One warm process (``motorlab.ui.warm --serve``) running short jobs one at a time, on one event loop.
+
+    A gains change would otherwise take a spare (then replaced: a new Python importing scipy) for
+    0.1 s of work. A job that runs past its time limit, or whose client goes away, ends the process (the
+    next is started when the app is idle); while the resident is busy or starting, a job runs the
+    ordinary way, in a spare or a fresh process, so nothing queues behind it.
+    """
+
+    def __init__(self) -> None:
+        self.proc: subprocess.Popen[bytes] | None = None
+        self.reader: asyncio.StreamReader | None = None
+        self.transport: asyncio.BaseTransport | None = None
+        self.ready = False
+        self.busy = False
+        self.jobs = 0  # jobs run so far (for tests and benchmarks)
+        self.starting: asyncio.Future[None] | None = None
+
+    def start_soon(self) -> None:
+        """:meth:`start` in the background (when idle: its imports take the CPU for a second or two)."""
+        if not self.busy and (self.starting is None or self.starting.done()):
+            self.starting = asyncio.ensure_future(self.start())
+
+    async def start(self) -> None:
+        """Start the process (when none runs) and mark it ready once its imports are done."""
+        if not _warm_enabled() or (self.proc is not None and self.proc.poll() is None):
+            return
+        self.close()
+        self.proc = POOL.spawn("--serve")
+        assert self.proc.stdout is not None
+        self.reader, self.transport = await _reader(self.proc.stdout)
+        self.busy = True  # until "ready"
+        try:
+            self.ready = (await self.reader.readline()).strip() == b"ready"
+        finally:
+            self.busy = False
+
+    async def run(self, module: str, argv: Sequence[str], cwd: str, env: Mapping[str, str],
+                  limit: float) -> Outcome | None:
+        """The job's outcome, or None when the resident cannot take it now (the caller runs it otherwise)."""
+        proc, reader = self.proc, self.reader
+        if self.busy or not self.ready or proc is None or reader is None or proc.poll() is not None:
+            return None
+        assert proc.stdin is not None
+        self.busy = True
+        try:
+            job = {"module": module, "argv": list(argv), "cwd": cwd, "env": dict(env)}
+            proc.stdin.write((json.dumps(job) + "\n").encode())
+            proc.stdin.flush()
+            line = await asyncio.wait_for(reader.readline(), timeout=limit)
+            if not line:  # it died (ended from outside): the job runs the ordinary way
+                self.close()
+                return None
+            self.jobs += 1
+            answer = json.loads(line)
+            err = "".join(k for k in str(answer["stderr"]).splitlines(keepends=True) if not k.startswith('{"progress"'))
+            return Outcome(int(answer["code"]), str(answer["stdout"]), err)
+        except TimeoutError:
+            self.close()
+            return Outcome(124, "", f"motorlab: error: the command took longer than {limit:g} s and was stopped")
+        except (OSError, ValueError):
+            self.close()
+            return None
+        except asyncio.CancelledError:  # the client went away: the job's state is unknown, end the process
+            self.close()
+            raise
+        finally:
+            self.busy = False
+
+    def close(self) -> None:
+        """End the process."""
+        proc, self.proc, self.ready = self.proc, None, False
+        if self.transport is not None:
+            with contextlib.suppress(RuntimeError):  # its event loop is closed already (at exit)
+                self.transport.close()
+            self.transport = None
+        if proc is not None:
+            end(proc)
+            proc.wait()
+            for pipe in (proc.stdin, proc.stdout, proc.stderr):
+                if pipe is not None:
+                    pipe.close()
+
+
+_residents: weakref.WeakKeyDictionary[asyncio.AbstractEventLoop, Resident] = weakref.WeakKeyDictionary()
+
+
+def resident() -> Resident:
+    """The running event loop's resident worker."""
+    loop = asyncio.get_running_loop()
+    if loop not in _residents:
+        _residents[loop] = Resident()
+    return _residents[loop]
+
+
+def _close_residents() -> None:
+    for worker in list(_residents.values()):
+        worker.close()
+
+
+atexit.register(_close_residents)
 
 
 #: Commands running now (their processes), for tests: a cancelled request leaves none behind.
@@ -261,8 +375,15 @@ async def run_module(
     """
     limit = TIME_LIMIT if time_limit is None else time_limit
     env = {"MOTORLAB_PROGRESS": "json"} if on_progress is not None else {}
+    if (module, argv[0] if argv else "") in RESIDENT_JOBS:
+        answered = await resident().run(module, argv, cwd, env, limit)
+        if answered is not None:
+            return answered
     async with _semaphore(slot):
         proc = _start(module, argv, cwd, env)
+        if slot == "session" and hasattr(os, "setpriority"):
+            with contextlib.suppress(OSError):  # the processes it forks inherit it
+                os.setpriority(os.PRIO_PROCESS, proc.pid, SESSION_NICENESS)
         RUNNING.add(proc)
         try:
             out, err = await asyncio.wait_for(_collect(proc, on_progress), timeout=limit)
@@ -276,6 +397,7 @@ async def run_module(
             RUNNING.discard(proc)
             if not RUNNING:  # idle: replace the spares used (not while commands run: they need the CPU)
                 POOL.fill()
+                resident().start_soon()
             if running:  # reap it (in a thread: Popen.wait blocks)
                 with contextlib.suppress(asyncio.CancelledError):
                     await asyncio.shield(asyncio.get_running_loop().run_in_executor(None, proc.wait))

@@ -87,8 +87,48 @@ def run(job: dict[str, object]) -> int:
         return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
 
 
+def serve() -> int:
+    """Preload, say ``ready``, then run jobs one after another: a JSON line in, a JSON line out.
+
+    The resident worker of :mod:`motorlab.ui.runner` for the gains (pure computations on typed
+    numbers, recomputed at each change of an option): ``{"code", "stdout", "stderr"}`` per job, what
+    the command printed caught as text. The environment, working folder and pyplot's figures are put
+    back after each job; the app ends the process (and starts another) when a job runs past its limit.
+    """
+    import contextlib
+    import io
+    import tempfile
+
+    import matplotlib.pyplot as plt
+
+    preload()
+    answers = sys.stdout
+    answers.write("ready\n")
+    answers.flush()
+    home, environment = tempfile.gettempdir(), dict(os.environ)
+    for line in sys.stdin:
+        if not line.strip():
+            continue
+        out, err = io.StringIO(), io.StringIO()
+        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+            try:
+                code = run(json.loads(line))
+            except Exception as exc:  # a bug in one job must not end the worker
+                print(f"motorlab: internal error: {type(exc).__name__}: {exc}", file=sys.stderr)
+                code = 1
+        os.environ.clear()
+        os.environ.update(environment)
+        os.chdir(home)
+        plt.close("all")
+        answers.write(json.dumps({"code": code, "stdout": out.getvalue(), "stderr": err.getvalue()}) + "\n")
+        answers.flush()
+    return 0
+
+
 def main() -> int:
-    """Preload, wait for the job on stdin, run it."""
+    """Preload, wait for the job on stdin, run it (``--serve``: run jobs until stdin closes)."""
+    if sys.argv[1:] == ["--serve"]:
+        return serve()
     preload()
     line = sys.stdin.readline()
     if not line.strip():  # the app went away before giving a job
