@@ -130,7 +130,10 @@ def parameters_of(heat: HeatFit, torque: TorqueFit | None, extra: dict[str, Esti
     if torque is not None:
         note = ("torque per amp at 25 °C (the magnets' coefficient applied at the case temperature)" if torque.beta
                 else "torque per amp at the runs' temperatures (see the warnings)")
-        out["K"] = Estimate("K", torque.K, torque.K_stderr, "N*m/A", True, note)
+        if not torque.K > 0:  # never printed silently: a torque against the current is positive
+            note = ("not determined: the fit gives a torque per amp that is not positive (the runs' torque and "
+                    "current disagree: another shaft, a sensor's sign or offset)")
+        out["K"] = Estimate("K", torque.K, torque.K_stderr, "N*m/A", bool(torque.K > 0), note)
         if math.isfinite(torque.tau0_stderr):
             out["tau0"] = Estimate("tau0", torque.tau0, torque.tau0_stderr, "N*m", True,
                                    "torque at zero current (a sensor offset, friction held, or saturation's curve)")
