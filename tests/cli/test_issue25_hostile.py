@@ -386,3 +386,15 @@ def test_a_unit_value_that_breaks_physics_keeps_its_warning(tmp_path: Path, caps
     assert unit["parameters"]["b"]["value"] < 0
     assert any(w.startswith("terminal: b is fitted negative") for w in unit["warnings"]), unit["warnings"]
     assert "motorlab: warning: unit A: terminal: b is fitted negative" in err
+
+
+def test_a_curve_voltage_beyond_any_motor_is_refused(tmp_path: Path, capsys) -> None:
+    """Found by the long fuzz run (case 4993): ``analyze curve --voltage 1e299`` ran, with numpy's
+    overflow warnings on stderr, to exit 0."""
+    from motorlab.io import write_csv
+
+    path = tmp_path / "curve.csv"
+    write_csv(path, {"speed_rpm": [0.0, 3000, 6000], "torque_Nm": [1.4, 0.7, 0.0], "current_A": [89.0, 46, 3]})
+    refused(capsys, "analyze", "curve", path, "--voltage", "1e299", "--json", mentions="above 1000 V")
+    code, _out, err = run(capsys, "analyze", "curve", path, "--voltage", "12", "--json")
+    assert code == 0, err
