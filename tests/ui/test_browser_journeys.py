@@ -175,6 +175,9 @@ def test_a_running_session_shows_its_units_then_its_table_before_its_report(page
     # Results first: the table while the report's figures are still being drawn, then the report.
     page.wait_text("Each unit's parameters", 180)
     assert "The report with its figures is being drawn" in page.text()  # its figures take seconds more
+    drawing = re.compile(r"Drawing the report: \d of \d sections done")
+    assert page.wait(lambda: drawing.search(page.text()), "the report's sections counted", 60)
+    page.shot("ui-session-table-first.png")
     page.check()
     page.wait_text("The printable report", 180)
     assert "being drawn" not in page.text()
