@@ -128,3 +128,21 @@ def test_curve_round_trip_across_motor_sizes(motor: str) -> None:
     for name, value in (("K", k), ("R", r), ("Kt", kt)):
         est = result[name]
         assert abs(est.value - value) <= 3 * est.stderr, (name, est.value, value)
+
+
+def test_rows_before_the_supply_switches_on_and_torque_only_files_among_others(tmp_path: Path) -> None:
+    """Rows logged at 0 A before the supply switches on are skipped (the heating starts at the switch-on); a
+    torque-only export among several files is left out and named, not a reason to refuse them all."""
+    run = VirtualRig("neverest40", noise_seed=2, heating=True).stall(tmp_path / "s.csv", voltage=6.0, duration=90.0)
+    rec = read_csv(run.paths[0])
+    lead = 8
+    t = np.concatenate([rec.time[0] - 0.35 * np.arange(lead, 0, -1), rec.time]) + 5.0
+    signals = {name: np.concatenate([np.zeros(lead), rec[name]]) for name in ("voltage", "current", "torque")}
+    delayed = Recording(time=t, signals=signals, source="delayed.csv")
+    plain, late = stall(rec), stall(delayed)
+    assert late["R"].value == pytest.approx(plain["R"].value, rel=1e-3)
+    assert late["C_w"].value == pytest.approx(plain["C_w"].value, rel=0.02)
+    torque_only = read_runs([_dyno("NeveRest-locked-rotor-data-10v-20171016.csv")])[0]
+    both = stall([rec, torque_only])
+    assert any("NeveRest-locked-rotor-data-10v" in w and "torque only" in w and "left out" in w for w in both.warnings)
+    assert both["R"].value == pytest.approx(plain["R"].value, rel=1e-6)

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from motorlab.analyses._common import reader_warnings, sources_of
-from motorlab.analyses._stall_cuts import Cut, find_cut, first_full_sample, set_point
+from motorlab.analyses._stall_cuts import NO_CURRENT, Cut, find_cut, first_full_sample, set_point
 from motorlab.analyses._stall_fit import (
     SHARED,
     HeatFit,
@@ -62,12 +62,18 @@ class Run:
     end: int
     set_point: float
     cut: Cut
+    on: int = 0  # the row the supply switched on at (rows logged before it carry no current)
+
+    @property
+    def switch_on(self) -> float:
+        """The file's time of the row the supply switched on at [s]."""
+        return float(self.time[self.on])
 
     def data(self) -> StallData:
-        """The healthy part, its time counted from the run's first row (the supply switching on)."""
+        """The healthy part, its time counted from the supply switching on (the run's first row with current)."""
         sl = slice(self.start, self.end)
-        return StallData(self.source, self.time[sl] - self.time[0], self.voltage[sl], self.current[sl],
-                         None if self.torque is None else self.torque[sl], float(self.time[0]))
+        return StallData(self.source, self.time[sl] - self.switch_on, self.voltage[sl], self.current[sl],
+                         None if self.torque is None else self.torque[sl], self.switch_on)
 
 
 def _run_of(rec: Recording, voltage: float | None, until: float | None) -> Run:
@@ -99,7 +105,33 @@ def _run_of(rec: Recording, voltage: float | None, until: float | None) -> Run:
     end = t.size if cut.index is None else cut.index
     if until is not None:
         end = min(end, int(np.searchsorted(t, until, side="right")))
-    return Run(source, t, i, v, q, start, end, v_set, cut)
+    on = int(np.flatnonzero(i > NO_CURRENT * float(np.max(i)))[0])
+    return Run(source, t, i, v, q, start, end, v_set, cut, on)
+
+
+def _runs_of(recs: list[Recording], voltage: float | None, until: float | None,
+             warnings: list[str]) -> tuple[list[Run], list[Recording]]:
+    """The runs of the recordings; among several, a file without current (an export of torque only) is left
+    out and named, and refused only when no file is left.
+
+    Raises
+    ------
+    LogFormatError
+        A lone file without current, or every file without.
+    """
+    runs, kept, refused = [], [], []
+    for rec in recs:
+        try:
+            runs.append(_run_of(rec, voltage, until))
+            kept.append(rec)
+        except LogFormatError as exc:
+            if len(recs) == 1 or "current" not in exc.message:
+                raise
+            refused.append(exc)
+    if not runs:
+        raise refused[0]
+    warnings.extend(f"{exc}: left out" for exc in refused)
+    return runs, kept
 
 
 def stall(
@@ -153,8 +185,8 @@ def stall(
     beta = _magnet(magnet, magnet_coefficient)
     if not (math.isfinite(ambient) and -40 <= ambient <= 80):
         raise OptionError(f"the ambient temperature must lie between −40 and 80 °C, got {ambient!r}")
-    runs = [_run_of(rec, voltage, until) for rec in recs]
     warnings = reader_warnings(recs)
+    runs, recs = _runs_of(recs, voltage, until, warnings)
     used = [k for k, r in enumerate(runs) if r.end - r.start >= MIN_SAMPLES]
     for k, r in enumerate(runs):
         if k not in used:
