@@ -28,10 +28,12 @@ bench: install
 	MPLBACKEND=Agg $(BIN)/python benchmarks/run.py
 
 # The long fuzz run (docs/fuzz.md): 10,000 cases, resumable (out/fuzz/state.json), failures in
-# out/fuzz/failures/; stops by itself after FUZZ_MINUTES. E.g. make fuzz FUZZ_ARGS="--cases 20000".
+# out/fuzz/failures/; stops by itself after FUZZ_MINUTES (or on Ctrl-C / kill: the cases under way end,
+# the state is saved). FUZZ_JOBS cases at once. E.g. make fuzz FUZZ_JOBS=2 FUZZ_ARGS="--cases 20000".
 FUZZ_MINUTES ?= 240
+FUZZ_JOBS ?= 1
 fuzz: install
-	MPLBACKEND=Agg nice -n 10 $(BIN)/python scripts/fuzz.py --minutes $(FUZZ_MINUTES) $(FUZZ_ARGS)
+	MPLBACKEND=Agg nice -n 10 $(BIN)/python scripts/fuzz.py --minutes $(FUZZ_MINUTES) --jobs $(FUZZ_JOBS) $(FUZZ_ARGS)
 
 clean:
 	rm -rf $(VENV) out build src/*.egg-info

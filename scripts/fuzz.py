@@ -5,11 +5,13 @@ run is resumable: ``out/fuzz/state.json`` holds the next case and the tallies, a
 ``make fuzz`` carries on from there until ``--cases`` is reached. A failure is saved as a folder
 under ``out/fuzz/failures/`` with its files, ``case.json`` and ``replay.sh`` (the command to run it
 again); ``--replay FOLDER`` runs a saved case and prints its verdict. The run stops by itself
-after ``--cases`` cases or ``--minutes`` minutes, whichever comes first.
+after ``--cases`` cases or ``--minutes`` minutes, whichever comes first, or on SIGTERM / Ctrl-C (the
+cases under way finish and are counted). ``--jobs N`` runs N cases at once, each in a worker forked
+from this process; results are tallied in case order, so the state file stays resumable.
 
 Usage::
 
-    python scripts/fuzz.py [--cases 10000] [--seed 1] [--minutes 60] [--out out/fuzz] [--time-limit 60]
+    python scripts/fuzz.py [--cases 10000] [--seed 1] [--minutes 60] [--jobs 1] [--out out/fuzz] [--time-limit 60]
     python scripts/fuzz.py --replay out/fuzz/failures/000123-traceback
     python scripts/fuzz.py --summary          # the tallies of the state file, as docs/fuzz.md shows them
 """
@@ -278,7 +280,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--replay", type=Path)
     parser.add_argument("--summary", action="store_true")
     parser.add_argument("--only", help="only seeds whose name contains this")
-    parser.add_argument("--app-every", type=int, default=20, help="every N-th case is an app request (0: none)")
+    parser.add_argument("--app-every", type=int, default=40,
+                        help="every N-th case is an app request (0: none; default 40: a request starts a Python "
+                             "process for its command, the cost of some fifteen CLI cases)")
     args = parser.parse_args(argv)
     if args.replay:
         return replay(args.replay, args.time_limit)

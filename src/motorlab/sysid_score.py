@@ -33,8 +33,11 @@ from motorlab.recording import Recording
 #: kS [V], kV, kA as a sequence or an array.
 Gains = Sequence[float] | np.ndarray
 
-#: Largest exponent range handled in one vectorised block of the linear recursion.
-_BLOCK_EXPONENT = 400.0
+#: Largest exponent range handled in one vectorised block of the linear recursion: the exponentials
+#: are taken about the block's middle, e^(±650) within a double's range (e^709) with room for the speeds.
+_BLOCK_EXPONENT = 1300.0
+#: A step of at least this many time constants settles within itself (e^(−400) is below a double's precision).
+_STIFF_EXPONENT = 400.0
 
 
 @dataclass(frozen=True)
@@ -107,9 +110,10 @@ def _linear_block(v0: float, dt: np.ndarray, u: np.ndarray, tau: float) -> tuple
         v_end = a * v0 + (1.0 - a) * u
         return v_end, u * dt + (v0 - u) * tau * (1.0 - a)
     c = np.concatenate([[0.0], np.cumsum(dt / tau)])
-    # v_i = e^(−c_i)·(v0 + Σ_{j<i} (e^(c_{j+1}) − e^(c_j))·u_j): the recursion v_{j+1} = a_j·v_j + (1 − a_j)·u_j
+    c -= 0.5 * c[-1]  # about the middle: e^c stays within range over a block of Σ dt/τ ≤ _BLOCK_EXPONENT
+    # v_i = e^(−c_i)·(v0·e^(c_0) + Σ_{j<i} (e^(c_{j+1}) − e^(c_j))·u_j): v_{j+1} = a_j·v_j + (1 − a_j)·u_j
     e = np.exp(c)
-    acc = v0 + np.cumsum((e[1:] - e[:-1]) * u)
+    acc = v0 * e[0] + np.cumsum((e[1:] - e[:-1]) * u)
     v = acc / e[1:]
     v_start = np.concatenate([[v0], v[:-1]])
     return v, u * dt + (v_start - u) * tau * (1.0 - a)
@@ -143,7 +147,7 @@ def simulate_gains(ks: float, kv: float, ka: float, test: ScoreTest) -> tuple[np
                 span = int(np.searchsorted(t, t[k] + _BLOCK_EXPONENT * tau)) - k - 1
             else:
                 span = _block_span(dt, k, tau)
-            stiff = span <= 0 and dt[k] >= _BLOCK_EXPONENT * tau  # rows each of many time constants: each settles
+            stiff = dt[k] >= _STIFF_EXPONENT * tau  # rows each of many time constants: each settles
             stop = min(n - 1, k + (_stiff_span(dt, k, tau) if stiff else max(span, 1)))
         u = (volts[k:stop] - ks * s) / kv
         v_new, dist = (_stiff_block if stiff else _linear_block)(v, dt[k:stop], u, tau)
@@ -180,17 +184,17 @@ def _block_span(dt: np.ndarray, k: int, tau: float) -> int:
 
 
 def _stiff_span(dt: np.ndarray, k: int, tau: float) -> int:
-    """Steps from ``k`` (at least 1) each of at least :data:`_BLOCK_EXPONENT` time constants."""
+    """Steps from ``k`` (at least 1) each of at least :data:`_STIFF_EXPONENT` time constants."""
     window = 4096
     while True:
-        short = np.flatnonzero(dt[k : k + window] < _BLOCK_EXPONENT * tau)
+        short = np.flatnonzero(dt[k : k + window] < _STIFF_EXPONENT * tau)
         if short.size or k + window >= dt.size:
             return max(int(short[0]) if short.size else dt.size - k, 1)
         window *= 4
 
 
 def _stiff_block(v0: float, dt: np.ndarray, u: np.ndarray, tau: float) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`_linear_block` over steps each of at least :data:`_BLOCK_EXPONENT` time constants, at once.
+    """:func:`_linear_block` over steps each of at least :data:`_STIFF_EXPONENT` time constants, at once.
 
     Each step's speed is a·v_start + (1 − a)·u with a = e^(−dt/τ) ≤ e^(−400): the step's start enters
     only through a, so taking the previous step's start as its settled speed u changes a result by

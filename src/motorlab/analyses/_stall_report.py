@@ -37,7 +37,7 @@ def run_rows(runs: Sequence[Any], used: list[int], fitted: list[int],
         t_cut = None
         if t0 is not None and run.cut.index is not None:
             sl = slice(run.start, run.cut.index + 1)
-            data = StallData(run.source, run.time[sl] - run.time[0], run.voltage[sl], run.current[sl], None)
+            data = StallData(run.source, run.time[sl] - run.switch_on, run.voltage[sl], run.current[sl], None)
             t_cut = float(simulate_runs(shared, [t0], [data], heat.thermal.magnet_coefficient,
                                         heat.thermal.ambient_temperature)[0][1][-1])
         rows.append({
@@ -130,7 +130,10 @@ def parameters_of(heat: HeatFit, torque: TorqueFit | None, extra: dict[str, Esti
     if torque is not None:
         note = ("torque per amp at 25 °C (the magnets' coefficient applied at the case temperature)" if torque.beta
                 else "torque per amp at the runs' temperatures (see the warnings)")
-        out["K"] = Estimate("K", torque.K, torque.K_stderr, "N*m/A", True, note)
+        if not torque.K > 0:  # never printed silently: a torque against the current is positive
+            note = ("not determined: the fit gives a torque per amp that is not positive (the runs' torque and "
+                    "current disagree: another shaft, a sensor's sign or offset)")
+        out["K"] = Estimate("K", torque.K, torque.K_stderr, "N*m/A", bool(torque.K > 0), note)
         if math.isfinite(torque.tau0_stderr):
             out["tau0"] = Estimate("tau0", torque.tau0, torque.tau0_stderr, "N*m", True,
                                    "torque at zero current (a sensor offset, friction held, or saturation's curve)")

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from motorlab.analyses._common import reader_warnings, sources_of
-from motorlab.analyses._stall_cuts import Cut, find_cut, first_full_sample, set_point
+from motorlab.analyses._stall_cuts import NO_CURRENT, Cut, find_cut, first_full_sample, set_point
 from motorlab.analyses._stall_fit import (
     SHARED,
     HeatFit,
@@ -62,12 +62,18 @@ class Run:
     end: int
     set_point: float
     cut: Cut
+    on: int = 0  # the row the supply switched on at (rows logged before it carry no current)
+
+    @property
+    def switch_on(self) -> float:
+        """The file's time of the row the supply switched on at [s]."""
+        return float(self.time[self.on])
 
     def data(self) -> StallData:
-        """The healthy part, its time counted from the run's first row (the supply switching on)."""
+        """The healthy part, its time counted from the supply switching on (the run's first row with current)."""
         sl = slice(self.start, self.end)
-        return StallData(self.source, self.time[sl] - self.time[0], self.voltage[sl], self.current[sl],
-                         None if self.torque is None else self.torque[sl], float(self.time[0]))
+        return StallData(self.source, self.time[sl] - self.switch_on, self.voltage[sl], self.current[sl],
+                         None if self.torque is None else self.torque[sl], self.switch_on)
 
 
 def _run_of(rec: Recording, voltage: float | None, until: float | None) -> Run:
@@ -80,8 +86,12 @@ def _run_of(rec: Recording, voltage: float | None, until: float | None) -> Run:
     if t.size < 3:
         raise LogFormatError(f"only {t.size} samples: a stall run needs a time series", path=rec.source or None)
     if not np.any(i > 0):
-        raise LogFormatError("the current is 0 A in every row: no current flowed in this run (supply off, or "
-                             "the wrong column?)", path=rec.source or None)
+        torque_only = "torque" in rec and np.any(np.asarray(rec["torque"]) != 0) and (
+            "voltage" not in rec or not np.any(np.asarray(rec["voltage"]) != 0))
+        raise LogFormatError("the current is 0 A in every row" + (
+            ", and the voltage too, while the torque is not: this export logs torque only, and a locked-rotor run "
+            "needs the winding current" if torque_only else
+            ": no current flowed in this run (supply off, or the wrong column?)"), path=rec.source or None)
     if "voltage" in rec:
         v = np.asarray(rec["voltage"], dtype=float)
     elif voltage is not None:
@@ -95,7 +105,33 @@ def _run_of(rec: Recording, voltage: float | None, until: float | None) -> Run:
     end = t.size if cut.index is None else cut.index
     if until is not None:
         end = min(end, int(np.searchsorted(t, until, side="right")))
-    return Run(source, t, i, v, q, start, end, v_set, cut)
+    on = int(np.flatnonzero(i > NO_CURRENT * float(np.max(i)))[0])
+    return Run(source, t, i, v, q, start, end, v_set, cut, on)
+
+
+def _runs_of(recs: list[Recording], voltage: float | None, until: float | None,
+             warnings: list[str]) -> tuple[list[Run], list[Recording]]:
+    """The runs of the recordings; among several, a file without current (an export of torque only) is left
+    out and named, and refused only when no file is left.
+
+    Raises
+    ------
+    LogFormatError
+        A lone file without current, or every file without.
+    """
+    runs, kept, refused = [], [], []
+    for rec in recs:
+        try:
+            runs.append(_run_of(rec, voltage, until))
+            kept.append(rec)
+        except LogFormatError as exc:
+            if len(recs) == 1 or "current" not in exc.message:
+                raise
+            refused.append(exc)
+    if not runs:
+        raise refused[0]
+    warnings.extend(f"{exc}: left out" for exc in refused)
+    return runs, kept
 
 
 def stall(
@@ -149,14 +185,15 @@ def stall(
     beta = _magnet(magnet, magnet_coefficient)
     if not (math.isfinite(ambient) and -40 <= ambient <= 80):
         raise OptionError(f"the ambient temperature must lie between −40 and 80 °C, got {ambient!r}")
-    runs = [_run_of(rec, voltage, until) for rec in recs]
     warnings = reader_warnings(recs)
+    runs, recs = _runs_of(recs, voltage, until, warnings)
     used = [k for k, r in enumerate(runs) if r.end - r.start >= MIN_SAMPLES]
     for k, r in enumerate(runs):
         if k not in used:
             warnings.append(f"{r.source}: only {max(r.end - r.start, 0)} healthy samples before the cut: left out")
     if not used:
         raise FitError("no run has a healthy stretch of at least 5 samples to fit")
+    used = _same_shaft(runs, used, warnings)
     heat, excluded, unexplained = _fit_with_exclusions([runs[k] for k in used], beta, ambient, warnings)
     data = [runs[k].data() for k in used]
     fitted = [j for j in range(len(used)) if j not in excluded]
@@ -194,6 +231,39 @@ def _mark_unexplained(result: FitResult, why: str) -> None:
         row["winding at the cut (°C)"] = None
     # the temperatures of a network heating does not explain are not the winding's: not stated
     result.warnings[:] = [re.sub(r"; the winding was at about -?\d+ °C", "", w) for w in result.warnings]
+
+
+#: Runs whose torque per amp differs from the others' by more than this factor measure another shaft (a
+#: gearbox's output) or another motor: no winding's torque per amp moves that much with current or heat.
+SHAFT_FACTOR = 2.0
+
+
+def _same_shaft(runs: list[Run], used: list[int], warnings: list[str]) -> list[int]:
+    """The runs fitted together: those whose torque per amp agrees (within :data:`SHAFT_FACTOR`) with the
+    largest such group; the others are left out and named (fit them alone)."""
+    ratio = {}
+    for k in used:
+        r = runs[k]
+        if r.torque is not None:
+            i = r.current[r.start:r.end]
+            ok = i > 0
+            if np.count_nonzero(ok) >= MIN_SAMPLES:
+                ratio[k] = float(np.median(r.torque[r.start:r.end][ok] / i[ok]))
+    if len(ratio) < 2 or all(v <= 0 for v in ratio.values()):
+        return used
+    groups = {k: [j for j in ratio if ratio[j] > 0 and 1 / SHAFT_FACTOR <= ratio[j] / ratio[k] <= SHAFT_FACTOR]
+              for k in ratio if ratio[k] > 0}
+    best = max(groups.values(), key=lambda g: (len(g), -min(g)))
+    others = float(np.median([ratio[j] for j in best]))
+    out = []
+    for k in used:
+        if k in ratio and k not in best:
+            warnings.append(f"{runs[k].source}: left out: its torque per amp, {ratio[k]:.4g} N·m/A, is "
+                            f"{ratio[k] / others:.3g} times the other runs' {others:.4g}: another shaft (a gearbox's "
+                            "output?) or another motor; analyse it alone")
+        else:
+            out.append(k)
+    return out
 
 
 def _with_case_uncertainty(torque: TorqueFit, data: list[StallData], heat: HeatFit) -> TorqueFit:

@@ -1,0 +1,148 @@
+"""analyze stall and curve beyond the three shared motors: other VEX exports (an FTC motor's among them) and
+motors from an FTC 550-size to a CIM on the virtual dynamometer (issue 23, the hidden check)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from motorlab.analyses.curve import curve
+from motorlab.analyses.stall import stall
+from motorlab.errors import LogFormatError
+from motorlab.experiments.stall import read_runs
+from motorlab.io.csv_table import read_csv
+from motorlab.model import MotorParams
+from motorlab.recording import Recording
+from motorlab.rig import VirtualRig
+from motorlab.thermal import ThermalModel
+
+DYNO = Path(__file__).resolve().parents[1] / "data" / "dyno"
+
+
+def _dyno(name: str) -> str:
+    return str(DYNO / name)
+
+
+# ---- other VEX exports (tests/data/dyno: kForth/FrcMotorCompare@ed54731, byte for byte) ---------------------
+
+
+def test_ftc_neverest_run_reads_and_fits() -> None:
+    """AndyMark's NeveRest (an FTC motor), 6 V for 300 s: UTF-8 with a byte-order mark and a UTF-8 '·'."""
+    rec = read_runs([_dyno("NeveRest-locked-rotor-data-6v-20171016.csv")])[0]
+    result = stall(rec)
+    row = result.details["runs"][0]
+    assert row["cause"] == "healthy to the end"
+    assert "unexplained" not in result.details
+    k0 = int(np.searchsorted(rec.time, row["first full sample (s)"]))
+    assert result["R"].value == pytest.approx(rec["voltage"][k0] / rec["current"][k0], rel=0.10)
+    curve_rec = read_csv(_dyno("NeveRest-motor-curve-data-20171016.csv"))
+    stall_row = int(np.argmin(curve_rec["speed"]))
+    maker = curve_rec["torque"][stall_row] / curve_rec["current"][stall_row]  # VEX's 12 V stall figures
+    assert result["K"].value == pytest.approx(maker, rel=0.20)
+
+
+def test_a_run_on_another_shaft_is_left_out_and_named() -> None:
+    """The NeveRest 7.2 V run holds ten times the torque per amp (a gearbox's output): not fitted with the rest."""
+    files = [_dyno("NeveRest-locked-rotor-data-6v-20171016.csv"), _dyno("NeveRest-locked-rotor-data-7-2v-20171016.csv")]
+    result = stall(read_runs(files))
+    assert any("7-2v" in w and "another shaft" in w for w in result.warnings)
+    assert result["K"].determined
+    assert result["K"].value > 0
+    assert result.details["runs"][1]["heating explains it"] is False
+
+
+def test_torque_only_export_is_refused_in_one_line() -> None:
+    """The NeveRest 10 V export logs torque only (Amps and Volts 0 in every row)."""
+    with pytest.raises(LogFormatError, match="logs torque only") as info:
+        stall(read_runs([_dyno("NeveRest-locked-rotor-data-10v-20171016.csv")]))
+    assert "\n" not in str(info.value)
+    assert "NeveRest-locked-rotor-data-10v" in str(info.value)
+
+
+def test_775pro_12v_starts_at_the_current_limit_and_collapses() -> None:
+    result = stall(read_runs([_dyno("775pro-locked-rotor-data-12v-20151209.csv")]))
+    row = result.details["runs"][0]
+    assert row["cause"] == "torque collapse"
+    assert abs(row["cut (s)"] - 2.8) <= 1.0
+    cut = next(w for w in result.warnings if "cut at" in w)
+    assert "supply cut at 3.5 s" in cut
+
+
+@pytest.mark.parametrize("name", ["NeveRest-motor-curve-data-20171016.csv", "cim-motor-curve-data-20151104.csv"])
+def test_other_vex_curves_match_their_free_and_stall_rows(name: str) -> None:
+    rec = read_csv(_dyno(name))
+    result = curve(rec, voltage=12.0)
+    speed, torque, current = rec["speed"], rec["torque"], rec["current"]
+    free, held = int(np.argmax(speed)), int(np.argmin(speed))
+    r = 12.0 / current[held]
+    implied = {"R": r, "K": (12.0 - r * current[free]) / speed[free],
+               "Kt": (torque[held] - torque[free]) / (current[held] - current[free])}
+    for key, value in implied.items():
+        assert result[key].value == pytest.approx(value, rel=0.02), key
+
+
+# ---- motors from an FTC 550-size to a CIM on the virtual dynamometer --------------------------------------------
+
+#: (K [N·m/A], R [Ω], thermal network) of a small FTC motor, a 1.5 Ω one, and a CIM-size FRC motor.
+MOTORS = {
+    "ftc-0.5ohm": (0.011, 0.5, ThermalModel(1.2, 6.0, 12.0, 90.0)),
+    "ftc-1.5ohm": (0.02, 1.5, ThermalModel(1.5, 8.0, 8.0, 60.0)),
+    "frc-cim": (0.0184, 0.09, ThermalModel(0.47, 1.5, 72.0, 230.0)),
+}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("motor", sorted(MOTORS))
+def test_stall_round_trip_across_motor_sizes(tmp_path: Path, motor: str) -> None:
+    k, r, network = MOTORS[motor]
+    params = MotorParams(K=k, R=r, L=r * 1e-3, J=1e-5, b=1e-6, Tf=1e-3, thermal=network)
+    rig = VirtualRig("neverest40", params=params, noise_seed=3, heating=True)
+    low, high = (2.0, 4.0) if r < 0.2 else (6.0, 12.0)  # a CIM at 12 V would draw 133 A, beyond the supply
+    runs = [rig.stall(tmp_path / "a.csv", voltage=low, duration=200.0),
+            rig.stall(tmp_path / "b.csv", voltage=high, duration=60.0, initial_temperature=35.0)]
+    result = stall([read_csv(run.paths[0]) for run in runs])
+    truth = runs[0].truth["expected"]
+    for name in ("K", "R", "R_wc", "C_w"):
+        est = result[name]
+        assert est.determined, name
+        assert abs(est.value - truth[name]) <= 3 * est.stderr + 0.02 * abs(truth[name]), (name, est.value, truth[name])
+    assert "unexplained" not in result.details
+
+
+@pytest.mark.parametrize("motor", sorted(MOTORS))
+def test_curve_round_trip_across_motor_sizes(motor: str) -> None:
+    k, r, _ = MOTORS[motor]
+    rng = np.random.default_rng(5)
+    kt, tf = 0.9 * k, 0.05 * k * 12.0 / r * 0.1
+    free = (kt * 12.0 / r - tf) / (kt * k / r)
+    speed = np.linspace(0.0, free, 60)
+    current = (12.0 - k * speed) / r
+    torque = kt * current - tf
+    stall_torque = kt * 12.0 / r
+    rec = Recording(time=np.arange(60.0), source=f"{motor}.csv", signals={
+        "speed": speed + rng.normal(0, 1e-3 * free, 60), "current": current + rng.normal(0, 1e-3 * 12.0 / r, 60),
+        "torque": torque + rng.normal(0, 1e-3 * stall_torque, 60), "voltage": np.full(60, 12.0)})
+    result = curve(rec)
+    for name, value in (("K", k), ("R", r), ("Kt", kt)):
+        est = result[name]
+        assert abs(est.value - value) <= 3 * est.stderr, (name, est.value, value)
+
+
+def test_rows_before_the_supply_switches_on_and_torque_only_files_among_others(tmp_path: Path) -> None:
+    """Rows logged at 0 A before the supply switches on are skipped (the heating starts at the switch-on); a
+    torque-only export among several files is left out and named, not a reason to refuse them all."""
+    run = VirtualRig("neverest40", noise_seed=2, heating=True).stall(tmp_path / "s.csv", voltage=6.0, duration=90.0)
+    rec = read_csv(run.paths[0])
+    lead = 8
+    t = np.concatenate([rec.time[0] - 0.35 * np.arange(lead, 0, -1), rec.time]) + 5.0
+    signals = {name: np.concatenate([np.zeros(lead), rec[name]]) for name in ("voltage", "current", "torque")}
+    delayed = Recording(time=t, signals=signals, source="delayed.csv")
+    plain, late = stall(rec), stall(delayed)
+    assert late["R"].value == pytest.approx(plain["R"].value, rel=1e-3)
+    assert late["C_w"].value == pytest.approx(plain["C_w"].value, rel=0.02)
+    torque_only = read_runs([_dyno("NeveRest-locked-rotor-data-10v-20171016.csv")])[0]
+    both = stall([rec, torque_only])
+    assert any("NeveRest-locked-rotor-data-10v" in w and "torque only" in w and "left out" in w for w in both.warnings)
+    assert both["R"].value == pytest.approx(plain["R"].value, rel=1e-6)
