@@ -10,6 +10,7 @@ load average is printed with the figures.
 
     python benchmarks/bench_ui.py            # all
     python benchmarks/bench_ui.py quick      # without the 8-unit session
+    python benchmarks/bench_ui.py session    # only the 8-unit session
 """
 
 from __future__ import annotations
@@ -136,7 +137,22 @@ def _beside_sessions(url: str, log: Path, body: bytes) -> float:
     return dt
 
 
+def _session_only() -> None:
+    """Only the 8-unit session (``python benchmarks/bench_ui.py session``)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        body = _session_zip(8, Path(tmp) / "eight")
+        print(f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} CPUs")
+        _server, url = _serve()
+        _wait_for_spares()
+        table, report = _session_streamed(url, body)
+        print(f"8-unit session: results table {table:.1f} s (target ≤ 10 s), report with its figures {report:.1f} s")
+        print(f"load average {os.getloadavg()[0]:.1f} at the end")
+
+
 def main() -> None:
+    if "session" in sys.argv[1:]:
+        _session_only()
+        return
     quick = "quick" in sys.argv[1:]
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
