@@ -89,8 +89,8 @@ EXPERIMENT = Experiment(
                help="with the winding's temperature: the catalogue's thermal network of this motor; without it, the "
                     "one the log names, else a 550-size motor's"),
         Option("thermal-fit", kind="files", metavar="FIT.json", label="Stall fit whose thermal network to use",
-               help="with the winding's temperature: the network a stall run measured (what analyze stall --json "
-                    "wrote), instead of the catalogue's"),
+               help="with the winding's temperature: the network a stall run measured (the JSON that analyze stall "
+                    "writes), instead of the catalogue's"),
         Option("initial-temperature", "degC", metavar="CELSIUS", label="Winding temperature at the start",
                help="with the winding's temperature: in °C, the winding's and case's at the log's start; without "
                     "it, the ambient's"),
