@@ -146,3 +146,19 @@ def test_rows_before_the_supply_switches_on_and_torque_only_files_among_others(t
     both = stall([rec, torque_only])
     assert any("NeveRest-locked-rotor-data-10v" in w and "torque only" in w and "left out" in w for w in both.warnings)
     assert both["R"].value == pytest.approx(plain["R"].value, rel=1e-6)
+
+
+def test_a_run_heating_explains_only_by_a_start_above_150_c_is_left_out(tmp_path: Path) -> None:
+    """Three runs of one unit and one of a winding 60 % more resistive (the AndyMark 775's 4 V run: 1.1 Ω against
+    0.6): heating explains the odd one only by a start near 180 °C; it is left out and named."""
+    rig = VirtualRig("neverest40", noise_seed=4, heating=True)
+    runs = [rig.stall(tmp_path / f"r{v}.csv", voltage=v, duration=60.0) for v in (4.0, 6.0, 8.0)]
+    odd = VirtualRig("neverest40", noise_seed=5, heating=True, params=rig.params.scaled(R=1.6 * rig.params.R))
+    runs.append(odd.stall(tmp_path / "odd.csv", voltage=6.0, duration=60.0))
+    result = stall([read_csv(run.paths[0]) for run in runs])
+    named = [w for w in result.warnings if "odd.csv" in w and "started at" in w]
+    assert len(named) == 1
+    assert "another winding" in named[0]
+    truth = runs[0].truth["expected"]
+    assert abs(result["R"].value - truth["R"]) <= 3 * result["R"].stderr + 0.01 * truth["R"]
+    assert result.details["runs"][3]["heating explains it"] is False
