@@ -49,6 +49,39 @@ def main() -> None:
     print(f"fit of a 300 s stall run ({Path(path).name}, {result.n_points} samples): {t_fit:8.3f} s   (target < 2 s)")
     print(f"forecast, 300 s at 0.1 s with the answers:          {t_fc * 1e3:8.1f} ms  (target < 200 ms)")
     print(f"virtual dynamometer, 300 s stalled and heating:     {t_rig:8.2f} s")
+    dyno = next((d for d in REAL if d.is_dir()), None)
+    if dyno is not None:
+        forecasts(dyno)
+
+
+def forecasts(dyno: Path) -> None:
+    """Each shared run that heating explains, fitted on its first 120 s and forecast over the rest (relative RMS
+    of the current; the judged aim: under 5 %)."""
+    import math
+
+    import numpy as np
+
+    from motorlab.errors import InputError
+
+    print("forecast of each healthy run from its first 120 s (relative RMS of the current over the rest):")
+    with tempfile.TemporaryDirectory() as tmp:
+        for path in sorted(dyno.glob("*-locked-rotor-data-*.csv")):
+            rec = read_runs([str(path)])[0]
+            fit = stall(rec, until=120.0)
+            row = fit.details["runs"][0]
+            end = row["cut (s)"] or float(rec.time[-1])
+            if end < 150.0:
+                continue
+            (Path(tmp) / "fit.json").write_text(json.dumps(fit.to_dict()))
+            try:
+                out = forecast(load_fit(Path(tmp) / "fit.json"), float(row["set point (V)"]), end - float(rec.time[0]))
+            except InputError:
+                print(f"  {path.name:46s} not forecast: heating does not explain it (brush contact)")
+                continue
+            later = (rec.time > 120.0) & (rec.time < end)
+            pred = np.interp(rec.time[later] - rec.time[0], out.time, out.current)
+            rms = math.sqrt(float(np.mean(((pred - rec["current"][later]) / rec["current"][later]) ** 2)))
+            print(f"  {path.name:46s} {100 * rms:5.2f} %")
 
 
 if __name__ == "__main__":

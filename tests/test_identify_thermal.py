@@ -82,3 +82,25 @@ def test_heated_log_round_trip_truth_within_three_standard_errors(tmp_path: Path
             bias = plain["R"].value - expected["R"]
             assert bias > 5 * plain["R"].stderr, (bias, plain["R"].stderr)
             assert math.isclose(plain["R"].value / expected["R"] - 1, 0.00393 * 0.6, rel_tol=0.6)
+
+
+def test_cli_takes_the_network_a_stall_run_measured(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    import json
+
+    from motorlab import cli
+
+    rig = VirtualRig("neverest40", noise_seed=2, heating=True)
+    run = rig.stall(tmp_path / "stall.csv", voltage=6.0, duration=60.0)
+    capsys.readouterr()
+    assert cli.main(["analyze", "stall", str(run.paths[0]), "--json"]) == 0
+    (tmp_path / "fit.json").write_text(capsys.readouterr().out)
+    fit = json.loads((tmp_path / "fit.json").read_text())
+    log = rig.transient(tmp_path / "log.csv", profile="steps", duration=1.5, rate=200.0)
+    capsys.readouterr()
+    assert cli.main(["analyze", "identify", str(log.paths[0]), "--thermal-fit", str(tmp_path / "fit.json"),
+                     "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    thermal = doc["details"]["thermal"]
+    assert thermal["network_from"] == "given"
+    assert thermal["network"]["winding_capacity"] == pytest.approx(fit["parameters"]["C_w"]["value"])
+    assert "25 °C" in doc["details"]["R_temperature"]

@@ -125,3 +125,16 @@ def test_report_drawn_in_two_processes_is_the_same_document(result, document: st
     drawing = [p for p in seen if p.what == "Drawing the report"]
     assert drawing[-1].finished
     assert drawing[-1].done == drawing[-1].total == 5  # the curves, three units, the gains
+
+
+def test_the_gains_line_gives_each_parameter_its_unit() -> None:
+    from types import SimpleNamespace
+
+    from motorlab.report import _gains_section
+
+    gains = {"motor": "median of the units", "voltage": 12.0, "text": "velocity loop ...",
+             "params": {"K": 0.37, "R": 1.16, "L": 6.6e-4, "J": 1.2e-4, "b": 2.5e-5, "Tf": 0.011}}
+    html = _gains_section(SimpleNamespace(gains=gains), figures=False)  # type: ignore[arg-type]
+    for shown in ("K = 0.37 V·s/rad", "R = 1.16 Ω", "L = 660 µH", "J = 1.2 × 10⁻⁴ kg·m²", "b = 2.5 × 10⁻⁵ N·m·s/rad",
+                  "Tf = 0.011 N·m"):
+        assert shown in html, (shown, html)

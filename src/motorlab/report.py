@@ -602,7 +602,7 @@ def _gains_section(result: Characterization, *, figures: bool) -> str:
         return ""
     text = str(gains.get("text") or "")
     params = gains.get("params") or {}
-    used = ", ".join(f"{k} = {v:.4g}" for k, v in params.items() if isinstance(v, int | float))
+    used = ", ".join(_with_unit(k, v) for k, v in params.items() if isinstance(v, int | float))
     body = (
         f"<p>For the {_e(gains.get('motor', 'motor'))} ({_e(used)}) at {_e(gains.get('voltage', ''))} V, "
         "WPILib SysId's LQR defaults (velocity and position loops, 20 ms period):</p>"
@@ -614,6 +614,22 @@ def _gains_section(result: Characterization, *, figures: bool) -> str:
             fig, "Closed-loop step responses with these gains (nonlinear motor model)", "step response"
         )
     return f'<section id="gains"><h2>Controller gains</h2>{body}</section>'
+
+
+def _with_unit(name: str, value: float) -> str:
+    """``"L = 661.4 µH"``: a motor parameter in the report's display unit (SI, inductance in µH)."""
+    from motorlab.units import SI_UNITS
+
+    unit, scale = DISPLAY_UNITS.get(name, (format_unit(SI_UNITS.get(name, "")), 1.0))
+    shown = value * scale
+    text = f"{shown:.4g}"
+    if shown != 0 and not 1e-3 <= abs(shown) < 1e6:  # 2.5 × 10⁻⁵, as the page writes it
+        mantissa, exponent = f"{shown:.3e}".split("e")
+        text = f"{float(mantissa):g} × 10{str(int(exponent)).translate(_SUPERSCRIPT)}"
+    return f"{name} = {text} {unit}".rstrip()
+
+
+_SUPERSCRIPT = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
 
 
 def gains_figure(result: Characterization) -> Figure | None:

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -44,6 +44,8 @@ class StallModel:
     initial_temperature: float = 25.0
     hottest: float = math.inf
     source: str = ""
+    #: R_ca came from the fit's prior on the case's time constant (the run was too short to tell it).
+    case_loss_from_prior: bool = False
 
 
 def load_fit(path: str | Path) -> StallModel:
@@ -87,10 +89,12 @@ def load_fit(path: str | Path) -> StallModel:
     except OptionError as exc:
         raise InputError(exc.message, path=str(path)) from None
     note = str((params.get("K") or {}).get("note", ""))
+    r_ca = params.get("R_ca") if isinstance(params.get("R_ca"), dict) else {}
     return StallModel(r, thermal, value("K"), value("tau0") if math.isfinite(value("tau0")) else 0.0,
                       "magnets' coefficient applied" in note,
                       float(details.get("initial_temperature_C") or thermal.ambient_temperature),
-                      float(details.get("max_winding_temperature_C") or math.inf), str(path))
+                      float(details.get("max_winding_temperature_C") or math.inf), str(path),
+                      bool(r_ca) and not r_ca.get("determined", True))
 
 
 @dataclass
@@ -147,10 +151,30 @@ def forecast(model: StallModel, voltage: float, duration: float, *, initial_temp
     if hottest > model.hottest + 1:
         out.warnings.append(f"the forecast reaches {hottest:.0f} °C, {hottest - model.hottest:.0f} K beyond the "
                             f"hottest winding temperature the fit saw ({model.hottest:.0f} °C): extrapolated")
+    if model.case_loss_from_prior:
+        out.warnings.append(_case_loss_band(model, t, voltage, t0, run.current))
     if limit > model.hottest + 1:
         out.warnings.append(f"the time to {limit:g} °C extrapolates the fit {limit - model.hottest:.0f} K beyond the "
                             f"hottest winding temperature it saw ({model.hottest:.0f} °C)")
     return out
+
+
+#: The spread of the prior on the case's time constant (a factor either way), as the fit uses it.
+CASE_PRIOR_FACTOR = 2.5
+
+
+def _case_loss_band(model: StallModel, t: np.ndarray, voltage: float, t0: float, current: np.ndarray) -> str:
+    """What the forecast's current would be at its end with the case's loss to ambient R_ca a factor
+    :data:`CASE_PRIOR_FACTOR` either way (the fit took R_ca from a prior: its runs were too short)."""
+    ends = []
+    for factor in (1 / CASE_PRIOR_FACTOR, CASE_PRIOR_FACTOR):
+        th = replace(model.thermal, case_to_ambient=model.thermal.case_to_ambient * factor)
+        ends.append(float(stall_response(model.resistance, th, t, np.full(t.size, float(voltage)), winding=t0)
+                          .current[-1]))
+    return (f"the case's loss to ambient (R_ca = {model.thermal.case_to_ambient:.3g} K/W) was not determined by the "
+            f"fitted run, too short for the case to settle (a prior on the case's time constant, or a bound, set it): "
+            f"with R_ca {CASE_PRIOR_FACTOR:g} times smaller or larger the current at {float(t[-1]):.0f} s would be "
+            f"{min(ends):.4g}–{max(ends):.4g} A instead of {float(current[-1]):.4g} A; fit a longer run to pin it")
 
 
 def stall_answers(model: StallModel, voltage: float, *, limit: float = WINDING_LIMIT, rise: float = 100.0,

@@ -223,3 +223,15 @@ def test_forecast_of_a_healthy_real_run_from_its_first_120_s(tmp_path: Path, nam
     pred = np.interp(rec.time[later] - rec.time[0], out.time, out.current)
     rms = math.sqrt(float(np.mean(((pred - rec["current"][later]) / rec["current"][later]) ** 2)))
     assert rms < 0.05, rms
+
+
+@needs_real
+def test_forecast_says_how_far_an_undetermined_case_loss_moves_it(tmp_path: Path) -> None:
+    rec = read_runs([str(REAL / "bag-locked-rotor-data-4v-20151207.csv")])[0]
+    fit = stall(rec, until=120.0)
+    assert not fit["R_ca"].determined
+    (tmp_path / "fit.json").write_text(json.dumps(fit.to_dict()))
+    out = forecast(load_fit(tmp_path / "fit.json"), 4.0, 300.0)
+    band = next(w for w in out.warnings if "R_ca" in w)
+    low, high = (float(x) for x in band.split("would be ")[1].split(" A")[0].split("–"))
+    assert low < float(out.current[-1]) < high

@@ -47,10 +47,30 @@ from motorlab.io.headers import column_mapping, normalise_unit, parse_column_map
         ("Current (Amps)", ("current", "A")),
         ("Torque (in-lbs)", ("torque", "lbf*in")),
         ("Voltage Current", None),
+        ("Lost Power", ("power_dissipation", None)),  # karagenit/frc-motors' curves (VEX's data, units dropped)
+        ("Input Power", ("input_power", None)),
+        ("RPM", ("speed", "rpm")),
     ],
 )
 def test_worded_headers(header: str, expected: tuple[str, str | None] | None) -> None:
     assert worded_column(header) == expected
+
+
+def test_a_speed_without_a_unit_is_refused_not_guessed(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """karagenit/frc-motors' copy of VEX's curves: ``Speed,Torque,Current,Input Power,Output Power,…`` in rpm."""
+    with pytest.raises(LogFormatError, match="without a unit"):
+        worded_column("Speed")
+    path = tmp_path / "bag.csv"
+    path.write_text("Speed,Torque,Current,Input Power,Output Power,Efficiency,Lost Power\n"
+                    "0,0.431,52.619,631.428,0,0,631.428\n6588.845,0.2155,27.21,326.52,148.691,45.538,177.829\n"
+                    "13177.689,0,1.8,21.6,0,0,21.6\n", encoding="utf-8")
+    assert cli.main(["analyze", "curve", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert "'Speed'" in err
+    assert "--column" in err
+    assert "\n" not in err.strip()
+    assert cli.main(["analyze", "curve", str(path), "--column", "Speed=speed [rpm]", "--json"]) == 0
+    assert '"K"' in capsys.readouterr().out
 
 
 def test_unit_of_the_wrong_dimension_is_refused() -> None:

@@ -1,9 +1,16 @@
-"""A live ``motorlab ui`` server (uvicorn in a thread) on a free loopback port, and simulated logs."""
+"""A live ``motorlab ui`` server (uvicorn in a thread) on a free loopback port, simulated logs, and a browser.
+
+The browser tests' helpers (``browser.py``: a headless Chromium driven by visible words) are loaded
+once here and importable by the test modules as ``ui_browser``; the ``page`` fixture gives each
+browser test module its own Chromium on the test server.
+"""
 
 from __future__ import annotations
 
+import importlib.util
 import json
 import socket
+import sys
 import threading
 import time
 from collections.abc import Iterator
@@ -15,6 +22,22 @@ import pytest
 import uvicorn
 
 from motorlab.ui.app import create_app
+
+
+def _browser_helpers() -> Any:
+    """tests/ui/browser.py, loaded once as the module ``ui_browser`` (the tests are no package)."""
+    if "ui_browser" in sys.modules:
+        return sys.modules["ui_browser"]
+    spec = importlib.util.spec_from_file_location("ui_browser", Path(__file__).with_name("browser.py"))
+    assert spec is not None
+    assert spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    sys.modules["ui_browser"] = module
+    spec.loader.exec_module(module)
+    return module
+
+
+browser = _browser_helpers()
 
 #: Upload limit of the test servers (small, so the 413 test is quick).
 TEST_MAX_BODY = 2 * 1024 * 1024
@@ -75,3 +98,12 @@ def sim_session(tmp_path_factory: pytest.TempPathFactory) -> Path:
 @pytest.fixture(scope="session")
 def truth(sim_session: Path) -> dict[str, Any]:
     return dict(json.loads((sim_session / "A" / "truth.json").read_text()))
+
+
+@pytest.fixture(scope="module")
+def page(server: Served, tmp_path_factory: pytest.TempPathFactory, request: pytest.FixtureRequest) -> Iterator[Any]:
+    """A headless Chromium on the test server for one test module, driven by visible words (``browser.Page``)."""
+    tmp = tmp_path_factory.mktemp(request.module.__name__.rsplit(".", 1)[-1])
+    driver = browser.make_driver(tmp / "profile")
+    yield browser.Page(driver, server.url, browser.shots_folder(tmp))
+    driver.quit()

@@ -11,33 +11,18 @@ Controls are found by their visible words only (tests/ui/browser.py).
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import math
 import re
 import subprocess
 import sys
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import pytest
-
-_spec = importlib.util.spec_from_file_location("motorlab_ui_browser", Path(__file__).with_name("browser.py"))
-assert _spec is not None
-assert _spec.loader is not None
-browser = importlib.util.module_from_spec(_spec)
-_spec.loader.exec_module(browser)
+import ui_browser as browser  # tests/ui/browser.py, loaded by conftest.py
 
 pytestmark = browser.needs_browser
-
-
-@pytest.fixture(scope="module")
-def page(server: Any, tmp_path_factory: pytest.TempPathFactory) -> Iterator[Any]:
-    tmp = tmp_path_factory.mktemp("browser")
-    driver = browser.make_driver(tmp / "profile")
-    yield browser.Page(driver, server.url, browser.shots_folder(tmp))
-    driver.quit()
 
 
 @pytest.fixture(scope="module")

@@ -9,35 +9,19 @@
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import re
 import shutil
 import subprocess
 import sys
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
-import pytest
-
-_spec = importlib.util.spec_from_file_location("motorlab_ui_browser", Path(__file__).with_name("browser.py"))
-assert _spec is not None
-assert _spec.loader is not None
-browser = importlib.util.module_from_spec(_spec)
-_spec.loader.exec_module(browser)
+import ui_browser as browser  # tests/ui/browser.py, loaded by conftest.py
 
 pytestmark = browser.needs_browser
 
 _NUMBER = r"([0-9.]+(?: × 10[⁻⁰¹²³⁴⁵⁶⁷⁸⁹]+)?)"
-
-
-@pytest.fixture(scope="module")
-def page(server: Any, tmp_path_factory: pytest.TempPathFactory) -> Iterator[Any]:
-    tmp = tmp_path_factory.mktemp("journeys")
-    driver = browser.make_driver(tmp / "profile")
-    yield browser.Page(driver, server.url, browser.shots_folder(tmp))
-    driver.quit()
 
 
 def _value(text: str, row: str) -> tuple[float, float]:
@@ -171,3 +155,30 @@ def test_dynamometer_csv_with_worded_headers(page: Any, tmp_path: Path) -> None:
     k2, k2_err = _value(page.text(), "Back-EMF constant K")
     assert abs(k2 - 0.35) < 4 * k2_err + 0.001
     assert (tmp_path / "dyno.csv").read_text(encoding="utf-8").count("\n") == 21  # the file given is kept whole
+
+
+def test_a_running_session_shows_its_units_then_its_table_before_its_report(page: Any, tmp_path: Path) -> None:
+    from motorlab.simulated_session import write_simulated_session
+
+    folder = tmp_path / "bench"
+    write_simulated_session("neverest40", out_dir=folder, units=2, seed=6, experiments=("lcr", "spindown", "identify"))
+    archive = Path(shutil.make_archive(str(tmp_path / "bench"), "zip", folder))
+    page.open(browser.LAPTOP)
+    page.click("Characterise motors on a bench")
+    page.upload("Choose the session file", archive)
+    page.click("Run the session")
+    # The person sees how many units are done of how many, and which experiment runs now, on which unit.
+    running = re.compile(r"Characterising the units: [01] of 2 units done \(unit [AB]: (lcr|spindown|identify)\)")
+    said = page.wait(lambda: running.search(page.text()), "the units done and the experiment running", 120)
+    assert said
+    page.shot("ui-session-running.png")
+    # Results first: the table while the report's figures are still being drawn, then the report.
+    page.wait_text("Each unit's parameters", 180)
+    assert "The report with its figures is being drawn" in page.text()  # its figures take seconds more
+    drawing = re.compile(r"Drawing the report: \d of \d sections done")
+    assert page.wait(lambda: drawing.search(page.text()), "the report's sections counted", 60)
+    page.shot("ui-session-table-first.png")
+    page.check()
+    page.wait_text("The printable report", 180)
+    assert "being drawn" not in page.text()
+    page.check()

@@ -3,33 +3,18 @@ files home, start a run, see it live, press Stop, fit it. Controls are found by 
 
 from __future__ import annotations
 
-import importlib.util
 import time
 from collections.abc import Iterator
-from pathlib import Path
 from typing import Any
 
 import pytest
+import ui_browser as browser  # tests/ui/browser.py, loaded by conftest.py
 
 from motorlab.rig.ftc import simulate_ramp
 from motorlab.robot.dashboard import STOP_TAG
 from motorlab.robot.emulator import EmulatedRobot, RobotFiles
 
-_spec = importlib.util.spec_from_file_location("motorlab_ui_browser_robot", Path(__file__).with_name("browser.py"))
-assert _spec is not None
-assert _spec.loader is not None
-browser = importlib.util.module_from_spec(_spec)
-_spec.loader.exec_module(browser)
-
 pytestmark = browser.needs_browser
-
-
-@pytest.fixture(scope="module")
-def page(server: Any, tmp_path_factory: pytest.TempPathFactory) -> Iterator[Any]:
-    tmp = tmp_path_factory.mktemp("robot-browser")
-    driver = browser.make_driver(tmp / "profile")
-    yield browser.Page(driver, server.url, browser.shots_folder(tmp))
-    driver.quit()
 
 
 @pytest.fixture(scope="module")

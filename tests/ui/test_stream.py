@@ -119,7 +119,7 @@ def test_a_client_that_goes_away_ends_its_command(server: Any, sim_session: Path
 def test_the_time_limit_ends_a_command_in_a_warm_worker(server: Any, sim_session: Path,
                                                         monkeypatch: pytest.MonkeyPatch) -> None:
     runner.POOL.fill()
-    monkeypatch.setattr(runner, "TIME_LIMIT", 0.5)  # a session takes seconds
+    monkeypatch.setattr(runner, "SESSION_TIME_LIMIT", 0.5)  # a session takes seconds
     response = httpx.post(f"{server.url}/api/characterize", files=[("file", ("bench.zip", _zip(sim_session)))],
                           timeout=120)
     assert response.status_code == 422
@@ -208,8 +208,9 @@ def test_gains_are_recomputed_in_one_resident_worker(tmp_path: Path, monkeypatch
         assert runner.POOL.started == started  # no new process for a change of the gains
         jobs = worker.jobs
         refused = await runner.run_cli([*argv, "--cpr=-3"], cwd=str(tmp_path))  # the CLI's refusal, as text
-        monkeypatch.setenv("MOTORLAB_UI_WARM", "0")
+        monkeypatch.setenv("MOTORLAB_UI_WARM", "0")  # a fresh `python -m motorlab`, the resident left alone
         fresh = await runner.run_cli([*argv[:2], "--kv=0.14", *argv[3:]], cwd=str(tmp_path))
+        assert worker.jobs == jobs + 1  # the refusal only
         worker.close()
         return answers, jobs, refused, fresh
 

@@ -57,12 +57,15 @@ def set_point(voltage: np.ndarray) -> float:
 
 
 def first_full_sample(current: np.ndarray) -> int:
-    """The first sample whose current has finished rising (the supply switches on during the first)."""
-    head = np.asarray(current[:5], dtype=float)
-    if head.size == 0:
+    """The first sample whose current has finished rising (the supply switches on during the first; rows
+    logged before it, at no current, are skipped)."""
+    i = np.abs(np.asarray(current, dtype=float))
+    if i.size == 0 or not np.max(i) > 0:
         return 0
+    on = int(np.flatnonzero(i > NO_CURRENT * float(np.max(i)))[0])
+    head = i[on : on + 5]
     peak = float(np.max(head))
-    return int(np.flatnonzero(head >= 0.97 * peak)[0])
+    return on + int(np.flatnonzero(head >= 0.97 * peak)[0])
 
 
 def find_cut(time: np.ndarray, current: np.ndarray, voltage: np.ndarray, torque: np.ndarray | None,

@@ -37,7 +37,7 @@ def run_rows(runs: Sequence[Any], used: list[int], fitted: list[int],
         t_cut = None
         if t0 is not None and run.cut.index is not None:
             sl = slice(run.start, run.cut.index + 1)
-            data = StallData(run.source, run.time[sl] - run.time[0], run.voltage[sl], run.current[sl], None)
+            data = StallData(run.source, run.time[sl] - run.switch_on, run.voltage[sl], run.current[sl], None)
             t_cut = float(simulate_runs(shared, [t0], [data], heat.thermal.magnet_coefficient,
                                         heat.thermal.ambient_temperature)[0][1][-1])
         rows.append({

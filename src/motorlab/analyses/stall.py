@@ -20,8 +20,9 @@ from typing import Any
 import numpy as np
 
 from motorlab.analyses._common import reader_warnings, sources_of
-from motorlab.analyses._stall_cuts import Cut, find_cut, first_full_sample, set_point
+from motorlab.analyses._stall_cuts import NO_CURRENT, Cut, find_cut, first_full_sample, set_point
 from motorlab.analyses._stall_fit import (
+    REFERENCE_SAMPLES,
     SHARED,
     HeatFit,
     StallData,
@@ -35,7 +36,7 @@ from motorlab.analyses._stall_report import answers, make_panels, parameters_of,
 from motorlab.errors import FitError, LogFormatError, OptionError
 from motorlab.recording import Recording
 from motorlab.results import FitResult
-from motorlab.thermal import MAGNET_COEFFICIENTS
+from motorlab.thermal import MAGNET_COEFFICIENTS, WINDING_LIMIT
 
 #: Fewest healthy samples a run needs to enter the fit.
 MIN_SAMPLES = 5
@@ -62,12 +63,18 @@ class Run:
     end: int
     set_point: float
     cut: Cut
+    on: int = 0  # the row the supply switched on at (rows logged before it carry no current)
+
+    @property
+    def switch_on(self) -> float:
+        """The file's time of the row the supply switched on at [s]."""
+        return float(self.time[self.on])
 
     def data(self) -> StallData:
-        """The healthy part, its time counted from the run's first row (the supply switching on)."""
+        """The healthy part, its time counted from the supply switching on (the run's first row with current)."""
         sl = slice(self.start, self.end)
-        return StallData(self.source, self.time[sl] - self.time[0], self.voltage[sl], self.current[sl],
-                         None if self.torque is None else self.torque[sl], float(self.time[0]))
+        return StallData(self.source, self.time[sl] - self.switch_on, self.voltage[sl], self.current[sl],
+                         None if self.torque is None else self.torque[sl], self.switch_on)
 
 
 def _run_of(rec: Recording, voltage: float | None, until: float | None) -> Run:
@@ -99,7 +106,33 @@ def _run_of(rec: Recording, voltage: float | None, until: float | None) -> Run:
     end = t.size if cut.index is None else cut.index
     if until is not None:
         end = min(end, int(np.searchsorted(t, until, side="right")))
-    return Run(source, t, i, v, q, start, end, v_set, cut)
+    on = int(np.flatnonzero(i > NO_CURRENT * float(np.max(i)))[0])
+    return Run(source, t, i, v, q, start, end, v_set, cut, on)
+
+
+def _runs_of(recs: list[Recording], voltage: float | None, until: float | None,
+             warnings: list[str]) -> tuple[list[Run], list[Recording]]:
+    """The runs of the recordings; among several, a file without current (an export of torque only) is left
+    out and named, and refused only when no file is left.
+
+    Raises
+    ------
+    LogFormatError
+        A lone file without current, or every file without.
+    """
+    runs, kept, refused = [], [], []
+    for rec in recs:
+        try:
+            runs.append(_run_of(rec, voltage, until))
+            kept.append(rec)
+        except LogFormatError as exc:
+            if len(recs) == 1 or "current" not in exc.message:
+                raise
+            refused.append(exc)
+    if not runs:
+        raise refused[0]
+    warnings.extend(f"{exc}: left out" for exc in refused)
+    return runs, kept
 
 
 def stall(
@@ -153,8 +186,8 @@ def stall(
     beta = _magnet(magnet, magnet_coefficient)
     if not (math.isfinite(ambient) and -40 <= ambient <= 80):
         raise OptionError(f"the ambient temperature must lie between −40 and 80 °C, got {ambient!r}")
-    runs = [_run_of(rec, voltage, until) for rec in recs]
     warnings = reader_warnings(recs)
+    runs, recs = _runs_of(recs, voltage, until, warnings)
     used = [k for k, r in enumerate(runs) if r.end - r.start >= MIN_SAMPLES]
     for k, r in enumerate(runs):
         if k not in used:
@@ -163,6 +196,8 @@ def stall(
         raise FitError("no run has a healthy stretch of at least 5 samples to fit")
     used = _same_shaft(runs, used, warnings)
     heat, excluded, unexplained = _fit_with_exclusions([runs[k] for k in used], beta, ambient, warnings)
+    if not unexplained:
+        heat = _drop_implausible_starts([runs[k].data() for k in used], heat, excluded, beta, ambient, warnings)
     data = [runs[k].data() for k in used]
     fitted = [j for j in range(len(used)) if j not in excluded]
     # The torque against the heating model's current, not the measured one: the model's is free of the
@@ -293,6 +328,28 @@ def _fit_with_exclusions(runs: list[Run], beta: float, ambient: float,
             heat = fit_heating([data[j] for j in keep], magnet=beta, ambient=ambient)
             warnings.append(_unexplained(data[bad], heat))
     return heat, excluded, ""
+
+
+def _drop_implausible_starts(data: list[StallData], heat: HeatFit, excluded: list[int], beta: float, ambient: float,
+                             warnings: list[str]) -> HeatFit:
+    """Leave out (adding to ``excluded``, and naming) a run of at least 30 samples that heating explains only
+    by a start at or above the winding's limit, 150 °C: a test does not start a motor that hot; its higher
+    resistance is another winding or brush contact. The hottest such run first, refitting after each."""
+    while True:
+        keep = [j for j in range(len(data)) if j not in excluded]
+        hot = [(heat.initial[pos], j) for pos, j in enumerate(keep)
+               if heat.initial[pos] >= WINDING_LIMIT and data[j].time.size >= REFERENCE_SAMPLES]
+        if not hot or len(keep) < 3:
+            return heat
+        start, j = max(hot)
+        ref = data[keep[heat.reference]]
+        r0, r_ref = float(data[j].voltage[0] / data[j].current[0]), float(ref.voltage[0] / ref.current[0])
+        excluded.append(j)
+        heat = fit_heating([data[k] for k in keep if k != j], magnet=beta, ambient=ambient)
+        warnings.append(f"{data[j].source}: left out: heating explains this run only if its winding started at "
+                        f"{start:.0f} °C (its resistance at the start, {r0:.3g} Ω, is {100 * (r0 / r_ref - 1):.0f} % "
+                        f"above the coolest run's {r_ref:.3g} Ω); a test does not start a motor that hot: another "
+                        "winding, or brush contact, not heat")
 
 
 def _lone_unexplained(run: StallData, heat: HeatFit, pos: int) -> str:

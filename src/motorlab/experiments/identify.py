@@ -34,10 +34,15 @@ def run(paths: list[str], v: dict[str, Any]) -> Any:
         cpr = None  # the readers of counts logs keep theirs in metadata["cpr"]
     from motorlab.analyses._heat import add_heat_warning
 
+    network = None
+    if v["thermal_fit"]:  # the network a stall run measured (analyze stall --json)
+        from motorlab.stall_forecast import load_fit
+
+        network = load_fit(v["thermal_fit"][0]).thermal
     result = identify(runs, resistance=v["resistance"], torque_constant=v["torque_constant"], cpr=cpr,
-                      use_current=v["use_current"], thermal=v["thermal"], motor=v["motor"],
-                      initial_temperature=v["initial_temperature"])
-    if v["thermal"]:  # the heat is in the model: its figure is among the warnings already
+                      use_current=v["use_current"], thermal=v["thermal"] or network is not None, motor=v["motor"],
+                      network=network, initial_temperature=v["initial_temperature"])
+    if v["thermal"] or network is not None:  # the heat is in the model: its figure is among the warnings already
         return result
     return add_heat_warning(result, runs, resistance=v["resistance"])
 
@@ -83,6 +88,9 @@ EXPERIMENT = Experiment(
                label="Motor whose thermal figures to use",
                help="with the winding's temperature: the catalogue's thermal network of this motor; without it, the "
                     "one the log names, else a 550-size motor's"),
+        Option("thermal-fit", kind="files", metavar="FIT.json", label="Stall fit whose thermal network to use",
+               help="with the winding's temperature: the network a stall run measured (the JSON that analyze stall "
+                    "writes), instead of the catalogue's"),
         Option("initial-temperature", "degC", metavar="CELSIUS", label="Winding temperature at the start",
                help="with the winding's temperature: in °C, the winding's and case's at the log's start; without "
                     "it, the ambient's"),

@@ -113,7 +113,8 @@ _POWER_KINDS: dict[str, str] = {
     "supplied": "input_power", "supply": "input_power", "input": "input_power", "in": "input_power",
     "electrical": "input_power",
     "dissipation": "power_dissipation", "dissipated": "power_dissipation", "loss": "power_dissipation",
-    "losses": "power_dissipation", "heat": "power_dissipation",
+    "losses": "power_dissipation", "heat": "power_dissipation", "lost": "power_dissipation",
+    "wasted": "power_dissipation",
 }
 
 #: Targets that leave a column out.
@@ -280,6 +281,10 @@ def _check_unit(text: str, quantity: str, error: Any) -> str:
     return unit
 
 
+#: Quantities whose unit is never guessed when a header gives none (a "Speed" column may be rpm or rad/s).
+_NO_DEFAULT_UNIT = ("speed", "velocity", "position")
+
+
 def worded_column(field: str) -> tuple[str, str | None] | None:
     """The quantity and the unit (as pint reads it, or None) of a header in words, or None if it names none.
 
@@ -311,6 +316,8 @@ def worded_column(field: str) -> tuple[str, str | None] | None:
     if len({q for q, _u in found}) != 1:
         return None  # no quantity word, or two: "Voltage Current" is no header to guess at
     quantity, word_unit = found[0]
+    if unit_text is None and word_unit is None and quantity in _NO_DEFAULT_UNIT:
+        raise LogFormatError(f"column {field!r} names a {quantity} without a unit (rpm? rad/s?: both are in use)")
     if unit_text is None:
         return quantity, word_unit
     unit = _check_unit(unit_text, quantity, lambda message: LogFormatError(f"column {field!r}: {message}"))

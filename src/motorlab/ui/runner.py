@@ -38,6 +38,10 @@ from typing import IO, Any
 #: Seconds one command may run before it is ended.
 TIME_LIMIT = 120.0
 
+#: Seconds a session (``characterize``, slot ``"session"``) may run: its work grows with its units (an
+#: 8-unit session is about 20 s of CPU and a report of a hundred figures; several times that on a busy machine).
+SESSION_TIME_LIMIT = 600.0
+
 #: Short commands (an analysis, gains, plots) at once; the others wait their turn.
 CONCURRENCY = max(1, min(4, os.cpu_count() or 1))
 
@@ -367,15 +371,17 @@ async def run_module(
     module: str, argv: Sequence[str], *, cwd: str, time_limit: float | None = None, slot: str = "short",
     on_progress: Callable[[dict[str, Any]], None] | None = None,
 ) -> Outcome:
-    """Run ``python -m module argv...`` in ``cwd``; end it after ``time_limit`` (default :data:`TIME_LIMIT`) s.
+    """Run ``python -m module argv...`` in ``cwd``; end it after ``time_limit`` s.
+
+    The default limit is :data:`TIME_LIMIT`, or :data:`SESSION_TIME_LIMIT` in the ``"session"`` slot.
 
     ``slot`` is ``"short"`` or ``"session"``. With ``on_progress`` the child reports progress
     (``MOTORLAB_PROGRESS=json``) and each report's dict is handed to it while the command runs. A
     cancelled call (the client went away) ends the child at once.
     """
-    limit = TIME_LIMIT if time_limit is None else time_limit
+    limit = (SESSION_TIME_LIMIT if slot == "session" else TIME_LIMIT) if time_limit is None else time_limit
     env = {"MOTORLAB_PROGRESS": "json"} if on_progress is not None else {}
-    if (module, argv[0] if argv else "") in RESIDENT_JOBS:
+    if _warm_enabled() and (module, argv[0] if argv else "") in RESIDENT_JOBS:
         answered = await resident().run(module, argv, cwd, env, limit)
         if answered is not None:
             return answered

@@ -117,6 +117,7 @@ export function render(host, ctx) {
       running ? el("progress", { "aria-label": "Progress of the session" }) : null,
       el("span", { class: "run-status", role: "status", text: s && s.status === "stopped" ? "cancelled" : "" })),
     s && s.error ? el("p", { class: "error", role: "alert", text: s.error }) : null));
+  if (running && sessionStep) { const last = sessionStep; requestAnimationFrame(() => progress(last)); }  // kept across a re-render
   if (s && !s.body) checkFiles(s, check);
   if (s && s.body) {
     const r = s.body.results;
