@@ -398,3 +398,26 @@ def test_a_curve_voltage_beyond_any_motor_is_refused(tmp_path: Path, capsys) -> 
     refused(capsys, "analyze", "curve", path, "--voltage", "1e299", "--json", mentions="above 1000 V")
     code, _out, err = run(capsys, "analyze", "curve", path, "--voltage", "12", "--json")
     assert code == 0, err
+
+
+def test_a_frequency_table_without_a_cpr_names_the_file(tmp_path: Path, capsys) -> None:
+    """Found by the long fuzz run (case 6226): a terminal table of channel frequencies that lost its
+    '# cpr:' line was refused with "give the counts per revolution (--cpr)" and no file name."""
+    path = tmp_path / "terminal.csv"
+    path.write_text("# experiment: 18.0\ncurrent_A,frequency_Hz\n0.292,375.42\n0.337,533.27\n0.382,691.5\n"
+                    "0.426,849.77\n0.471,1011.4\n")
+    refused(capsys, "analyze", "terminal", path, "--K", "0.7", "--json", mentions=f"{path}: the rows hold")
+
+
+def test_a_file_name_with_a_nul_byte_is_refused(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys) -> None:
+    """Found by the long fuzz run (case 6410): ``tune --params $'\\0'`` (a script's argv can hold a NUL)
+    reached os.stat, whose ValueError ended the run with exit 1."""
+    from motorlab.errors import LogFormatError
+    from motorlab.io import read_any
+
+    monkeypatch.chdir(tmp_path)
+    refused(capsys, "tune", "velocity", "--params", "\x00", "--json", mentions="contains a NUL byte")
+    refused(capsys, "analyze", "lcr", "lcr\x00.csv", "--json", mentions="'lcr?.csv': contains a NUL byte")
+    refused(capsys, "simulate", "torque", "--motor", "neverest40", "-o", "a\x00.csv", mentions="contains a NUL")
+    with pytest.raises(LogFormatError, match=r"lcr\?\.csv: the file name contains a NUL byte"):
+        read_any("lcr\x00.csv")

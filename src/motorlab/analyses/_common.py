@@ -231,7 +231,8 @@ def position_of(recording: Recording, *, cpr: float | None = None) -> tuple[np.n
         quantum = 2.0 * math.pi / float(cpr) if cpr is not None else math.nan
         return recording.signals["position"], quantum
     if "counts" in recording.signals:
-        raise OptionError("this log holds encoder counts: give the encoder's counts per revolution (--cpr)")
+        raise OptionError("this log holds encoder counts: give the encoder's counts per revolution (--cpr)",
+                          path=recording.source or None)
     recording.require("position")  # raises LogFormatError naming the file
     raise AssertionError("unreachable")  # pragma: no cover
 

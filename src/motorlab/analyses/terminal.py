@@ -40,7 +40,8 @@ def speeds_of(recording: Recording, *, cpr: float | None = None) -> np.ndarray:
         if cpr is None:
             cpr = recording.metadata.get("cpr")
         if cpr is None:
-            raise OptionError("the rows hold encoder channel frequencies: give the counts per revolution (--cpr)")
+            raise OptionError("the rows hold encoder channel frequencies and the file has no '# cpr:' line: give "
+                              "the counts per revolution (--cpr)", path=recording.source or None)
         common.check_positive(float(cpr), "cpr (encoder counts per revolution)")
         try:
             common.check_cpr(float(cpr))

@@ -77,6 +77,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     analyses failed (each unit's status says why); 1 an internal error (a bug: one line asks for a
     report; set ``MOTORLAB_TRACEBACK=1`` to see the traceback); 130 interrupted.
     """
+    given = list(sys.argv[1:] if argv is None else argv)
+    nul = next((str(a) for a in given if "\0" in str(a)), None)
+    if nul is not None:  # a script's argv can hold one; no file name or value can (the OS refuses it)
+        print(f"motorlab: error: {nul.replace(chr(0), '?')[:80]!r}: contains a NUL byte", file=sys.stderr)
+        return EXIT_INPUT
     parser = build_parser()
     args = parser.parse_args(argv)
     pending: list[str] = []

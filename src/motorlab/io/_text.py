@@ -131,6 +131,8 @@ def check_input_file(path: PathArg) -> tuple[str, int]:
         name = os.fsdecode(name)
     if not name.strip():
         raise LogFormatError("the file name is empty")
+    if "\0" in name:  # no file system holds such a name (os.stat raises ValueError, not OSError)
+        raise LogFormatError("the file name contains a NUL byte", path=name.replace("\0", "?"))
     try:
         info = os.stat(name)
     except FileNotFoundError:
@@ -172,8 +174,8 @@ def check_distinct(paths: Sequence[PathArg]) -> None:
         try:
             info = os.stat(name)
             key: tuple[int, int] | str = (info.st_dev, info.st_ino)
-        except OSError:
-            key = os.path.abspath(name)  # missing: the reader names it
+        except (OSError, ValueError):  # ValueError: a NUL in the name
+            key = os.path.abspath(name)  # missing or no name at all: the reader names it
         if key in seen:
             same = "" if seen[key] == name else f" (the same file as {seen[key]})"
             raise LogFormatError(f"given twice{same}: each file of a run is read once", path=name)
