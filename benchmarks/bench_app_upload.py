@@ -56,6 +56,16 @@ def _hwm(pid: int) -> float:
     return 0.0
 
 
+def _cpu(pid: int) -> float:
+    """User + system CPU seconds of ``pid`` so far (0 when it is gone)."""
+    try:
+        with open(f"/proc/{pid}/stat") as handle:
+            fields = handle.read().rsplit(")", 1)[1].split()
+        return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+    except (OSError, IndexError, ValueError):
+        return 0.0
+
+
 def _descendants(pid: int) -> list[int]:
     out, todo = [], [pid]
     while todo:
@@ -76,12 +86,16 @@ class Watch(threading.Thread):
     def __init__(self, pid: int) -> None:
         super().__init__(daemon=True)
         self.pid, self.server, self.workers, self.done = pid, 0.0, {}, threading.Event()
+        self.cpu: dict[int, float] = {}
+        self.start_cpu = _cpu(pid)
 
     def run(self) -> None:
         while not self.done.is_set():
             self.server = max(self.server, _hwm(self.pid))
+            self.cpu[self.pid] = _cpu(self.pid) - self.start_cpu
             for child in _descendants(self.pid):
                 self.workers[child] = max(self.workers.get(child, 0.0), _hwm(child))
+                self.cpu[child] = max(self.cpu.get(child, 0.0), _cpu(child))
             time.sleep(0.05)
 
 
@@ -154,10 +168,13 @@ def main(argv: list[str]) -> int:
         what = f"J = {doc['parameters']['J']['value']:.4g} kg·m²" if response.status == 200 else doc.get("error")
     except (ValueError, KeyError, TypeError):
         what = answer[:200].decode("utf-8", "replace")
-    busiest = max(watch.workers.values(), default=0.0)
+    busiest = max(watch.workers, key=lambda pid: watch.cpu.get(pid, 0.0), default=None)
+    worker_peak = watch.workers.get(busiest, 0.0) if busiest else 0.0
+    worker_cpu = watch.cpu.get(busiest, 0.0) if busiest else 0.0
     print(f"upload {size / 2**20:.1f} MiB ({samples / 1e6:.2f} M samples) of a {MAX_UPLOAD / 2**20:.0f} MiB limit")
-    print(f"status {response.status} in {wall:.1f} s wall; server peak {watch.server:.0f} MiB; "
-          f"busiest worker peak {busiest:.0f} MiB ({len(watch.workers)} processes under the server); {what}")
+    print(f"status {response.status} in {wall:.1f} s wall; server {watch.cpu.get(server.pid, 0.0):.1f} s CPU, "
+          f"peak {watch.server:.0f} MiB; the worker that ran it {worker_cpu:.1f} s CPU (imports included), "
+          f"peak {worker_peak:.0f} MiB ({len(watch.workers)} processes under the server); {what}")
     return 0 if response.status == 200 else 1
 
 

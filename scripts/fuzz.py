@@ -246,7 +246,10 @@ def run_cases(args: argparse.Namespace, seeds: list, state: dict, state_path: Pa
                 del busy[conn]
                 done[index] = result
             while state["next"] in done:
-                _tally(state, done.pop(state["next"]))
+                result = done.pop(state["next"])
+                _tally(state, result)
+                with open(state_path.with_name("cases.jsonl"), "a") as log:  # each case's result, for --merge
+                    log.write(json.dumps({"index": state["next"], **result}) + "\n")
                 state["next"] += 1
                 state["timed_cases"] = state.get("timed_cases", 0) + 1
                 wall, last = wall + time.monotonic() - last, time.monotonic()
@@ -269,6 +272,33 @@ def run_cases(args: argparse.Namespace, seeds: list, state: dict, state_path: Pa
             signal.signal(sig, handler)
 
 
+def merge(state: dict, state_path: Path, other: Path) -> int:
+    """Add the cases of another run's folder (``--out`` of a run made with ``--start``) that follow ours.
+
+    Two runs of the same seed may share the work: one from case 0, one ``--start K``. Its cases from
+    our next one on are tallied in order (those we ran too are skipped); its failure folders are
+    copied. A gap between our next case and its first leaves us where we are.
+    """
+    rows = [json.loads(line) for line in (other / "cases.jsonl").read_text().splitlines() if line.strip()]
+    theirs = json.loads((other / "state.json").read_text())
+    if theirs.get("seed") != state["seed"]:
+        print(f"{other}: seed {theirs.get('seed')}, not {state['seed']}: not merged")
+        return 1
+    by_index = {row["index"]: row for row in rows}
+    added = 0
+    while state["next"] in by_index:
+        _tally(state, by_index[state["next"]])
+        state["next"] += 1
+        added += 1
+    state["timed_cases"] = state.get("timed_cases", 0) + added  # the runs overlapped in time: ours is the wall
+    for folder in sorted((other / "failures").glob("*")) if (other / "failures").is_dir() else []:
+        if folder.is_dir() and not (state_path.parent / "failures" / folder.name).exists():
+            shutil.copytree(folder, state_path.parent / "failures" / folder.name)
+    _write_state(state_path, state)
+    print(f"merged {added} cases of {other}; next case {state['next']}")
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--cases", type=int, default=10_000)
@@ -277,6 +307,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", type=Path, default=ROOT / "out" / "fuzz")
     parser.add_argument("--time-limit", type=float, default=60.0, help="CPU seconds per case (default 60)")
     parser.add_argument("--jobs", type=int, default=1, help="cases run at once, in forked workers (default 1)")
+    parser.add_argument("--start", type=int, default=0, help="a new run's first case (to share a run; see --merge)")
+    parser.add_argument("--merge", type=Path, help="add the cases of another run's --out folder that follow ours")
     parser.add_argument("--replay", type=Path)
     parser.add_argument("--summary", action="store_true")
     parser.add_argument("--only", help="only seeds whose name contains this")
@@ -292,6 +324,12 @@ def main(argv: list[str] | None = None) -> int:
     if args.summary:
         print(summary(state))
         return 0
+    if args.merge:
+        return merge(state, state_path, args.merge)
+    if state["next"] < args.start:
+        if state["next"]:
+            parser.error(f"--start {args.start}: {state_path} has run cases already")
+        state["next"] = args.start
     seeds = build(args.out / "corpus")
     warm()
     if args.only:

@@ -120,6 +120,10 @@ class Disagreement:
         )
 
 
+#: Motor parameters physics wants positive: a negative one in a unit's table carries its warning.
+POSITIVE_PARAMETERS = frozenset({"J", "b", "Tf", "K", "R", "R_dc", "L", "Ka", "gamma"})
+
+
 @dataclass
 class UnitResult:
     """Everything measured on one unit."""
@@ -147,6 +151,23 @@ class UnitResult:
         """The chosen estimate of each motor parameter."""
         return {name: c.estimate for name, c in self.parameters.items()}
 
+    @property
+    def warnings(self) -> list[str]:
+        """What the analyses said of each chosen parameter that breaks physics (a negative b, R …).
+
+        The unit's table takes each parameter from one analysis; when that value is negative, the
+        warning its analysis gave comes with it (``"terminal: b is fitted negative …"``).
+        """
+        out: list[str] = []
+        for name, c in self.parameters.items():
+            if name not in POSITIVE_PARAMETERS or not c.estimate.value < 0:
+                continue
+            fit = self.fits.get(c.source)
+            said = [w for w in (fit.warnings if fit is not None else []) if w.startswith(f"{name} ")]
+            out += [f"{c.source}: {w}" for w in said] or [
+                f"{c.source}: {name} = {c.estimate.value:.4g} is negative, which no motor has"]
+        return list(dict.fromkeys(out))
+
     def to_dict(self) -> dict[str, Any]:
         """JSON of one unit: parameters, experiments, disagreements, failures, truth."""
         out: dict[str, Any] = {
@@ -155,6 +176,7 @@ class UnitResult:
             "parameters": {name: c.to_dict() for name, c in self.parameters.items()},
             "experiments": {name: fit.to_dict() for name, fit in self.fits.items()},
             "failures": dict(self.failures),
+            "warnings": self.warnings,
             "disagreements": [
                 {
                     "parameter": d.parameter,

@@ -359,3 +359,42 @@ def test_a_log_no_regression_start_can_simulate_is_refused(capsys) -> None:
     regression start simulated beyond a float, and an ``assert`` ended the run (exit 1)."""
     failure = Path(__file__).parents[1] / "data" / "fuzz" / "duplicated-range-sysid.wpilog"
     refused(capsys, "analyze", "feedforward", failure, "--json", mentions="duplicated-range-sysid.wpilog: cannot find")
+
+
+@pytest.mark.parametrize("argv", [("simulate", "torque", "--motor", "neverest40", "-o", "sim.csv", "--noise-seed=--"),
+                                  ("motors", "neverest40", "--voltage=--")])
+def test_a_double_dash_as_an_option_value_is_refused(argv, tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                                                      capsys) -> None:
+    """Found by the long fuzz run (cases 3950, 3967): ``--noise-seed=--`` and ``--R=--`` reached the
+    analysis as an empty list (argparse drops the "--" and never runs the option's type): exit 1."""
+    monkeypatch.chdir(tmp_path)
+    refused(capsys, *argv, mentions="expected a value, got '--'")
+    assert not (tmp_path / "sim.csv").exists()
+
+
+def test_a_unit_value_that_breaks_physics_keeps_its_warning(tmp_path: Path, capsys) -> None:
+    """Found by the long fuzz run (case 6514): a terminal table with a range of rows repeated gave
+    b < 0; the terminal analysis warned, but the unit's table (results.json, results.csv, the printed
+    table) showed the negative b with status "ok" and no warning."""
+    import shutil
+
+    folder = tmp_path / "session"
+    shutil.copytree(Path(__file__).parents[1] / "data" / "fuzz" / "negative-b-session", folder)
+    code, _out, err = run(capsys, "characterize", folder / "session.toml", "--no-report", "-o", tmp_path / "out")
+    assert code == 0, err
+    unit = json.loads((tmp_path / "out" / "results.json").read_text())["units"]["A"]
+    assert unit["parameters"]["b"]["value"] < 0
+    assert any(w.startswith("terminal: b is fitted negative") for w in unit["warnings"]), unit["warnings"]
+    assert "motorlab: warning: unit A: terminal: b is fitted negative" in err
+
+
+def test_a_curve_voltage_beyond_any_motor_is_refused(tmp_path: Path, capsys) -> None:
+    """Found by the long fuzz run (case 4993): ``analyze curve --voltage 1e299`` ran, with numpy's
+    overflow warnings on stderr, to exit 0."""
+    from motorlab.io import write_csv
+
+    path = tmp_path / "curve.csv"
+    write_csv(path, {"speed_rpm": [0.0, 3000, 6000], "torque_Nm": [1.4, 0.7, 0.0], "current_A": [89.0, 46, 3]})
+    refused(capsys, "analyze", "curve", path, "--voltage", "1e299", "--json", mentions="above 1000 V")
+    code, _out, err = run(capsys, "analyze", "curve", path, "--voltage", "12", "--json")
+    assert code == 0, err

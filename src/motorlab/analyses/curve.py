@@ -42,6 +42,10 @@ INTERPOLATED = 1e-4
 RATIO_WARNING = 0.05
 
 
+#: Highest terminal voltage a curve can be given at [V]: brushed DC motors run from a few volts to a few hundred.
+MAX_VOLTAGE = 1000.0
+
+
 def curve(recordings: Recording | Sequence[Recording], *, voltage: float | None = None) -> FitResult:
     """K, Kt, R, the free current and the friction of a bare motor from its steady-state curve(s).
 
@@ -69,7 +73,7 @@ def curve(recordings: Recording | Sequence[Recording], *, voltage: float | None 
         A file without current (some exports log torque only), torque or speed, or without a voltage
         column when ``voltage`` is not given.
     OptionError
-        ``voltage`` not positive, or given for a file that has a voltage column.
+        ``voltage`` not positive, above :data:`MAX_VOLTAGE`, or given for a file that has a voltage column.
     FitError
         Fewer than three rows, or rows that do not span speed and current.
     """
@@ -78,6 +82,9 @@ def curve(recordings: Recording | Sequence[Recording], *, voltage: float | None 
         raise OptionError("no curve given")
     if voltage is not None and not (math.isfinite(voltage) and voltage > 0):
         raise OptionError(f"the voltage (--voltage) must be positive, got {voltage!r}")
+    if voltage is not None and voltage > MAX_VOLTAGE:
+        raise OptionError(f"the voltage (--voltage) {voltage:.4g} V is above {MAX_VOLTAGE:g} V, beyond any brushed "
+                          "DC motor's: give the voltage the curve was measured at, in volts")
     notes: list[str] = []
     current, torque, speed, volts = _rows(recs, voltage, notes)
     source = " + ".join(sources_of(recs))

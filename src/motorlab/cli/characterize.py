@@ -78,6 +78,9 @@ def run(args: argparse.Namespace) -> int:
     paths = write_outputs(result, out_dir, report=not args.no_report, processes=args.processes)
     if not args.quiet:
         print_table(result)
+    for unit in result.units.values():  # a value in the table that breaks physics is never shown silently
+        for warning in unit.warnings:
+            print(f"motorlab: warning: unit {unit.spec.display_name}: {warning}", file=sys.stderr)
     for kind in ("json", "csv", "html"):
         if kind in paths:
             print(f"wrote {paths[kind]}")

@@ -39,6 +39,13 @@ class Parser(argparse.ArgumentParser):
     def format_help(self) -> str:
         return plain_text(super().format_help())
 
+    def _get_values(self, action: argparse.Action, arg_strings: list[str]) -> Any:
+        # ``--R=--``: Python's argparse drops the "--" and hands the option an empty list, unconverted
+        # (its type never runs), which then meets arithmetic as a list. "--" is no value: refused.
+        if action.option_strings and "--" in arg_strings and action.nargs not in (argparse.PARSER, argparse.REMAINDER):
+            self.error(f"argument {'/'.join(action.option_strings)}: expected a value, got '--'")
+        return super()._get_values(action, arg_strings)
+
     def error(self, message: str) -> NoReturn:
         """``motorlab: error: SUB-COMMAND: message`` like every other refusal, and exit code 2."""
         command = self.prog.split(None, 1)[1] if " " in self.prog else ""
