@@ -18,8 +18,10 @@ lint: install
 	$(BIN)/ruff check src tests benchmarks
 	$(BIN)/mypy
 
+# The suite runs on every core (pytest-xdist; tests finish in any order and share nothing); BLAS on
+# one thread per worker, so that two workers on two cores do not fight over four threads.
 test: lint
-	MPLBACKEND=Agg $(BIN)/pytest
+	MPLBACKEND=Agg OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 $(BIN)/pytest -n auto --dist worksteal
 
 demo: install
 	MPLBACKEND=Agg $(BIN)/motorlab demo -o out/demo

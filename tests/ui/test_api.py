@@ -168,11 +168,11 @@ def test_twenty_concurrent_requests_leave_it_responsive(server: Any, sim_session
     with concurrent.futures.ThreadPoolExecutor(20) as pool:
         futures = [pool.submit(post, body) for body in bodies]
         time.sleep(0.5)
-        start = time.monotonic()
         _alive(server)  # served while the twenty wait for their child processes
-        latency = time.monotonic() - start
+        # Not a timing: a blocked event loop would answer only after the twenty (on any machine, loaded or not)
+        waiting = sum(not f.done() for f in futures)
         codes = [f.result() for f in futures]
-    assert latency < 2.0
+    assert waiting > 0, "the app answered only after all twenty analyses had ended"
     assert codes == [200 if k % 2 else 400 for k in range(20)]
 
 

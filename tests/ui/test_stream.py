@@ -239,3 +239,16 @@ def test_a_resident_job_past_its_time_limit_ends_the_worker(tmp_path: Path) -> N
     outcome, ended = asyncio.run(late())
     assert outcome.code == 124
     assert ended
+
+
+def test_one_resident_worker_whatever_the_event_loops() -> None:
+    async def ready() -> Any:
+        await runner.resident().start()
+        return runner.resident().proc
+
+    first, second = asyncio.run(ready()), asyncio.run(ready())  # a harness may make an event loop per request
+    assert first is second
+    assert first is not None
+    assert first.poll() is None
+    runner.resident().close()
+    assert first.poll() is not None

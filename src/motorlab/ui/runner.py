@@ -202,55 +202,69 @@ SESSION_NICENESS = 10
 
 
 class Resident:
-    """One warm process (``motorlab.ui.warm --serve``) running short jobs one at a time, on one event loop.
+    """One warm process (``motorlab.ui.warm --serve``) running short jobs one at a time, for the whole app.
 
     A gains change would otherwise take a spare (then replaced: a new Python importing scipy) for
     0.1 s of work. A job that runs past its time limit, or whose client goes away, ends the process (the
     next is started when the app is idle); while the resident is busy or starting, a job runs the
-    ordinary way, in a spare or a fresh process, so nothing queues behind it.
+    ordinary way, in a spare or a fresh process, so nothing queues behind it. One per Python process,
+    whatever the event loops: its answers are read in a thread, not through a loop's pipe transport.
     """
 
     def __init__(self) -> None:
+        self._lock = threading.Lock()
         self.proc: subprocess.Popen[bytes] | None = None
-        self.reader: asyncio.StreamReader | None = None
-        self.transport: asyncio.BaseTransport | None = None
         self.ready = False
         self.busy = False
         self.jobs = 0  # jobs run so far (for tests and benchmarks)
-        self.starting: asyncio.Future[None] | None = None
 
     def start_soon(self) -> None:
-        """:meth:`start` in the background (when idle: its imports take the CPU for a second or two)."""
-        if not self.busy and (self.starting is None or self.starting.done()):
-            self.starting = asyncio.ensure_future(self.start())
+        """Start the process (when none runs); it is ready once its imports are done (a thread waits for it)."""
+        if not _warm_enabled():
+            return
+        with self._lock:
+            if self.busy or (self.proc is not None and self.proc.poll() is None):
+                return
+            self.proc, self.ready = POOL.spawn("--serve"), False
+            proc = self.proc
+        threading.Thread(target=self._wait_ready, args=(proc,), daemon=True).start()
+
+    def _wait_ready(self, proc: subprocess.Popen[bytes]) -> None:
+        assert proc.stdout is not None
+        with contextlib.suppress(OSError, ValueError):
+            said = proc.stdout.readline().strip() == b"ready"
+            with self._lock:
+                if self.proc is proc:
+                    self.ready = said
 
     async def start(self) -> None:
-        """Start the process (when none runs) and mark it ready once its imports are done."""
-        if not _warm_enabled() or (self.proc is not None and self.proc.poll() is None):
-            return
-        self.close()
-        self.proc = POOL.spawn("--serve")
-        assert self.proc.stdout is not None
-        self.reader, self.transport = await _reader(self.proc.stdout)
-        self.busy = True  # until "ready"
-        try:
-            self.ready = (await self.reader.readline()).strip() == b"ready"
-        finally:
-            self.busy = False
+        """:meth:`start_soon`, then wait until the process is ready (or has ended)."""
+        self.start_soon()
+        while self.proc is not None and not self.ready and self.proc.poll() is None:
+            await asyncio.sleep(0.05)
+
+    def _take(self) -> subprocess.Popen[bytes] | None:
+        with self._lock:
+            proc = self.proc
+            if self.busy or not self.ready or proc is None or proc.poll() is not None:
+                return None
+            self.busy = True
+            return proc
 
     async def run(self, module: str, argv: Sequence[str], cwd: str, env: Mapping[str, str],
                   limit: float) -> Outcome | None:
         """The job's outcome, or None when the resident cannot take it now (the caller runs it otherwise)."""
-        proc, reader = self.proc, self.reader
-        if self.busy or not self.ready or proc is None or reader is None or proc.poll() is not None:
+        proc = self._take()
+        if proc is None:
             return None
         assert proc.stdin is not None
-        self.busy = True
+        assert proc.stdout is not None
         try:
             job = {"module": module, "argv": list(argv), "cwd": cwd, "env": dict(env)}
             proc.stdin.write((json.dumps(job) + "\n").encode())
             proc.stdin.flush()
-            line = await asyncio.wait_for(reader.readline(), timeout=limit)
+            line = await asyncio.wait_for(asyncio.get_running_loop().run_in_executor(None, proc.stdout.readline),
+                                          timeout=limit)
             if not line:  # it died (ended from outside): the job runs the ordinary way
                 self.close()
                 return None
@@ -259,7 +273,7 @@ class Resident:
             err = "".join(k for k in str(answer["stderr"]).splitlines(keepends=True) if not k.startswith('{"progress"'))
             return Outcome(int(answer["code"]), str(answer["stdout"]), err)
         except TimeoutError:
-            self.close()
+            self.close()  # its reading thread gets the end of the pipe and finishes
             return Outcome(124, "", f"motorlab: error: the command took longer than {limit:g} s and was stopped")
         except (OSError, ValueError):
             self.close()
@@ -272,36 +286,24 @@ class Resident:
 
     def close(self) -> None:
         """End the process."""
-        proc, self.proc, self.ready = self.proc, None, False
-        if self.transport is not None:
-            with contextlib.suppress(RuntimeError):  # its event loop is closed already (at exit)
-                self.transport.close()
-            self.transport = None
+        with self._lock:
+            proc, self.proc, self.ready = self.proc, None, False
         if proc is not None:
             end(proc)
             proc.wait()
             for pipe in (proc.stdin, proc.stdout, proc.stderr):
                 if pipe is not None:
-                    pipe.close()
+                    with contextlib.suppress(OSError):
+                        pipe.close()
 
 
-_residents: weakref.WeakKeyDictionary[asyncio.AbstractEventLoop, Resident] = weakref.WeakKeyDictionary()
+RESIDENT = Resident()
+atexit.register(RESIDENT.close)
 
 
 def resident() -> Resident:
-    """The running event loop's resident worker."""
-    loop = asyncio.get_running_loop()
-    if loop not in _residents:
-        _residents[loop] = Resident()
-    return _residents[loop]
-
-
-def _close_residents() -> None:
-    for worker in list(_residents.values()):
-        worker.close()
-
-
-atexit.register(_close_residents)
+    """The app's resident worker (:data:`RESIDENT`)."""
+    return RESIDENT
 
 
 #: Commands running now (their processes), for tests: a cancelled request leaves none behind.
