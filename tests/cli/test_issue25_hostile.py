@@ -421,3 +421,20 @@ def test_a_file_name_with_a_nul_byte_is_refused(tmp_path: Path, monkeypatch: pyt
     refused(capsys, "simulate", "torque", "--motor", "neverest40", "-o", "a\x00.csv", mentions="contains a NUL")
     with pytest.raises(LogFormatError, match=r"lcr\?\.csv: the file name contains a NUL byte"):
         read_any("lcr\x00.csv")
+
+
+def test_the_heat_of_a_long_table_is_bounded_work(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Found by bench_scale.py: `analyze terminal` on 2 M rows (18 s operating points, 10 h) moved
+    360 M bins of 0.1 s through the thermal network: 24 GB, killed. The bins widen past a bound."""
+    import numpy as np
+
+    from motorlab import thermal
+
+    steps = []
+    original = thermal.ThermalModel.step
+    monkeypatch.setattr(thermal.ThermalModel, "step", lambda self, *a: steps.append(1) or original(self, *a))
+    t = np.arange(200_000) * 18.0
+    energy, rise = thermal.log_rise(t, np.full(t.size, 0.3), 2.0)
+    assert len(steps) <= thermal.LOG_RISE_BINS + 2
+    assert energy == pytest.approx(2.0 * 0.09 * t[-1])
+    assert rise == pytest.approx(0.09 * 2.0 * 5.9, rel=0.05)  # the steady rise I²R·(R_wc + R_ca)
