@@ -96,3 +96,35 @@ def test_send_to_the_robot_and_put_back(client: TestClient, robot: EmulatedRobot
     back = client.post("/api/robot/push/restore", data=fields)
     assert back.status_code == 200, back.text
     assert robot.config == before
+
+
+def test_stopped_is_said_only_once_the_log_is_written(robot: EmulatedRobot, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The recorder ends before its log is on disk: the page stops asking at "stopped", so the log must be there."""
+    from motorlab.robot import record
+
+    real = record.write_log
+
+    def slow(*args: object, **kwargs: object) -> object:
+        time.sleep(1.0)  # a loaded machine writing the log
+        return real(*args, **kwargs)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(record, "write_log", slow)
+    client = TestClient(create_app(host="127.0.0.1", port=8765), base_url="http://127.0.0.1:8765")
+    fields = {"host": "127.0.0.1", "dashboard-port": str(robot.dashboard_port), "opmode": "motorlab: quasistatic ramp",
+              "seconds": "20"}
+    start = client.post("/api/robot/record/start", data=fields)
+    assert start.status_code == 200, start.text
+    deadline = time.monotonic() + 20
+    while client.get("/api/robot/record").json()["rows"] < 10 and time.monotonic() < deadline:
+        time.sleep(0.05)
+    client.post("/api/robot/record/stop")
+    seen = []
+    while time.monotonic() < deadline:
+        state = client.get("/api/robot/record").json()
+        seen.append(state["state"])
+        if state["state"] == "stopped":
+            break
+        time.sleep(0.05)
+    assert state["state"] == "stopped"
+    assert state["log"], seen  # said "stopped" with the log, never before it
+    assert "saving the log" in seen

@@ -104,10 +104,18 @@ class Page:
         upper = "ABCDEFGHIJKLMNOPQRSTUVWXYZ"
         xpath = ("//*[self::button or self::a or self::label or self::summary]"
                  f"[contains(translate(normalize-space(.), '{upper}', '{upper.lower()}'), {lower!r})]")
-        found = self.wait(lambda: self._visible(xpath), f"a control saying {words!r}")
-        target = found[-1]
-        self.d.execute_script("arguments[0].scrollIntoView({block: 'center'})", target)
-        target.click()
+        from selenium.common.exceptions import StaleElementReferenceException
+
+        for _ in range(5):  # the page may re-render between finding the control and clicking it: find it again
+            found = self.wait(lambda: self._visible(xpath), f"a control saying {words!r}")
+            target = found[-1]
+            try:
+                self.d.execute_script("arguments[0].scrollIntoView({block: 'center'})", target)
+                target.click()
+                return
+            except StaleElementReferenceException:
+                time.sleep(0.2)
+        pytest.fail(f"the control saying {words!r} was replaced five times before it could be clicked")
 
     def field(self, words: str) -> Any:
         """The visible input named ``words`` by its label (or aria-label)."""

@@ -158,13 +158,18 @@ def _record_routes(link: _Link) -> list[Route]:
 
             def work() -> None:
                 try:
-                    data = recorder.run()
-                    log = link.folder / "record" / "run.csv"
-                    log.parent.mkdir(parents=True, exist_ok=True)
-                    outcome["summary"] = write_log(data, log, host=outcome["host"], cpr=cpr)
-                    outcome["log"] = log
+                    recorder.run()
                 except MotorlabError as exc:
                     outcome["error"] = " ".join(str(exc).split())
+                except Exception as exc:  # a link that broke in a way of its own: say so, keep what was recorded
+                    outcome["error"] = f"the link to the robot ended with {type(exc).__name__}: {exc}"
+                try:  # what was recorded is kept even when the link ended badly
+                    log = link.folder / "record" / "run.csv"
+                    log.parent.mkdir(parents=True, exist_ok=True)
+                    outcome["summary"] = write_log(recorder.data, log, host=outcome["host"], cpr=cpr)
+                    outcome["log"] = log
+                except (MotorlabError, OSError) as exc:
+                    outcome.setdefault("error", " ".join(str(exc).split()))
 
             link.recorder, link.outcome = recorder, outcome
             link.thread = threading.Thread(target=work, name="motorlab-app-record", daemon=True)
@@ -183,7 +188,9 @@ def _record_routes(link: _Link) -> list[Route]:
         t0 = data.rows[0][0] if data.rows else 0
         series = {k: [_number(v.get(k)) for _, _, v in rows] for k in keys}
         running = link.thread is not None and link.thread.is_alive()
-        answer: dict[str, Any] = {"state": recorder.state if running else "stopped", "opmode": data.opmode,
+        # The recorder says "stopped" before its thread has written the log: until then the page keeps asking
+        now = ("saving the log" if recorder.state == "stopped" else recorder.state) if running else "stopped"
+        answer: dict[str, Any] = {"state": now, "opmode": data.opmode,
                                   "rows": count, "keys": keys, "time": [(s - t0) / 1000 for s, _, _ in rows],
                                   "series": series, "stop_reason": data.stop_reason,
                                   "still_running": data.still_running}
