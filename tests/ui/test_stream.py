@@ -203,14 +203,15 @@ def test_gains_are_recomputed_in_one_resident_worker(tmp_path: Path, monkeypatch
         await worker.start()
         assert worker.ready
         started = runner.POOL.started
+        before = worker.jobs  # the one resident worker of this process may have served other tests already
         answers = [await runner.run_cli([*argv[:2], f"--kv={kv}", *argv[3:]], cwd=str(tmp_path))
                    for kv in (0.12, 0.13, 0.14)]
         assert runner.POOL.started == started  # no new process for a change of the gains
-        jobs = worker.jobs
+        jobs = worker.jobs - before
         refused = await runner.run_cli([*argv, "--cpr=-3"], cwd=str(tmp_path))  # the CLI's refusal, as text
         monkeypatch.setenv("MOTORLAB_UI_WARM", "0")  # a fresh `python -m motorlab`, the resident left alone
         fresh = await runner.run_cli([*argv[:2], "--kv=0.14", *argv[3:]], cwd=str(tmp_path))
-        assert worker.jobs == jobs + 1  # the refusal only
+        assert worker.jobs == before + jobs + 1  # the refusal only
         worker.close()
         return answers, jobs, refused, fresh
 
