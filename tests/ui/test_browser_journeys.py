@@ -73,6 +73,7 @@ def test_session_zip_and_loose_files(page: Any, sim_session: Path, truth: dict[s
     page.click("Run the session")
     page.wait_text("Each unit's parameters", 180)
     assert "Fleet check" in page.text()
+    page.wait_text("The printable report", 180)  # the table comes first, the report after it (the page redraws)
     page.check()
     page.shot("ui-session.png")
     page.click("Gains")
