@@ -61,13 +61,15 @@ def test_road_runner_ramp_with_a_lifted_dead_wheel(tmp_path: Path, seed: int) ->
     z = _z(fixed, truth, names)
     assert all(abs(v) < 3 for v in z.values()), z
     left = fixed.details["left_out"]
-    assert left["spans"] == [[2.45, 3.55]] and left["seconds"] == pytest.approx(1.1)
+    assert left["spans"] == [[2.45, 3.55]]
+    assert left["seconds"] == pytest.approx(1.1)
     assert 40 < left["samples"] < 120
     assert fixed.warnings[0] == left["text"]
     assert left["text"].startswith(f"1 time span left out, 1.10 s, {left['samples']} samples")
     # the panels say each point's time in the log: none inside the span
     times = np.concatenate([p.time for p in fixed.panels if p.time is not None])
-    assert times.size and not np.any((times > 2.46) & (times < 3.54))
+    assert times.size
+    assert not np.any((times > 2.46) & (times < 3.54))
 
 
 def test_spindown_with_a_voltage_reading_high_for_two_seconds(tmp_path: Path) -> None:
@@ -133,12 +135,15 @@ def test_spans_parsed_in_every_form_and_refused_in_words() -> None:
 def test_dropping_and_cutting_a_run() -> None:
     rec = _recording()
     (dropped,), left = leave_out([rec], [(0.295, 0.395), (0.35, 0.495)], split=False)  # overlapping: merged
-    assert len(dropped) == 80 and left.samples == 20 and left.spans == [(0.295, 0.495)]
+    assert len(dropped) == 80
+    assert left.samples == 20
+    assert left.spans == [(0.295, 0.495)]
     assert left.text() == "1 time span left out, 0.20 s, 20 samples (0.295–0.495 s of the log's time)"
     pieces, left = leave_out([rec], [(0.295, 0.495), (0.895, 0.955)], split=True)
     # 0–0.29 s (30 samples) and 0.5–0.89 s (40); 0.96–0.99 s is too short to fit and goes with the span
     assert [len(p) for p in pieces] == [30, 40]
-    assert left.samples == 20 + 6 + 4 and left.pieces_dropped == 1
+    assert left.samples == 20 + 6 + 4
+    assert left.pieces_dropped == 1
     assert pieces[1].time[0] == pytest.approx(0.5)  # each piece keeps the log's own time
 
 
@@ -151,8 +156,11 @@ def test_cli_takes_the_spans_and_an_analysis_without_time_refuses_them(tmp_path:
     assert left["spans"] == [[1.0, 1.5], [2.0, 2.5]]
     assert left["text"].startswith("2 time spans left out, 1.00 s,")
     bad = subprocess.run([*cmd, "--exclude", "2:1"], capture_output=True, text=True)
-    assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "ends before it starts" in bad.stderr
+    assert bad.returncode == 2
+    assert bad.stderr.count("\n") == 1
+    assert "ends before it starts" in bad.stderr
     lcr = subprocess.run([sys.executable, "-m", "motorlab", "analyze", "lcr", str(tmp_path / "ramp.json"),
                           "--exclude", "1:2"], capture_output=True, text=True)
-    assert lcr.returncode == 2 and lcr.stderr.count("\n") == 1
+    assert lcr.returncode == 2
+    assert lcr.stderr.count("\n") == 1
     assert "leave the rows out of a copy of the file" in lcr.stderr

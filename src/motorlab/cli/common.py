@@ -50,12 +50,12 @@ class Parser(argparse.ArgumentParser):
         """``motorlab: error: SUB-COMMAND: message`` like every other refusal, and exit code 2."""
         command = self.prog.split(None, 1)[1] if " " in self.prog else ""
         if message.startswith("unrecognized arguments") and "--exclude" in message:
-            message += f"; {_EXCLUDE_HINT()}"
+            message += f"; {_exclude_hint()}"
         print(f"motorlab: error: {command + ': ' if command else ''}{message}", file=sys.stderr)
         raise SystemExit(EXIT_INPUT)
 
 
-def _EXCLUDE_HINT() -> str:  # noqa: N802 - reads as the constant it stands for
+def _exclude_hint() -> str:
     """What to do when an analysis without time spans is given ``--exclude``."""
     from motorlab.experiments import all_experiments
 
