@@ -72,6 +72,7 @@ class Log:
     reading: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))  # run index per sample
     position_weight: np.ndarray = field(default_factory=lambda: np.ones(0))  # 1/√(run length) per sample
     stale_variance: np.ndarray | None = None  # variance of stale status frames per sample [rad²]
+    start: float = 0.0  # the log's own time of the first sample [s] (``time`` counts from it)
 
     def position_factor(self, sigma_position: float) -> np.ndarray:
         """Weight of each angle residual: 1/√(run length) over the angle noise of the sample [1/rad]."""
@@ -129,7 +130,8 @@ def prepare_log(
     cur = None if current is None else np.asarray(current, dtype=float)
     pos = np.asarray(position, dtype=float)
     reading, weight = reading_runs(pos)
-    return Log(t, dt, grid_v, grid_theta, pos, cur, uniform, resolution, moving, source, reading, weight)
+    return Log(t, dt, grid_v, grid_theta, pos, cur, uniform, resolution, moving, source, reading, weight,
+               start=float(time[0]))
 
 
 def grid_angle(time: np.ndarray, position: np.ndarray, dt: float, n_grid: int, *, lag: float = 0.0) -> np.ndarray:

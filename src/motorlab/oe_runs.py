@@ -294,10 +294,11 @@ def fit_panels(logs: list[_oe.Log], fit: _oe.Fit, *, title: str, length: str = "
     if any(log.current is not None for log in logs) and "current" in fit.simulations[0]:
         signals.append(("current", "current", "i [A]"))
     for key, label, y_label in signals:
-        xs, data, model = [], [], []
+        xs, data, model, times = [], [], [], []
         t_offset = 0.0
         for log, sim in zip(logs, fit.simulations, strict=True):
             xs.append(log.time + t_offset)
+            times.append(log.time + log.start)
             if key == "speed":
                 data.append(measured_speed(log))
             elif key == "current" and log.current is not None:
@@ -314,6 +315,7 @@ def fit_panels(logs: list[_oe.Log], fit: _oe.Fit, *, title: str, length: str = "
                 y_label=y_label,
                 data=Series(x, np.concatenate(data), "measured" if key != "speed" else "measured (differenced)"),
                 model=Series(x, np.concatenate(model), "simulated", kind="model"),
+                time=np.concatenate(times),
             )
         )
     return panels

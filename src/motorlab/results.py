@@ -96,7 +96,8 @@ class Panel:
     """One plot: data against model, with axis labels carrying units.
 
     When ``data`` and ``model`` share the same x, :func:`motorlab.plot.plot_fit` draws their
-    residuals beneath.
+    residuals beneath. ``time``, when the data points are samples of a log, is each point's time in
+    the log's own time axis [s] (what ``--exclude`` takes), whatever the x axis shows.
     """
 
     title: str
@@ -105,6 +106,7 @@ class Panel:
     data: Series | None = None
     model: Series | None = None
     extra: list[Series] = field(default_factory=list)
+    time: np.ndarray | None = None
 
 
 @dataclass

@@ -49,6 +49,7 @@ class ScoreTest:
     voltage: np.ndarray
     position: np.ndarray
     velocity: np.ndarray
+    start: float = 0.0  # the log's own time of the first row [s] (``time`` counts from it)
 
 
 @dataclass(frozen=True)
@@ -79,7 +80,7 @@ def score_tests(recordings: Recording | Iterable[Recording]) -> list[ScoreTest]:
                 raise OptionError(f"{part.source or 'recording'}: the score needs voltage, position and velocity rows")
             name = part.metadata.get("segment") or part.source
             tests.append(ScoreTest(str(name), part.time - part.time[0], part["voltage"], part["position"],
-                                   part["velocity"]))
+                                   part["velocity"], float(part.time[0])))
     return tests
 
 
@@ -619,7 +620,8 @@ def score_panels(gains: Gains, tests: Sequence[ScoreTest], *, title: str, length
         model = np.concatenate([s[k] for s in sims])
         panels.append(Panel(title=f"{title}: logged and open-loop simulated {label} (the score)",
                             x_label="time (tests end to end) [s]", y_label=y_label,
-                            data=Series(x, data, "logged"), model=Series(x, model, "simulated", kind="model")))
+                            data=Series(x, data, "logged"), model=Series(x, model, "simulated", kind="model"),
+                            time=np.concatenate([t.time + t.start for t in tests])))
     return panels
 
 

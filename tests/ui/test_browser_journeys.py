@@ -73,7 +73,7 @@ def test_session_zip_and_loose_files(page: Any, sim_session: Path, truth: dict[s
     page.click("Run the session")
     page.wait_text("Each unit's parameters", 180)
     assert "Fleet check" in page.text()
-    page.wait_text("The printable report", 180)  # the table comes first, the report after it (the page redraws)
+    page.wait_text("The printable report", 180)  # the table comes first, the report after it
     page.check()
     page.shot("ui-session.png")
     page.click("Gains")
@@ -182,4 +182,40 @@ def test_a_running_session_shows_its_units_then_its_table_before_its_report(page
     page.check()
     page.wait_text("The printable report", 180)
     assert "being drawn" not in page.text()
+    page.check()
+
+
+def test_typing_goes_on_while_a_result_arrives(page: Any, sim_session: Path) -> None:
+    """A fit's result arriving redraws the view: the field being typed in keeps its focus, caret and text."""
+    page.open(browser.LAPTOP)
+    page.click("Tune a mechanism")
+    page.upload("Choose or drop your files", sim_session / "A" / "spindown.txt")
+    page.wait_text("FTC OpMode log")
+    page.type("counts per revolution", "1120")
+    # The fit's answer is held in the page until the first keystrokes are in (so the redraw falls mid-typing).
+    page.d.execute_script("""
+        const real = window.fetch;
+        window.__hold = new Promise((resolve) => { window.__release = resolve; });
+        window.fetch = async (...args) => {
+          const answer = await real(...args);
+          if (String(args[0]).includes("api/analyze")) await window.__hold;
+          return answer;
+        };""")
+    page.click("Run the fit")
+    page.click("Gains")
+    box = page.field("Type the winding resistance")
+    box.click()
+    box.send_keys("1.2")
+    box.send_keys("\ue012")  # the caret one to the left: 1.|2
+    assert "spindown.txt (" not in page.text()  # no result yet
+    page.d.execute_script("window.__release()")
+    page.wait_text("spindown.txt (")  # the result arrived: the view was drawn again
+    typing = page.d.switch_to.active_element
+    assert "winding resistance" in page.d.execute_script("return arguments[0].labels[0].textContent", typing).lower()
+    assert typing.get_attribute("value") == "1.2"
+    typing.send_keys("5")  # typed where the caret was
+    assert typing.get_attribute("value") == "1.52"
+    page.click("Use this value")
+    page.wait(lambda: not page._visible("//label[contains(., 'Type the winding resistance')]"),
+              "the resistance taken (no longer asked for)")
     page.check()

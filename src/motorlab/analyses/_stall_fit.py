@@ -117,11 +117,15 @@ def _guess(runs: Sequence[StallData], reference: int, ambient: float) -> list[fl
     return [r25, 0.5, 2.0, c_w, 6.0 * c_w]
 
 
-#: The case's time constant R_ca·C_c a weak prior pulls towards when the runs cannot tell R_ca [s], and the
-#: prior's spread (a factor of 2.5 either way, in the logarithm). VEX's BAG runs give 840 s; a 550-size
-#: gearmotor's estimate (data/thermal.toml) 750 s.
-PRIOR_CASE_TIME_CONSTANT = 800.0
-PRIOR_LOG_SIGMA = math.log(2.5)
+#: The case's time constant R_ca·C_c the prior pulls towards when the runs cannot tell R_ca [s], and the
+#: prior's spread (the standard deviation of its logarithm): an empirical prior, the geometric mean and spread
+#: of R_ca·C_c over a population of real motors, the 14 healthy 2–7.2 V locked-rotor runs of eight motors
+#: (VEX's dynamometer exports of the mini-CIM, BAG, AndyMark 9015, 775pro, AndyMark 775, BaneBots 550, CIM and
+#: NeveRest) whose whole run (up to 300 s) determines R_ca, each fitted alone: 80–358 s, geometric mean 186 s, a
+#: factor 1.50 either way (``benchmarks/bench_thermal.py`` recomputes it, and the prior of each motor from the
+#: others: 177–200 s). It replaced 800 s (VEX's BAG 2 V run, where R_ca is not determined either).
+PRIOR_CASE_TIME_CONSTANT = 186.0
+PRIOR_LOG_SIGMA = 0.408
 
 
 def _needs_prior(fit: LeastSquares, hi: Sequence[float]) -> bool:
@@ -224,6 +228,8 @@ class TorqueFit:
     model: list[np.ndarray | None]
     beta: float  # the magnets' coefficient applied [1/K] (0: not applied, see ``warning``)
     warning: str | None = None
+    #: per run as ``per_run``, of (τ − τ₀)/i: the torque per amp once the offset is taken off (τ₀ fitted)
+    per_run_net: list[tuple[float, float, float]] = field(default_factory=list)
 
 
 def _beta_check(i: np.ndarray, tc: np.ndarray, y: np.ndarray, groups: np.ndarray, beta: float) -> str | None:
@@ -246,8 +252,12 @@ def _beta_check(i: np.ndarray, tc: np.ndarray, y: np.ndarray, groups: np.ndarray
             "magnets' coefficient")
 
 
-def fit_torque(runs: Sequence[StallData], case: Sequence[np.ndarray], magnet: float) -> TorqueFit | None:
-    """The torque constant from the runs' torque and current (None when no run measured torque)."""
+def fit_torque(runs: Sequence[StallData], case: Sequence[np.ndarray], magnet: float, *, offset: bool = True,
+               check: bool = True) -> TorqueFit | None:
+    """The torque constant from the runs' torque and current (None when no run measured torque).
+
+    ``offset=False`` never fits τ₀; ``check=False`` applies ``magnet`` as it is (no test of the magnets'
+    coefficient against the runs)."""
     with_torque = [(run, tc) for run, tc in zip(runs, case, strict=True) if run.torque is not None]
     if not with_torque:
         return None
@@ -255,20 +265,17 @@ def fit_torque(runs: Sequence[StallData], case: Sequence[np.ndarray], magnet: fl
     tc = np.concatenate([t for _, t in with_torque])
     y = np.concatenate([r.torque for r, _ in with_torque if r.torque is not None])
     groups = np.concatenate([np.full(r.current.size, j) for j, (r, _) in enumerate(with_torque)])
-    warning = _beta_check(i, tc, y, groups, magnet)
+    warning = _beta_check(i, tc, y, groups, magnet) if check else None
     beta = 0.0 if warning else magnet
     x = i * (1 + beta * (tc - 25.0))
-    per_run = []
-    for run, t in with_torque:
-        assert run.torque is not None
-        k = run.torque / (run.current * (1 + beta * (t - 25.0)))
-        n_eff = max(k.size / 10.0, 1.0)  # neighbouring samples are far from independent
-        per_run.append((float(np.mean(run.current)), float(np.mean(k)),
-                        float(np.std(k, ddof=1) / math.sqrt(n_eff)) if k.size > 1 else math.nan))
+    per_run = _per_run(with_torque, beta, 0.0)
     # τ = K·i at a held shaft; the intercept τ₀ (sensor offset, friction held, the curvature of saturation)
-    # only when runs at three or more voltages span at least half the current range: over one run's narrow
-    # range it is nearly collinear with K and takes K wherever the model's small systematic errors lead.
-    wide = len(with_torque) >= 3 and np.ptp(x) >= 0.5 * np.max(x)
+    # only when two runs or more span at least half the current range: the contrast between runs at different
+    # currents determines it. Over one run it is nearly collinear with K (the run's current and its case
+    # temperature fall together) and takes K wherever the model's small systematic errors lead; a per-run
+    # offset would make every run such a case (on VEX's exports, K from the runs' own slopes scatters by a
+    # factor of 2, from 40 % below to 35 % above the makers' figures).
+    wide = offset and len(with_torque) >= 2 and np.ptp(x) >= 0.5 * np.max(x)
     design = np.column_stack([x, np.ones_like(x)]) if wide else x[:, None]
     fit = fit_linear(design, y, ["K", "tau0"][: design.shape[1]], covariance="hac", groups=groups)
     tau0, tau0_se = (float(fit.values[1]), float(fit.stderr[1])) if wide else (0.0, math.nan)
@@ -277,24 +284,64 @@ def fit_torque(runs: Sequence[StallData], case: Sequence[np.ndarray], magnet: fl
         model.append(None if run.torque is None else fit.values[0] * run.current * (1 + beta * (t - 25.0)) + tau0)
     resid = y - (fit.values[0] * x + tau0)
     return TorqueFit(float(fit.values[0]), float(fit.stderr[0]), tau0, tau0_se,
-                     per_run, float(np.sqrt(np.mean(resid**2))), model, beta, warning)
+                     per_run, float(np.sqrt(np.mean(resid**2))), model, beta, warning,
+                     _per_run(with_torque, beta, tau0) if wide else [])
+
+
+def _per_run(runs: Sequence[tuple[StallData, np.ndarray]], beta: float,
+             offset: float) -> list[tuple[float, float, float]]:
+    """(mean current [A], mean of (τ − offset)/(i·(1 + β·(T_c − 25 °C))) [N·m/A], its standard error) per run."""
+    out = []
+    for run, t in runs:
+        assert run.torque is not None
+        k = (run.torque - offset) / (run.current * (1 + beta * (t - 25.0)))
+        n_eff = max(k.size / 10.0, 1.0)  # neighbouring samples are far from independent
+        out.append((float(np.mean(run.current)), float(np.mean(k)),
+                    float(np.std(k, ddof=1) / math.sqrt(n_eff)) if k.size > 1 else math.nan))
+    return out
+
+
+def _spread(per_run: Sequence[tuple[float, float, float]]) -> tuple[list[tuple[float, float, float]], bool]:
+    """The runs sorted by current, and whether their torque per amp differs beyond its uncertainty (and 3 %)."""
+    rows = sorted((r for r in per_run if math.isfinite(r[2])), key=lambda r: r[0])
+    if len(rows) < 2:
+        return rows, False
+    lo, hi = min(rows, key=lambda r: r[1]), max(rows, key=lambda r: r[1])
+    diff = hi[1] - lo[1]
+    return rows, bool(diff > 3 * math.hypot(lo[2], hi[2]) and diff > 0.03 * abs(lo[1]))
+
+
+def _listing(rows: Sequence[tuple[float, float, float]]) -> str:
+    return ", ".join(f"{r[1]:.4g} at {r[0]:.3g} A" for r in rows)
 
 
 def current_dependence(tq: TorqueFit) -> str | None:
     """A sentence when the torque per amp of the runs differs beyond its uncertainty (else None), with the
-    likely cause from how it goes with the current."""
-    rows = sorted((r for r in tq.per_run if math.isfinite(r[2])), key=lambda r: r[0])
-    if len(rows) < 2:
-        return None
+    likely cause from how it goes with the current; when the runs determine a torque offset τ₀ (the torque
+    read at zero current), what it is and whether it accounts for the difference."""
+    rows, differs = _spread(tq.per_run)
+    offset = bool(tq.per_run_net) and abs(tq.tau0) > 3 * tq.tau0_stderr
+    if not offset:
+        return _dependence(rows) if differs else None
+    net, still = _spread(tq.per_run_net)
+    text = (f"the torque reads {tq.tau0:.3g} ± {tq.tau0_stderr:.1g} N·m at zero current (the intercept of the runs' "
+            "torque against their current): an untared load cell or the lock's preload on the torque channel, or the "
+            "curve of saturation; K is the slope")
+    if still:
+        return f"{text}; {_dependence(net, ' once that offset is taken off')}"
+    if differs:
+        text += (f"; their torque per amp τ/i ({_listing(rows)}) changes with the current as such an offset makes it, "
+                 f"and agrees once it is taken off ({_listing(net)})")
+    return text
+
+
+def _dependence(rows: Sequence[tuple[float, float, float]], how: str = "") -> str:
     lo, hi = min(rows, key=lambda r: r[1]), max(rows, key=lambda r: r[1])
     diff = hi[1] - lo[1]
-    if diff <= 3 * math.hypot(lo[2], hi[2]) or diff <= 0.03 * lo[1]:
-        return None
     trend = float(np.corrcoef([r[0] for r in rows], [r[1] for r in rows])[0, 1]) if len(rows) > 2 else (
         1.0 if rows[-1][1] > rows[0][1] else -1.0)
     cause = ("falling as the current rises: saturation of the iron (armature reaction) at high current" if trend < 0
              else "rising with the current: brush friction taking a larger share of the torque at low current")
-    listing = ", ".join(f"{r[1]:.4g} at {r[0]:.3g} A" for r in rows)
-    return (f"the torque per amp changes between runs beyond its uncertainty, from {lo[1]:.4g} ± {lo[2]:.1g} to "
-            f"{hi[1]:.4g} ± {hi[2]:.1g} N·m/A ({100 * diff / lo[1]:.0f} %; by mean current: {listing}), {cause}; "
-            "K above is the fit over all currents")
+    return (f"the torque per amp changes between runs beyond its uncertainty{how}, from {lo[1]:.4g} ± {lo[2]:.1g} to "
+            f"{hi[1]:.4g} ± {hi[2]:.1g} N·m/A ({100 * diff / lo[1]:.0f} %; by mean current: {_listing(rows)}), "
+            f"{cause}; K above is the fit over all currents")

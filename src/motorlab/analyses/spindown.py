@@ -537,7 +537,7 @@ def _panels(t: np.ndarray, theta: np.ndarray, model_theta: np.ndarray, x: np.nda
     panels = [
         Panel(
             "Coast: position", "time [s]", "position since the coast began [rad]",
-            data=Series(t, theta, "encoder"), model=Series(t, model_theta, "model", kind="model"),
+            data=Series(t, theta, "encoder"), model=Series(t, model_theta, "model", kind="model"), time=t,
         )
     ]
     mid = 0.5 * (t[1:] + t[:-1])
@@ -557,6 +557,7 @@ def _panels(t: np.ndarray, theta: np.ndarray, model_theta: np.ndarray, x: np.nda
             Panel(
                 "Coast: bus voltage", "time [s]", "bus voltage [V]",
                 data=Series(t, voltage, "INA219 bus voltage"), model=Series(t, k * omega, "K·ω", kind="model"),
+                time=t,
             )
         )
         order = np.argsort(omega)

@@ -204,6 +204,10 @@ def stall(
     # ammeter's noise, which would bias the slope low (errors in the regressor).
     smooth = [replace(data[j], current=heat.model_current[pos]) for pos, j in enumerate(fitted)]
     torque = fit_torque(smooth, heat.case, beta)
+    if torque is not None and math.isfinite(torque.tau0_stderr):
+        torque = _offset_uncertainty(torque, smooth, heat)
+        if len(torque.per_run) == 2 and not abs(torque.tau0) > 3 * torque.tau0_stderr:
+            torque = fit_torque(smooth, heat.case, torque.beta, offset=False, check=False) or torque
     if torque is not None and torque.beta:
         torque = _with_case_uncertainty(torque, smooth, heat)
     if torque is not None:
@@ -269,6 +273,31 @@ def _same_shaft(runs: list[Run], used: list[int], warnings: list[str]) -> list[i
     return out
 
 
+def _offset_uncertainty(torque: TorqueFit, data: list[StallData], heat: HeatFit) -> TorqueFit:
+    """τ₀'s standard error with the uncertainty of the heating model it is fitted against (the model's current
+    and case temperature, from the heating fit's whole covariance by the delta method). Two runs determine τ₀
+    through the contrast of their currents, which a relative error of 0.2 % between the runs' model currents,
+    or 1 K in a case temperature, moves as much as the torque's own scatter does."""
+    x = np.asarray(heat.fit.values, dtype=float)
+    free = [j for j in range(len(heat.initial)) if j != heat.reference]
+    ambient = heat.thermal.ambient_temperature
+    grad = np.zeros(x.size)
+    for k in range(x.size):
+        step = 1e-3 if k < len(SHARED) else 0.1
+        moved = x.copy()
+        moved[k] += step
+        initial = list(heat.initial)
+        for pos, j in enumerate(free):
+            initial[j] = float(moved[len(SHARED) + pos])
+        sims = simulate_runs(np.exp(moved[: len(SHARED)]), initial, data, torque.beta, ambient)
+        runs = [replace(d, current=s[0]) for d, s in zip(data, sims, strict=True)]
+        refit = fit_torque(runs, [s[2] for s in sims], torque.beta, check=False)
+        grad[k] = ((refit.tau0 if refit is not None else torque.tau0) - torque.tau0) / step
+    extra = float(grad @ np.nan_to_num(heat.fit.covariance) @ grad)
+    torque.tau0_stderr = math.sqrt(torque.tau0_stderr**2 + max(extra, 0.0))
+    return torque
+
+
 def _with_case_uncertainty(torque: TorqueFit, data: list[StallData], heat: HeatFit) -> TorqueFit:
     """K's standard error with the uncertainty of the case temperatures it is corrected to (the network's
     covariance, by the delta method on the logarithms of the shared parameters)."""
@@ -278,7 +307,8 @@ def _with_case_uncertainty(torque: TorqueFit, data: list[StallData], heat: HeatF
         shared = list(base)
         shared[k] *= math.exp(1e-3)
         sims = simulate_runs(shared, heat.initial, data, torque.beta, heat.thermal.ambient_temperature)
-        moved = fit_torque(data, [s[2] for s in sims], torque.beta)
+        moved = fit_torque(data, [s[2] for s in sims], torque.beta, offset=math.isfinite(torque.tau0_stderr),
+                           check=False)
         grad[k] = ((moved.K if moved is not None else torque.K) - torque.K) / 1e-3
     extra = float(grad @ np.nan_to_num(heat.log_covariance) @ grad)
     torque.K_stderr = math.sqrt(torque.K_stderr**2 + max(extra, 0.0))

@@ -24,6 +24,7 @@ from motorlab.cli.common import (
     positive_number,
     print_json,
     quantity,
+    time_spans,
 )
 from motorlab.experiments import Option, all_experiments, get
 from motorlab.results import Estimate, FitResult
@@ -105,6 +106,9 @@ def _argparse_keywords(opt: Option) -> dict[str, Any]:
     elif opt.kind == "columns":
         out["action"] = "append"
         out["type"] = column_rule
+    elif opt.kind == "spans":
+        out["action"] = "append"
+        out["type"] = time_spans
     else:
         assert opt.unit is not None
         out["type"] = quantity(opt.unit, positive=opt.positive, nonnegative=opt.nonnegative)

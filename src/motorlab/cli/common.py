@@ -49,8 +49,19 @@ class Parser(argparse.ArgumentParser):
     def error(self, message: str) -> NoReturn:
         """``motorlab: error: SUB-COMMAND: message`` like every other refusal, and exit code 2."""
         command = self.prog.split(None, 1)[1] if " " in self.prog else ""
+        if message.startswith("unrecognized arguments") and "--exclude" in message:
+            message += f"; {_exclude_hint()}"
         print(f"motorlab: error: {command + ': ' if command else ''}{message}", file=sys.stderr)
         raise SystemExit(EXIT_INPUT)
+
+
+def _exclude_hint() -> str:
+    """What to do when an analysis without time spans is given ``--exclude``."""
+    from motorlab.experiments import all_experiments
+
+    takes = [name for name, exp in all_experiments().items() if any(o.kind == "spans" for o in exp.options)]
+    return (f"time spans are left out by analyze {', '.join(sorted(takes))} only (a log with a time axis); "
+            "for another analysis, leave the rows out of a copy of the file")
 
 
 def finite_number(text: str) -> float:
@@ -103,6 +114,17 @@ def column_rule(text: str) -> str:
     except OptionError as exc:
         raise argparse.ArgumentTypeError(exc.message.removeprefix("--column ")) from None
     return rule.text()
+
+
+def time_spans(text: str) -> str:
+    """An argparse ``type`` for ``--exclude 12.5:14.0`` (several: ``12.5:14,20:21``; :mod:`motorlab.timespans`)."""
+    from motorlab.timespans import parse_spans
+
+    try:
+        parse_spans(text)
+    except OptionError as exc:
+        raise argparse.ArgumentTypeError(exc.message.removeprefix("exclude: ")) from None
+    return text
 
 
 def _whole_number(text: str) -> int:

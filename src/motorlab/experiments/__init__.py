@@ -37,7 +37,7 @@ R_AS_MEASURED = ("R holds at the winding's temperature during the measurement, w
                  "R rises 0.393 % per kelvin, so a warm winding reads high (analyze stall gives R at 25 °C)")
 #: Kinds of option value: a number with a unit (pint), one of some words, true/false, paths, a whole
 #: number, a plain number (its unit depends on other options, e.g. tune's kV per ``--units``), text.
-KINDS = ("quantity", "choice", "flag", "files", "int", "number", "text", "columns")
+KINDS = ("quantity", "choice", "flag", "files", "int", "number", "text", "columns", "spans")
 
 
 @dataclass(frozen=True)
@@ -60,8 +60,10 @@ class Option:
         The field's name in words, as a form shows it ("Encoder counts per revolution").
     kind
         ``"quantity"`` (a number with a unit), ``"choice"``, ``"flag"`` (true/false), ``"files"``
-        (one or more paths), ``"int"`` or ``"columns"`` (column rules ``HEADER=quantity``, repeatable:
-        :mod:`motorlab.io.headers`; the value is a list of rules as text).
+        (one or more paths), ``"int"``, ``"columns"`` (column rules ``HEADER=quantity``, repeatable:
+        :mod:`motorlab.io.headers`; the value is a list of rules as text) or ``"spans"`` (time spans
+        ``start:end`` in seconds of the log's time, repeatable: :mod:`motorlab.timespans`; the value is
+        a list of ``(start, end)``).
     dest
         Name of the value handed to the experiment's ``run`` (default: ``name`` with ``_``). A flag
         whose default is True is switched off by ``--name`` (``--no-current`` sets ``use_current``
@@ -134,6 +136,10 @@ class Option:
             from motorlab.io.headers import parse_column_mapping
 
             return [rule.text() for rule in parse_column_mapping(value, name=label)] or None
+        if self.kind == "spans":
+            from motorlab.timespans import parse_spans
+
+            return parse_spans(value, name=label) or None
         if self.kind == "number":
             try:
                 number = float(value)
@@ -166,7 +172,7 @@ class Option:
         text = f"{self.label}: {self.help}" if self.label and self.help else self.label or self.help
         if self.unit and self.unit not in ("1", "count"):
             text += f" [{format_unit(self.unit)}]"
-        if self.default is not None and self.kind not in ("flag", "files", "columns"):
+        if self.default is not None and self.kind not in ("flag", "files", "columns", "spans"):
             shown = f"{self.default:g}" if isinstance(self.default, float) else str(self.default)
             text += f" (default {shown})"
         return text.replace("%", "%%")

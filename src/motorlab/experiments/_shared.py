@@ -23,6 +23,38 @@ COLUMN = Option(
          '"I (mA)=current", "Load=torque [oz*in]" or "Notes=skip"; one rule per column (headers in words '
          'with a unit in brackets, such as "Current (A)", need none)',
 )
+EXCLUDE = Option(
+    "exclude", kind="spans", metavar="START:END", label="Time spans to leave out",
+    help="stretches of the log not to fit, start:end in seconds of the log's own time, e.g. 12.5:14.0 where the "
+         "wheels slipped; several separated by commas",
+)
+
+
+def spans(values: Mapping[str, Any]) -> list[tuple[float, float]]:
+    """The time spans to leave out (``exclude``), as ``(start, end)`` [s] whatever form they came in."""
+    from motorlab.timespans import parse_spans
+
+    given = values.get("exclude")
+    if given and not isinstance(given, str) and all(isinstance(g, str) for g in given):
+        given = ",".join(given)  # the CLI's repeated --exclude, each checked already
+    return parse_spans(given)
+
+
+def without_spans(recordings: list[Any], values: Mapping[str, Any], *, split: bool) -> tuple[list[Any], Any]:
+    """The recordings without the time spans to leave out, and what was left out (None: nothing asked)."""
+    asked = spans(values)
+    if not asked:
+        return recordings, None
+    from motorlab.timespans import leave_out
+
+    return leave_out(recordings, asked, split=split)
+
+
+def noted(result: Any, left: Any) -> Any:
+    """``result``, saying what was left out (when anything was)."""
+    return result if left is None else left.note(result)
+
+
 _INERTIA_GROUP = "inertia at the encoder shaft (its value, or the flywheel disc)"
 INERTIA = (
     Option("inertia", "kg*m^2", positive=True, group=_INERTIA_GROUP, label="Flywheel moment of inertia",

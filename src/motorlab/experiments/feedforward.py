@@ -6,7 +6,7 @@ from typing import Any
 
 from motorlab.errors import OptionError
 from motorlab.experiments import Experiment, Option, RigRun, stderr_or_none
-from motorlab.experiments._shared import COLUMN
+from motorlab.experiments._shared import COLUMN, EXCLUDE, noted, spans, without_spans
 
 MECHANISMS = ("simple", "elevator", "arm")  # as motorlab.feedforward.MECHANISMS (tests/test_experiments.py)
 #: frc-characterization units (motorlab.io.frc_json.UNITS), as its --units choices.
@@ -22,6 +22,11 @@ def run(paths: list[str], v: dict[str, Any]) -> Any:
         raise OptionError("the torque constant (--K) turns the gains into motor parameters only with the "
                           "resistance (--R): give both, or neither")
     runs = read_tests(paths, cpr=cpr, side=v["side"], units=v["units"])
+    if spans(v) and any(r.metadata.get("ramp") in ("lateral", "angular") for r in runs):
+        raise OptionError("time spans can be left out of a forward ramp only (a lateral or angular ramp is read as "
+                          "a whole): fit the forward ramp alone with them, then the others without")
+    # an output-error fit simulates each run from its voltage: a span left out cuts the run in two
+    runs, left = without_spans(runs, v, split=True)
     json_only = any(run.metadata.get("format") in ("sysid-json", "frc-char-json") for run in runs)
     if any(r.metadata.get("ramp") in ("lateral", "angular") for r in runs):  # Road Runner's other ramps
         from motorlab.analyses.roadrunner import from_runs
@@ -43,7 +48,7 @@ def run(paths: list[str], v: dict[str, Any]) -> Any:
         )
     from motorlab.analyses._heat import add_heat_warning
 
-    return add_heat_warning(result, runs, resistance=v["resistance"])
+    return noted(add_heat_warning(result, runs, resistance=v["resistance"]), left)
 
 
 def characterize(ctx: Any) -> Any:
@@ -90,7 +95,7 @@ EXPERIMENT = Experiment(
         Option("units", kind="choice", choices=UNIT_CHOICES, label="Unit of a frc-characterization file",
                help="for a file without a 'units' key; left empty: that tool's template units (Feet; Degrees "
                     "for an arm)"),
-        COLUMN,
+        EXCLUDE, COLUMN,
     ),
     reports=("kS", "kV", "kA", "kG"),
     shaft="output + the SysId mechanism, per unit of K·i",

@@ -4,8 +4,9 @@ from __future__ import annotations
 
 from typing import Any
 
+from motorlab.errors import OptionError
 from motorlab.experiments import Experiment, Option, RigRun, Setting
-from motorlab.experiments._shared import COLUMN
+from motorlab.experiments._shared import COLUMN, EXCLUDE, noted, spans, without_spans
 
 PARAMETERS = ("K", "R", "L", "J", "b", "Tf")
 
@@ -28,6 +29,11 @@ def run(paths: list[str], v: dict[str, Any]) -> Any:
     cpr = v["cpr"]
     check_cpr(cpr)  # any positive number of counts (537.7), within physical bounds
     runs = read_runs(paths, cpr=cpr)
+    if spans(v) and (v["thermal"] or v["thermal_fit"]):
+        raise OptionError("time spans cannot be left out of a fit of the winding's temperature (the heat of the "
+                          "whole log warms it): fit without the temperature, or without the spans")
+    # an output-error fit simulates each run from its voltage: a span left out cuts the run in two
+    runs, left = without_spans(runs, v, split=True)
     json_runs = [r for r in runs if r.metadata.get("format") in ("sysid-json", "frc-char-json")]
     if json_runs and cpr is not None:  # a JSON file logs its own units: cpr counts per logged rotation
         apply_cpr(json_runs, cpr)
@@ -43,8 +49,8 @@ def run(paths: list[str], v: dict[str, Any]) -> Any:
                       use_current=v["use_current"], thermal=v["thermal"] or network is not None, motor=v["motor"],
                       network=network, initial_temperature=v["initial_temperature"])
     if v["thermal"] or network is not None:  # the heat is in the model: its figure is among the warnings already
-        return result
-    return add_heat_warning(result, runs, resistance=v["resistance"])
+        return noted(result, left)
+    return noted(add_heat_warning(result, runs, resistance=v["resistance"]), left)
 
 
 def characterize(ctx: Any) -> Any:
@@ -94,7 +100,7 @@ EXPERIMENT = Experiment(
         Option("initial-temperature", "degC", metavar="CELSIUS", label="Winding temperature at the start",
                help="with the winding's temperature: in °C, the winding's and case's at the log's start; without "
                     "it, the ambient's"),
-        COLUMN,
+        EXCLUDE, COLUMN,
     ),
     reports=PARAMETERS,
     settings=(

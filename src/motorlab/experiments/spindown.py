@@ -5,7 +5,7 @@ from __future__ import annotations
 from typing import Any
 
 from motorlab.experiments import Experiment, Option, RigRun, Setting
-from motorlab.experiments._shared import COLUMN, CPR, CURRENT_UNIT, INERTIA, inertia_of
+from motorlab.experiments._shared import COLUMN, CPR, CURRENT_UNIT, EXCLUDE, INERTIA, inertia_of, noted, without_spans
 
 
 def run(paths: list[str], v: dict[str, Any]) -> Any:
@@ -15,8 +15,10 @@ def run(paths: list[str], v: dict[str, Any]) -> Any:
 
     recording = common.read_position_log(paths, cpr=v["cpr"], current_unit=v["current_unit"])
     inertia, inertia_se = inertia_of(v)
-    return spindown(recording, cpr=v["cpr"], inertia=inertia, inertia_stderr=inertia_se, cutoff=v["cutoff"],
-                    guard=v["guard"])
+    # the coast's model is a closed form in time: samples in a span left out are simply not fitted
+    (recording,), left = without_spans([recording], v, split=False)
+    return noted(spindown(recording, cpr=v["cpr"], inertia=inertia, inertia_stderr=inertia_se, cutoff=v["cutoff"],
+                          guard=v["guard"]), left)
 
 
 def characterize(ctx: Any) -> Any:
@@ -43,7 +45,7 @@ EXPERIMENT = Experiment(
                help="when the relay opened, in the log's time; left empty: found from the current"),
         Option("guard", "s", nonnegative=True, default=0.1, label="Time left out after the cut",
                help="samples this long after the cut-off are not fitted (the current decaying)"),
-        COLUMN,
+        EXCLUDE, COLUMN,
     ),
     reports=("K", "gamma", "Tf_over_J", "J", "b", "Tf"),
     shaft="output + flywheel, coasting: gearbox back-driven, physical torques",

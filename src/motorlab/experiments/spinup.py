@@ -6,7 +6,7 @@ from typing import Any
 
 from motorlab.errors import OptionError
 from motorlab.experiments import Experiment, Option, RigRun, Setting
-from motorlab.experiments._shared import COLUMN, CPR, CURRENT_UNIT, INERTIA, inertia_of
+from motorlab.experiments._shared import COLUMN, CPR, CURRENT_UNIT, EXCLUDE, INERTIA, inertia_of, noted, without_spans
 
 
 def run(paths: list[str], v: dict[str, Any]) -> Any:
@@ -18,6 +18,7 @@ def run(paths: list[str], v: dict[str, Any]) -> Any:
     if inertia is None:
         raise OptionError("the spin-up needs the inertia: give --inertia or the flywheel disc")
     recording = common.read_position_log(paths, cpr=v["cpr"], current_unit=v["current_unit"])
+    (recording,), left = without_spans([recording], v, split=False)  # of the spin-up log, not the spin-down's
     spindown_result = None
     if v["spindown"]:
         if v["b"] is not None or v["Tf"] is not None:
@@ -34,7 +35,7 @@ def run(paths: list[str], v: dict[str, Any]) -> Any:
         coulomb_friction=v["Tf"], coulomb_friction_stderr=v["Tf_stderr"],
         spindown_result=spindown_result, start=v["start"], end=v["end"],
     )
-    return add_heat_warning(result, [recording])
+    return noted(add_heat_warning(result, [recording]), left)
 
 
 def characterize(ctx: Any) -> Any:
@@ -85,7 +86,7 @@ EXPERIMENT = Experiment(
                help="in the log's time; left empty: found from the current"),
         Option("end", "s", label="End of the constant current",
                help="in the log's time; left empty: found from the current"),
-        COLUMN,
+        EXCLUDE, COLUMN,
     ),
     reports=("K", "alpha", "i"),
     shaft="output + flywheel, motor driving: K = Kt through the gearbox",

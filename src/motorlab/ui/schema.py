@@ -57,7 +57,7 @@ def field(opt: Option) -> dict[str, Any]:
         "default": None if flag else _jsonable_default(opt.default),
         "choices": list(opt.choices) if opt.choices else None,
         "required": opt.required,
-        "repeatable": opt.kind in ("files", "columns"),  # --column: one rule per column
+        "repeatable": opt.kind in ("files", "columns", "spans"),  # --column: one rule per column
         "positive": opt.positive,
         "nonnegative": opt.nonnegative,
         "group": opt.group,

@@ -154,6 +154,9 @@ def panels(argv: Sequence[str]) -> list[dict[str, Any]]:
             "model": _series(p.model),
             "extra": [_series(s) for s in p.extra],
             "same_x": bool(p.data is not None and p.model is not None and np.array_equal(p.data.x, p.model.x)),
+            # each point's time in the log (what a span left out is given in), thinned as the points
+            "time": _thin(p.time) if p.time is not None and p.data is not None and len(p.time) == len(p.data.x)
+            else None,
         }
         for p in result.panels
     ]

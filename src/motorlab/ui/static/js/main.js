@@ -1,5 +1,5 @@
 // motorlab ui: the page. Hash routes "#/<task>/<step>", one shared state (store.js), steps in steps/*.js.
-import { $, el } from "./dom.js";
+import { $, el, keepFocus } from "./dom.js";
 import { getJson } from "./api.js";
 import { load, state, task as taskState } from "./store.js";
 import { STEPS, TASKS, findTask, registerStep } from "./tasks.js";
@@ -39,6 +39,10 @@ function breadcrumb(task, step) {
 }
 
 let current = null;
+// A redraw of the same view (a result arriving, an option changed) keeps the focused field, its caret and
+// what is typed in it; a new view (a link, back, forward) starts afresh.
+const rerender = () => keepFocus($("#view"), render);
+
 export function render() {
   const { task, step } = parseHash();
   if (current && current.leave) current.leave();
@@ -46,7 +50,7 @@ export function render() {
   const host = $("#view");
   host.replaceChildren();
   current = STEPS[step];
-  const ctx = { app, task, state: task ? taskState(task.key) : null, go: (s) => go(task && task.key, s), rerender: render, goTask: go };
+  const ctx = { app, task, state: task ? taskState(task.key) : null, go: (s) => go(task && task.key, s), rerender, goTask: go };
   document.title = task ? `motorlab · ${task.short}` : "motorlab";
   current.render(host, ctx);
   document.body.dataset.view = task ? `${task.key}/${step}` : "choose";
