@@ -52,6 +52,7 @@ def main() -> None:
     dyno = next((d for d in REAL if d.is_dir()), None)
     if dyno is not None:
         forecasts(dyno)
+    population([d for d in (dyno, HERE / "tests/data/dyno") if d is not None])
 
 
 def forecasts(dyno: Path) -> None:
@@ -82,6 +83,76 @@ def forecasts(dyno: Path) -> None:
             pred = np.interp(rec.time[later] - rec.time[0], out.time, out.current)
             rms = math.sqrt(float(np.mean(((pred - rec["current"][later]) / rec["current"][later]) ** 2)))
             print(f"  {path.name:46s} {100 * rms:5.2f} %")
+
+
+def _motor(path: Path) -> str:
+    return path.name.split("-locked-rotor-data-")[0]
+
+
+def _forecast_rms(rec, tmp: Path) -> float | None:  # type: ignore[no-untyped-def]
+    """Relative RMS of the forecast from the run's first 120 s over the rest (None: a run not forecast)."""
+    import math
+
+    import numpy as np
+
+    from motorlab.errors import InputError
+
+    fit = stall(rec, until=120.0)
+    row = fit.details["runs"][0]
+    end = row["cut (s)"] or float(rec.time[-1])
+    (tmp / "fit.json").write_text(json.dumps(fit.to_dict()))
+    try:
+        out = forecast(load_fit(tmp / "fit.json"), float(row["set point (V)"]), end - float(rec.time[0]))
+    except InputError:
+        return None
+    later = (rec.time > 120.0) & (rec.time < end)
+    pred = np.interp(rec.time[later] - rec.time[0], out.time, out.current)
+    return math.sqrt(float(np.mean(((pred - rec["current"][later]) / rec["current"][later]) ** 2)))
+
+
+def population(dirs: list[Path]) -> None:
+    """The empirical prior on the case's time constant R_ca·C_c (``_stall_fit.PRIOR_CASE_TIME_CONSTANT``): each
+    healthy run of at least 150 s of every motor here fitted alone over its whole length; the runs whose R_ca is
+    determined give the population. Then each run forecast from its first 120 s with the prior of the other
+    motors only (leave one motor out)."""
+    import math
+
+    import numpy as np
+
+    from motorlab.analyses import _stall_fit
+
+    runs = []
+    for path in sorted({p.name: p for d in dirs for p in d.glob("*-locked-rotor-data-*.csv")}.values()):
+        rec = read_runs([str(path)])[0]
+        if not np.any(np.asarray(rec["current"]) > 0):
+            continue
+        full = stall(rec)
+        row = full.details["runs"][0]
+        if (row["cut (s)"] or float(rec.time[-1])) < 150.0 or "unexplained" in full.details:
+            continue
+        r_ca, c_c = full["R_ca"], full["C_c"]
+        runs.append((path, rec, r_ca.value * c_c.value if r_ca.determined else None))
+    known = [(_motor(p), math.log(tc)) for p, _, tc in runs if tc is not None]
+    logs = np.array([v for _, v in known])
+    print(f"case time constant R_ca·C_c over {len(known)} runs of {len({m for m, _ in known})} motors whose whole run "
+          f"determines R_ca: {np.exp(logs.min()):.0f}–{np.exp(logs.max()):.0f} s, geometric mean "
+          f"{np.exp(logs.mean()):.0f} s, a factor {np.exp(logs.std(ddof=1)):.2f} either way "
+          f"(the prior used: {_stall_fit.PRIOR_CASE_TIME_CONSTANT:g} s, log sd {_stall_fit.PRIOR_LOG_SIGMA:g})")
+    print("forecast from 120 s with the prior as shipped, and with the prior of the other motors only:")
+    shipped = (_stall_fit.PRIOR_CASE_TIME_CONSTANT, _stall_fit.PRIOR_LOG_SIGMA)
+    with tempfile.TemporaryDirectory() as tmp:
+        try:
+            for path, rec, _ in runs:
+                others = np.array([v for m, v in known if m != _motor(path)])
+                _stall_fit.PRIOR_CASE_TIME_CONSTANT, _stall_fit.PRIOR_LOG_SIGMA = shipped
+                a = _forecast_rms(rec, Path(tmp))
+                _stall_fit.PRIOR_CASE_TIME_CONSTANT = float(np.exp(others.mean()))
+                _stall_fit.PRIOR_LOG_SIGMA = float(others.std(ddof=1))
+                b = _forecast_rms(rec, Path(tmp))
+                text = " ".join("not forecast" if v is None else f"{100 * v:5.2f} %" for v in (a, b))
+                print(f"  {path.name:46s} {text}   (others' prior {_stall_fit.PRIOR_CASE_TIME_CONSTANT:.0f} s)")
+        finally:
+            _stall_fit.PRIOR_CASE_TIME_CONSTANT, _stall_fit.PRIOR_LOG_SIGMA = shipped
 
 
 if __name__ == "__main__":

@@ -26,6 +26,7 @@ from motorlab.sysid_score import (
     score,
     score_file,
     simulate_gains,
+    simulate_sensitivity,
     speed_lag,
 )
 
@@ -77,6 +78,32 @@ def test_negative_ks_and_zero_ka():
     assert np.all(np.isfinite(speed))
     with pytest.raises(OptionError, match="kV > 0"):
         score((0.1, 0.0, 0.1), [test])
+
+
+@pytest.mark.parametrize("gains", [(0.4, 1.0, 0.2), (-0.1, 2.0, 0.5), (0.4, 1.0, 1e-7)])
+def test_sensitivities_match_central_differences(gains):
+    """The fit's Jacobian (sensitivity equations) against differences of the simulation itself, on jittered
+    rows with a ramp from rest (static friction), a step, and a reversal (a stop inside a step, then off
+    the other way); with kA = 1e-7 every row settles (the blocks of many time constants)."""
+    rng = np.random.default_rng(3)
+    t = np.concatenate([[0.0], np.cumsum(0.02 * (1 + 0.3 * rng.uniform(-1, 1, 799)))])
+    volts = np.concatenate([np.linspace(0, 6, 400), np.full(200, 7.0), np.full(200, -3.0)])
+    test = ScoreTest("x", t, volts, np.full(t.size, 1.0), np.zeros(t.size))
+    speed, position, d_speed, d_position = simulate_sensitivity(*gains, test)
+    plain = simulate_gains(*gains, test)
+    np.testing.assert_array_equal(speed, plain[0])  # the same simulation
+    np.testing.assert_array_equal(position, plain[1])
+    p = np.array([gains[0], math.log(gains[1]), math.log(gains[2])])
+    for i in range(3):
+        h = np.zeros(3)
+        h[i] = 1e-6
+        up = simulate_gains(p[0] + h[0], math.exp(p[1] + h[1]), math.exp(p[2] + h[2]), test)
+        down = simulate_gains(p[0] - h[0], math.exp(p[1] - h[1]), math.exp(p[2] - h[2]), test)
+        for k, derivative in ((0, d_speed[i]), (1, d_position[i])):
+            numeric = (up[k] - down[k]) / 2e-6
+            scale = max(float(np.max(np.abs(numeric))), 1e-3)
+            np.testing.assert_allclose(derivative, numeric, rtol=0, atol=2e-4 * scale)
+    assert np.max(np.abs(d_position[0])) > 1  # kS moves the position: the test is not of zeros
 
 
 def test_rows_of_many_time_constants_are_simulated_in_blocks(monkeypatch):

@@ -373,18 +373,26 @@ class _Problem:
 
     def residual_parts(self, p: np.ndarray, offsets: np.ndarray, speeds: np.ndarray) -> tuple[np.ndarray, list]:
         """Weighted residuals (per run: angle, then current) and the simulations."""
-        model, sigma = self.model, self.sigma
         parts = []
         sims = []
-        for k, log in enumerate(self.logs):
-            sim = _simulate_log(model, p, log, self.speed_of(k, speeds), float(offsets[k]))
+        for k in range(len(self.logs)):
+            part, sim = self.log_residuals(k, p, offsets, speeds)
+            parts += part
             sims.append(sim)
-            parts.append((sim["position"] - log.position) * self.factors[k])
-            if model.uses_current:
-                assert log.current is not None
-                parts.append((sim["current"] - log.current) / sigma["current"])
-        parts.append(model.extra_residuals(p))
+        parts.append(self.model.extra_residuals(p))
         return np.concatenate(parts), sims
+
+    def log_residuals(
+        self, k: int, p: np.ndarray, offsets: np.ndarray, speeds: np.ndarray
+    ) -> tuple[list[np.ndarray], dict[str, np.ndarray]]:
+        """Weighted residuals of run k (angle, then current) and its simulation."""
+        model, log = self.model, self.logs[k]
+        sim = _simulate_log(model, p, log, self.speed_of(k, speeds), float(offsets[k]))
+        parts = [(sim["position"] - log.position) * self.factors[k]]
+        if model.uses_current:
+            assert log.current is not None
+            parts.append((sim["current"] - log.current) / self.sigma["current"])
+        return parts, sim
 
     def fun(self, z: np.ndarray) -> np.ndarray:
         """Weighted residuals at z."""
@@ -421,7 +429,8 @@ class _Problem:
         return r
 
     def jac(self, z: np.ndarray) -> np.ndarray:
-        """Jacobian of the weighted residuals in z: forward differences, the angle offsets' columns analytic."""
+        """Jacobian of the weighted residuals in z: forward differences (an initial speed re-simulates its own
+        run only), the angle offsets' columns analytic."""
         model, logs, n_model = self.model, self.logs, self.n_model
         r0 = self.fun(z)
         cols = np.empty((r0.size, z.size))
@@ -438,6 +447,12 @@ class _Problem:
                 cols[:, j] = (self.local_column(zj, loc[0], loc[1], r0) - r0) / h
                 continue
             p, offsets, speeds = self.unpack(zj)
+            if j >= n_model + len(logs):  # run k's initial speed: only run k's residuals change
+                k = self.speed_logs[j - n_model - len(logs)]
+                rows = slice(int(self.row_starts[k]), int(self.row_starts[k + 1]))
+                cols[:, j] = 0.0
+                cols[rows, j] = (np.concatenate(self.log_residuals(k, p, offsets, speeds)[0]) - r0[rows]) / h
+                continue
             cols[:, j] = (self.residual_parts(p, offsets, speeds)[0] - r0) / h
         # angle offsets: residual of log k's angle rises 1/σ per unit offset
         start = 0

@@ -159,8 +159,9 @@ def forecast(model: StallModel, voltage: float, duration: float, *, initial_temp
     return out
 
 
-#: The spread of the prior on the case's time constant (a factor either way), as the fit uses it.
-CASE_PRIOR_FACTOR = 2.5
+#: The spread of the prior on the case's time constant (a factor either way), as the fit uses it (the
+#: population's, :data:`motorlab.analyses._stall_fit.PRIOR_LOG_SIGMA`, rounded).
+CASE_PRIOR_FACTOR = 1.5
 
 
 def _case_loss_band(model: StallModel, t: np.ndarray, voltage: float, t0: float, current: np.ndarray) -> str:

@@ -123,6 +123,24 @@ def _linear_block(v0: float, dt: np.ndarray, u: np.ndarray, tau: float) -> tuple
 
 def simulate_gains(ks: float, kv: float, ka: float, test: ScoreTest) -> tuple[np.ndarray, np.ndarray]:
     """Simulated speed and position at the test's rows (see the module notes)."""
+    speed, position, _ = _simulate(ks, kv, ka, test, sensitivity=False)
+    return speed, position
+
+
+def simulate_sensitivity(
+    ks: float, kv: float, ka: float, test: ScoreTest
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`simulate_gains` with the derivatives of the speed and position, each (3 × rows), in
+    (kS, ln kV, ln kA): the sensitivity equations of the same exact solution, see :func:`_block_sensitivity`."""
+    speed, position, derivatives = _simulate(ks, kv, ka, test, sensitivity=True)
+    assert derivatives is not None
+    return speed, position, derivatives[0], derivatives[1]
+
+
+def _simulate(
+    ks: float, kv: float, ka: float, test: ScoreTest, *, sensitivity: bool
+) -> tuple[np.ndarray, np.ndarray, tuple[np.ndarray, np.ndarray] | None]:
+    """Speed, position and (with ``sensitivity``) their derivatives in (kS, ln kV, ln kA)."""
     t, volts = test.time, test.voltage
     n = t.size
     dt = np.diff(t)
@@ -130,6 +148,8 @@ def simulate_gains(ks: float, kv: float, ka: float, test: ScoreTest) -> tuple[np
     speed = np.zeros(n)
     step_dist = np.zeros(max(n - 1, 0))
     speed[0] = test.velocity[0]
+    d_speed = np.zeros((3, n if sensitivity else 0))  # (kS, ln kV, ln kA) × rows
+    d_dist = np.zeros((3, max(n - 1, 0) if sensitivity else 0))
     threshold = max(ks, 0.0)
     ordered = bool(np.all(dt >= 0.0))  # (readers refuse time going backwards; the score does not rely on it)
     k = 0
@@ -153,20 +173,104 @@ def simulate_gains(ks: float, kv: float, ka: float, test: ScoreTest) -> tuple[np
             stop = min(n - 1, k + (_stiff_span(dt, k, tau) if stiff else max(span, 1)))
         u = (volts[k:stop] - ks * s) / kv
         v_new, dist = (_stiff_block if stiff else _linear_block)(v, dt[k:stop], u, tau)
+        if sensitivity:
+            w_new, dd = _block_sensitivity(v, d_speed[:, k], dt[k:stop], u, tau, s / kv, v_new, stiff)
         cross = np.flatnonzero(s * v_new <= 0.0)
-        if cross.size == 0:
-            speed[k + 1:stop + 1] = v_new
-            step_dist[k:stop] = dist
-            k = stop
-            continue
-        j = int(cross[0])
+        j = int(cross[0]) if cross.size else stop - k
         speed[k + 1:k + j + 1] = v_new[:j]
         step_dist[k:k + j] = dist[:j]
+        if sensitivity:
+            d_speed[:, k + 1:k + j + 1] = w_new[:, :j]
+            d_dist[:, k:k + j] = dd[:, :j]
         k += j
-        speed[k + 1], step_dist[k] = _stop_within_step(speed[k], u[j], dt[k], tau, volts[k], ks, kv, threshold)
+        if not cross.size:
+            continue
+        stop_args = (speed[k], dt[k], volts[k], s, ks, kv, ka)
+        speed[k + 1], step_dist[k] = _stop_within_step(*_stop_inputs(*stop_args))
+        if sensitivity:
+            d_speed[:, k + 1], d_dist[:, k] = _stop_sensitivity(d_speed[:, k], *stop_args)
         k += 1
     position = test.position[0] + np.concatenate([[0.0], np.cumsum(step_dist)])
-    return speed, position
+    if not sensitivity:
+        return speed, position, None
+    return speed, position, (d_speed, np.concatenate([np.zeros((3, 1)), np.cumsum(d_dist, axis=1)], axis=1))
+
+
+def _stop_inputs(
+    v: float, dt: float, volts: float, s: float, ks: float, kv: float, ka: float
+) -> tuple[float, float, float, float, float, float, float, float]:
+    """The arguments of :func:`_stop_within_step` for the step from speed ``v`` in direction ``s``."""
+    return v, (volts - ks * s) / kv, dt, ka / kv, volts, ks, kv, max(ks, 0.0)
+
+
+def _stop_sensitivity(
+    w: np.ndarray, v: float, dt: float, volts: float, s: float, ks: float, kv: float, ka: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Derivatives of :func:`_stop_within_step`'s speed and distance in (kS, ln kV, ln kA), the step's
+    starting speed carrying its own derivatives ``w``: central differences of the closed form."""
+    d_speed, d_dist = np.zeros(3), np.zeros(3)
+    base = np.array([ks, math.log(kv), math.log(ka) if ka > 0 else 0.0])
+    for i in range(3 if ka > 0 else 2):  # (without inertia kA has no effect)
+        h = 1e-6 * max(abs(base[i]), 1.0)
+        ends = []
+        for sign in (1.0, -1.0):
+            p = base.copy()
+            p[i] += sign * h
+            ends.append(_stop_within_step(*_stop_inputs(v + sign * h * w[i], dt, volts, s, p[0], math.exp(p[1]),
+                                                        math.exp(p[2]) if ka > 0 else 0.0)))
+        d_speed[i] = (ends[0][0] - ends[1][0]) / (2 * h)
+        d_dist[i] = (ends[0][1] - ends[1][1]) / (2 * h)
+    return d_speed, d_dist
+
+
+def _block_sensitivity(
+    v0: float, w0: np.ndarray, dt: np.ndarray, u: np.ndarray, tau: float, s_kv: float, v: np.ndarray, stiff: bool
+) -> tuple[np.ndarray, np.ndarray]:
+    """Derivatives in (kS, ln kV, ln kA), each (3 × steps), of a block's speeds ``v`` and step distances
+    (:func:`_linear_block`), from the block's first speed ``v0`` and its derivatives ``w0``.
+
+    Differentiating v_{j+1} = a_j·v_j + (1 − a_j)·u_j, a_j = e^(−dt_j/τ), u_j = (V_j − kS·s)/kV, τ = kA/kV
+    gives the same recursion for the derivative w: w_{j+1} = a_j·w_j + b_j with
+    b_j = ∂a_j·(v_j − u_j) + (1 − a_j)·∂u_j, ∂u = (−s/kV, −u, 0), ∂a = a·dt/τ·(0, −1, 1); it is summed
+    as :func:`_linear_block` sums the speeds (about the block's middle). The distance
+    d_j = u_j·dt_j + (v_j − u_j)·τ·(1 − a_j) is differentiated term by term (∂τ = τ·(0, −1, 1)).
+    """
+    m = dt.size
+    du = np.empty((3, m))
+    du[0], du[1], du[2] = -s_kv, -u, 0.0
+    if tau <= 0.0:
+        return du, du * dt
+    x = dt / tau
+    a = np.exp(-x)
+    one_a = 1.0 - a
+    if stiff:  # each step settles: its start is the previous step's settled speed (as _stiff_block)
+        q = np.concatenate([[v0], u[:-1]]) - u
+        w_start = np.concatenate([w0[:, None], du[:, :-1]], axis=1)
+        g = a * x * q
+        w = a * w_start + one_a * du
+        w[1] -= g
+        w[2] += g
+    else:
+        q = np.concatenate([[v0], v[:-1]]) - u
+        g = a * x * q
+        bias = one_a * du
+        bias[1] -= g
+        bias[2] += g
+        if m == 1:
+            w = a * w0[:, None] + bias
+        else:
+            c = np.concatenate([[0.0], np.cumsum(x)])
+            c -= 0.5 * c[-1]
+            e = np.exp(c)
+            w = (w0[:, None] * e[0] + np.cumsum(bias * e[1:], axis=1)) / e[1:]
+    q = np.concatenate([[v0], v[:-1]]) - u
+    r = tau * one_a
+    h = q * (r - tau * a * x)
+    w_start = np.concatenate([w0[:, None], w[:, :-1]], axis=1)
+    dd = du * dt + (w_start - du) * r
+    dd[1] -= h
+    dd[2] += h
+    return w, dd
 
 
 def _block_span(dt: np.ndarray, k: int, tau: float) -> int:
@@ -243,6 +347,42 @@ def residuals(gains: Gains, tests: Sequence[ScoreTest]) -> tuple[np.ndarray, np.
     return np.concatenate(rs), np.concatenate(rp)
 
 
+class _Weighted:
+    """The weighted residuals of :func:`fit_gains` in p = (kS, ln kV, ln kA) and their Jacobian.
+
+    The Jacobian is that of the sensitivity equations (:func:`simulate_sensitivity`), computed with
+    the residuals in the same pass and kept for the point least squares asks it of next (the one it
+    has just evaluated): one simulation per point instead of four (forward differences).
+    """
+
+    def __init__(self, tests: Sequence[ScoreTest], ws: float, wp: float):
+        self.tests, self.ws, self.wp = tests, ws, wp
+        self.norm = math.sqrt(sum(t.time.size for t in tests))
+        self.at: np.ndarray | None = None
+        self.jacobian = np.zeros((0, 3))
+        self.scores: dict[bytes, Score] = {}
+
+    def fun(self, p: np.ndarray) -> np.ndarray:
+        gains = _gains(p)
+        ks, kv, ka = (float(g) for g in gains)
+        if not (kv > 0 and ka >= 0 and math.isfinite(ks)):
+            raise OptionError(f"the score needs kV > 0 and kA ≥ 0, got kS={ks:g}, kV={kv:g}, kA={ka:g}")
+        parts = [simulate_sensitivity(ks, kv, ka, test) for test in self.tests]
+        rs = np.concatenate([sp - t.velocity for (sp, _, _, _), t in zip(parts, self.tests, strict=True)])
+        rp = np.concatenate([po - t.position for (_, po, _, _), t in zip(parts, self.tests, strict=True)])
+        self.at = p.copy()
+        self.scores[p.tobytes()] = Score(rms(rs), rms(rp))
+        d_speed = np.concatenate([d for _, _, d, _ in parts], axis=1)
+        d_position = np.concatenate([d for _, _, _, d in parts], axis=1)
+        self.jacobian = np.concatenate([self.ws * d_speed, self.wp * d_position], axis=1).T / self.norm
+        return np.concatenate([self.ws * rs, self.wp * rp]) / self.norm
+
+    def jac(self, p: np.ndarray) -> np.ndarray:
+        if self.at is None or not np.array_equal(self.at, p):
+            self.fun(p)
+        return self.jacobian
+
+
 def score(gains: Gains, tests: Sequence[ScoreTest]) -> Score:
     """The fair score of (kS [V], kV [V·s/unit], kA [V·s²/unit]) on the tests (units as the tests')."""
     rs, rp = residuals(gains, tests)
@@ -310,7 +450,6 @@ def fit_gains(
 
     best: tuple[float, np.ndarray, Score] | None = None
     nfev = 0
-    ns = sum(t.time.size for t in tests)
     with progress.task("Fitting the open-loop gains", total=len(starts) * rounds, unit="rounds") as report:
         for number, start in enumerate(starts):
             report.update(number * rounds, detail=f"start {number + 1} of {len(starts)}")
@@ -319,15 +458,11 @@ def fit_gains(
             for _ in range(rounds):
                 report.advance()
                 ws, wp = 1.0 / max(current.speed, 1e-300), math.sqrt(position_weight) / max(current.position, 1e-300)
-
-                def fun(p: np.ndarray, ws: float = ws, wp: float = wp) -> np.ndarray:
-                    rs, rp = residuals(_gains(p), tests)
-                    return np.concatenate([ws * rs, wp * rp]) / math.sqrt(ns)
-
-                sol = least_squares(fun, x, x_scale=np.array([max(abs(x[0]), 0.05), 0.1, 0.3]), diff_step=1e-4,
-                                    max_nfev=60, ftol=1e-6, xtol=1e-6)
+                weighted = _Weighted(tests, ws, wp)
+                sol = least_squares(weighted.fun, x, jac=weighted.jac, max_nfev=60, ftol=1e-6, xtol=1e-6,
+                                    x_scale=np.array([max(abs(x[0]), 0.05), 0.1, 0.3]))
                 nfev += int(sol.nfev)
-                new = score(_gains(sol.x), tests)
+                new = weighted.scores.get(sol.x.tobytes()) or score(_gains(sol.x), tests)
                 if not _objective(new, position_weight) < _objective(current, position_weight) - 1e-5:
                     break
                 x, current = sol.x, new
@@ -342,25 +477,14 @@ def fit_gains(
 
 
 def _hac(gains: np.ndarray, tests: Sequence[ScoreTest], sc: Score, weight: float) -> tuple[np.ndarray, float]:
-    """Newey–West covariance of the gains from the weighted score residuals (central differences)."""
+    """Newey–West covariance of the gains from the weighted score residuals (sensitivity Jacobian)."""
     from motorlab.fitting import hac_covariance
 
     ws, wp = 1.0 / sc.speed, math.sqrt(weight) / sc.position
-
-    def weighted(g: np.ndarray) -> np.ndarray:
-        rs, rp = residuals(g, tests)
-        return np.concatenate([ws * rs, wp * rp])
-
-    r0 = weighted(gains)
-    jac = np.empty((r0.size, 3))
-    for k in range(3):
-        h = (1e-2 if k == 0 else 1e-3) * max(abs(gains[k]), 1e-3 * abs(gains[1]) if k == 0 else 1e-12)
-        up, down = gains.copy(), gains.copy()
-        up[k] += h
-        down[k] -= h
-        if k > 0:
-            down[k] = max(down[k], 0.0)
-        jac[:, k] = (weighted(up) - weighted(down)) / (up[k] - down[k])
+    weighted = _Weighted(tests, ws, wp)
+    p = np.array([gains[0], math.log(gains[1]), math.log(gains[2])])
+    r0 = weighted.fun(p) * weighted.norm
+    jac = weighted.jac(p) * weighted.norm / np.array([1.0, gains[1], gains[2]])  # d/d(ln g) = g·d/dg
     sizes = [t.time.size for t in tests]
     labels = np.concatenate([np.full(n, i) for i, n in enumerate(sizes)] +
                             [np.full(n, len(sizes) + i) for i, n in enumerate(sizes)])

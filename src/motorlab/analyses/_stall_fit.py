@@ -117,11 +117,15 @@ def _guess(runs: Sequence[StallData], reference: int, ambient: float) -> list[fl
     return [r25, 0.5, 2.0, c_w, 6.0 * c_w]
 
 
-#: The case's time constant R_ca·C_c a weak prior pulls towards when the runs cannot tell R_ca [s], and the
-#: prior's spread (a factor of 2.5 either way, in the logarithm). VEX's BAG runs give 840 s; a 550-size
-#: gearmotor's estimate (data/thermal.toml) 750 s.
-PRIOR_CASE_TIME_CONSTANT = 800.0
-PRIOR_LOG_SIGMA = math.log(2.5)
+#: The case's time constant R_ca·C_c the prior pulls towards when the runs cannot tell R_ca [s], and the
+#: prior's spread (the standard deviation of its logarithm): an empirical prior, the geometric mean and spread
+#: of R_ca·C_c over a population of real motors, the 14 healthy 2–7.2 V locked-rotor runs of eight motors
+#: (VEX's dynamometer exports of the mini-CIM, BAG, AndyMark 9015, 775pro, AndyMark 775, BaneBots 550, CIM and
+#: NeveRest) whose whole run (up to 300 s) determines R_ca, each fitted alone: 80–358 s, geometric mean 186 s, a
+#: factor 1.50 either way (``benchmarks/bench_thermal.py`` recomputes it, and the prior of each motor from the
+#: others: 177–200 s). It replaced 800 s (VEX's BAG 2 V run, where R_ca is not determined either).
+PRIOR_CASE_TIME_CONSTANT = 186.0
+PRIOR_LOG_SIGMA = 0.408
 
 
 def _needs_prior(fit: LeastSquares, hi: Sequence[float]) -> bool:

@@ -8,7 +8,14 @@ from typing import Any
 
 import numpy as np
 
-from motorlab.analyses._stall_fit import SHARED, HeatFit, StallData, TorqueFit, simulate_runs
+from motorlab.analyses._stall_fit import (
+    PRIOR_CASE_TIME_CONSTANT,
+    SHARED,
+    HeatFit,
+    StallData,
+    TorqueFit,
+    simulate_runs,
+)
 from motorlab.results import Estimate, Panel, Series
 from motorlab.thermal import ThermalModel, continuous_current, steady_stall_temperature, time_to_temperature
 
@@ -143,7 +150,8 @@ def parameters_of(heat: HeatFit, torque: TorqueFit | None, extra: dict[str, Esti
         if name == "R_ca" and heat.prior:
             determined = False
             note = (_NOTES[name] + f": the runs are too short to tell it; {heat.values[name]:.3g} K/W comes from a "
-                    "prior on the case's time constant R_ca·C_c ≈ 800 s (used by forecasts)")
+                    f"prior on the case's time constant R_ca·C_c ≈ {PRIOR_CASE_TIME_CONSTANT:.0f} s (real motors' "
+                    "population; used by forecasts)")
         out[name] = Estimate(name, heat.values[name], heat.stderr[name], _UNITS[name], determined, note)
     out.update(extra)
     return out
