@@ -154,8 +154,9 @@ def test_a_stretch_of_a_long_log_left_out_on_the_plot(page: Any, ramp: tuple[Pat
     page.type("counts per revolution", "8192")
     page.click("Run the fit")
     page.wait_text("Result from bumpy.json")
-    kv, err = _kv(page)
-    assert abs(kv - true_kv) > 3 * err + 0.001  # the stretch ruins the fit
+    if "Velocity gain kV not determined" not in page.text():  # the stretch ruins the fit
+        kv, err = _kv(page)
+        assert abs(kv - true_kv) > 3 * err + 0.001
     assert "To leave a stretch of the log out" in page.text()
     page.wait(lambda: page.d.find_elements("css selector", ".plots .nsewdrag"), "the plots")
     _box_select(page, 2.45, 3.55)
@@ -189,4 +190,4 @@ def test_a_stretch_of_a_long_log_left_out_on_the_plot(page: Any, ramp: tuple[Pat
               "the whole log fitted again")
     codes = page.d.find_elements("css selector", "pre code")
     assert not any("--exclude" in e.get_attribute("textContent") for e in codes)
-    assert abs(_kv(page)[0] - true_kv) > 0.001
+    assert "Velocity gain kV not determined" in page.text() or abs(_kv(page)[0] - true_kv) > 0.001
