@@ -232,9 +232,9 @@ def _parse_chunk(
                                    ndmin=1, dtype=dtype)
         except (ValueError, UserWarning, OverflowError):
             continue
-        xs, ys = table["x"].astype(float), table["y"]
-        if table.shape[0] == expected and np.isfinite(xs).all() and np.isfinite(ys).all():
-            return xs, ys, None
+        x, y = table["x"].astype(float), table["y"]
+        if table.shape[0] == expected and np.isfinite(x).all() and np.isfinite(y).all():
+            return x, y, None
     text = chunk.data.decode("latin-1")  # the numbers are ASCII; any other byte is named as not a number
     rows = [(n, line.strip()) for n, line in enumerate(text.split("\n"), start=chunk.first_line)]
     rows = [(n, line) for n, line in rows if line and not line.startswith("#")]
