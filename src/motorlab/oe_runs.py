@@ -7,6 +7,7 @@ use these; neither imports the other for them.
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Sequence
 from typing import Any
@@ -284,8 +285,17 @@ def _estimate(name: str, value: float, stderr: float, *, determined: bool = True
     return Estimate(name, float(value), float(stderr), SI_UNITS[name], determined, note)
 
 
+def _one_time_axis(spans: list[tuple[float, float]]) -> bool:
+    """Whether runs spanning these (first, last) times follow one another on one time axis (pieces of one log)."""
+    return all(b[0] > a[1] for a, b in itertools.pairwise(spans))
+
+
 def fit_panels(logs: list[_oe.Log], fit: _oe.Fit, *, title: str, length: str = "rad") -> list[Panel]:
-    """Measured against simulated angle (or distance, ``length="m"``), speed and current, runs end to end."""
+    """Measured against simulated angle (or distance, ``length="m"``), speed and current.
+
+    Against the log's own time when the runs follow one another on it (one log, or the pieces of one log
+    cut by a span left out); else runs end to end.
+    """
     panels = []
     if length == "m":
         signals = [("position", "position", "x [m]"), ("speed", "speed", "v [m/s]")]
@@ -307,11 +317,12 @@ def fit_panels(logs: list[_oe.Log], fit: _oe.Fit, *, title: str, length: str = "
                 data.append(log.position)
             model.append(sim[key])
             t_offset += float(log.time[-1]) + log.dt
-        x = np.concatenate(xs)
+        in_order = _one_time_axis([(log.start, log.start + float(log.time[-1])) for log in logs])
+        x = np.concatenate(times if in_order else xs)
         panels.append(
             Panel(
                 title=f"{title}: measured and simulated {label}",
-                x_label="time (runs end to end) [s]",
+                x_label="time in the log [s]" if in_order else "time (runs end to end) [s]",
                 y_label=y_label,
                 data=Series(x, np.concatenate(data), "measured" if key != "speed" else "measured (differenced)"),
                 model=Series(x, np.concatenate(model), "simulated", kind="model"),

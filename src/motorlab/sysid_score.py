@@ -19,6 +19,7 @@ fit, each score weighed by its own size) — see docs/real-logs.md.
 
 from __future__ import annotations
 
+import itertools
 import math
 import os
 from collections.abc import Iterable, Sequence
@@ -613,13 +614,17 @@ def score_panels(gains: Gains, tests: Sequence[ScoreTest], *, title: str, length
 
     sims = [simulate_gains(gains[0], gains[1], gains[2], t) for t in tests]
     offsets = np.cumsum([0.0] + [float(t.time[-1]) + 0.01 for t in tests[:-1]])
+    in_order = all(b.start > a.start + float(a.time[-1]) for a, b in itertools.pairwise(tests))
+    if in_order:  # one log (or its pieces, a span left out): against its own time
+        offsets = np.array([t.start for t in tests])
     x = np.concatenate([t.time + o for t, o in zip(tests, offsets, strict=True)])
     panels = []
     for k, (label, y_label) in enumerate([("speed", f"v [{length}/s]"), ("position", f"x [{length}]")]):
         data = np.concatenate([t.velocity if k == 0 else t.position for t in tests])
         model = np.concatenate([s[k] for s in sims])
         panels.append(Panel(title=f"{title}: logged and open-loop simulated {label} (the score)",
-                            x_label="time (tests end to end) [s]", y_label=y_label,
+                            x_label="time in the log [s]" if in_order else "time (tests end to end) [s]",
+                            y_label=y_label,
                             data=Series(x, data, "logged"), model=Series(x, model, "simulated", kind="model"),
                             time=np.concatenate([t.time + t.start for t in tests])))
     return panels

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from motorlab.errors import LogFormatError, OptionError
-from motorlab.io.frc_json import TESTS, read_frc_char_json, read_sysid_json
+from motorlab.io._text import unit_factor
+from motorlab.io.frc_json import SI_PER_UNIT, TESTS, UNITS, read_frc_char_json, read_sysid_json
 
 FRC_CHAR = "frc-characterization-drivetrain-linear.json"
 SYSID = "sysid-flywheel.json"
@@ -113,6 +114,13 @@ def sysid_data(**changes):
     data.update({"slow-forward": rows, "fast-forward": [[1.0 + r[0], *r[1:]] for r in rows]})
     data.update(changes)
     return data
+
+
+def test_unit_factors_are_pints():
+    """The written-out factors are pint's, to the last bit (the readers skip building pint's registry)."""
+    assert set(SI_PER_UNIT) == set(UNITS)
+    for name, (unit, si_unit) in UNITS.items():
+        assert SI_PER_UNIT[name] == unit_factor(unit, si_unit), name
 
 
 def test_rotations_are_converted_to_radians(tmp_path):

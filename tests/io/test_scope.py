@@ -167,6 +167,24 @@ def test_waveform_with_gaps_in_the_index_and_crlf(tmp_path, monkeypatch):
     np.testing.assert_allclose(rec.time, -1e-3 + (k[rises] - 0.5) * 1e-5, atol=1e-9)
 
 
+def test_waveform_indices_written_as_floats_read_as_integers_do(tmp_path, monkeypatch):
+    """The Sequence indices are parsed as integers when they are; chunks whose indices are written
+    otherwise (``1500.0``, ``1.5e3``) fall back to floats and give the same edges and lines."""
+    from motorlab.io import _chunks
+
+    monkeypatch.setattr(_chunks, "CHUNK", 2048)
+    k = np.arange(3000)
+    volts = np.where((k // 50) % 2 == 1, 3.3, 0.0)
+    plain, mixed = tmp_path / "plain.csv", tmp_path / "mixed.csv"
+    _square_wave_export(plain, rows=[f"{i},{v:.4e}," for i, v in zip(k, volts, strict=True)])
+    _square_wave_export(mixed, rows=[(f"{i}.0" if 1200 <= i < 1800 else f"{i:.4e}" if i >= 2500 else f"{i}") +
+                                     f",{v:.4e}," for i, v in zip(k, volts, strict=True)])
+    a, b = read_scope_waveform(plain), read_scope_waveform(mixed)
+    np.testing.assert_array_equal(a.time, b.time)
+    np.testing.assert_array_equal(a.lines, b.lines)
+    assert a.time.size == 30
+
+
 def test_waveform_errors_name_the_line_in_any_chunk(tmp_path, monkeypatch):
     from motorlab.io import _chunks
 

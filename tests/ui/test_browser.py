@@ -99,3 +99,95 @@ def test_reload_back_and_offline(page: Any, ramp: tuple[Path, float]) -> None:
     foreign = [url for url in loaded if not url.startswith((page.url, "blob:", "data:"))]
     assert not foreign, foreign
     assert any(url.endswith("/static/plotly.min.js") for url in loaded)
+
+
+def _lift_dead_wheels(path: Path, out: Path, t1: float, t2: float) -> None:
+    """The ramp with its dead wheels off the floor from t1 to t2 s (tests/test_timespans.py does the same)."""
+    doc = json.loads(path.read_text())
+    for key in ("forwardEncPositions", "forwardEncVels"):
+        for enc in doc[key]:
+            t = [float(x) for x in enc["times"]]
+            i1 = next(k for k, x in enumerate(t) if x >= t1)
+            i2 = next(k for k, x in enumerate(t) if x >= t2)
+            v = list(enc["values"])
+            if key == "forwardEncPositions":
+                missed = v[i2] - v[i1]
+                enc["values"] = v[:i1] + [v[i1]] * (i2 - i1) + [x - missed for x in v[i2:]]
+            else:
+                enc["values"] = v[:i1] + [0] * (i2 - i1) + v[i2:]
+    out.write_text(json.dumps(doc))
+
+
+def _kv(page: Any) -> tuple[float, float]:
+    """kV and its uncertainty as the result table says them ("0.1253 ± 0.0000x V·s/rad", "(4.0 ± 2.7) × 10⁻⁷ …")."""
+    found = re.search(r"Velocity gain kV\s+\(?(-?[0-9.]+) ± ([0-9.]+)\)?(?: × 10([⁻⁰-⁹¹²³]+))? V·s/rad", page.text())
+    assert found, page.text()[:3000]
+    power = 0
+    if found.group(3):
+        power = int(found.group(3).translate(str.maketrans("⁻⁰¹²³⁴⁵⁶⁷⁸⁹", "-0123456789")))
+    return float(found.group(1)) * 10.0**power, float(found.group(2)) * 10.0**power
+
+
+def _box_select(page: Any, x0: float, x1: float) -> None:
+    """Drag the box tool over x0..x1 (in the first plot's x axis) across the whole height, as a hand does."""
+    from selenium.webdriver.common.action_chains import ActionChains
+
+    page.d.find_element("css selector", ".plots .modebar-btn[data-title='Box Select']").click()
+    area = page.d.find_element("css selector", ".plots .nsewdrag")
+    left, right = page.d.execute_script(
+        "const gd = document.querySelector('.plots .js-plotly-plot'); const ax = gd._fullLayout.xaxis;"
+        "return [ax.l2p(arguments[0]), ax.l2p(arguments[1])];", x0, x1)
+    width, height = area.size["width"], area.size["height"]
+    ActionChains(page.d).move_to_element_with_offset(area, int(left - width / 2), -height // 2 + 2).click_and_hold() \
+        .move_by_offset(int(right - left), height - 4).release().perform()
+
+
+def test_a_stretch_of_a_long_log_left_out_on_the_plot(page: Any, ramp: tuple[Path, float], tmp_path: Path) -> None:
+    """A ramp whose dead wheels lifted for a second: selected on the plot, left out, fitted again, put back."""
+    path, _ = ramp
+    true_kv = json.loads((path.parent / "truth.json").read_text())["runs"]["ramp.json"]["expected"]["kV"]
+    _lift_dead_wheels(path, tmp_path / "bumpy.json", 2.5, 3.5)
+    page.open(browser.LAPTOP)
+    page.click("Tune a Road Runner or Pedro Pathing drive")
+    page.upload("Choose or drop your files", tmp_path / "bumpy.json")
+    page.wait_text("Proposed: Road Runner feedforward fit")
+    page.type("counts per revolution", "8192")
+    page.click("Run the fit")
+    page.wait_text("Result from bumpy.json")
+    if "Velocity gain kV not determined" not in page.text():  # the stretch ruins the fit
+        kv, err = _kv(page)
+        assert abs(kv - true_kv) > 3 * err + 0.001
+    assert "To leave a stretch of the log out" in page.text()
+    page.wait(lambda: page.d.find_elements("css selector", ".plots .nsewdrag"), "the plots")
+    _box_select(page, 2.45, 3.55)
+    page.wait_text("and fit again")
+    offer = next(b.text for b in page.d.find_elements("tag name", "button") if "and fit again" in b.text)
+    found = re.fullmatch(r"Leave out ([0-9.]+)–([0-9.]+) s and fit again", offer)
+    assert found, offer
+    start, end = float(found.group(1)), float(found.group(2))
+    assert 2.3 < start < 2.5 < 3.5 < end < 3.7
+    flag = f"--exclude={found.group(1)}:{found.group(2)}"
+    assert any(flag in e.text for e in page.d.find_elements("css selector", "pre code")), flag  # the CLI form
+    page.check()
+    page.shot("ui-leave-out.png")
+    page.click("and fit again")
+    page.wait_text("time span left out)")
+    said = page.d.find_element("css selector", ".left-out").text
+    assert re.match(r"1 time span left out, [0-9.]+ s, \d+ samples", said), said
+    kv, err = _kv(page)
+    assert abs(kv - true_kv) < 3 * err + 0.0005, (kv, err, true_kv)
+    assert any(flag in e.get_attribute("textContent") for e in page.d.find_elements("css selector", "pre code"))
+    page.check()
+    page.shot("ui-left-out.png")
+    page.d.set_window_size(*browser.PHONE)
+    page.wait(lambda: page.d.execute_script("return document.documentElement.scrollWidth <= window.innerWidth"),
+              "the plots redrawn to the phone's width")  # Plotly follows the window's size a moment later
+    page.check()
+    page.shot("ui-left-out-phone.png")
+    page.d.set_window_size(*browser.LAPTOP)
+    page.click("Put them back")
+    page.wait(lambda: "left out)" not in page.text() and "Result from bumpy.json" in page.text(),
+              "the whole log fitted again")
+    codes = page.d.find_elements("css selector", "pre code")
+    assert not any("--exclude" in e.get_attribute("textContent") for e in codes)
+    assert "Velocity gain kV not determined" in page.text() or abs(_kv(page)[0] - true_kv) > 0.001

@@ -4,7 +4,8 @@ A Rigol DS1054Z exports up to 24 Mpts per channel. The rows are parsed in C (``n
 chunk of whole lines at a time, straight from the file; only the chosen channel is kept, as 32-bit
 floats (4 bytes a sample: a scope's 8-bit samples written with 3–5 digits lose nothing), and the
 sample times are not stored at all when they are the Rigol ``Sequence`` layout's start +
-index·increment with consecutive indices. A chunk the C parser refuses (a comment, a blank line, a
+index·increment with consecutive indices (the Rigol indices are parsed as integers, in a third of a
+float's time: a quarter of a 24 Mpt export's reading). A chunk the C parser refuses (a comment, a blank line, a
 quoted or broken value) is read line by line, which names the bad line. A 24 Mpt export thus takes
 about 100 MB instead of several GB.
 """
@@ -215,19 +216,25 @@ def waveform_rows(
 
 
 def _parse_chunk(
-    chunk: Chunk, name: str, column: int, labels: tuple[str, str]
+    chunk: Chunk, name: str, column: int, labels: tuple[str, str], *, integer_x: bool = False
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
-    """x, the channel's values and the lines of a chunk's rows (None: one row per line of the chunk)."""
-    expected = chunk.data.count(b"\n") + (0 if chunk.data.endswith(b"\n") else 1)
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("error")  # "input contained no data": the slow path says what is wrong
-            table = np.loadtxt(io.BytesIO(chunk.data), delimiter=",", usecols=(0, column), comments=None,
-                               ndmin=2, dtype=float)
-        if table.shape[0] == expected and np.isfinite(table).all():
-            return table[:, 0], table[:, 1], None
-    except (ValueError, UserWarning):
-        pass
+    """x, the channel's values and the lines of a chunk's rows (None: one row per line of the chunk).
+
+    ``integer_x``: x is a sample index (Rigol ``Sequence``), tried as integers first (numpy converts
+    them in a third of a float's time); a chunk whose x are not all integers is read as floats.
+    """
+    expected = chunk.lines()
+    for dtype in ([[("x", "<i8"), ("y", "<f8")]] if integer_x else []) + [[("x", "<f8"), ("y", "<f8")]]:
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("error")  # "input contained no data": the slow path says what is wrong
+                table = np.loadtxt(io.BytesIO(chunk.data), delimiter=",", usecols=(0, column), comments=None,
+                                   ndmin=1, dtype=dtype)
+        except (ValueError, UserWarning, OverflowError):
+            continue
+        x, y = table["x"].astype(float), table["y"]
+        if table.shape[0] == expected and np.isfinite(x).all() and np.isfinite(y).all():
+            return x, y, None
     text = chunk.data.decode("latin-1")  # the numbers are ASCII; any other byte is named as not a number
     rows = [(n, line.strip()) for n, line in enumerate(text.split("\n"), start=chunk.first_line)]
     rows = [(n, line) for n, line in rows if line and not line.startswith("#")]
@@ -301,7 +308,7 @@ def stream_samples(path: str | os.PathLike[str], channel: str | None) -> Samples
         gather.x = Column(estimate)
     base = os.path.basename(name)
     for chunk in line_chunks(name, offset, first_line, what=f"Reading {base}"):
-        xs, ys, lines = _parse_chunk(chunk, name, column, labels)
+        xs, ys, lines = _parse_chunk(chunk, name, column, labels, integer_x=gather.consecutive)
         gather.add(xs, ys, lines, chunk.first_line, name)
     if gather.volts.size < 2:
         raise LogFormatError("fewer than two samples", path=name)

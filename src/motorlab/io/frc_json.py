@@ -21,7 +21,7 @@ import numpy as np
 
 from motorlab import progress
 from motorlab.errors import LogFormatError, OptionError
-from motorlab.io._text import PathArg, load_json, read_bytes, unit_factor
+from motorlab.io._text import PathArg, load_json, read_bytes
 from motorlab.recording import Recording
 
 #: The four tests, in the order the tools run them (segments keep this order).
@@ -36,6 +36,10 @@ UNITS: dict[str, tuple[str, str]] = {
     "rotations": ("revolution", "rad"),
     "degrees": ("degree", "rad"),
 }
+#: One unit of each in SI: pint's factors for :data:`UNITS` (a test checks them against pint), written out
+#: because building pint's unit registry takes longer than reading a large log.
+SI_PER_UNIT = {"meters": 1.0, "feet": 12 * 0.0254, "inches": 0.0254, "radians": 1.0, "rotations": 2 * math.pi,
+               "degrees": math.pi / 180}
 
 _SIDES = ("left", "right")
 #: ``side="both"``: every drivetrain test twice, as ``<test>#left`` and ``<test>#right``.
@@ -76,16 +80,16 @@ class _Parsed:
 
 _TEST_START = re.compile(rb'"(slow-forward|slow-backward|fast-forward|fast-backward)"\s*:\s*(\[)\s*\[')
 _TEST_END = re.compile(rb"\]\s*\]")
-_JSON_NUMERIC = np.zeros(256, dtype=bool)
-_JSON_NUMERIC[np.frombuffer(b"0123456789+-.eE \t\r\n,[]", dtype=np.uint8)] = True
+#: The bytes of rows of plain numbers (deleted by ``bytes.translate``: what is left is something else).
+_JSON_NUMERIC = b"0123456789+-.eE \t\r\n,[]"
 _TO_SPACE = bytes.maketrans(b",[]", b"   ")
 
 
 def _parse_rows(segment: bytes) -> np.ndarray | None:
     """``[[t, V, x, v], ...]`` as an (n, ncol) array, or None unless every row is plain numbers of one length."""
-    codes = np.frombuffer(segment, dtype=np.uint8)
-    if not _JSON_NUMERIC[codes].all():
+    if segment.translate(None, _JSON_NUMERIC):
         return None  # NaN, Infinity, strings, objects: json.loads and the checks below name them
+    codes = np.frombuffer(segment, dtype=np.uint8)
     opens = np.flatnonzero(codes == ord("["))[1:]
     closes = np.flatnonzero(codes == ord("]"))[:-1]
     if opens.size == 0 or opens.size != closes.size or np.any(closes <= opens) or np.any(opens[1:] <= closes[:-1]):
@@ -318,8 +322,8 @@ def _units(name: str, data: dict[str, Any], *, units: str | None = None, legacy:
     if not low <= upr <= high:
         raise LogFormatError(f"unitsPerRotation {upr!r} is outside {low:g} … {high:g}: no mechanism turns a rotation "
                              "into that many units (a wheel's circumference, 360 degrees, a gear ratio)", path=name)
-    pint_unit, si_unit = UNITS[written.lower()]
-    si_per_unit = unit_factor(pint_unit, si_unit)
+    si_unit = UNITS[written.lower()][1]
+    si_per_unit = SI_PER_UNIT[written.lower()]
     if "unitsPerRotation" in data:
         rotation_si: float | None = float(upr) * si_per_unit
     else:  # rows in the unit itself: a rotation is known only for angles

@@ -44,8 +44,18 @@ function shaftWords(details) {
 
 export function result(r) {
   const items = Array.isArray(r) ? r : [r];
-  return items.map((one) => el("div", { class: "result" },
-    parameterTable(one.parameters, shaftWords(one.details)),
-    one.warnings && one.warnings.length ? el("ul", { class: "warnings" }, one.warnings.map((w) => el("li", { text: plain(w) }))) : null,
-    diagnostics(one.fit)));
+  return items.map((one) => {
+    const left = ((one.details || {}).left_out || {}).text;  // said above the result, with "Put them back"
+    const warnings = (one.warnings || []).filter((w) => w !== left);
+    return el("div", { class: "result" },
+      parameterTable(one.parameters, shaftWords(one.details)),
+      warnings.length ? el("ul", { class: "warnings" }, warnings.map((w) => el("li", { text: plain(w) }))) : null,
+      diagnostics(one.fit));
+  });
+}
+
+// What a result says was left out of its log (time spans), or null.
+export function leftOut(r) {
+  const one = Array.isArray(r) ? r[0] : r;
+  return (one && one.details && one.details.left_out) || null;
 }

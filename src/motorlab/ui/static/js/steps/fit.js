@@ -6,7 +6,7 @@ import { save, state } from "../store.js";
 import { argvOf, appendValues, field, isShared } from "../fields.js";
 import { EXPERIMENT_WORDS, plain } from "../words.js";
 import * as plots from "../plots.js";
-import { result as resultView } from "../results.js";
+import { leftOut, result as resultView } from "../results.js";
 
 // Options shown at once (the others under "More options"), besides required, shared and needed ones.
 const PRIMARY = { spindown: ["inertia", "disc-radius", "disc-thickness", "ratio"], feedforward: ["mechanism"], torque: ["arm"], terminal: ["inertia"] };
@@ -168,18 +168,73 @@ function groupCard(ctx, key, files) {
   if (run && run.result) {
     const same = run.files.join("\n") === files.map((f) => f.name).join("\n");
     const left = files.reduce((n, f) => n + (f.excluded || []).length, 0);
-    card.append(el("h4", { text: `Result from ${run.files.join(", ")}${run.excluded ? ` (${run.excluded} point${run.excluded > 1 ? "s" : ""} left out)` : ""}` }));
+    const spans = leftOut(run.result);
+    const spanCount = spans ? spans.spans.length : 0;
+    const leftWords = run.excluded ? ` (${run.excluded} point${run.excluded > 1 ? "s" : ""} left out)`
+      : spanCount ? ` (${spanCount} time span${spanCount > 1 ? "s" : ""} left out)` : "";
+    card.append(el("h4", { text: `Result from ${run.files.join(", ")}${leftWords}` }));
     if (left) card.append(el("p", { class: "small" }, `${left} point${left > 1 ? "s are" : " is"} left out of the fit. `,
       el("button", { type: "button", class: "link", text: "Put them back", onclick: () => { for (const f of files) f.excluded = []; save(); runGroup(ctx, key, files); } })));
+    if (spans) card.append(el("p", { class: "small left-out" }, `${sentence(spans.text)} `,
+      el("button", { type: "button", class: "link", text: "Put them back", onclick: () => { values.exclude = ""; save(); runGroup(ctx, key, files); } })));
     if (!same) card.append(el("p", { class: "small", text: "The files have changed since this result: run the fit again to update it." }));
     card.append(...resultView(run.result));
     const host = el("div", { class: "plots" });
     const exclude = el("div", { class: "actions exclude" });
     const table = files.length === 1 && (files[0].info || {}).format === "csv";
-    card.append(table ? el("p", { class: "small", text: "To leave points out: pick the box or lasso tool above a plot, select the points, then fit again." }) : "", exclude, host);
-    requestAnimationFrame(() => plots.panels(host, run.panels, { onSelect: (panel, indices) => offerExclusion(ctx, key, files, panel, indices, exclude) }));
+    const timed = takesSpans(fields) && (run.panels || []).some((p) => (p.time || []).some((v) => v !== null));
+    const how = timed ? "To leave a stretch of the log out (the wheels slipping, a glitch): pick the box or lasso tool above a plot, select its points, then fit again."
+      : "To leave points out: pick the box or lasso tool above a plot, select the points, then fit again.";
+    card.append(table || timed ? el("p", { class: "small", text: how }) : "", exclude, host);
+    const command = (more) => commandBox(["analyze", exp, ...files.map((f) => f.name), ...columnRules(files).map((r) => `--column=${r}`),
+      ...argvOf(fields, { ...values, exclude: [values.exclude, more].filter(Boolean).join(", ") })]);
+    requestAnimationFrame(() => plots.panels(host, run.panels, { onSelect: (panel, indices) => {
+      if (timed && panel.time) offerSpans(ctx, key, files, spanChoice(panel, indices), exclude, command);
+      else offerExclusion(ctx, key, files, panel, indices, exclude);
+    } }));
   }
   return card;
+}
+
+const takesSpans = (fields) => fields.some((f) => f.name === "exclude");
+const sentence = (text) => `${text.charAt(0).toUpperCase()}${text.slice(1)}.`;
+
+// The time spans (in the log's own time) that the selected points cover: points closer than three sampling
+// steps are one span; each span reaches half a step beyond its outer points, rounded outwards.
+export function spanChoice(panel, indices) {
+  const time = panel.time || [];
+  const picked = indices.map((i) => time[i]).filter((v) => v !== null && v !== undefined).sort((a, b) => a - b);
+  if (!picked.length) return [];
+  const all = time.filter((v) => v !== null && v !== undefined).sort((a, b) => a - b);
+  const steps = all.slice(1).map((v, k) => v - all[k]).filter((d) => d > 0).sort((a, b) => a - b);
+  const step = steps.length ? steps[Math.floor(steps.length / 2)] : 0;
+  const groups = [];
+  for (const v of picked) {
+    const last = groups[groups.length - 1];
+    if (last && v - last[1] <= 3 * step) last[1] = v; else groups.push([v, v]);
+  }
+  const digits = Math.min(4, Math.max(1, Math.ceil(-Math.log10(Math.max(step, 1e-4)))));
+  const f = 10 ** digits;
+  return groups.map(([a, b]) => {
+    const [start, end] = [Math.floor((a - step / 2) * f) / f, Math.ceil((b + step / 2) * f) / f];
+    return { words: `${start.toFixed(digits)}–${end.toFixed(digits)} s`, value: `${start.toFixed(digits)}:${end.toFixed(digits)}` };
+  });
+}
+
+// Points selected on a long log's plot: leave their time span(s) out and fit again (the analysis cuts the log there).
+function offerSpans(ctx, key, files, spans, host, command) {
+  host.replaceChildren();
+  if (!spans.length) return;
+  const exp = files[0].experiment;
+  const values = (ctx.state.options[exp] = ctx.state.options[exp] || {});
+  const more = spans.map((s) => s.value).join(", ");
+  const words = spans.map((s) => s.words);
+  const said = words.length > 1 ? `${words.slice(0, -1).join(", ")} and ${words[words.length - 1]}` : words[0];
+  host.append(el("button", { type: "button", class: "primary", text: `Leave out ${said} and fit again`, onclick: () => {
+    values.exclude = [values.exclude, more].filter(Boolean).join(", ");
+    save();
+    runGroup(ctx, key, files);
+  } }), Object.assign(command(more), { open: true }));
 }
 
 // The data rows of a small table file (the points of its fit, one per row, when nothing was thinned).
