@@ -122,11 +122,16 @@ def population(dirs: list[Path]) -> None:
     from motorlab.analyses import _stall_fit
 
     runs = []
+    shipped = (_stall_fit.PRIOR_CASE_TIME_CONSTANT, _stall_fit.PRIOR_LOG_SIGMA)
     for path in sorted({p.name: p for d in dirs for p in d.glob("*-locked-rotor-data-*.csv")}.values()):
         rec = read_runs([str(path)])[0]
         if not np.any(np.asarray(rec["current"]) > 0):
             continue
-        full = stall(rec)
+        _stall_fit.PRIOR_LOG_SIGMA = math.inf  # the population from the runs alone: no prior (its weight is 0)
+        try:
+            full = stall(rec)
+        finally:
+            _stall_fit.PRIOR_LOG_SIGMA = shipped[1]
         row = full.details["runs"][0]
         if (row["cut (s)"] or float(rec.time[-1])) < 150.0 or "unexplained" in full.details:
             continue
@@ -139,7 +144,6 @@ def population(dirs: list[Path]) -> None:
           f"{np.exp(logs.mean()):.0f} s, a factor {np.exp(logs.std(ddof=1)):.2f} either way "
           f"(the prior used: {_stall_fit.PRIOR_CASE_TIME_CONSTANT:g} s, log sd {_stall_fit.PRIOR_LOG_SIGMA:g})")
     print("forecast from 120 s with the prior as shipped, and with the prior of the other motors only:")
-    shipped = (_stall_fit.PRIOR_CASE_TIME_CONSTANT, _stall_fit.PRIOR_LOG_SIGMA)
     with tempfile.TemporaryDirectory() as tmp:
         try:
             for path, rec, _ in runs:

@@ -308,7 +308,7 @@ def continuous_current(resistance: float, thermal: ThermalModel, rise: float = 1
 HEAT_WARNING_RISE = 10.0
 #: The network used for a log when the motor's own is not known: the catalogue's estimate for the
 #: 550-size motors of FTC gearmotors (``data/thermal.toml``, family ``can550``).
-DEFAULT_NETWORK = ThermalModel(winding_to_case=0.9, case_to_ambient=5.0, winding_capacity=20.0, case_capacity=150.0)
+DEFAULT_NETWORK = ThermalModel(winding_to_case=0.9, case_to_ambient=4.8, winding_capacity=20.0, case_capacity=48.0)
 
 
 #: Most bins :func:`log_rise` moves through the network (at 0.1 s, logs up to 1.4 h; longer ones get wider bins).

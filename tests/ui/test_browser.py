@@ -142,6 +142,16 @@ def _box_select(page: Any, x0: float, x1: float) -> None:
         .move_by_offset(int(right - left), height - 4).release().perform()
 
 
+def _on_a_phone(page: Any, shot: str) -> None:
+    """The same view at 390 px: checked and photographed, then back to the laptop."""
+    page.d.set_window_size(*browser.PHONE)
+    page.wait(lambda: page.d.execute_script("return document.documentElement.scrollWidth <= window.innerWidth"),
+              "the plots redrawn to the phone's width")  # Plotly follows the window's size a moment later
+    page.check()
+    page.shot(shot)
+    page.d.set_window_size(*browser.LAPTOP)
+
+
 def test_a_stretch_of_a_long_log_left_out_on_the_plot(page: Any, ramp: tuple[Path, float], tmp_path: Path) -> None:
     """A ramp whose dead wheels lifted for a second: selected on the plot, left out, fitted again, put back."""
     path, _ = ramp
@@ -170,6 +180,7 @@ def test_a_stretch_of_a_long_log_left_out_on_the_plot(page: Any, ramp: tuple[Pat
     assert any(flag in e.text for e in page.d.find_elements("css selector", "pre code")), flag  # the CLI form
     page.check()
     page.shot("ui-leave-out.png")
+    _on_a_phone(page, "ui-leave-out-phone.png")
     page.click("and fit again")
     page.wait_text("time span left out)")
     said = page.d.find_element("css selector", ".left-out").text
@@ -179,12 +190,7 @@ def test_a_stretch_of_a_long_log_left_out_on_the_plot(page: Any, ramp: tuple[Pat
     assert any(flag in e.get_attribute("textContent") for e in page.d.find_elements("css selector", "pre code"))
     page.check()
     page.shot("ui-left-out.png")
-    page.d.set_window_size(*browser.PHONE)
-    page.wait(lambda: page.d.execute_script("return document.documentElement.scrollWidth <= window.innerWidth"),
-              "the plots redrawn to the phone's width")  # Plotly follows the window's size a moment later
-    page.check()
-    page.shot("ui-left-out-phone.png")
-    page.d.set_window_size(*browser.LAPTOP)
+    _on_a_phone(page, "ui-left-out-phone.png")
     page.click("Put them back")
     page.wait(lambda: "left out)" not in page.text() and "Result from bumpy.json" in page.text(),
               "the whole log fitted again")

@@ -44,7 +44,7 @@ export function typedValues(fields, values) {
     const v = isShared(f.name) ? state.shared[f.name] : values[f.name];
     if (v === undefined || v === null || String(v).trim() === "") continue;
     // a repeatable option typed as a list ("12.5:14, 20:21"): one value each, as the command line repeats it
-    const items = f.repeatable && f.kind === "text" ? String(v).split(/[,;]/).map((x) => x.trim()).filter(Boolean) : [String(v).trim()];
+    const items = f.type === "spans" ? String(v).split(/[,;]/).map((x) => x.trim()).filter(Boolean) : [String(v).trim()];
     for (const item of items) out.push([f.name, item, f.kind]);
   }
   return out;
