@@ -164,3 +164,5 @@ def test_cli_takes_the_spans_and_an_analysis_without_time_refuses_them(tmp_path:
     assert lcr.returncode == 2
     assert lcr.stderr.count("\n") == 1
     assert "leave the rows out of a copy of the file" in lcr.stderr
+    with pytest.raises(OptionError, match="leave the rows out of a copy of the file"):  # the notebook's words
+        get("lcr").values({"exclude": "1:2"})

@@ -347,6 +347,48 @@ def residuals(gains: Gains, tests: Sequence[ScoreTest]) -> tuple[np.ndarray, np.
     return np.concatenate(rs), np.concatenate(rp)
 
 
+@dataclass(frozen=True)
+class _Simulation:
+    """The tests simulated at one point p = (kS, ln kV, ln kA): speed and position residuals (all rows),
+    their derivatives (3 × rows each) and the score."""
+
+    speed: np.ndarray
+    position: np.ndarray
+    d_speed: np.ndarray
+    d_position: np.ndarray
+    score: Score
+
+
+class _Simulations:
+    """The last few :class:`_Simulation` of :func:`fit_gains`, by point: a round of the reweighted fit
+    starts where the last one ended, with new weights on the same residuals (one simulation less a round)."""
+
+    KEEP = 3
+
+    def __init__(self, tests: Sequence[ScoreTest]):
+        self.tests = tests
+        self.norm = math.sqrt(sum(t.time.size for t in tests))
+        self.kept: dict[bytes, _Simulation] = {}
+
+    def at(self, p: np.ndarray) -> _Simulation:
+        key = np.asarray(p, dtype=float).tobytes()
+        if key in self.kept:
+            self.kept[key] = self.kept.pop(key)  # the most recently used is kept longest
+            return self.kept[key]
+        ks, kv, ka = (float(g) for g in _gains(p))
+        if not (kv > 0 and ka >= 0 and math.isfinite(ks)):
+            raise OptionError(f"the score needs kV > 0 and kA ≥ 0, got kS={ks:g}, kV={kv:g}, kA={ka:g}")
+        parts = [simulate_sensitivity(ks, kv, ka, test) for test in self.tests]
+        rs = np.concatenate([sp - t.velocity for (sp, _, _, _), t in zip(parts, self.tests, strict=True)])
+        rp = np.concatenate([po - t.position for (_, po, _, _), t in zip(parts, self.tests, strict=True)])
+        sim = _Simulation(rs, rp, np.concatenate([d for _, _, d, _ in parts], axis=1),
+                          np.concatenate([d for _, _, _, d in parts], axis=1), Score(rms(rs), rms(rp)))
+        if len(self.kept) >= self.KEEP:
+            del self.kept[next(iter(self.kept))]
+        self.kept[key] = sim
+        return sim
+
+
 class _Weighted:
     """The weighted residuals of :func:`fit_gains` in p = (kS, ln kV, ln kA) and their Jacobian.
 
@@ -355,32 +397,16 @@ class _Weighted:
     has just evaluated): one simulation per point instead of four (forward differences).
     """
 
-    def __init__(self, tests: Sequence[ScoreTest], ws: float, wp: float):
-        self.tests, self.ws, self.wp = tests, ws, wp
-        self.norm = math.sqrt(sum(t.time.size for t in tests))
-        self.at: np.ndarray | None = None
-        self.jacobian = np.zeros((0, 3))
-        self.scores: dict[bytes, Score] = {}
+    def __init__(self, sims: _Simulations, ws: float, wp: float):
+        self.sims, self.ws, self.wp = sims, ws, wp
 
     def fun(self, p: np.ndarray) -> np.ndarray:
-        gains = _gains(p)
-        ks, kv, ka = (float(g) for g in gains)
-        if not (kv > 0 and ka >= 0 and math.isfinite(ks)):
-            raise OptionError(f"the score needs kV > 0 and kA ≥ 0, got kS={ks:g}, kV={kv:g}, kA={ka:g}")
-        parts = [simulate_sensitivity(ks, kv, ka, test) for test in self.tests]
-        rs = np.concatenate([sp - t.velocity for (sp, _, _, _), t in zip(parts, self.tests, strict=True)])
-        rp = np.concatenate([po - t.position for (_, po, _, _), t in zip(parts, self.tests, strict=True)])
-        self.at = p.copy()
-        self.scores[p.tobytes()] = Score(rms(rs), rms(rp))
-        d_speed = np.concatenate([d for _, _, d, _ in parts], axis=1)
-        d_position = np.concatenate([d for _, _, _, d in parts], axis=1)
-        self.jacobian = np.concatenate([self.ws * d_speed, self.wp * d_position], axis=1).T / self.norm
-        return np.concatenate([self.ws * rs, self.wp * rp]) / self.norm
+        sim = self.sims.at(p)
+        return np.concatenate([self.ws * sim.speed, self.wp * sim.position]) / self.sims.norm
 
     def jac(self, p: np.ndarray) -> np.ndarray:
-        if self.at is None or not np.array_equal(self.at, p):
-            self.fun(p)
-        return self.jacobian
+        sim = self.sims.at(p)
+        return np.concatenate([self.ws * sim.d_speed, self.wp * sim.d_position], axis=1).T / self.sims.norm
 
 
 def score(gains: Gains, tests: Sequence[ScoreTest]) -> Score:
@@ -450,19 +476,20 @@ def fit_gains(
 
     best: tuple[float, np.ndarray, Score] | None = None
     nfev = 0
+    sims = _Simulations(tests)
     with progress.task("Fitting the open-loop gains", total=len(starts) * rounds, unit="rounds") as report:
         for number, start in enumerate(starts):
             report.update(number * rounds, detail=f"start {number + 1} of {len(starts)}")
             x = np.array([float(start[0]), math.log(max(start[1], 1e-9)), math.log(max(start[2], 1e-9))])
-            current = score(_gains(x), tests)
+            current = sims.at(x).score
             for _ in range(rounds):
                 report.advance()
                 ws, wp = 1.0 / max(current.speed, 1e-300), math.sqrt(position_weight) / max(current.position, 1e-300)
-                weighted = _Weighted(tests, ws, wp)
+                weighted = _Weighted(sims, ws, wp)
                 sol = least_squares(weighted.fun, x, jac=weighted.jac, max_nfev=60, ftol=1e-6, xtol=1e-6,
                                     x_scale=np.array([max(abs(x[0]), 0.05), 0.1, 0.3]))
                 nfev += int(sol.nfev)
-                new = weighted.scores.get(sol.x.tobytes()) or score(_gains(sol.x), tests)
+                new = sims.at(sol.x).score
                 if not _objective(new, position_weight) < _objective(current, position_weight) - 1e-5:
                     break
                 x, current = sol.x, new
@@ -481,10 +508,10 @@ def _hac(gains: np.ndarray, tests: Sequence[ScoreTest], sc: Score, weight: float
     from motorlab.fitting import hac_covariance
 
     ws, wp = 1.0 / sc.speed, math.sqrt(weight) / sc.position
-    weighted = _Weighted(tests, ws, wp)
-    p = np.array([gains[0], math.log(gains[1]), math.log(gains[2])])
-    r0 = weighted.fun(p) * weighted.norm
-    jac = weighted.jac(p) * weighted.norm / np.array([1.0, gains[1], gains[2]])  # d/d(ln g) = g·d/dg
+    sim = _Simulations(tests).at(np.array([gains[0], math.log(gains[1]), math.log(gains[2])]))
+    r0 = np.concatenate([ws * sim.speed, wp * sim.position])
+    jac = np.concatenate([ws * sim.d_speed, wp * sim.d_position], axis=1).T
+    jac /= np.array([1.0, gains[1], gains[2]])  # d/d(ln g) = g·d/dg
     sizes = [t.time.size for t in tests]
     labels = np.concatenate([np.full(n, i) for i, n in enumerate(sizes)] +
                             [np.full(n, len(sizes) + i) for i, n in enumerate(sizes)])

@@ -186,7 +186,8 @@ def test_a_running_session_shows_its_units_then_its_table_before_its_report(page
 
 
 def test_typing_goes_on_while_a_result_arrives(page: Any, sim_session: Path) -> None:
-    """A fit's result arriving redraws the view: the field being typed in keeps its focus, caret and text."""
+    """A fit's result arriving redraws the view: the field being typed in keeps its focus, caret and text, an
+    opened section stays open."""
     page.open(browser.LAPTOP)
     page.click("Tune a mechanism")
     page.upload("Choose or drop your files", sim_session / "A" / "spindown.txt")
@@ -203,6 +204,7 @@ def test_typing_goes_on_while_a_result_arrives(page: Any, sim_session: Path) -> 
         };""")
     page.click("Run the fit")
     page.click("Gains")
+    page.click("More settings")  # a section opened before the redraw stays open
     box = page.field("Type the winding resistance")
     box.click()
     box.send_keys("1.2")
@@ -210,6 +212,8 @@ def test_typing_goes_on_while_a_result_arrives(page: Any, sim_session: Path) -> 
     assert "spindown.txt (" not in page.text()  # no result yet
     page.d.execute_script("window.__release()")
     page.wait_text("spindown.txt (")  # the result arrived: the view was drawn again
+    assert page.d.execute_script(
+        "return [...document.querySelectorAll('details')].some(d => d.open && d.textContent.includes('More settings'))")
     typing = page.d.switch_to.active_element
     assert "winding resistance" in page.d.execute_script("return arguments[0].labels[0].textContent", typing).lower()
     assert typing.get_attribute("value") == "1.2"

@@ -56,12 +56,9 @@ class Parser(argparse.ArgumentParser):
 
 
 def _exclude_hint() -> str:
-    """What to do when an analysis without time spans is given ``--exclude``."""
-    from motorlab.experiments import all_experiments
+    from motorlab.experiments import exclude_hint
 
-    takes = [name for name, exp in all_experiments().items() if any(o.kind == "spans" for o in exp.options)]
-    return (f"time spans are left out by analyze {', '.join(sorted(takes))} only (a log with a time axis); "
-            "for another analysis, leave the rows out of a copy of the file")
+    return exclude_hint()
 
 
 def finite_number(text: str) -> float:

@@ -279,6 +279,8 @@ class Experiment:
         for opt in self.options:
             if keyword in opt.keywords or keyword == opt.name:
                 return opt
+        if keyword == "exclude":  # time spans: only the analyses of logs with a time axis take them
+            raise OptionError(f"{self.name}: {exclude_hint()}")
         known = ", ".join(opt.key for opt in self.options)
         raise OptionError(f"{self.name}: unknown option {keyword!r}; known: {known}")
 
@@ -388,6 +390,13 @@ def command_options(command: str) -> tuple[Option, ...]:
 
         return _commands.tune_options(TARGETS)
     return {"characterize": _commands.CHARACTERIZE_OPTIONS}[command]
+
+
+def exclude_hint() -> str:
+    """What to do when an analysis that takes no time spans is given some (``--exclude``)."""
+    takes = [name for name, exp in all_experiments().items() if any(o.kind == "spans" for o in exp.options)]
+    return (f"time spans are left out by analyze {', '.join(sorted(takes))} only (a log with a time axis); "
+            "for another analysis, leave the rows out of a copy of the file")
 
 
 def stderr_or_none(est: Estimate) -> float | None:

@@ -51,7 +51,8 @@ function describe(node) {
 const textual = (node) => node.tagName === "TEXTAREA" || (node.tagName === "INPUT" && /^(text|search|number|email|url|tel|password|)$/.test(node.type));
 
 // Redraw `root` with draw() and give the person back what they were doing: the focused control (found again
-// by its description), its caret and selection, and what they had typed into it but not yet committed.
+// by its description), its caret and selection, what they had typed into it but not yet committed, the
+// sections they had opened and where they had scrolled to.
 export function keepFocus(root, draw) {
   const active = document.activeElement;
   let kept = null;
@@ -61,13 +62,18 @@ export function keepFocus(root, draw) {
     kept = { key, tag: active.tagName, index: twins.indexOf(active), textual: textual(active), value: active.value,
       start: textual(active) ? active.selectionStart : null, end: textual(active) ? active.selectionEnd : null };
   }
+  // the sections the person opened ("More options for this fit") stay open
+  const summaryOf = (d) => { const s = d.querySelector(":scope > summary"); const place = d.closest("[data-group], [data-file]");
+    return `${s ? s.textContent.trim() : ""}|${place ? place.getAttribute("data-group") || place.getAttribute("data-file") : ""}`; };
+  const opened = [...root.querySelectorAll("details[open]")].map(summaryOf);
   const scroll = [window.scrollX, window.scrollY];
   // Chromium fires blur and change at a focused field taken out of the page: they must not commit half a number
   const swallow = (e) => { if (kept && e.target === active) e.stopImmediatePropagation(); };
   const types = ["change", "blur", "focusout"];
   for (const type of types) window.addEventListener(type, swallow, true);
   try { draw(); } finally { setTimeout(() => { for (const type of types) window.removeEventListener(type, swallow, true); }, 0); }
-  if (!kept) return;
+  for (const d of root.querySelectorAll("details:not([open])")) if (opened.includes(summaryOf(d))) d.open = true;
+  if (!kept) { window.scrollTo(...scroll); return; }
   const twins = [...root.querySelectorAll(kept.tag)].filter((n) => describe(n) === kept.key);
   const again = twins[kept.index] || (twins.length === 1 ? twins[0] : null);
   if (!again) return;
