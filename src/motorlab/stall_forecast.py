@@ -67,7 +67,7 @@ def load_fit(path: str | Path) -> StallModel:
     params, details = doc.get("parameters", {}), doc.get("details", {})
     if isinstance(details, dict) and details.get("unexplained"):
         raise InputError("no forecast from this fit: heating does not explain the run it was fitted to (its "
-                         "resistance rose more than its heat allows: brush contact, see the fit's warnings); fit a "
+                         "resistance does not move as its heat makes it: brush contact, see the fit's warnings); fit a "
                          "healthy run with 'motorlab analyze stall'", path=str(path))
 
     def value(name: str) -> float:

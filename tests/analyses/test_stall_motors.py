@@ -236,3 +236,26 @@ def test_forecast_of_other_motors_runs_from_their_first_120_s(tmp_path: Path, na
     pred = np.interp(rec.time[later] - rec.time[0], out.time, out.current)
     measured = rec["current"][later]
     assert math.sqrt(float(np.mean(((pred - measured) / measured) ** 2))) < 0.05
+
+
+def test_a_slow_start_heat_does_not_make_is_flagged_not_forecast(tmp_path: Path) -> None:
+    """The CIM's 4 V run: R flat for its first seconds under 165 W, then rising faster. Its first 120 s need a
+    winding slower than its case (R_wc·C_w ~530 s against R_ca·C_c ~186 s), which no motor has: flagged with the
+    figures and brush contact, and `simulate stall` refuses to forecast from it (it would miss by 10.5 %)."""
+    import json
+
+    from motorlab.errors import InputError
+    from motorlab.stall_forecast import load_fit
+
+    rec = read_runs([_dyno("cim-locked-rotor-data-4v-20151104.csv")])[0]
+    fit = stall(rec, until=120.0)
+    why = fit.details["unexplained"]
+    assert "slower to reach its case" in why
+    assert "brush contact" in why
+    assert "165 W" in why
+    assert not fit["R_ca"].determined
+    (tmp_path / "fit.json").write_text(json.dumps(fit.to_dict()))
+    with pytest.raises(InputError, match="no forecast"):
+        load_fit(tmp_path / "fit.json")
+    # the whole run is one heating explains (its network is a motor's), and the fit of the others is untouched
+    assert "unexplained" not in stall(rec).details
