@@ -166,3 +166,26 @@ def test_cli_takes_the_spans_and_an_analysis_without_time_refuses_them(tmp_path:
     assert "leave the rows out of a copy of the file" in lcr.stderr
     with pytest.raises(OptionError, match="leave the rows out of a copy of the file"):  # the notebook's words
         get("lcr").values({"exclude": "1:2"})
+
+
+def test_a_session_leaves_spans_out_and_refuses_them_where_no_analysis_takes_them(tmp_path: Path) -> None:
+    from motorlab.characterize import characterize
+    from motorlab.errors import SessionError
+    from motorlab.session import load_session
+    from motorlab.simulated_session import write_simulated_session
+
+    write_simulated_session("neverest40", out_dir=tmp_path, units=1, seed=5, experiments=("lcr", "spindown"))
+    toml = tmp_path / "session.toml"
+    text = toml.read_text()
+    spindown = 'files = ["A/spindown.txt"]'
+    toml.write_text(text.replace(spindown, f'{spindown}\nexclude = ["40:41", "45:45.5"]'))
+    done = characterize(load_session(toml), control=False, figures=False)
+    fit = done.units["A"].fits["spindown"]
+    assert fit.details["left_out"]["spans"] == [[40.0, 41.0], [45.0, 45.5]]
+    assert fit.warnings[0].startswith("2 time spans left out, 1.50 s,")
+    toml.write_text(text.replace('files = ["A/lcr.csv"]', 'files = ["A/lcr.csv"]\nexclude = "1:2"'))
+    with pytest.raises(SessionError, match="leave the rows out of a copy of the file"):
+        load_session(toml)
+    toml.write_text(text.replace(spindown, f'{spindown}\nexclude = "2:1"'))
+    with pytest.raises(SessionError, match="ends before it starts"):
+        load_session(toml)

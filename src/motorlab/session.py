@@ -61,6 +61,7 @@ from motorlab.io._text import (
     read_bytes,
 )
 from motorlab.plan import MATERIALS, disc_inertia
+from motorlab.timespans import setting_spans
 from motorlab.units import format_unit, parse_quantity
 
 #: Densities of flywheel materials [kg/m³]: the one table of :mod:`motorlab.plan`.
@@ -686,6 +687,11 @@ def _read_experiment(unit: _Table, name: str, folder: Path, rig: RigSpec) -> Exp
     columns = _read_columns(table)
     if columns:
         settings["columns"] = columns
+    if table.has("exclude"):  # time spans to leave out of the log (motorlab.timespans)
+        try:
+            settings["exclude"] = setting_spans(table.raw("exclude"), experiment=name)
+        except OptionError as exc:
+            raise table.error("exclude", exc.message) from None
     for key, (kind, _description) in EXPERIMENT_SETTINGS[name].items():
         if not table.has(key):
             table.known.append(key)

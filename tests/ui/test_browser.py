@@ -187,6 +187,9 @@ def test_a_stretch_of_a_long_log_left_out_on_the_plot(page: Any, ramp: tuple[Pat
     assert re.match(r"1 time span left out, [0-9.]+ s, \d+ samples", said), said
     kv, err = _kv(page)
     assert abs(kv - true_kv) < 3 * err + 0.0005, (kv, err, true_kv)
+    page.wait(lambda: page.d.execute_script(  # the span is shaded on the plots against the log's time
+        "return [...document.querySelectorAll('.plots svg text')].some(t => t.textContent === 'left out')"),
+        "the span shaded on the plots")
     assert any(flag in e.get_attribute("textContent") for e in page.d.find_elements("css selector", "pre code"))
     page.check()
     page.shot("ui-left-out.png")

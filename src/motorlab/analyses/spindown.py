@@ -549,6 +549,7 @@ def _panels(t: np.ndarray, theta: np.ndarray, model_theta: np.ndarray, x: np.nda
             "Coast: speed", "time [s]", "speed [rad/s]",
             data=Series(mid[ok], fd_speed, "finite-difference speed (display only; not fitted)"),
             model=Series(mid[ok], common.coast_speed(mid[ok] - t[0], x[1], x[2], x[3]), "model", kind="model"),
+            time=mid[ok],  # a difference of two samples: selected, both go
         )
     )
     if voltage is not None:
@@ -565,7 +566,7 @@ def _panels(t: np.ndarray, theta: np.ndarray, model_theta: np.ndarray, x: np.nda
             Panel(
                 "Back-EMF", "model speed [rad/s]", "bus voltage [V]",
                 data=Series(omega[order], voltage[order], "INA219 bus voltage"),
-                model=Series(omega[order], k * omega[order], "V = K·ω", kind="model"),
+                model=Series(omega[order], k * omega[order], "V = K·ω", kind="model"), time=t[order],
             )
         )
 

@@ -360,7 +360,7 @@ def _panels(phase: _Phase, model_theta: np.ndarray, x_full: np.ndarray, mode: st
         Panel("Spin-up: speed", "time [s]", "speed [rad/s]",
               data=Series(mid[ok], np.diff(theta)[ok] / dt[ok], "finite-difference speed (display only)"),
               model=Series(mid[ok], common.ramp_speed(mid[ok] - t[0], x_full[1], *_rates(x_full, mode)), "model",
-                           kind="model")),
+                           kind="model"), time=mid[ok]),
         Panel("Spin-up: current", "time [s]", "current [A]", data=Series(t, phase.i_samples, "shunt current"),
               model=Series(t, np.full_like(t, phase.i_mean), "mean", kind="model"), time=t),
     ]

@@ -60,7 +60,8 @@ def characterize(ctx: Any) -> Any:
     # the session's cpr is not applied to it. Both sides of a drivetrain are fitted.
     json_only = all(p.lower().endswith(".json") for p in ctx.files)
     runs = read_tests(list(ctx.files), cpr=None if json_only else cpr)
-    result = feedforward(runs, cpr=None if json_only else cpr)
+    runs, left = without_spans(runs, {"exclude": ctx.setting("exclude")}, split=True)
+    result = noted(feedforward(runs, cpr=None if json_only else cpr), left)
     r, k = ctx.estimate("R"), ctx.estimate("K")
     if r is not None:
         result.parameters.update(

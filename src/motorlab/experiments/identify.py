@@ -55,12 +55,22 @@ def run(paths: list[str], v: dict[str, Any]) -> Any:
 
 def characterize(ctx: Any) -> Any:
     """The session's logs; without current, R and K come from what the unit has measured."""
-    from motorlab.identify import identify, read_runs
+    from motorlab.identify import read_runs
 
     cpr = ctx.cpr
-    runs = read_runs(ctx.files, cpr=cpr)
+    runs, left = without_spans(read_runs(ctx.files, cpr=cpr), {"exclude": ctx.setting("exclude")}, split=True)
+    heat = str(ctx.setting("thermal") or "").strip()
+    if left is not None and heat and heat.lower() not in ("no", "false"):
+        raise OptionError("time spans cannot be left out of a fit of the winding's temperature (the heat of the "
+                          "whole log warms it): remove exclude or thermal from this experiment's table")
+    return noted(_identify_session(ctx, runs, cpr, heat), left)
+
+
+def _identify_session(ctx: Any, runs: list[Any], cpr: Any, heat: str) -> Any:
+    from motorlab.identify import identify
+
     if all(run.has("current") for run in runs):
-        heat = str(ctx.setting("thermal") or "").strip()  # "yes", or the catalogue motor whose figures to use
+        # heat: "yes", or the catalogue motor whose figures to use
         return identify(runs, cpr=cpr, thermal=bool(heat) and heat.lower() not in ("no", "false"),
                         motor=None if heat.lower() in ("", "yes", "true", "no", "false") else heat,
                         initial_temperature=ctx.setting("initial_temperature"))

@@ -27,8 +27,10 @@ def characterize(ctx: Any) -> Any:
     from motorlab.analyses.spindown import spindown
 
     recording = common.read_position_log(ctx.files, cpr=ctx.cpr)
+    (recording,), left = without_spans([recording], {"exclude": ctx.setting("exclude")}, split=False)
     inertia, inertia_se = ctx.loaded_inertia()
-    return spindown(recording, cpr=ctx.cpr, inertia=inertia, inertia_stderr=inertia_se, cutoff=ctx.setting("cutoff"))
+    return noted(spindown(recording, cpr=ctx.cpr, inertia=inertia, inertia_stderr=inertia_se,
+                          cutoff=ctx.setting("cutoff")), left)
 
 
 EXPERIMENT = Experiment(

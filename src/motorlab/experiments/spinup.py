@@ -46,6 +46,7 @@ def characterize(ctx: Any) -> Any:
     if ctx.session.rig.flywheel is None:  # the session validation refuses this; kept for library callers
         raise OptionError("the spin-up needs the flywheel's inertia: add [rig.flywheel]")
     recording = common.read_position_log(ctx.files, cpr=ctx.cpr)
+    (recording,), left = without_spans([recording], {"exclude": ctx.setting("exclude")}, split=False)
     inertia, inertia_se = ctx.loaded_inertia()
     assert inertia is not None  # a flywheel was checked above
     friction = ctx.motoring_friction()
@@ -59,9 +60,10 @@ def characterize(ctx: Any) -> Any:
             "equal): the coasting flywheel back-drives the gearbox and sees the motor's friction ÷ η, the motor "
             "driving it passes only η of it; this K is the output's Kt = η·Ke (docs/gearbox.md)"
         )
-        return fit
-    return spinup(recording, inertia=inertia, inertia_stderr=inertia_se, cpr=ctx.cpr,
-                  spindown_result=ctx.fits.get("spindown"), start=ctx.setting("start"), end=ctx.setting("end"))
+        return noted(fit, left)
+    return noted(spinup(recording, inertia=inertia, inertia_stderr=inertia_se, cpr=ctx.cpr,
+                        spindown_result=ctx.fits.get("spindown"), start=ctx.setting("start"), end=ctx.setting("end")),
+                 left)
 
 
 EXPERIMENT = Experiment(

@@ -33,8 +33,13 @@ export function raw(host, item) {
   figure(host, `${item.file}: the signals as read`, traces, layout);
 }
 
-// Data against the fitted model, residuals below. onSelect(points) gets the points picked with the box/lasso tool.
-export function panels(host, list, { onSelect } = {}) {
+// The x axis is the log's own time when each point's x is its time: spans left out can be shaded on it.
+const againstLogTime = (p) => p.data && p.time && p.time.length === p.data.x.length
+  && p.data.x.every((x, k) => x === null || p.time[k] === null || Math.abs(x - p.time[k]) < 1e-9);
+
+// Data against the fitted model, residuals below. onSelect(points) gets the points picked with the box/lasso tool;
+// `leftOut` (spans [start, end] of the log's time) are shaded on plots against that time.
+export function panels(host, list, { onSelect, leftOut = [] } = {}) {
   host.replaceChildren();
   for (const p of list || []) {
     const traces = [];
@@ -50,6 +55,12 @@ export function panels(host, list, { onSelect } = {}) {
       layout.yaxis.domain = [0.34, 1];
       layout.xaxis2 = { matches: "x", anchor: "y2", title: { text: p.x_label } };
       layout.yaxis2 = { domain: [0, 0.26], title: { text: "residual" }, anchor: "x2" };
+    }
+    if (leftOut.length && againstLogTime(p)) {
+      layout.shapes = leftOut.map(([x0, x1]) => ({ type: "rect", xref: "x", yref: "paper", x0, x1, y0: 0, y1: 1,
+        fillcolor: "#d33", opacity: 0.08, line: { width: 0 }, layer: "below" }));
+      layout.annotations = leftOut.map(([x0, x1]) => ({ xref: "x", yref: "paper", x: (x0 + x1) / 2, y: 1, yanchor: "bottom",
+        text: "left out", showarrow: false, font: { ...FONT, color: "#a33" } }));
     }
     const div = figure(host, p.title, traces, layout);
     // the measured points and their residuals share indices: a selection on either names the same rows

@@ -188,8 +188,9 @@ function groupCard(ctx, key, files) {
     card.append(table || timed ? el("p", { class: "small", text: how }) : "", exclude, host);
     const command = (more) => commandBox(["analyze", exp, ...files.map((f) => f.name), ...columnRules(files).map((r) => `--column=${r}`),
       ...argvOf(fields, { ...values, exclude: [values.exclude, more].filter(Boolean).join(", ") })]);
-    requestAnimationFrame(() => plots.panels(host, run.panels, { onSelect: (panel, indices) => {
+    requestAnimationFrame(() => plots.panels(host, run.panels, { leftOut: spans ? spans.spans : [], onSelect: (panel, indices) => {
       if (timed && panel.time) offerSpans(ctx, key, files, spanChoice(panel, indices), exclude, command);
+      else if (timed) exclude.replaceChildren(el("p", { class: "small", text: "This plot's points are not samples of the log: select the stretch to leave out on a plot against time." }));
       else offerExclusion(ctx, key, files, panel, indices, exclude);
     } }));
   }
