@@ -127,15 +127,16 @@ def population(dirs: list[Path]) -> None:
         rec = read_runs([str(path)])[0]
         if not np.any(np.asarray(rec["current"]) > 0):
             continue
-        _stall_fit.PRIOR_LOG_SIGMA = math.inf  # the population from the runs alone: no prior (its weight is 0)
-        try:
-            full = stall(rec)
-        finally:
-            _stall_fit.PRIOR_LOG_SIGMA = shipped[1]
+        full = stall(rec)
         row = full.details["runs"][0]
         if (row["cut (s)"] or float(rec.time[-1])) < 150.0 or "unexplained" in full.details:
             continue
-        r_ca, c_c = full["R_ca"], full["C_c"]
+        _stall_fit.PRIOR_LOG_SIGMA = math.inf  # the population from the runs alone: no prior (its weight is 0)
+        try:
+            alone = stall(rec)
+        finally:
+            _stall_fit.PRIOR_LOG_SIGMA = shipped[1]
+        r_ca, c_c = alone["R_ca"], alone["C_c"]
         runs.append((path, rec, r_ca.value * c_c.value if r_ca.determined else None))
     known = [(_motor(p), math.log(tc)) for p, _, tc in runs if tc is not None]
     logs = np.array([v for _, v in known])

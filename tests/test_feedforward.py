@@ -436,3 +436,42 @@ def test_cli_arm_on_a_distance_is_one_line_error(tmp_path, capsys):
     lift = _analyze_json(capsys, str(path), "--mechanism", "elevator")  # a distance suits an elevator
     assert lift["parameters"]["kV"]["unit"] == "V*s/m"
     assert lift["fit"]["rmse_unit"] == "m"
+
+
+def test_initial_speed_columns_simulate_their_own_run_only():
+    """The motor-model fit's Jacobian column of a run's initial speed re-simulates that run alone: the
+    same column, to the bit, as re-simulating every run (the others' residuals do not move)."""
+    from motorlab import _oe
+    from motorlab.feedforward import (
+        FeedforwardModel,
+        _bounds,
+        _checked_recordings,
+        _prepare,
+        _stale_frames,
+        noise_levels,
+        regression_start,
+    )
+
+    recs = []
+    for rec in sysid_tests(3):  # the steps logged from 0.3 s on: those runs start moving
+        keep = slice(30, None) if "fast" in rec.source else slice(None)
+        recs.append(Recording(rec.time[keep], {k: rec[k][keep] for k in ("voltage", "position", "counts")},
+                              metadata=rec.metadata, source=rec.source))
+    recs = _checked_recordings(recs, mechanism="simple", cpr=None)
+    logs, _ = _prepare(recs, cpr=None, with_current=False)
+    period = _stale_frames(logs, "simple")
+    p0 = regression_start(logs, "simple", lag=0.5 * period)
+    lower, upper, scale = _bounds(p0, logs)
+    problem = _oe._Problem(FeedforwardModel("simple", lag=0.5 * period), logs, np.clip(p0, lower, upper),
+                           lower=lower, upper=upper, scale=scale, sigma=noise_levels(logs, with_current=False))
+    assert len(problem.speed_logs) == 2  # the two steps start spinning: there are such columns
+    z = problem.z0
+    jac = problem.jac(z)
+    r0 = problem.fun(z)
+    first = problem.n_model + len(logs)
+    for j in range(first, z.size):
+        h = 1e-6 * max(abs(z[j]), 1.0)
+        zj = z.copy()
+        zj[j] += h
+        full = (problem.residual_parts(*problem.unpack(zj))[0] - r0) / h
+        np.testing.assert_array_equal(jac[:, j], full)

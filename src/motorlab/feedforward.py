@@ -628,8 +628,9 @@ def read_tests(paths: list[str], *, cpr: float | None, side: str = "both", units
 
     runs: list[Recording] = []
     for path in paths:
-        if mio.detect_format(path) in ("sysid-json", "frc-char-json"):
-            parts = mio.read_any(path, side=side, units=units).split()
+        fmt = mio.detect_format(path)
+        if fmt in ("sysid-json", "frc-char-json"):  # (its reader directly: a large file is not detected twice)
+            parts = mio.READERS[fmt](path, side=side, units=units).split()
             if cpr is not None:
                 apply_cpr(parts, cpr)
             runs.extend(parts)

@@ -20,6 +20,7 @@ import numpy as np
 from motorlab.errors import InputError, OptionError
 from motorlab.thermal import (
     WINDING_LIMIT,
+    StallRun,
     ThermalModel,
     continuous_current,
     stall_response,
@@ -46,6 +47,10 @@ class StallModel:
     source: str = ""
     #: R_ca came from the fit's prior on the case's time constant (the run was too short to tell it).
     case_loss_from_prior: bool = False
+    #: The brushes' contact at the end of the fitted run (``details["brush_contact"]`` of a lone run's fit): the
+    #: resistance [Ω] the heating model did not account for then, the time it was measured at [s] and the run's
+    #: set point [V]. A forecast that continues the run (at that voltage, from its start) holds it on from there.
+    contact: dict[str, float] = field(default_factory=dict)
 
 
 def load_fit(path: str | Path) -> StallModel:
@@ -94,7 +99,16 @@ def load_fit(path: str | Path) -> StallModel:
                       "magnets' coefficient applied" in note,
                       float(details.get("initial_temperature_C") or thermal.ambient_temperature),
                       float(details.get("max_winding_temperature_C") or math.inf), str(path),
-                      bool(r_ca) and not r_ca.get("determined", True))
+                      bool(r_ca) and not r_ca.get("determined", True), _contact(details.get("brush_contact")))
+
+
+def _contact(entry: Any) -> dict[str, float]:
+    """The brushes' contact of a fit file (empty when absent or not numbers)."""
+    keys = ("resistance_ohm", "from_s", "voltage_V", "relative")
+    if not isinstance(entry, dict) or not all(isinstance(entry.get(k), int | float) for k in keys):
+        return {}
+    out = {k: float(entry[k]) for k in keys}
+    return out if all(math.isfinite(v) for v in out.values()) else {}
 
 
 @dataclass
@@ -139,7 +153,9 @@ def forecast(model: StallModel, voltage: float, duration: float, *, initial_temp
     n = math.floor(duration / sample_interval + 1e-9)
     t = np.append(np.arange(n + 1) * sample_interval, duration) if n * sample_interval < duration else (
         np.arange(n + 1) * sample_interval)
-    run = stall_response(model.resistance, model.thermal, t, np.full(t.size, float(voltage)), winding=t0)
+    contact = model.contact if initial_temperature is None and model.contact and abs(
+        voltage - model.contact["voltage_V"]) <= 0.01 * model.contact["voltage_V"] else {}
+    run = _response(model, t, float(voltage), t0, contact)
     if math.isfinite(model.torque_constant):
         beta = model.thermal.magnet_coefficient if model.magnet_applied else 0.0
         torque = model.torque_constant * (1 + beta * (run.case_temperature - 25.0)) * run.current + model.torque_offset
@@ -152,11 +168,33 @@ def forecast(model: StallModel, voltage: float, duration: float, *, initial_temp
         out.warnings.append(f"the forecast reaches {hottest:.0f} °C, {hottest - model.hottest:.0f} K beyond the "
                             f"hottest winding temperature the fit saw ({model.hottest:.0f} °C): extrapolated")
     if model.case_loss_from_prior:
-        out.warnings.append(_case_loss_band(model, t, voltage, t0, run.current))
+        out.warnings.append(_case_loss_band(model, t, voltage, t0, run.current, contact))
+    if contact and abs(contact["relative"]) >= 0.01 and t[-1] > contact["from_s"]:
+        out.warnings.append(
+            f"the fitted run's resistance ended {100 * contact['relative']:+.1f} % "
+            f"({1e3 * contact['resistance_ohm']:+.3g} mΩ) off the heating model over its last seconds (to "
+            f"{contact['from_s']:.0f} s): the brushes' contact, which moves in steps heat does not make; the forecast "
+            "holds it on from there (not at another voltage or start)")
     if limit > model.hottest + 1:
         out.warnings.append(f"the time to {limit:g} °C extrapolates the fit {limit - model.hottest:.0f} K beyond the "
                             f"hottest winding temperature it saw ({model.hottest:.0f} °C)")
     return out
+
+
+def _response(model: StallModel, t: np.ndarray, voltage: float, t0: float, contact: dict[str, float]) -> StallRun:
+    """The stall of the fitted model at ``voltage`` from ``t0``; with ``contact``, its resistance in series from
+    the time it was measured at (the run continued as it ended)."""
+    volts = np.full(t.size, voltage)
+    if not contact or t[-1] <= contact["from_s"]:
+        return stall_response(model.resistance, model.thermal, t, volts, winding=t0)
+    k = int(np.searchsorted(t, contact["from_s"]))
+    first = stall_response(model.resistance, model.thermal, t[: k + 1], volts[: k + 1], winding=t0)
+    rest = stall_response(model.resistance, model.thermal, t[k:], volts[k:],
+                          winding=float(first.winding_temperature[-1]), case=float(first.case_temperature[-1]),
+                          series_resistance=contact["resistance_ohm"])
+    return replace(rest, time=t, current=np.concatenate([first.current[:k], rest.current]),
+                   winding_temperature=np.concatenate([first.winding_temperature[:k], rest.winding_temperature]),
+                   case_temperature=np.concatenate([first.case_temperature[:k], rest.case_temperature]))
 
 
 #: The spread of the prior on the case's time constant (a factor either way), as the fit uses it (the
@@ -164,14 +202,14 @@ def forecast(model: StallModel, voltage: float, duration: float, *, initial_temp
 CASE_PRIOR_FACTOR = 1.5
 
 
-def _case_loss_band(model: StallModel, t: np.ndarray, voltage: float, t0: float, current: np.ndarray) -> str:
+def _case_loss_band(model: StallModel, t: np.ndarray, voltage: float, t0: float, current: np.ndarray,
+                    contact: dict[str, float]) -> str:
     """What the forecast's current would be at its end with the case's loss to ambient R_ca a factor
     :data:`CASE_PRIOR_FACTOR` either way (the fit took R_ca from a prior: its runs were too short)."""
     ends = []
     for factor in (1 / CASE_PRIOR_FACTOR, CASE_PRIOR_FACTOR):
         th = replace(model.thermal, case_to_ambient=model.thermal.case_to_ambient * factor)
-        ends.append(float(stall_response(model.resistance, th, t, np.full(t.size, float(voltage)), winding=t0)
-                          .current[-1]))
+        ends.append(float(_response(replace(model, thermal=th), t, float(voltage), t0, contact).current[-1]))
     return (f"the case's loss to ambient (R_ca = {model.thermal.case_to_ambient:.3g} K/W) was not determined by the "
             f"fitted run, too short for the case to settle (a prior on the case's time constant, or a bound, set it): "
             f"with R_ca {CASE_PRIOR_FACTOR:g} times smaller or larger the current at {float(t[-1]):.0f} s would be "

@@ -171,7 +171,7 @@ class StallRun:
 
 def stall_response(
     resistance: float, thermal: ThermalModel, time: np.ndarray, voltage: np.ndarray, *,
-    winding: float, case: float | None = None, current_limit: float | None = None,
+    winding: float, case: float | None = None, current_limit: float | None = None, series_resistance: float = 0.0,
 ) -> StallRun:
     """Current and temperatures of a stalled motor under held terminal voltages.
 
@@ -189,6 +189,9 @@ def stall_response(
         Initial temperatures [°C] (``case`` defaults to ``winding``: a motor at rest long enough).
     current_limit
         A supply's current limit [A]: beyond it the current is held at the limit (constant current).
+    series_resistance
+        A resistance in series with the winding that does not follow its temperature [Ω] (the brushes'
+        contact, as a forecast carries it on from a fitted run); its heat is counted with the winding's.
 
     Notes
     -----
@@ -212,11 +215,11 @@ def stall_response(
     n = t_arr.size
     cur, tws, tcs = [0.0] * n, [0.0] * n, [0.0] * n
     limit = math.inf if current_limit is None else float(current_limit)
-    r25, tref = float(resistance), REFERENCE_TEMPERATURE
+    r25, tref, rs = float(resistance), REFERENCE_TEMPERATURE, float(series_resistance)
     for k in range(n):
         tw = ta + w00 * z1 + w01 * z2
         tc = ta + w10 * z1 + w11 * z2
-        r = r25 * (1.0 + alpha * (tw - tref))
+        r = r25 * (1.0 + alpha * (tw - tref)) + rs
         i = v[k] / r
         if i > limit:
             i = limit
@@ -225,7 +228,7 @@ def stall_response(
             break
         h, a1, a2, b1, b2 = next(steps)
         tw_mid = tw + 0.5 * h * (i * i * r - (tw - tc) / rwc) / cw
-        r_mid = r25 * (1.0 + alpha * (tw_mid - tref))
+        r_mid = r25 * (1.0 + alpha * (tw_mid - tref)) + rs
         i_mid = v[k] / r_mid
         if i_mid > limit:
             i_mid = limit

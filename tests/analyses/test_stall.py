@@ -249,7 +249,7 @@ HEALTHY = ["am-9015-locked-rotor-data-2v-20151210.csv", "am-9015-locked-rotor-da
 @pytest.mark.parametrize("name", HEALTHY)
 def test_forecast_from_the_first_120_s_within_5_percent(tmp_path: Path, name: str) -> None:
     """Fitted on a healthy run's first 120 s, the forecast meets the measured current over the rest within 5 % RMS
-    (the mini-CIM's 4 V run: 4.0 % with the population's prior on the case, 5.9 % with the old 800 s one)."""
+    (the mini-CIM's 4 V run: 3.9 % with the population's prior on the case, 5.9 % with the old 800 s one)."""
     rec = read_runs([str(REAL / name)])[0]
     fit = stall(rec, until=120.0)
     row = fit.details["runs"][0]
