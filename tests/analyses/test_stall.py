@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 import json
-import math
 from pathlib import Path
 
 import numpy as np
 import pytest
+from tests.analyses._forecast import forecast_rms
 from tests.conftest import find_dyno_dir
 
 from motorlab.analyses.stall import stall
@@ -207,25 +207,6 @@ def test_every_other_real_run_alone_is_explained_by_heating(name: str) -> None:
 
 
 @needs_real
-@pytest.mark.parametrize("name", ["am-9015-locked-rotor-data-2v-20151210.csv",
-                                  "am-9015-locked-rotor-data-4v-20151210.csv",
-                                  "bag-locked-rotor-data-2v-20151207.csv", "bag-locked-rotor-data-4v-20151207.csv",
-                                  "bag-locked-rotor-data-6v-20151207.csv", "mini-cim-locked-rotor-data-8v-20151209.csv",
-                                  "mini-cim-locked-rotor-data-6v-20151209.csv"])
-def test_forecast_of_a_healthy_real_run_from_its_first_120_s(tmp_path: Path, name: str) -> None:
-    rec = read_runs([str(REAL / name)])[0]
-    fit = stall(rec, until=120.0)
-    (tmp_path / "fit.json").write_text(json.dumps(fit.to_dict()))
-    row = fit.details["runs"][0]
-    end = row["cut (s)"] or float(rec.time[-1])
-    out = forecast(load_fit(tmp_path / "fit.json"), float(row["set point (V)"]), end - float(rec.time[0]))
-    later = (rec.time > 120.0) & (rec.time < end)
-    pred = np.interp(rec.time[later] - rec.time[0], out.time, out.current)
-    rms = math.sqrt(float(np.mean(((pred - rec["current"][later]) / rec["current"][later]) ** 2)))
-    assert rms < 0.05, rms
-
-
-@needs_real
 def test_forecast_says_how_far_an_undetermined_case_loss_moves_it(tmp_path: Path) -> None:
     rec = read_runs([str(REAL / "bag-locked-rotor-data-4v-20151207.csv")])[0]
     fit = stall(rec, until=120.0)
@@ -250,13 +231,4 @@ HEALTHY = ["am-9015-locked-rotor-data-2v-20151210.csv", "am-9015-locked-rotor-da
 def test_forecast_from_the_first_120_s_within_5_percent(tmp_path: Path, name: str) -> None:
     """Fitted on a healthy run's first 120 s, the forecast meets the measured current over the rest within 5 % RMS
     (the mini-CIM's 4 V run: 3.9 % with the population's prior on the case, 5.9 % with the old 800 s one)."""
-    rec = read_runs([str(REAL / name)])[0]
-    fit = stall(rec, until=120.0)
-    row = fit.details["runs"][0]
-    end = row["cut (s)"] or float(rec.time[-1])
-    (tmp_path / "fit.json").write_text(json.dumps(fit.to_dict()))
-    out = forecast(load_fit(tmp_path / "fit.json"), float(row["set point (V)"]), end - float(rec.time[0]))
-    later = (rec.time > 120.0) & (rec.time < end)
-    pred = np.interp(rec.time[later] - rec.time[0], out.time, out.current)
-    measured = rec["current"][later]
-    assert math.sqrt(float(np.mean(((pred - measured) / measured) ** 2))) < 0.05
+    assert forecast_rms(REAL / name, tmp_path) < 0.05
