@@ -12,6 +12,9 @@ are written first, into a temporary folder under /tmp (never kept), in the forma
 - free-spinup: scope cursor times of n rising edges of a constant-current spin-up (closed form);
 - feedforward: a SysId JSON whose four tests follow the feedforward model (closed form, 10 ms rows);
 - terminal, lcr, torque, amplifier, tachometer: tables of n readings around the model's line;
+- stall: the virtual rig's 300 s locked-rotor run at 4 V with heating (VEX's 0.35 s rows), interpolated to
+  n rows with the meters' noise;
+- curve: a 12 V motor curve of n rows (the motor model's steady states, meter noise; VEX's have ~100);
 - waveform: free-spinup on a Rigol DS1054Z export of n samples of one encoder channel.
 
     python benchmarks/bench_scale.py [SIZES...] [--only=spindown,identify] [--waveform=12e6,24e6]
@@ -31,8 +34,12 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from motorlab.rig import VirtualRig
 
 SIZES = (10_000, 100_000, 1_000_000, 2_000_000)
 #: Samples of the scope waveform exports (a DS1054Z holds up to 24 Mpts a channel).
@@ -104,6 +111,25 @@ def _sysid(path: Path, n: int, rng: np.random.Generator) -> None:
     path.write_text(json.dumps(doc))
 
 
+def _stall(path: Path, n: int, rig: VirtualRig, rng: np.random.Generator) -> None:
+    from motorlab.io import read_csv
+
+    run = rig.stall(path, voltage=4.0, duration=300.0)
+    rec = read_csv(run.paths[0])
+    t = np.linspace(float(rec.time[0]), float(rec.time[-1]), n)
+    noise = {"voltage": 0.001, "current": 0.02, "torque": 0.001}
+    _table(path, n, {"time_s": t, **{f"{k}_{u}": np.interp(t, rec.time, rec[k]) + rng.normal(0, noise[k], n)
+                                     for k, u in (("voltage", "V"), ("current", "A"), ("torque", "Nm"))}})
+
+
+def _curve(path: Path, n: int, rng: np.random.Generator) -> None:
+    k, r, kt, friction = 0.0190, 0.134, 0.0165, 0.045  # V·s/rad, Ω, N·m/A, N·m
+    speed = np.linspace(0.0, (kt * 12.0 / r - friction) / (kt * k / r), n)
+    current = (12.0 - k * speed) / r
+    _table(path, n, {"speed_rad_per_s": speed + rng.normal(0, 0.5, n), "current_A": current + rng.normal(0, 0.02, n),
+                     "torque_Nm": kt * current - friction + rng.normal(0, 0.002, n)})
+
+
 def _edges(path: Path, n: int) -> None:
     from motorlab.io import write_csv
 
@@ -167,6 +193,10 @@ def write_inputs(folder: Path, n: int) -> dict[str, tuple[list[str], list[str]]]
     out["free-spinup"] = ([str(folder / "edges.csv")], ["--K", "0.7", "--current", "0.5 A", "--cpr", str(CPR)])
     _sysid(folder / "sysid.json", n, rng)
     out["feedforward"] = ([str(folder / "sysid.json")], [])
+    _stall(folder / "stall.csv", n, rig, rng)
+    out["stall"] = ([str(folder / "stall.csv")], [])
+    _curve(folder / "curve.csv", n, rng)
+    out["curve"] = ([str(folder / "curve.csv")], ["--voltage", "12"])
     x = np.linspace(0.25, 1.0, n)
     noise = rng.standard_normal(n)
     _table(folder / "terminal.csv", n, {"current_A": 0.2 + 0.3 * x + 0.002 * noise, "frequency_Hz": 900 * x})

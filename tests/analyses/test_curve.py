@@ -90,6 +90,21 @@ def test_round_trip_one_voltage(seed: int) -> None:
     assert not result["b"].determined
 
 
+@pytest.mark.parametrize("seed", range(3))
+def test_a_curve_of_every_sample_is_fitted_as_means_of_neighbouring_rows(seed: int) -> None:
+    """A dynamometer that logs every sample (50,000 rows) is reduced to MAX_ROWS means, says so, and keeps
+    K, R and the slope within 3 standard errors of the truth."""
+    from motorlab.analyses.curve import MAX_ROWS
+
+    result = curve(_synthetic(seed, rows=50_000))
+    assert any(f"50,000 rows fitted as {math.ceil(50_000 / 3):,} means of 3 neighbouring rows" in w
+               for w in result.warnings)
+    assert result.n_points <= MAX_ROWS
+    k, r, kt, b = (TRUTH[n] for n in ("K", "R", "Kt", "b"))
+    for name, truth in {"K": k, "R": r, "Kt": kt + b * r / k}.items():
+        assert abs(result[name].value - truth) < 3 * result[name].stderr, (name, result[name], truth)
+
+
 def test_round_trip_several_voltages_separates_friction() -> None:
     """Curves at 6, 9 and 12 V: Kt, Tf and b each determined, truth within 3 standard errors, over seeds."""
     inside = 0

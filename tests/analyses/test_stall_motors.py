@@ -277,3 +277,23 @@ def test_a_forecast_carries_on_the_brushes_contact_the_run_ended_with(tmp_path: 
     assert np.allclose(other.current, stall_response(model.resistance, model.thermal, other.time,
                                                      np.full(other.time.size, 12.0),
                                                      winding=model.initial_temperature).current)
+
+
+def test_a_dense_log_is_analysed_as_medians_of_consecutive_samples():
+    """A run logged 20 times denser than VEX's (the NeveRest's 6 V run, interpolated, with noise) is reduced to
+    MAX_SAMPLES medians, says so, and gives the sparse run's R and K within their standard errors."""
+    from motorlab.analyses.stall import MAX_SAMPLES
+
+    sparse = read_runs([_dyno("NeveRest-locked-rotor-data-6v-20171016.csv")])[0]
+    t = np.asarray(sparse.time, dtype=float)
+    dense_t = np.linspace(t[0], t[-1], 20 * t.size)
+    rng = np.random.default_rng(3)
+    signals = {name: np.interp(dense_t, t, np.asarray(sparse[name], dtype=float))
+               for name in ("current", "voltage", "torque")}
+    signals["current"] = signals["current"] + 0.005 * rng.standard_normal(dense_t.size)
+    dense = Recording(dense_t, signals, source="dense.csv")
+    a, b = stall(sparse), stall(dense)
+    assert any(f"{dense_t.size:,} samples analysed as" in w and "medians of 4 consecutive" in w for w in b.warnings)
+    assert b.details["runs"][0]["healthy samples"] <= MAX_SAMPLES
+    for name in ("R", "K"):
+        assert abs(b.value(name) - a.value(name)) < 3 * a[name].stderr, name

@@ -129,3 +129,20 @@ def test_hysteresis_is_fitted_only_with_both_directions():
     assert result.value("K") == pytest.approx(K_TRUE, rel=1e-9)
     assert result.correlation_names == ["K", "tau0", "tau_h"]
     assert result.correlation.shape == (3, 3)
+
+
+def test_a_long_table_gives_counts_of_approach_directions_not_a_number_per_row():
+    """Up to ROW_DETAILS rows the answer lists each row's approach; past it, only how many (a 2 M-row table's
+    answer held 2 M numbers, most of its 10 s)."""
+    from motorlab.analyses.torque import ROW_DETAILS
+
+    for n in (11, ROW_DETAILS + 500):
+        current = np.concatenate([np.linspace(0.5, 4.0, n // 2), np.linspace(4.0, 0.5, n - n // 2)])
+        tau = 0.02 * current + 0.001 * np.sign(np.gradient(current))
+        rec = Recording(np.arange(n, dtype=float), {"current": current, "torque": tau}, source="long.csv")
+        details = torque(rec).details
+        counts = details["approach_counts"]
+        assert sum(counts.values()) == n
+        assert counts["below"] > 0
+        assert counts["above"] > 0
+        assert ("approach" in details) == (n <= ROW_DETAILS)

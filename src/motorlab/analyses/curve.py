@@ -27,7 +27,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from motorlab.analyses._common import reader_warnings, sources_of
+from motorlab.analyses._common import consecutive, reader_warnings, sources_of
 from motorlab.errors import FitError, LogFormatError, OptionError
 from motorlab.fitting import LeastSquares, fit_linear, r_squared
 from motorlab.recording import Recording
@@ -44,6 +44,9 @@ RATIO_WARNING = 0.05
 
 #: Highest terminal voltage a curve can be given at [V]: brushed DC motors run from a few volts to a few hundred.
 MAX_VOLTAGE = 1000.0
+#: Most rows a curve is fitted at: a longer one (a dynamometer logging every sample) is reduced to means of
+#: neighbouring rows (VEX's curves have ~100).
+MAX_ROWS = 20_000
 
 
 def curve(recordings: Recording | Sequence[Recording], *, voltage: float | None = None) -> FitResult:
@@ -88,6 +91,11 @@ def curve(recordings: Recording | Sequence[Recording], *, voltage: float | None 
     notes: list[str] = []
     current, torque, speed, volts = _rows(recs, voltage, notes)
     source = " + ".join(sources_of(recs))
+    group = math.ceil(current.size / MAX_ROWS)
+    if group > 1:  # means of neighbouring rows lie on the same lines; their scatter gives the same uncertainty
+        notes.append(f"{source}: {current.size:,} rows fitted as {math.ceil(current.size / group):,} means of "
+                     f"{group} neighbouring rows")
+        current, torque, speed, volts = (consecutive(x, group, np.mean) for x in (current, torque, speed, volts))
     if current.size < 3:
         raise FitError(f"{source}: a curve needs at least three rows, found {current.size}")
     for values, what in ((speed, "speed"), (current, "current")):

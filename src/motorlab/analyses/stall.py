@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from motorlab.analyses._common import reader_warnings, sources_of
+from motorlab.analyses._common import consecutive, reader_warnings, sources_of
 from motorlab.analyses._stall_cuts import NO_CURRENT, Cut, find_cut, first_full_sample, set_point
 from motorlab.analyses._stall_fit import (
     REFERENCE_SAMPLES,
@@ -40,6 +40,9 @@ from motorlab.thermal import MAGNET_COEFFICIENTS, WINDING_LIMIT
 
 #: Fewest healthy samples a run needs to enter the fit.
 MIN_SAMPLES = 5
+#: Most samples a run is analysed at: a denser log is reduced to medians of consecutive samples (a
+#: winding heats over seconds; VEX's 300 s runs hold ~850 samples).
+MAX_SAMPLES = 5000
 #: A run fits this much worse than the others (relative RMS, and at least :data:`UNEXPLAINED_RMS`):
 #: heating does not explain it.
 UNEXPLAINED_FACTOR = 4.0
@@ -64,6 +67,7 @@ class Run:
     set_point: float
     cut: Cut
     on: int = 0  # the row the supply switched on at (rows logged before it carry no current)
+    group: int = 1  # consecutive samples of the file reduced to each of these (their median)
 
     @property
     def switch_on(self) -> float:
@@ -100,6 +104,11 @@ def _run_of(rec: Recording, voltage: float | None, until: float | None) -> Run:
     else:
         raise OptionError(f"{source}: no voltage column: give the supply's voltage (--voltage)")
     q = np.abs(np.asarray(rec["torque"], dtype=float)) if "torque" in rec else None
+    group = math.ceil(t.size / MAX_SAMPLES)
+    if group > 1:
+        # Medians, not means: a group that straddles a cut or a glitch takes one side, never a half-cut sample.
+        t, i, v = (consecutive(x, group) for x in (t, i, v))
+        q = None if q is None else consecutive(q, group)
     start = first_full_sample(i)
     v_set = set_point(v) if voltage is None else float(voltage)
     cut = find_cut(t, i, v, q, start, v_set)
@@ -107,7 +116,8 @@ def _run_of(rec: Recording, voltage: float | None, until: float | None) -> Run:
     if until is not None:
         end = min(end, int(np.searchsorted(t, until, side="right")))
     on = int(np.flatnonzero(i > NO_CURRENT * float(np.max(i)))[0])
-    return Run(source, t, i, v, q, start, end, v_set, cut, on)
+    return Run(source, t, i, v, q, start, end, v_set, cut, on, group)
+
 
 
 def _runs_of(recs: list[Recording], voltage: float | None, until: float | None,
@@ -125,6 +135,9 @@ def _runs_of(recs: list[Recording], voltage: float | None, until: float | None,
         try:
             runs.append(_run_of(rec, voltage, until))
             kept.append(rec)
+            if runs[-1].group > 1:
+                warnings.append(f"{runs[-1].source}: {len(rec.time):,} samples analysed as {runs[-1].time.size:,} "
+                                f"medians of {runs[-1].group} consecutive samples (a winding heats over seconds)")
         except LogFormatError as exc:
             if len(recs) == 1 or "current" not in exc.message:
                 raise

@@ -41,6 +41,9 @@ from motorlab.units import SI_UNITS, STANDARD_GRAVITY
 INTERCEPT_WARNING_FRACTION = 0.03
 
 
+#: Rows up to which the answer lists each row's approach direction.
+ROW_DETAILS = 1000
+
 def _torque_rows(recs: list[Recording], arm: float | None, arm_stderr: float,
                  gearbox: tuple[float, float | None, float]) -> tuple[Recording, np.ndarray, float | None]:
     """The rows joined, their torque [N·m] (a torque column, or scale mass × g × arm) and the arm used [m].
@@ -280,11 +283,15 @@ def one_operating_current(current: np.ndarray) -> bool:
 
 def _details(approach: np.ndarray, hysteresis: bool, arm_used: float | None,
              gearbox: tuple[float, float | None, float]) -> dict[str, object]:
-    """The torque analysis's ``details``: g, the approach direction of each row, whether the hysteresis
-    was fitted, the gearbox's figures (when the motor K is given) and the arm used."""
+    """The torque analysis's ``details``: g, how many rows were approached from below (+1), from above
+    (−1) or neither (0), each row's direction for a table of up to :data:`ROW_DETAILS` rows (a longer one
+    would put a number per row into the answer), whether the hysteresis was fitted, the gearbox's
+    figures (when the motor K is given) and the arm used."""
     ratio, motor_constant, motor_constant_stderr = gearbox
-    details: dict[str, object] = {"g": STANDARD_GRAVITY, "approach": [int(d) for d in approach],
-                                  "hysteresis_fitted": hysteresis}
+    counts = {name: int(np.count_nonzero(approach == d)) for name, d in (("below", 1), ("above", -1), ("neither", 0))}
+    details: dict[str, object] = {"g": STANDARD_GRAVITY, "approach_counts": counts, "hysteresis_fitted": hysteresis}
+    if approach.size <= ROW_DETAILS:
+        details["approach"] = [int(d) for d in approach]
     if motor_constant is not None:
         details.update(_gearbox_details(ratio, motor_constant, motor_constant_stderr))
     if arm_used is not None:
