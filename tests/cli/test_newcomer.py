@@ -6,6 +6,8 @@ import argparse
 import json
 from pathlib import Path
 
+import pytest
+
 from motorlab import cli
 from motorlab.cli import build_parser
 
@@ -40,3 +42,16 @@ def test_help_texts_show_no_restructuredtext_markup() -> None:
         text = parser.format_help()
         for markup in ("``", ":func:", ":class:", ":mod:", ":data:"):
             assert markup not in text, (" ".join(path), markup)
+
+
+def test_a_command_builds_only_its_own_parser_and_a_misspelt_one_lists_them_all(capsys):
+    """`motorlab analyze …` imports only its own sub-command (tune's controller design costs tenths of a
+    second); an unknown command still gets every choice in its one-line refusal."""
+    only = build_parser("analyze")
+    assert set(only._subparsers._group_actions[0].choices) == {"analyze"}  # type: ignore[union-attr]
+    with pytest.raises(SystemExit) as exit_info:
+        cli.main(["anlyze", "x.csv"])
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err
+    assert "invalid choice: 'anlyze'" in err
+    assert all(f"'{name}'" in err for name in cli.COMMANDS)

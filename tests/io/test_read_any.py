@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import shutil
 
 import numpy as np
@@ -71,3 +72,20 @@ def test_read_any_bad_files(data_dir, tmp_path):
     shutil.copy(data_dir / "csv/lcr.csv", path)
     with pytest.raises(LogFormatError, match="not a WPILib data log"):
         read_any(path)
+
+
+@pytest.mark.parametrize(("where", "expected"), [("first", "sysid-json"), ("middle", "sysid-json"),
+                                                 ("last", "sysid-json"), (None, "frc-char-json")])
+def test_a_large_json_file_is_told_apart_wherever_its_key_sits(tmp_path, where, expected):
+    """The head and the last 64 KiB are searched first (SysId writes its flag after the tests), the whole
+    file when neither holds the key: the answer does not depend on where it sits."""
+    rows = [[0.01 * k, 1.0, 0.5, 0.25] for k in range(6000)]  # ~170 KB a test
+    doc = {"slow-forward": rows, "fast-forward": rows}
+    items = list(doc.items())
+    if where is not None:
+        at = {"first": 0, "middle": 1, "last": 2}[where]
+        items.insert(at, ("sysid", True))
+    path = tmp_path / "big.json"
+    path.write_text(json.dumps(dict(items)))
+    assert path.stat().st_size > 3 * 65536
+    assert detect_format(path) == expected

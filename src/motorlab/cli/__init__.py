@@ -31,15 +31,17 @@ from motorlab.errors import MotorlabError  # noqa: E402
 COMMANDS = ("demo", "motors", "plan", "simulate", "analyze", "tune", "characterize", "acquire", "robot", "ui")
 
 
-def build_parser() -> Parser:
-    """The top-level parser with every sub-command registered."""
+def build_parser(command: str | None = None) -> Parser:
+    """The top-level parser with every sub-command registered, or only ``command`` when it is one of
+    :data:`COMMANDS` (``main`` passes the one given: the others' modules, such as ``tune``'s controller
+    design, cost a few tenths of a second to import)."""
     from motorlab import __version__
 
     parser = Parser(prog="motorlab", description="Characterize brushed DC gearmotors from measurements.")
     parser.add_argument("--version", action="version", version=f"motorlab {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=Parser)
     sub.required = True
-    for name in COMMANDS:
+    for name in (command,) if command in COMMANDS else COMMANDS:
         importlib.import_module(f"motorlab.cli.{name}").register(sub)
     return parser
 
@@ -82,8 +84,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     if nul is not None:  # a script's argv can hold one; no file name or value can (the OS refuses it)
         print(f"motorlab: error: {nul.replace(chr(0), '?')[:80]!r}: contains a NUL byte", file=sys.stderr)
         return EXIT_INPUT
-    parser = build_parser()
-    args = parser.parse_args(argv)
+    parser = build_parser(str(given[0]) if given else None)
+    args = parser.parse_args(given)
     pending: list[str] = []
     reporter = _progress_reporter()
     try:

@@ -65,6 +65,16 @@ _RR_RAMP = re.compile(r'"(forwardEncPositions|perpEncPositions|angVels)"\s*:')
 _HEAD = 1 << 16
 
 
+def _tail(name: str) -> str:
+    """The last :data:`_HEAD` bytes of a file larger than twice that, decoded ("" for a smaller one)."""
+    with open(name, "rb") as handle:
+        size = handle.seek(0, os.SEEK_END)
+        if size <= 2 * _HEAD:
+            return ""
+        handle.seek(size - _HEAD)
+        return decode_text(handle.read())[0]
+
+
 def detect_format(path: PathArg) -> str:
     """The format of ``path`` (a key of :data:`READERS`), from its extension and content.
 
@@ -90,10 +100,15 @@ def detect_format(path: PathArg) -> str:
         raise LogFormatError("not a text file (it contains binary data) and not a WPILib data log", path=name)
     text, _encoding = decode_text(raw)
     if extension == ".json" or text.lstrip().startswith("{"):
-        text, _encoding = decode_text(read_bytes(name)[1])
-        if _RR_RAMP.search(text):
-            return "roadrunner-ramp"
-        return "sysid-json" if _SYSID_FLAG.search(text) else "frc-char-json"
+        # The keys that tell these JSON files apart sit before or after their arrays (SysId writes
+        # "sysid": true after its tests): the head and the last 64 KiB first, the whole file only if needed.
+        for part in (text + _tail(name), None):
+            part = decode_text(read_bytes(name)[1])[0] if part is None else part
+            if _RR_RAMP.search(part):
+                return "roadrunner-ramp"
+            if _SYSID_FLAG.search(part):
+                return "sysid-json"
+        return "frc-char-json"
     if len(raw) == _HEAD:
         text = text[: max(text.rfind("\n"), 0)]  # drop the line the head cut
     lines = [line.strip() for line in text.splitlines()]
