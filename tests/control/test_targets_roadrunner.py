@@ -47,6 +47,21 @@ def test_roadrunner_units_are_ticks():
         to_target(POS, FF, "roadrunner")
 
 
+@pytest.mark.parametrize("gains", [POS, Gains("velocity", kP=0.568297)])
+def test_roadrunner_note_computes_the_gains_its_table_shows(gains):
+    """The conversion note names each path gain with the formula that gives its value in the table (it
+    said axialGain = kP/kV for a velocity loop whose axialGain is 0)."""
+    tg = to_target(gains, FF, "roadrunner", units=MechanismUnits.from_options("rad", cpr=8192))
+    note = next(line for line in tg.conversion if line.startswith("path gains"))
+    for name in ("axialGain", "axialVelGain"):
+        formula = note.split(f"{name} = ")[1].split(";")[0].split(" (")[0]
+        if formula.startswith("0"):
+            assert tg.gains[name] == 0.0, name
+        else:
+            numerator, denominator = formula.split(" = ")[1].split("/")
+            assert tg.gains[name] == pytest.approx(float(numerator) / float(denominator), rel=1e-5), name
+
+
 def test_pedro_constants_from_the_model():
     units = MechanismUnits.from_options("rad", cpr=8192, wheel_radius=0.0175)
     tg = to_target(POS, FF, "pedro", units=units, voltage=12.0)

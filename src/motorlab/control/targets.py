@@ -315,8 +315,11 @@ def _roadrunner(gains: Gains, feedforward: Feedforward, units: MechanismUnits, v
     }
     conv = [
         f"ticks: cpr = {units.cpr:g}; kV, kA [V per rad/s, rad/s²] × 2π/cpr = × {rad_per_tick:.6g} per tick",
-        f"path gains: axialGain = kP/kV = {gains.kP:.6g}/{kv:.6g}; axialVelGain = kD/kV (HolonomicController "
-        "turns a pose error into a velocity command that the feedforward converts to volts)",
+        ("path gains: axialGain = kP/kV = " f"{gains.kP:.6g}/{kv:.6g}; axialVelGain = kD/kV = {gains.kD:.6g}/{kv:.6g}"
+         if gains.loop == "position" else
+         f"path gains: axialGain = 0 (a velocity loop has no position gain); axialVelGain = kP/kV = "
+         f"{gains.kP:.6g}/{kv:.6g}") + " (HolonomicController turns a pose error into a velocity command that "
+        "the feedforward converts to volts; lateral and heading the same)",
     ]
     notes = ["kS, kV, kA are for the encoder whose cpr was given (dead wheels or drive motors): the same "
              "encoder as Road Runner's inPerTick"]
