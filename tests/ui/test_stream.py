@@ -5,6 +5,8 @@ from __future__ import annotations
 import asyncio
 import io
 import json
+import os
+import signal
 import time
 import zipfile
 from pathlib import Path
@@ -226,15 +228,23 @@ def test_gains_are_recomputed_in_one_resident_worker(tmp_path: Path, monkeypatch
 
 
 def test_a_resident_job_past_its_time_limit_ends_the_worker(tmp_path: Path) -> None:
+    """The worker is paused (SIGSTOP) so that its job cannot answer within the limit, whatever the load: a
+    0.1 ms limit on a job that answers in milliseconds lost the race when the event loop itself was held up
+    (CI, 2 cores busy)."""
+
     async def late() -> tuple[runner.Outcome, bool]:
         worker = runner.resident()
         await worker.start()
         assert worker.ready
         proc = worker.proc
-        outcome = await runner.run_cli(["tune", "velocity", "--kv=0.12", "--json"], cwd=str(tmp_path),
-                                       time_limit=0.0001)
-        ended = proc is not None and proc.poll() is not None
-        worker.close()
+        assert proc is not None
+        os.kill(proc.pid, signal.SIGSTOP)
+        try:
+            outcome = await runner.run_cli(["tune", "velocity", "--kv=0.12", "--json"], cwd=str(tmp_path),
+                                           time_limit=0.5)
+            ended = proc.poll() is not None
+        finally:
+            worker.close()  # SIGKILL: ends a stopped process too
         return outcome, ended
 
     outcome, ended = asyncio.run(late())
