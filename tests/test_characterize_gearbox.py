@@ -93,3 +93,21 @@ def test_report_splits_kt_ke_into_motor_and_gearbox(tmp_path):
                                     experiments=("spindown", "torque"))
     plain = render_report(characterize(load_session(toml2), control=False, figures=False))
     assert "All of it is given to the gearbox here" in plain
+
+
+def test_a_stall_run_held_at_the_gearbox_output_is_not_taken_for_the_bare_motor(tmp_path):
+    """The simulated session's stall runs hold the gearmotor's output: their torque per amp is N·η times the
+    motor's K, ~12 times the back-EMF constant, which no bare motor gives. The report split the shortfall
+    with it (a gearbox of 2.5 % efficiency); now it is passed over and the report says what would tell."""
+    from motorlab.efficiency import bare_motor_ratio
+    from motorlab.report import render_report
+
+    toml = write_simulated_session("neverest40", out_dir=tmp_path, units=1, seed=3, gearbox="catalog",
+                                   experiments=("spindown", "torque", "stall"))
+    result = characterize(load_session(toml), control=False, figures=False)
+    unit = result.units["A"]
+    assert unit.fits["stall"]["K"].value > 5 * unit.parameters["K"].estimate.value / 40  # the output shaft's
+    assert bare_motor_ratio({"A": unit.fits}, "A", k_output=unit.parameters["K"].estimate, ratio=40.0) is None
+    html = render_report(result)
+    assert "Split with" not in html
+    assert "All of it is given to the gearbox here" in html

@@ -185,7 +185,10 @@ def bare_motor_ratio(fits_by_unit: Mapping[str, Mapping[str, FitResult]], unit: 
 
     Looked for in ``unit``'s own fits first, then in any unit of the session (the same motor model):
     a motor curve's ``Kt_over_K`` (``analyze curve``), a stall run's ``Kt_over_K``, or a stall run's
-    torque per amp ``K`` at the motor shaft divided by the unit's back-EMF constant ``k_output``/N.
+    torque per amp ``K`` at the motor shaft divided by the unit's back-EMF constant ``k_output``/N. A
+    stall run whose torque per amp exceeds the motor's back-EMF constant by more than three standard errors
+    is no bare motor's (a motor's shaft gives at most Ke per amp): it was held at a gearbox's output, and is
+    passed over.
 
     Returns
     -------
@@ -205,6 +208,8 @@ def bare_motor_ratio(fits_by_unit: Mapping[str, Mapping[str, FitResult]], unit: 
                 ke_motor = k_output.value / ratio
                 value = fit["K"].value / ke_motor
                 se = abs(value) * math.hypot(fit["K"].stderr / fit["K"].value, k_output.stderr / k_output.value)
+                if value - 3 * se > 1.0:  # the torque per amp of a gearbox's output, not the motor's shaft
+                    continue
                 return Estimate("Kt_over_K", value, se, "1", True, "stall run's Kt ÷ the back-EMF K/N"), where
     return None
 
