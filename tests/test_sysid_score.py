@@ -151,6 +151,50 @@ def test_fit_round_trip_with_noise():
     assert speed_lag(fit.gains, tests)[0] == 0.0  # nothing lags here
 
 
+def _noisy_tests(truth, rows, seed):
+    """The four SysId tests simulated with ``truth``, noisy speed and position (clean first rows)."""
+    rng = np.random.default_rng(seed)
+    tests = []
+    for name, sign, volts in (("slow-forward", 1, None), ("slow-backward", -1, None),
+                              ("fast-forward", 1, 6.0), ("fast-backward", -1, 6.0)):
+        t = jittered_time(rows if volts is None else rows // 2, seed=seed + len(tests))
+        v = sign * (6.0 * t / t[-1] if volts is None else np.full(t.size, volts))
+        speed, position = simulate_gains(*truth, ScoreTest(name, t, v, np.zeros(t.size), np.zeros(t.size)))
+        speed_noise, position_noise = 0.02 * rng.standard_normal(t.size), 0.002 * rng.standard_normal(t.size)
+        speed_noise[0] = position_noise[0] = 0.0
+        tests.append(ScoreTest(name, t, v, position + position_noise, speed + speed_noise))
+    return tests
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_long_logs_rank_the_starts_on_every_kth_row(seed, monkeypatch):
+    """Above COARSE_ROWS rows the starts are ranked on every k-th row and only the best is fitted to every
+    row: the gains of fitting every start to every row, within a small part of a standard error."""
+    from motorlab import sysid_score
+
+    truth = (0.25, 1.8, 0.3)
+    tests = _noisy_tests(truth, 8_000, seed)  # 24,000 rows
+    assert sum(t.time.size for t in tests) > sysid_score.COARSE_ROWS
+    starts = [(0.1, 1.5, 0.5), (0.6, 3.0, 0.02)]
+    full_fits = []
+    original = sysid_score._reweighted_fit
+
+    def counted(sims, *args):
+        full_fits.append(sum(t.time.size for t in sims.tests) == sum(t.time.size for t in tests))
+        return original(sims, *args)
+
+    monkeypatch.setattr(sysid_score, "_reweighted_fit", counted)
+    ranked = fit_gains(tests, starts)
+    assert full_fits.count(True) == 1 and full_fits.count(False) == 2
+    monkeypatch.setattr(sysid_score, "COARSE_ROWS", 10**9)
+    every = fit_gains(tests, starts)
+    assert full_fits.count(True) == 3
+    stderr = np.sqrt(np.diag(ranked.covariance))
+    for k in range(3):
+        assert abs(ranked.gains[k] - every.gains[k]) < 0.05 * stderr[k], (k, ranked.gains, every.gains, stderr)
+        assert abs(ranked.gains[k] - truth[k]) < 4 * stderr[k], (k, ranked.gains[k], stderr[k])
+
+
 # --------------------------------------------------------------------------------------------------
 # the five real logs
 # --------------------------------------------------------------------------------------------------

@@ -40,6 +40,14 @@ def default_processes() -> int:
     return max(1, min(DEFAULT_PROCESSES, os.cpu_count() or 1))
 
 
+def can_fork() -> bool:
+    """Whether children may be forked here: Linux, no other Python thread, and not itself a pool's
+    child (a daemonic process may have none). Work too short to repay a spawned child's start
+    runs here when this is False."""
+    return (sys.platform == "linux" and threading.active_count() == 1
+            and not multiprocessing.current_process().daemon)
+
+
 def _context() -> BaseContext:
     if sys.platform == "linux" and threading.active_count() == 1:
         return multiprocessing.get_context("fork")

@@ -462,7 +462,11 @@ def fit_gains(
     are those of the score. Each round weighs the speed and position residuals by the inverse of
     their RMSE at the previous round's gains (iteratively reweighted least squares, whose fixed
     point minimises the criterion: each score counts by its relative change, independent of units).
-    Every start is tried and the best end kept. The covariance is the Newey–West sandwich of the
+    Every start is tried and the best end kept. On a long log (more than :data:`COARSE_ROWS` rows)
+    with several starts, each start is first fitted to every k-th row only (the simulation stays
+    exact for the voltage held over k rows, so that fit ends near the full one) and only the start
+    whose end is best there is fitted to every row: one full fit, not one per start. The covariance
+    is the Newey–West sandwich of the
     weighted residuals at the optimum (:func:`motorlab.fitting.hac_covariance`, runs of one test and
     one signal taken as uncorrelated): the residuals of real logs are dominated by unmodelled,
     serially correlated effects, not by measurement noise.
@@ -472,35 +476,63 @@ def fit_gains(
     FitError
         When no gains with kV > 0 and kA ≥ 0 simulate the tests.
     """
-    from scipy.optimize import least_squares
-
-    best: tuple[float, np.ndarray, Score] | None = None
+    points = [np.array([float(g[0]), math.log(max(g[1], 1e-9)), math.log(max(g[2], 1e-9))]) for g in starts]
+    rows = sum(t.time.size for t in tests)
     nfev = 0
-    sims = _Simulations(tests)
-    with progress.task("Fitting the open-loop gains", total=len(starts) * rounds, unit="rounds") as report:
-        for number, start in enumerate(starts):
-            report.update(number * rounds, detail=f"start {number + 1} of {len(starts)}")
-            x = np.array([float(start[0]), math.log(max(start[1], 1e-9)), math.log(max(start[2], 1e-9))])
-            current = sims.at(x).score
-            for _ in range(rounds):
-                report.advance()
-                ws, wp = 1.0 / max(current.speed, 1e-300), math.sqrt(position_weight) / max(current.position, 1e-300)
-                weighted = _Weighted(sims, ws, wp)
-                sol = least_squares(weighted.fun, x, jac=weighted.jac, max_nfev=60, ftol=1e-6, xtol=1e-6,
-                                    x_scale=np.array([max(abs(x[0]), 0.05), 0.1, 0.3]))
-                nfev += int(sol.nfev)
-                new = sims.at(sol.x).score
-                if not _objective(new, position_weight) < _objective(current, position_weight) - 1e-5:
-                    break
-                x, current = sol.x, new
-            value = _objective(current, position_weight)
+    with progress.task("Fitting the open-loop gains", total=len(points), unit="starts") as report:
+        if len(points) > 1 and rows > COARSE_ROWS:
+            k = math.ceil(rows / COARSE_ROWS)
+            sparse = _Simulations([_every(t, k) for t in tests])
+            ends = [_reweighted_fit(sparse, x, position_weight, rounds) for x in points]
+            nfev += sum(e[3] for e in ends)
+            scores = [e[0] for e in ends]
+            if any(math.isfinite(v) for v in scores):
+                points = [points[int(np.nanargmin(np.where(np.isfinite(scores), scores, np.nan)))]]
+                report.update(len(starts) - 1, detail="the best start on every k-th row")
+        sims = _Simulations(tests)
+        best: tuple[float, np.ndarray, Score] | None = None
+        for number, x in enumerate(points):
+            report.advance(detail=f"start {number + 1} of {len(points)}")
+            value, end, current, n = _reweighted_fit(sims, x, position_weight, rounds)
+            nfev += n
             if math.isfinite(value) and (best is None or value < best[0]):
-                best = (value, x, current)
+                best = (value, end, current)
     if best is None:
         raise FitError("no three gains simulate these tests")
     gains = _gains(best[1])
     cov, bandwidth = _hac(gains, tests, best[2], position_weight)
     return GainFit(gains, cov, best[2], bandwidth, nfev)
+
+
+#: Above this many rows, :func:`fit_gains` ranks its starts on every k-th row (k from this) first.
+COARSE_ROWS = 20_000
+
+
+def _every(test: ScoreTest, k: int) -> ScoreTest:
+    """``test``'s every k-th row from the first (the simulation holds each kept row's voltage to the next)."""
+    return ScoreTest(test.name, test.time[::k], test.voltage[::k], test.position[::k], test.velocity[::k],
+                     test.start)
+
+
+def _reweighted_fit(
+    sims: _Simulations, x: np.ndarray, weight: float, rounds: int
+) -> tuple[float, np.ndarray, Score, int]:
+    """(criterion, p, score, evaluations) at the end of the reweighted fit from p = (kS, ln kV, ln kA) = ``x``."""
+    from scipy.optimize import least_squares
+
+    current = sims.at(x).score
+    nfev = 0
+    for _ in range(rounds):
+        ws, wp = 1.0 / max(current.speed, 1e-300), math.sqrt(weight) / max(current.position, 1e-300)
+        weighted = _Weighted(sims, ws, wp)
+        sol = least_squares(weighted.fun, x, jac=weighted.jac, max_nfev=60, ftol=1e-6, xtol=1e-6,
+                            x_scale=np.array([max(abs(x[0]), 0.05), 0.1, 0.3]))
+        nfev += int(sol.nfev)
+        new = sims.at(sol.x).score
+        if not _objective(new, weight) < _objective(current, weight) - 1e-5:
+            break
+        x, current = sol.x, new
+    return _objective(current, weight), x, current, nfev
 
 
 def _hac(gains: np.ndarray, tests: Sequence[ScoreTest], sc: Score, weight: float) -> tuple[np.ndarray, float]:

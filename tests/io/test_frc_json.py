@@ -198,3 +198,33 @@ def test_frc_char_mechanism_rows_and_stale_first_row(tmp_path):
     np.testing.assert_allclose(rec["velocity"], -0.1 * np.arange(1, 6) * 2 * math.pi)
     assert rec.metadata["stale_rows_dropped"] == {"slow-backward": 1}
     assert rec.metadata["side"] is None
+
+
+def test_a_large_file_is_parsed_in_two_processes_as_in_one(tmp_path, monkeypatch):
+    """Above PARALLEL_BYTES the tests are parsed in two forked processes: the same arrays, lines and errors."""
+    from motorlab import parallel
+    from motorlab.io import frc_json
+
+    rows = [[0.005 * k, 0.1 * k, 0.01 * k, 0.5 + 0.001 * k] for k in range(50)]
+    data = sysid_data(**{"slow-backward": [[r[0], -r[1], -r[2], -r[3]] for r in rows],
+                         "fast-backward": [[2.0 + r[0], -r[1], -r[2], -r[3]] for r in rows[:7]]})
+    path = write(tmp_path, data)  # indented: each row over several lines
+    one = read_sysid_json(path)
+    forked = []
+    monkeypatch.setattr(frc_json, "PARALLEL_BYTES", 0)
+    monkeypatch.setattr(parallel, "can_fork", lambda: True)
+    monkeypatch.setattr(parallel, "map_in_processes",
+                        lambda *a, original=parallel.map_in_processes, **k: forked.append(k) or original(*a, **k))
+    two = read_sysid_json(path)
+    assert forked and forked[0]["processes"] == 2
+    assert list(two.segments) == list(one.segments) and two.segments == one.segments
+    np.testing.assert_array_equal(two.time, one.time)
+    np.testing.assert_array_equal(two.lines, one.lines)
+    for name in one.signals:
+        np.testing.assert_array_equal(two[name], one[name])
+    text = json.dumps(data, indent=2).replace("0.01,\n", "NaN,\n", 1)
+    path.write_text(text)
+    line = next(n for n, s in enumerate(text.splitlines(), start=1) if "NaN" in s) - 3
+    with pytest.raises(LogFormatError, match=rf"log\.json:{line}: test 'slow-forward' row 1: nan is not a finite"):
+        read_sysid_json(path)
+    assert len(forked) == 2

@@ -10,6 +10,7 @@ back separately. See ``docs/formats.md`` and ``shared/data/real/README.md``.
 from __future__ import annotations
 
 import difflib
+import itertools
 import math
 import os
 import re
@@ -85,8 +86,9 @@ _JSON_NUMERIC = b"0123456789+-.eE \t\r\n,[]"
 _TO_SPACE = bytes.maketrans(b",[]", b"   ")
 
 
-def _parse_rows(segment: bytes) -> np.ndarray | None:
-    """``[[t, V, x, v], ...]`` as an (n, ncol) array, or None unless every row is plain numbers of one length."""
+def _parse_rows(segment: bytes) -> tuple[np.ndarray, np.ndarray] | None:
+    """``[[t, V, x, v], ...]`` as an (n, ncol) array and each row's ``[`` offset, or None unless every row
+    is plain numbers of one length."""
     if segment.translate(None, _JSON_NUMERIC):
         return None  # NaN, Infinity, strings, objects: json.loads and the checks below name them
     codes = np.frombuffer(segment, dtype=np.uint8)
@@ -107,7 +109,51 @@ def _parse_rows(segment: bytes) -> np.ndarray | None:
             return None
     if values.size != opens.size * ncol or not np.all(np.isfinite(values)):
         return None
-    return values.reshape(opens.size, ncol)
+    return values.reshape(opens.size, ncol), opens
+
+
+def _parse_test(part: tuple[bytes, int, int, int]) -> tuple[_Parsed, int] | None:
+    """A test's rows ``raw[start:stop]`` whose ``[`` is on line ``line``: (rows and their lines, newlines
+    inside), or None (:func:`_parse_rows`)."""
+    raw, start, stop, line = part
+    segment = raw[start:stop]
+    found = _parse_rows(segment)
+    if found is None:
+        return None
+    rows, opens = found
+    breaks = segment.count(b"\n")
+    if breaks:
+        newlines = np.flatnonzero(np.frombuffer(segment, dtype=np.uint8) == ord("\n"))
+        lines = line + np.searchsorted(newlines, opens)
+    else:  # (SysId writes its JSON on one line)
+        lines = np.full(opens.size, line)
+    return _Parsed(rows, lines.astype(int)), breaks
+
+
+#: Tests of more bytes than this in all are parsed in two processes where this one may fork
+#: (:func:`motorlab.parallel.can_fork`): numpy's parser holds the GIL, about 0.3 µs a number here.
+PARALLEL_BYTES = 16_000_000
+
+
+def _parse_tests(parts: list[tuple[bytes, int, int, int]]) -> list[tuple[_Parsed, int] | None]:
+    """:func:`_parse_test` of each part; a large file's in two processes, each about half the bytes."""
+    from motorlab import parallel
+
+    sizes = [stop - start for _, start, stop, _ in parts]
+    if len(parts) < 2 or sum(sizes) < PARALLEL_BYTES or not parallel.can_fork():
+        return [_parse_test(part) for part in parts]
+    groups: list[list[int]] = [[], []]
+    for k in sorted(range(len(parts)), key=lambda k: -sizes[k]):  # largest first, to the lighter group
+        min(groups, key=lambda g: sum(sizes[i] for i in g)).append(k)
+    done = parallel.map_in_processes(_parse_group, [[parts[k] for k in g] for g in groups], processes=2)
+    found: dict[int, tuple[_Parsed, int] | None] = {}
+    for group, results in zip(groups, done, strict=True):
+        found.update(zip(group, results, strict=True))
+    return [found[k] for k in range(len(parts))]
+
+
+def _parse_group(parts: list[tuple[bytes, int, int, int]]) -> list[tuple[_Parsed, int] | None]:
+    return [_parse_test(part) for part in parts]
 
 
 def _extract_tests(raw: bytes, name: str = "") -> tuple[bytes, dict[str, _Parsed]]:
@@ -117,30 +163,31 @@ def _extract_tests(raw: bytes, name: str = "") -> tuple[bytes, dict[str, _Parsed
     whose rows are not plain numbers of one length is left in place for ``json.loads`` and the
     row-by-row checks, which name the line of the problem.
     """
+    found: list[tuple[str, int, int]] = []
+    at = 0
+    for match in _TEST_START.finditer(raw):
+        if match.start() < at:
+            continue
+        end = _TEST_END.search(raw, match.end())
+        if end is None:
+            break
+        found.append((match.group(1).decode("ascii"), match.start(2), end.end()))
+        at = end.end()
     parsed: dict[str, _Parsed] = {}
     pieces: list[bytes] = []
     at = 0
-    with progress.task(f"Reading {os.path.basename(name)}", total=round(len(raw) / 1e6, 1), unit="MB") as report:
-        for match in _TEST_START.finditer(raw):
-            if match.start() < at:
+    with progress.task(f"Reading {os.path.basename(name)}", total=len(found), unit="tests") as report:
+        starts = [start for _, start, _ in found]  # each test's line: the newlines before it, counted once
+        lines = list(itertools.accumulate((raw.count(b"\n", a, b) for a, b in zip([0, *starts], starts, strict=False)),
+                                          initial=1))[1:]
+        done = _parse_tests([(raw, start, stop, line) for (_, start, stop), line in zip(found, lines, strict=True)])
+        for (test, start, stop), result in zip(found, done, strict=True):
+            report.advance(detail=test)
+            if result is None:
                 continue
-            report.update(round(match.start() / 1e6, 1), detail=match.group(1).decode("ascii"))
-            end = _TEST_END.search(raw, match.end())
-            if end is None:
-                break
-            start = match.start(2)
-            segment = raw[start : end.end()]
-            rows = _parse_rows(segment)
-            if rows is None:
-                continue
-            base = raw.count(b"\n", 0, start) + 1
-            codes = np.frombuffer(segment, dtype=np.uint8)
-            newlines = np.flatnonzero(codes == ord("\n"))
-            row_starts = np.flatnonzero(codes == ord("["))[1:]
-            lines = base + np.searchsorted(newlines, row_starts)
-            parsed[match.group(1).decode("ascii")] = _Parsed(rows, lines.astype(int))
-            pieces += [raw[at:start], b"[" + b"\n" * newlines.size + b"]"]
-            at = end.end()
+            parsed[test], breaks = result
+            pieces += [raw[at:start], b"[" + b"\n" * breaks + b"]"]
+            at = stop
     return b"".join([*pieces, raw[at:]]), parsed
 
 
