@@ -185,7 +185,8 @@ def test_long_logs_rank_the_starts_on_every_kth_row(seed, monkeypatch):
 
     monkeypatch.setattr(sysid_score, "_reweighted_fit", counted)
     ranked = fit_gains(tests, starts)
-    assert full_fits.count(True) == 1 and full_fits.count(False) == 2
+    assert full_fits.count(True) == 1
+    assert full_fits.count(False) == 2
     monkeypatch.setattr(sysid_score, "COARSE_ROWS", 10**9)
     every = fit_gains(tests, starts)
     assert full_fits.count(True) == 3

@@ -216,8 +216,10 @@ def test_a_large_file_is_parsed_in_two_processes_as_in_one(tmp_path, monkeypatch
     monkeypatch.setattr(parallel, "map_in_processes",
                         lambda *a, original=parallel.map_in_processes, **k: forked.append(k) or original(*a, **k))
     two = read_sysid_json(path)
-    assert forked and forked[0]["processes"] == 2
-    assert list(two.segments) == list(one.segments) and two.segments == one.segments
+    assert forked
+    assert forked[0]["processes"] == 2
+    assert list(two.segments) == list(one.segments)
+    assert two.segments == one.segments
     np.testing.assert_array_equal(two.time, one.time)
     np.testing.assert_array_equal(two.lines, one.lines)
     for name in one.signals:
