@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+import os
+
+import pytest
+
 from motorlab import parallel
 
 
@@ -13,3 +17,17 @@ def test_a_pools_child_forks_no_children_of_its_own():
     """A session's unit runs in a pool's (daemonic) child, which may have no children: a reader there
     parses in its own process instead of failing."""
     assert parallel.map_in_processes(_may_fork, [0, 1], processes=2) == [False, False]
+
+
+def _fails(kind: str) -> None:
+    if kind == "raise":
+        raise ValueError("bad row")
+    os._exit(3)
+
+
+def test_a_forked_childs_answer_and_failures_reach_the_parent():
+    assert parallel.Forked(sum, [1, 2, 3]).result() == 6
+    with pytest.raises(ValueError, match="bad row"):
+        parallel.Forked(_fails, "raise").result()
+    with pytest.raises(ChildProcessError, match="code 3"):
+        parallel.Forked(_fails, "exit").result()

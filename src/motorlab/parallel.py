@@ -48,6 +48,46 @@ def can_fork() -> bool:
             and not multiprocessing.current_process().daemon)
 
 
+class Forked:
+    """``fn(item)`` started in a forked child (only where :func:`can_fork`) while this process goes on;
+    :meth:`result` waits for it. The child reports no progress and ignores Ctrl+C (this process ends it)."""
+
+    def __init__(self, fn: Callable[[Any], Any], item: Any) -> None:
+        context = multiprocessing.get_context("fork")
+        self._answer, sender = context.Pipe(duplex=False)
+        self._process = context.Process(target=_forked, args=(fn, item, sender), daemon=True)
+        self._process.start()
+        sender.close()
+
+    def result(self) -> Any:
+        """``fn(item)``, or the exception it raised (a child that died without answering: ChildProcessError)."""
+        try:
+            ok, value = self._answer.recv()
+        except EOFError:
+            raise ChildProcessError(f"a forked child ended with code {self._process.exitcode}") from None
+        finally:
+            if self._process.is_alive() and not self._answer.poll():
+                self._process.terminate()
+            self._process.join()
+            self._answer.close()
+        if not ok:
+            raise value
+        return value
+
+
+def _forked(fn: Callable[[Any], Any], item: Any, sender: Any) -> None:
+    from motorlab import progress
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    with progress.reporting(None):
+        try:
+            answer = (True, fn(item))
+        except Exception as exc:  # handed to the parent, which raises it
+            answer = (False, exc)
+    sender.send(answer)
+    sender.close()
+
+
 def _context() -> BaseContext:
     if sys.platform == "linux" and threading.active_count() == 1:
         return multiprocessing.get_context("fork")

@@ -213,11 +213,15 @@ def test_a_large_file_is_parsed_in_two_processes_as_in_one(tmp_path, monkeypatch
     forked = []
     monkeypatch.setattr(frc_json, "PARALLEL_BYTES", 0)
     monkeypatch.setattr(parallel, "can_fork", lambda: True)
-    monkeypatch.setattr(parallel, "map_in_processes",
-                        lambda *a, original=parallel.map_in_processes, **k: forked.append(k) or original(*a, **k))
+
+    class Counted(parallel.Forked):
+        def __init__(self, fn, item):
+            forked.append(len(item))
+            super().__init__(fn, item)
+
+    monkeypatch.setattr(parallel, "Forked", Counted)
     two = read_sysid_json(path)
-    assert forked
-    assert forked[0]["processes"] == 2
+    assert len(forked) == 1  # one child, with the tests of about half the bytes
     assert list(two.segments) == list(one.segments)
     assert two.segments == one.segments
     np.testing.assert_array_equal(two.time, one.time)
@@ -230,3 +234,13 @@ def test_a_large_file_is_parsed_in_two_processes_as_in_one(tmp_path, monkeypatch
     with pytest.raises(LogFormatError, match=rf"log\.json:{line}: test 'slow-forward' row 1: nan is not a finite"):
         read_sysid_json(path)
     assert len(forked) == 2
+
+    class Killed(parallel.Forked):
+        def result(self):
+            super().result()
+            raise ChildProcessError("a forked child ended with code -9")
+
+    monkeypatch.setattr(parallel, "Forked", Killed)
+    path.write_text(json.dumps(data, indent=2))
+    again = read_sysid_json(path)  # a child that dies: its half parsed here
+    np.testing.assert_array_equal(again["velocity"], one["velocity"])
