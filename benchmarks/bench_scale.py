@@ -20,9 +20,11 @@ are written first, into a temporary folder under /tmp (never kept), in the forma
     python benchmarks/bench_scale.py [SIZES...] [--only=spindown,identify] [--waveform=12e6,24e6]
 
 prints one table row per analysis and size: wall seconds, CPU seconds (child processes included),
-peak MiB (VmHWM of the command's own process, imports included: about 85–115 MiB of it is Python,
-numpy, scipy and pint; plus the largest child's peak where the command forks one, an upper bound
-since a forked child shares the parent's pages) and the exit code. The figures of issue 25, before and after, are in docs/formats.md ("Large files").
+peak MiB and the exit code. The peak is the command's own VmHWM (imports included: about 85–115 MiB
+of it is Python, numpy, scipy and pint) or, when larger, the largest sum of the proportional set
+sizes (PSS: shared pages divided among their sharers) of the command and its children, sampled
+every 0.1 s (a large SysId file is parsed half in a forked child). The figures of issue 25, before
+and after, are in docs/formats.md ("Large files").
 """
 
 from __future__ import annotations
@@ -63,7 +65,6 @@ except (OSError, IndexError, ValueError):
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 usage = resource.getrusage(resource.RUSAGE_SELF)
 children = resource.getrusage(resource.RUSAGE_CHILDREN)  # a large SysId file is parsed in a forked child
-peak += children.ru_maxrss / 1024  # an upper bound: a forked child's pages shared with this one count twice
 cpu = usage.ru_utime + usage.ru_stime + children.ru_utime + children.ru_stime
 print(f"{elapsed:.3f} {peak:.1f} {code} {cpu:.3f}", file=sys.stderr)
 """
@@ -222,12 +223,34 @@ def measure(experiment: str, paths: list[str], options: list[str]) -> tuple[floa
     env = {**os.environ, "MPLBACKEND": "Agg"}
     command = {"pulse-24": "pulse", "waveform": "free-spinup"}.get(experiment, experiment)
     argv = [sys.executable, "-c", _RUN, "analyze", command, *paths, *options, "--json"]
-    done = subprocess.run(argv, capture_output=True, text=True, env=env, timeout=1800, check=False)
-    last = (done.stderr.strip().splitlines() or ["nan nan -1 nan"])[-1].split()
+    with tempfile.TemporaryFile("w+") as err:
+        proc = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=err, text=True, env=env)
+        tree = 0.0
+        while proc.poll() is None:
+            tree = max(tree, _tree_pss(proc.pid))
+            time.sleep(0.1)
+        err.seek(0)
+        last = (err.read().strip().splitlines() or ["nan nan -1 nan"])[-1].split()
     try:
-        return float(last[0]), float(last[1]), int(last[2]), float(last[3])
+        return float(last[0]), max(float(last[1]), tree), int(last[2]), float(last[3])
     except (ValueError, IndexError):
-        return math.nan, math.nan, done.returncode, math.nan
+        return math.nan, math.nan, proc.returncode, math.nan
+
+
+def _tree_pss(pid: int) -> float:
+    """Proportional set size [MiB] of process ``pid`` and its descendants (0 where /proc cannot tell)."""
+    total = 0.0
+    pending = [pid]
+    while pending:
+        p = pending.pop()
+        try:
+            with open(f"/proc/{p}/smaps_rollup") as rollup:
+                total += next((int(line.split()[1]) for line in rollup if line.startswith("Pss:")), 0) / 1024
+            with open(f"/proc/{p}/task/{p}/children") as children:
+                pending += [int(c) for c in children.read().split()]
+        except (OSError, ValueError):
+            continue
+    return total
 
 
 def main() -> None:
