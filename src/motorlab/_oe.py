@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy import signal
+from scipy import fft
 
 from motorlab import progress
 from motorlab._oe_noise import (  # noqa: F401 - re-exported
@@ -643,11 +643,20 @@ def hac_covariance(
         for sgl in range(n_signals):
             sl = slice(start + sgl * m, start + (sgl + 1) * m)
             g += jac[sl] * res[sl, None]
-        kg = signal.fftconvolve(g, weights[:, None], mode="same", axes=0) if band > 0 else g
+        kg = _smoothed(g, weights) if band > 0 else g
         s_mat += g.T @ kg
     s_mat = 0.5 * (s_mat + s_mat.T) * n / max(n - p, 1)
     cov = h_inv @ s_mat @ h_inv
     return cov, cov_white, null, bandwidth
+
+
+def _smoothed(g: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """Each column of ``g`` convolved with the (odd-length, centred) ``weights``, as long as ``g``:
+    ``scipy.signal.fftconvolve(g, weights[:, None], mode="same", axes=0)``, by scipy.fft (what it does)."""
+    m, half = g.shape[0], weights.size // 2
+    size = fft.next_fast_len(m + weights.size - 1, real=True)
+    full = fft.irfft(fft.rfft(g, size, axis=0) * fft.rfft(weights, size)[:, None], size, axis=0)
+    return full[half : half + m]
 
 
 @dataclass

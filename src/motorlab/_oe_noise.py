@@ -10,9 +10,9 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 import numpy as np
-from scipy import linalg, signal
+from scipy import linalg
 
-from motorlab._oe_sim import StatePlant, _Discrete, _Modal
+from motorlab._oe_sim import StatePlant, _Discrete, _Modal, first_order
 
 if TYPE_CHECKING:  # annotations only: _oe imports this module
     from motorlab._oe import Log, OEModel
@@ -73,6 +73,14 @@ def _filters(d: _Discrete) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 def _adjoint(num: np.ndarray, den: np.ndarray, u: np.ndarray) -> np.ndarray:
     """a_k = Σ_{m≥0} h(m)·u_{k+m} for the impulse response h of num/den (filtering backwards in time)."""
+    if den[2] == 0.0:  # one state (the feedforward model): (n0 + n1·z⁻¹ + n2·z⁻²)/(1 − a·z⁻¹)
+        v = np.asarray(u, dtype=float)[::-1]
+        w = num[0] * v
+        w[1:] += num[1] * v[:-1]
+        w[2:] += num[2] * v[:-2]
+        return first_order(-float(den[1]), w)[::-1]
+    from scipy import signal
+
     return signal.lfilter(num, den, u[::-1], axis=0)[::-1]
 
 

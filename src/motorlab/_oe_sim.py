@@ -14,12 +14,12 @@ exceed the friction level F = −b_F[w] (stiction at the Coulomb level).
 Method
 ------
 Between events (speed reaching zero, break-away) the plant is linear time-invariant with a held input,
-so a stretch of samples is propagated exactly (matrix exponential of the augmented system) as a second-
-order recursion run by :func:`scipy.signal.lfilter`. An event is detected on the grid, its time inside
-the step found by linear interpolation of the speed (or of the drive margin for a break-away), and the
-step finished in the new regime with two fractional-step propagations. The located event time varies
-continuously with the parameters, so the simulated outputs do too, which finite-difference Jacobians
-need; no smoothing of sgn(ω) is required.
+so a stretch of samples is propagated exactly (matrix exponential of the augmented system) as a first-
+or second-order recursion (:func:`first_order` for one state, :func:`scipy.signal.lfilter` for two).
+An event is detected on the grid, its time inside the step found by linear interpolation of the
+speed (or of the drive margin for a break-away), and the step finished in the new regime with two
+fractional-step propagations. The located event time varies continuously with the parameters, so the
+simulated outputs do too, which finite-difference Jacobians need; no smoothing of sgn(ω) is required.
 """
 
 from __future__ import annotations
@@ -28,9 +28,30 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import linalg, signal
+from scipy import linalg
+from scipy.linalg import lapack
 
 _MIN_CHUNK = 64
+
+
+def first_order(a: float, u: np.ndarray) -> np.ndarray:
+    """y with y_k = a·y_(k−1) + u_k along axis 0 (y_(−1) = 0): ``scipy.signal.lfilter([1], [1, −a], u, axis=0)``.
+
+    Solved as the unit lower bidiagonal system it is (LAPACK ``dtbtrs``: the same forward
+    substitution). The feedforward model has one state, so its fits never import ``scipy.signal``
+    (which imports ``scipy.stats``: 0.7 s of every ``analyze feedforward``); the motor model's
+    two-state recursion stays with lfilter.
+    """
+    y = np.array(u, dtype=float, order="F")  # a copy: the solve overwrites it
+    if y.shape[0] == 0:
+        return y
+    rows = y.reshape(y.shape[0], -1, order="F")
+    band = np.empty((2, rows.shape[0]))
+    band[0], band[1] = 1.0, -a  # band[k, j] = A[j + k, j]
+    x, info = lapack.dtbtrs(band, rows, uplo="L", diag="U", overwrite_b=1)
+    if info != 0:
+        raise ValueError(f"dtbtrs failed (info {info})")
+    return x.reshape(y.shape, order="F")
 
 
 @dataclass(frozen=True)
@@ -172,8 +193,10 @@ def _propagate(d: _Discrete, x0: np.ndarray, v: np.ndarray) -> tuple[np.ndarray,
     e[:, 1 : m + 1] = d.bv[:, None] * v[None, :] + d.c[:, None]
     e[:, m + 1] = 0.0
     if n == 1:
-        x = signal.lfilter([0.0, 1.0], [1.0, -d.ad[0, 0]], e[0])[1:, None]
+        x = first_order(float(d.ad[0, 0]), e[0, :-1])[:, None]  # lfilter([0, 1], [1, −a], e[0])[1:]
     else:
+        from scipy import signal
+
         (a11, a12), (a21, a22) = d.ad
         den = [1.0, -(a11 + a22), a11 * a22 - a12 * a21]
         e0, e1 = e

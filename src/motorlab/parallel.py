@@ -62,14 +62,18 @@ class Forked:
     def result(self) -> Any:
         """``fn(item)``, or the exception it raised (a child that died without answering: ChildProcessError)."""
         try:
-            ok, value = self._answer.recv()
-        except EOFError:
-            raise ChildProcessError(f"a forked child ended with code {self._process.exitcode}") from None
+            answer = self._answer.recv()
+        except EOFError:  # it ended without answering
+            answer = None
+        except BaseException:  # Ctrl+C here: end the child too
+            self._process.terminate()
+            raise
         finally:
-            if self._process.is_alive() and not self._answer.poll():
-                self._process.terminate()
             self._process.join()
             self._answer.close()
+        if answer is None:
+            raise ChildProcessError(f"a forked child ended with code {self._process.exitcode}")
+        ok, value = answer
         if not ok:
             raise value
         return value
