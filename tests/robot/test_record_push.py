@@ -205,15 +205,20 @@ def test_dashboard_client_reads_status_and_opmodes(robot: EmulatedRobot) -> None
         dash.stop_op_mode()
 
 
-def test_ctrl_c_stops_the_robot_and_keeps_the_log(robot: EmulatedRobot, tmp_path: Path) -> None:
+@pytest.mark.parametrize("inherited", ["default", "ignored"])
+def test_ctrl_c_stops_the_robot_and_keeps_the_log(robot: EmulatedRobot, tmp_path: Path, inherited: str) -> None:
+    """SIGINT stops the OpMode within 0.1 s, also in a process started with SIGINT ignored (a shell's
+    background job: Python then leaves it ignored, and this test failed when the suite ran as one)."""
     import signal
     import subprocess
     import sys
 
+    disposition = signal.SIG_IGN if inherited == "ignored" else signal.SIG_DFL
     log = tmp_path / "run.csv"
     proc = subprocess.Popen([sys.executable, "-m", "motorlab", "robot", "record", "--host", "127.0.0.1",
                              "--dashboard-port", str(robot.dashboard_port), "--opmode", OPMODE, "--seconds", "60",
-                             "-o", str(log)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                             "-o", str(log)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, disposition))
     try:
         deadline = time.monotonic() + 30
         while robot.status != "RUNNING" and time.monotonic() < deadline:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import math
+import signal
 import sys
 import tempfile
 import threading
@@ -153,6 +154,10 @@ def run_record(args: argparse.Namespace) -> int:
         finally:
             done.set()
 
+    # Ctrl-C stops the robot even in a process started with SIGINT ignored (a script's background job,
+    # where Python leaves it ignored): `kill -INT` is then the way to stop it, and it must work.
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGINT, signal.default_int_handler)
     thread = threading.Thread(target=work, name="motorlab-record", daemon=True)
     print(f"recording {args.opmode!r} on {args.host}:{args.dashboard_port} for up to {args.seconds:g} s "
           "(Ctrl-C stops the robot)", file=sys.stderr)
