@@ -13,6 +13,7 @@ done in ``metadata["warnings"]`` and ``metadata["decimation"]``.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 
@@ -22,13 +23,12 @@ from motorlab.recording import Recording
 MAX_POINTS = 50_000
 
 
-def _blocks(values: np.ndarray, k: int) -> np.ndarray:
-    """Means of consecutive blocks of ``k`` samples (the last block may be shorter)."""
-    whole = values.size // k * k
-    means = values[:whole].reshape(-1, k).mean(axis=1)
-    if whole < values.size:
-        means = np.append(means, values[whole:].mean())
-    return means
+def consecutive(x: np.ndarray, group: int, statistic: Callable[..., np.ndarray] = np.median) -> np.ndarray:
+    """``statistic`` (median or mean) of ``group`` consecutive samples of ``x``, the last group shorter when
+    the size is no multiple: how a log denser than its estimate needs is reduced (and the analysis says so)."""
+    whole = x.size // group * group
+    out = statistic(x[:whole].reshape(-1, group), axis=1)
+    return np.append(out, statistic(x[whole:])) if whole < x.size else out
 
 
 def block_mean(recording: Recording, *, max_points: int = MAX_POINTS) -> Recording:
@@ -51,7 +51,7 @@ def block_mean(recording: Recording, *, max_points: int = MAX_POINTS) -> Recordi
     if n <= max_points:
         return recording
     k = math.ceil(n / max_points)
-    signals = {name: _blocks(values, k) for name, values in recording.signals.items()}
+    signals = {name: consecutive(values, k, np.mean) for name, values in recording.signals.items()}
     lines = None if recording.lines is None else recording.lines[::k].copy()
     metadata = dict(recording.metadata)
     metadata["decimation"] = {"block": k, "samples": n, "points": math.ceil(n / k)}
@@ -62,8 +62,8 @@ def block_mean(recording: Recording, *, max_points: int = MAX_POINTS) -> Recordi
     ]
     if isinstance(metadata.get("file_starts"), list):
         metadata["file_starts"] = [int(s) // k for s in metadata["file_starts"]]
-    out = Recording(time=_blocks(recording.time, k), signals=signals, metadata=metadata, source=recording.source,
-                    lines=lines)
+    out = Recording(time=consecutive(recording.time, k, np.mean), signals=signals, metadata=metadata,
+                    source=recording.source, lines=lines)
     out.segments = {key: (a // k, -(-b // k)) for key, (a, b) in recording.segments.items()}
     return out
 

@@ -360,14 +360,6 @@ def read_position_log(paths: list[str], *, cpr: float | None, current_unit: str 
 # ---- tables of the bench analyses (lcr, torque, pulse, gains) ---------------------------------------------------
 
 
-def consecutive(x: np.ndarray, group: int, statistic: Callable[..., np.ndarray] = np.median) -> np.ndarray:
-    """``statistic`` (median or mean) of ``group`` consecutive samples of ``x``, the last group shorter when
-    the size is no multiple: how a log denser than its estimate needs is reduced (and the analysis says so)."""
-    whole = x.size // group * group
-    out = statistic(x[:whole].reshape(-1, group), axis=1)
-    return np.append(out, statistic(x[whole:])) if whole < x.size else out
-
-
 def read_tables(paths: Sequence[str]) -> list[Recording]:
     """Read headed CSV files (``motorlab.io.read_csv``), one :class:`Recording` per path.
 

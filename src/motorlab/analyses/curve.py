@@ -27,7 +27,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from motorlab.analyses._common import consecutive, reader_warnings, sources_of
+from motorlab.analyses._common import reader_warnings, sources_of
+from motorlab.decimate import consecutive
 from motorlab.errors import FitError, LogFormatError, OptionError
 from motorlab.fitting import LeastSquares, fit_linear, r_squared
 from motorlab.recording import Recording

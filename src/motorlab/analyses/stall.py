@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from motorlab.analyses._common import consecutive, reader_warnings, sources_of
+from motorlab.analyses._common import reader_warnings, sources_of
 from motorlab.analyses._stall_cuts import NO_CURRENT, Cut, find_cut, first_full_sample, set_point
 from motorlab.analyses._stall_fit import (
     REFERENCE_SAMPLES,
@@ -33,6 +33,7 @@ from motorlab.analyses._stall_fit import (
     simulate_runs,
 )
 from motorlab.analyses._stall_report import answers, make_panels, parameters_of, run_rows
+from motorlab.decimate import consecutive
 from motorlab.errors import FitError, LogFormatError, OptionError
 from motorlab.recording import Recording
 from motorlab.results import FitResult
