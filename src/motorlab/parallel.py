@@ -44,8 +44,11 @@ def can_fork() -> bool:
     """Whether children may be forked here: Linux, no other Python thread, and not itself a pool's
     child (a daemonic process may have none). Work too short to repay a spawned child's start
     runs here when this is False."""
-    return (sys.platform == "linux" and threading.active_count() == 1
-            and not multiprocessing.current_process().daemon)
+    return _fork_safe() and not multiprocessing.current_process().daemon
+
+
+def _fork_safe() -> bool:
+    return sys.platform == "linux" and threading.active_count() == 1
 
 
 class Forked:
@@ -93,7 +96,7 @@ def _forked(fn: Callable[[Any], Any], item: Any, sender: Any) -> None:
 
 
 def _context() -> BaseContext:
-    if sys.platform == "linux" and threading.active_count() == 1:
+    if _fork_safe():
         return multiprocessing.get_context("fork")
     return multiprocessing.get_context("spawn")
 

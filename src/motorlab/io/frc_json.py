@@ -10,7 +10,6 @@ back separately. See ``docs/formats.md`` and ``shared/data/real/README.md``.
 from __future__ import annotations
 
 import difflib
-import itertools
 import math
 import os
 import re
@@ -117,11 +116,13 @@ def _parse_rows(raw: bytes, start: int, stop: int) -> tuple[np.ndarray, np.ndarr
     return values.reshape(opens.size, ncol), opens
 
 
-def _parse_test(part: tuple[bytes, int, int, int]) -> tuple[_Parsed, int] | None:
+def _parse_test(part: tuple[bytes, int, int, int], report: Any = None) -> tuple[_Parsed, int] | None:
     """A test's rows ``raw[start:stop]`` whose ``[`` is on line ``line``: (rows and their lines, newlines
-    inside), or None (:func:`_parse_rows`)."""
+    inside), or None (:func:`_parse_rows`); ``report.advance()`` when given."""
     raw, start, stop, line = part
     found = _parse_rows(raw, start, stop)
+    if report is not None:
+        report.advance()
     if found is None:
         return None
     rows, opens = found
@@ -139,22 +140,24 @@ def _parse_test(part: tuple[bytes, int, int, int]) -> tuple[_Parsed, int] | None
 PARALLEL_BYTES = 16_000_000
 
 
-def _parse_tests(parts: list[tuple[bytes, int, int, int]]) -> list[tuple[_Parsed, int] | None]:
-    """:func:`_parse_test` of each part; a large file's half in a forked child while this process parses the other."""
+def _parse_tests(parts: list[tuple[bytes, int, int, int]], report: Any) -> list[tuple[_Parsed, int] | None]:
+    """:func:`_parse_test` of each part (``report.advance()`` after each); a large file's half in a forked
+    child while this process parses the other."""
     from motorlab import parallel
 
     sizes = [stop - start for _, start, stop, _ in parts]
     if len(parts) < 2 or sum(sizes) < PARALLEL_BYTES or not parallel.can_fork():
-        return [_parse_test(part) for part in parts]
+        return [_parse_test(part, report) for part in parts]
     groups: list[list[int]] = [[], []]
     for k in sorted(range(len(parts)), key=lambda k: -sizes[k]):  # largest first, to the lighter group
         min(groups, key=lambda g: sum(sizes[i] for i in g)).append(k)
     child = parallel.Forked(_parse_group, [parts[k] for k in groups[1]])
-    done = [_parse_group([parts[k] for k in groups[0]])]
+    done = [[_parse_test(parts[k], report) for k in groups[0]]]
     try:
         done.append(child.result())
     except ChildProcessError:  # killed (out of memory?): its half here, then
         done.append(_parse_group([parts[k] for k in groups[1]]))
+    report.advance(len(groups[1]))
     found: dict[int, tuple[_Parsed, int] | None] = {}
     for group, results in zip(groups, done, strict=True):
         found.update(zip(group, results, strict=True))
@@ -185,13 +188,14 @@ def _extract_tests(raw: bytes, name: str = "") -> tuple[bytes, dict[str, _Parsed
     parsed: dict[str, _Parsed] = {}
     pieces: list[bytes] = []
     at = 0
+    parts, line, counted = [], 1, 0
+    for _, start, stop in found:  # each test's first line: the newlines before it, each counted once
+        line += raw.count(b"\n", counted, start)
+        counted = start
+        parts.append((raw, start, stop, line))
     with progress.task(f"Reading {os.path.basename(name)}", total=len(found), unit="tests") as report:
-        starts = [start for _, start, _ in found]  # each test's line: the newlines before it, counted once
-        lines = list(itertools.accumulate((raw.count(b"\n", a, b) for a, b in zip([0, *starts], starts, strict=False)),
-                                          initial=1))[1:]
-        done = _parse_tests([(raw, start, stop, line) for (_, start, stop), line in zip(found, lines, strict=True)])
+        done = _parse_tests(parts, report)
         for (test, start, stop), result in zip(found, done, strict=True):
-            report.advance(detail=test)
             if result is None:
                 continue
             parsed[test], breaks = result
