@@ -58,6 +58,9 @@ def test_road_runner_ramp_to_gains(page: Any, ramp: tuple[Path, float], size: tu
         page.upload("Choose or drop any log", path)
     page.wait_text("Road Runner ramp log")
     page.wait_text("Proposed: Road Runner feedforward fit")  # on upload, before any option was given
+    options = page.field("What this file measures").find_elements("tag name", "option")
+    bare = [o.get_attribute("value") for o in options if o.text.strip() == o.get_attribute("value")]
+    assert not bare, f"experiments named by their key, not in words: {bare}"  # (the stall runs read "stall")
     page.type("counts per revolution", "8192")
     page.check()
     page.click("Run the fit")

@@ -22,9 +22,14 @@ export async function addFiles(t, files) {
   save();
 }
 
-function proposalWords(info) {
+// An experiment in words: the app's own, else the title its description gives (never its key).
+function experimentWords(ctx, key) {
+  return EXPERIMENT_WORDS[key] || (ctx.app.schema.analyze[key] || {}).title || key;
+}
+
+function proposalWords(ctx, info) {
   if (/^roadrunner/.test(info.format || "")) return "Road Runner feedforward fit (kS, kV, kA)";
-  return EXPERIMENT_WORDS[info.experiment] || info.experiment;
+  return experimentWords(ctx, info.experiment);
 }
 
 function fileRow(ctx, entry) {
@@ -43,15 +48,15 @@ function fileRow(ctx, entry) {
   }
   const select = el("select", { id, onchange: (e) => { entry.experiment = e.target.value; entry.chosen = true; save(); ctx.rerender(); } });
   for (const key of Object.keys(ctx.app.schema.analyze)) {
-    const words = EXPERIMENT_WORDS[key] || ctx.app.schema.analyze[key].label || key;
-    select.append(el("option", { value: key, text: key === info.experiment ? proposalWords(info) : words, selected: key === entry.experiment }));
+    const words = key === info.experiment ? proposalWords(ctx, info) : experimentWords(ctx, key);
+    select.append(el("option", { value: key, text: words, selected: key === entry.experiment }));
   }
   const differs = entry.chosen && info.experiment && entry.experiment !== info.experiment;
   return el("li", { class: "file", "data-file": entry.name },
     el("strong", { text: entry.name }), el("span", { class: "format", text: ` ${info.format_words || info.format}` }),
-    el("div", { class: "proposal" }, el("span", { text: "Proposed: " }), el("span", { class: "proposed", text: proposalWords(info) })),
+    el("div", { class: "proposal" }, el("span", { text: "Proposed: " }), el("span", { class: "proposed", text: proposalWords(ctx, info) })),
     el("div", { class: "field inline" }, el("label", { for: id, text: "What this file measures" }), select),
-    differs ? el("p", { class: "small" }, `This file looks like ${proposalWords(info)}. `,
+    differs ? el("p", { class: "small" }, `This file looks like ${proposalWords(ctx, info)}. `,
       el("button", { type: "button", class: "link", text: "Use that", onclick: () => { entry.experiment = info.experiment; entry.chosen = false; save(); ctx.rerender(); } })) : null,
     remove);
 }
@@ -159,7 +164,7 @@ function groupCard(ctx, key, files) {
     onclick: () => runGroup(ctx, key, files) });
   const cancel = el("button", { type: "button", text: "Cancel", hidden: !running, onclick: () => { const c = controllers.get(key); if (c) c.abort(); } });
   const card = el("section", { class: "card group", "data-group": key },
-    el("h3", { text: /^roadrunner/.test((files[0].info || {}).format || "") ? "Road Runner feedforward fit (kS, kV, kA)" : EXPERIMENT_WORDS[exp] || exp }),
+    el("h3", { text: /^roadrunner/.test((files[0].info || {}).format || "") ? "Road Runner feedforward fit (kS, kV, kA)" : experimentWords(ctx, exp) }),
     el("p", { class: "small", text: `From ${files.map((f) => f.name).join(", ")}` }),
     box, more, commandBox(["analyze", exp, ...files.map((f) => f.name), ...columnRules(files).map((r) => `--column=${r}`), ...argvOf(fields, values)]),
     el("div", { class: "actions" }, runButton, cancel, running ? el("progress", { "aria-label": "Progress of the fit" }) : null,
