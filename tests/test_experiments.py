@@ -26,7 +26,7 @@ def test_every_module_describes_one_experiment_whose_analysis_exists() -> None:
         assert isinstance(exp, Experiment)
         module, function = exp.analysis.split(":")
         assert callable(getattr(importlib.import_module(module), function)), name
-        assert exp.characterize is not None
+        assert exp.session is not None
         assert exp.shaft
         keys = [opt.key for opt in exp.options]
         assert len(keys) == len(set(keys)), f"{name}: two options with one name"

@@ -101,3 +101,20 @@ def test_from_motorlab_import_gives_the_submodule() -> None:
             "print(type(feedforward).__name__, hasattr(feedforward, 'motor_estimates'), callable(ml.identify))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
     assert out == ["CallableModule", "True", "True"]
+
+
+def test_the_public_face_is_the_registry() -> None:
+    """dir(motorlab) lists every experiment of the registry, the notebook's functions and the public types,
+    and no helper; a name the package merely imports (``os``) is no attribute."""
+    import motorlab as ml
+    from motorlab.experiments import all_experiments
+
+    names = set(dir(ml))
+    assert {name.replace("-", "_") for name in all_experiments()} <= names
+    assert {"analyze", "read", "describe", "FitResult", "Estimate", "Recording"} <= names
+    assert not names & {"Any", "CallableModule", "annotations", "importlib", "types", "os"}
+    assert sorted(ml.__all__) == sorted(names)
+    for helper in ("os", "np", "Path", "sys"):
+        with pytest.raises(AttributeError):
+            getattr(ml, helper)
+    assert ml.FitResult.__name__ == "FitResult"

@@ -25,18 +25,46 @@ from typing import Any
 
 __version__ = "0.1.0"
 
+#: The few public types, by the module that defines them (``ml.FitResult`` …).
+_TYPES = {
+    "FitResult": "motorlab.results", "Estimate": "motorlab.results", "Recording": "motorlab.recording",
+    "MotorParams": "motorlab.model", "Motor": "motorlab.catalog",
+}
+#: The notebook's functions besides one per experiment.
+_FUNCTIONS = ("analyze", "read", "describe")
+
+
+def _experiment_functions() -> list[str]:
+    from motorlab.experiments import all_experiments
+
+    return [name.replace("-", "_") for name in all_experiments()]
+
+
+def _public() -> list[str]:
+    return sorted([*_experiment_functions(), *_FUNCTIONS, *_TYPES])
+
+
 def __getattr__(name: str) -> Any:
-    """``analyze``, ``read``, ``describe`` and one function per experiment, from :mod:`motorlab.notebook`."""
+    """Every experiment's notebook function, ``analyze``, ``read``, ``describe``, the public types, and the
+    subpackages (``motorlab.io`` …); nothing else (``motorlab.os`` is no attribute)."""
+    if name == "__all__":
+        return _public()
     if name.startswith("__"):
         raise AttributeError(f"module 'motorlab' has no attribute {name!r}")
-    if importlib.util.find_spec(f"{__name__}.{name}") is not None:
-        # A submodule (``from motorlab import feedforward`` wants the module): identify and
-        # feedforward are CallableModules, so ml.identify(...) still runs the experiment.
+    if name in _TYPES:
+        return getattr(importlib.import_module(_TYPES[name]), name)
+    if not name.startswith("_") and importlib.util.find_spec(f"{__name__}.{name}") is not None:
+        # A submodule (``from motorlab import progress``); identify and feedforward are CallableModules, so
+        # ml.identify(...) still runs the experiment.
         return importlib.import_module(f"{__name__}.{name}")
-    try:
+    if name in _FUNCTIONS or name in _experiment_functions():
         return getattr(importlib.import_module("motorlab.notebook"), name)
-    except AttributeError:
-        raise AttributeError(f"module 'motorlab' has no attribute {name!r}") from None
+    raise AttributeError(f"module 'motorlab' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    """What a notebook user reaches for: the experiments, the notebook's functions and the public types."""
+    return _public()
 
 
 class CallableModule(types.ModuleType):

@@ -338,10 +338,10 @@ class _UnitContext:
                                  self.estimate("b"), self.estimate("Tf"))
 
 
-#: Experiment name -> adapter calling the analysis' library function with the session's settings
-#: (the descriptions' ``characterize``).
+#: Experiment name -> adapter running the experiment's own ``run`` (the command's and the notebook's) with
+#: the option values its description draws from the session (:meth:`motorlab.experiments.Experiment.in_session`).
 ADAPTERS: dict[str, Callable[[_UnitContext], FitResult]] = {
-    name: exp.characterize for name, exp in all_experiments().items() if exp.characterize is not None
+    name: exp.in_session for name, exp in all_experiments().items() if exp.session is not None
 }
 
 

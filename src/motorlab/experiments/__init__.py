@@ -219,6 +219,37 @@ class RigRun:
     order: int = 100
 
 
+#: The key of :meth:`Experiment.in_session`'s values that holds the unit's earlier fits (by experiment name):
+#: ``run(paths, values)`` uses ``values.get(FITS, {})`` where a session gives it more than an option can say.
+FITS = "fits"
+#: Likewise the unit's estimates so far (by symbol): what fills in where a command would need an option.
+KNOWN = "known"
+
+
+@dataclass(frozen=True)
+class FromSession:
+    """What a session gives an experiment's ``run``.
+
+    Parameters
+    ----------
+    options
+        Option values by keyword, as a notebook caller gives them (SI numbers or strings with units);
+        None is left out (the option's default holds).
+    fits
+        Earlier results of the unit that the run may use (``"spindown"``, …).
+    known
+        The unit's estimates so far (``"R"``, ``"K"`` …) that the run may fall back on where the file lacks
+        what a command's option would give (identify's R and K for a log without current).
+    notes
+        What the session contributed, said in the result's warnings.
+    """
+
+    options: Mapping[str, Any]
+    fits: Mapping[str, Any] = field(default_factory=dict)
+    known: Mapping[str, Any] = field(default_factory=dict)
+    notes: tuple[str, ...] = ()
+
+
 @dataclass(frozen=True)
 class Experiment:
     """The description of one experiment.
@@ -252,8 +283,10 @@ class Experiment:
         Result parameter -> motor parameter of the final table.
     loaded
         Run with the flywheel attached (its J, b, Tf include the flywheel and gearbox).
-    characterize
-        ``adapter(ctx) -> FitResult`` for a session (:mod:`motorlab.characterize`).
+    session
+        ``session(ctx) -> FromSession``: the option values a session's table and what the unit has
+        measured so far give :attr:`run` (:mod:`motorlab.characterize`). A session runs the very
+        ``run`` the CLI and the notebook call (:meth:`in_session`): one analysis path per experiment.
     rig
         How the virtual rig produces the experiment's file, or None.
     """
@@ -270,7 +303,7 @@ class Experiment:
     settings: tuple[Setting, ...] = ()
     contributes: Mapping[str, str] = field(default_factory=dict)
     loaded: bool = False
-    characterize: Callable[[Any], FitResult] | None = None
+    session: Callable[[Any], FromSession] | None = None
     rig: RigRun | None = None
     title: str = ""
 
@@ -321,6 +354,26 @@ class Experiment:
             # Every R says at what temperature it holds (analyze stall: 25 °C; the others: as measured).
             result.details.setdefault("R_temperature", R_AS_MEASURED)
         result.check_physics()  # also what the run added after the analysis made its result
+        return result
+
+    def in_session(self, ctx: Any) -> FitResult:
+        """Run the analysis for a unit of a session: :attr:`session`'s option values through :meth:`analyze`.
+
+        The session's answer is the command's answer for the same files and options, warnings included;
+        what the unit contributed (its K, an earlier fit) is said in the result's warnings.
+
+        Raises
+        ------
+        OptionError
+            The experiment takes no part in a session, or a value it needs is missing.
+        """
+        if self.session is None:
+            raise OptionError(f"{self.name} takes no part in a session")
+        given = self.session(ctx)
+        values = self.values({key: value for key, value in given.options.items() if value is not None})
+        values[FITS], values[KNOWN] = dict(given.fits), dict(given.known)
+        result = self.analyze(ctx.files, values)
+        result.warnings.extend(note for note in given.notes if note not in result.warnings)
         return result
 
     def schema(self) -> dict[str, Any]:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from motorlab.experiments import Experiment, Option, Setting
+from motorlab.experiments import Experiment, FromSession, Option, Setting
 from motorlab.experiments._shared import COLUMN, read_tables
 
 
@@ -15,11 +15,9 @@ def run(paths: list[str], v: dict[str, Any]) -> Any:
     return curve(read_tables(paths), voltage=v["voltage"])
 
 
-def characterize(ctx: Any) -> Any:
+def session(ctx: Any) -> FromSession:
     """The session's curve of the bare motor, at the voltage its table gives (or its voltage column)."""
-    from motorlab.analyses.curve import curve
-
-    return curve(read_tables(ctx.files), voltage=ctx.setting("voltage"))
+    return FromSession({"voltage": ctx.setting("voltage")})
 
 
 EXPERIMENT = Experiment(
@@ -41,5 +39,5 @@ EXPERIMENT = Experiment(
     shaft="motor shaft of the bare motor (no gearbox), physical torque",
     order=120,
     settings=(Setting("voltage", "V", "terminal voltage of the curve (when the file has no voltage column)"),),
-    characterize=characterize,
+    session=session,
 )

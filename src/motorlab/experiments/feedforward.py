@@ -5,7 +5,7 @@ from __future__ import annotations
 from typing import Any
 
 from motorlab.errors import OptionError
-from motorlab.experiments import Experiment, Option, RigRun, stderr_or_none
+from motorlab.experiments import Experiment, FromSession, Option, RigRun, stderr_or_none
 from motorlab.experiments._shared import COLUMN, EXCLUDE, noted, spans, without_spans
 
 MECHANISMS = ("simple", "elevator", "arm")  # as motorlab.feedforward.MECHANISMS (tests/test_experiments.py)
@@ -43,35 +43,27 @@ def run(paths: list[str], v: dict[str, Any]) -> Any:
         result.details["cpr"] = {"given": cpr, "note": "counts per logged rotation: the position quantum is "
                                  "one rotation (unitsPerRotation) / cpr"}
     if v["resistance"] is not None:
-        result.parameters.update(
-            motor_estimates(result, resistance=v["resistance"], torque_constant=v["torque_constant"])
-        )
+        result.parameters.update(motor_estimates(
+            result, resistance=v["resistance"], resistance_stderr=v["resistance_stderr"] or 0.0,
+            torque_constant=v["torque_constant"], torque_constant_stderr=v["torque_constant_stderr"] or 0.0,
+        ))
     from motorlab.analyses._heat import add_heat_warning
 
     return noted(add_heat_warning(result, runs, resistance=v["resistance"]), left)
 
 
-def characterize(ctx: Any) -> Any:
+def session(ctx: Any) -> FromSession:
     """The session's SysId log; R and K from the unit turn the gains into motor parameters."""
-    from motorlab.feedforward import feedforward, motor_estimates, read_tests
-
-    cpr = ctx.cpr
     # A SysId JSON file holds angles already (no counts; its rotations need not be the motor's):
     # the session's cpr is not applied to it. Both sides of a drivetrain are fitted.
     json_only = all(p.lower().endswith(".json") for p in ctx.files)
-    runs = read_tests(list(ctx.files), cpr=None if json_only else cpr)
-    runs, left = without_spans(runs, {"exclude": ctx.setting("exclude")}, split=True)
-    result = noted(feedforward(runs, cpr=None if json_only else cpr), left)
     r, k = ctx.estimate("R"), ctx.estimate("K")
-    if r is not None:
-        result.parameters.update(
-            motor_estimates(
-                result, resistance=r.value, resistance_stderr=stderr_or_none(r) or 0.0,
-                torque_constant=None if k is None else k.value,
-                torque_constant_stderr=0.0 if k is None else stderr_or_none(k) or 0.0,
-            )
-        )
-    return result
+    return FromSession({
+        "cpr": None if json_only else ctx.cpr, "exclude": ctx.setting("exclude"),
+        "R": None if r is None else r.value, "R_stderr": None if r is None else stderr_or_none(r),
+        "K": None if r is None or k is None else k.value,
+        "K_stderr": None if r is None or k is None else stderr_or_none(k),
+    })
 
 
 EXPERIMENT = Experiment(
@@ -89,8 +81,12 @@ EXPERIMENT = Experiment(
                help="the gravity term: none (simple), kG (elevator), kG·cos(θ+φ) (arm)"),
         Option("R", "ohm", positive=True, dest="resistance", label="Winding resistance",
                help="if known (an LCR reading): turns the gains into K, J, b, Tf"),
+        Option("R-stderr", "ohm", nonnegative=True, dest="resistance_stderr",
+               label="Uncertainty of the winding resistance", help="standard error of R; left empty: exact"),
         Option("K", "V*s/rad", positive=True, dest="torque_constant", label="Back-EMF constant",
                help="if known (a spin-down): separates K from b in kV; needs the resistance too"),
+        Option("K-stderr", "V*s/rad", nonnegative=True, dest="torque_constant_stderr",
+               label="Uncertainty of the back-EMF constant", help="standard error of K; left empty: exact"),
         Option("side", kind="choice", choices=("both", "left", "right"), default="both",
                label="Drivetrain side", help="of a drivetrain log: both sides' tests together (as SysId), or one"),
         Option("units", kind="choice", choices=UNIT_CHOICES, label="Unit of a frc-characterization file",
@@ -103,7 +99,7 @@ EXPERIMENT = Experiment(
     order=80,
     # A SysId log is usually taken on a mechanism: its J, b, Tf are reported, not the motor's.
     contributes={},
-    characterize=characterize,
+    session=session,
     # Long enough for the flywheel's mechanical time constant (≈ 37 s through a NeveRest 40's lossy
     # gearbox): SysId's dynamic test must approach steady state or kV and kA are confounded.
     rig=RigRun("sysid", "sysid.json", {"quasistatic_duration": 60.0, "dynamic_duration": 40.0}, order=110),

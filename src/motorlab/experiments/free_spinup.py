@@ -5,7 +5,7 @@ from __future__ import annotations
 from typing import Any
 
 from motorlab.errors import OptionError
-from motorlab.experiments import Experiment, Option, RigRun, Setting, stderr_or_none
+from motorlab.experiments import Experiment, FromSession, Option, RigRun, Setting, stderr_or_none
 from motorlab.experiments._shared import CPR
 
 
@@ -23,26 +23,17 @@ def run(paths: list[str], v: dict[str, Any]) -> Any:
     )
 
 
-def characterize(ctx: Any) -> Any:
+def session(ctx: Any) -> FromSession:
     """The session's free spin-up with the unit's K, b and Tf known so far."""
-    from motorlab.analyses.free_spinup import free_spinup, read_edges
-
-    if len(ctx.files) != 1:
-        raise OptionError(f"free-spinup analyses one file of edge times, got {len(ctx.files)}")
     k = ctx.require("K", "the torque is K·I")
-    current = ctx.setting("current")
-    if current is None:  # the session validation requires it; kept for library callers
-        raise OptionError("free-spinup needs its current setting")
     b, tf = ctx.estimate("b"), ctx.estimate("Tf")
-    return free_spinup(
-        read_edges(ctx.files[0]), torque_constant=k.value, torque_constant_stderr=stderr_or_none(k),
-        current=current, current_stderr=ctx.setting("current_stderr"), cpr=ctx.cpr,
-        edges_per_revolution=ctx.setting("edges_per_revolution"),
-        viscous_friction=None if b is None else max(b.value, 0.0),
-        viscous_friction_stderr=None if b is None else stderr_or_none(b),
-        coulomb_friction=None if tf is None else max(tf.value, 0.0),
-        coulomb_friction_stderr=None if tf is None else stderr_or_none(tf),
-    )
+    return FromSession({
+        "cpr": ctx.cpr, "K": k.value, "K_stderr": stderr_or_none(k),
+        "current": ctx.setting("current"), "current_stderr": ctx.setting("current_stderr"),
+        "edges_per_rev": ctx.setting("edges_per_revolution"),
+        "b": None if b is None else max(b.value, 0.0), "b_stderr": None if b is None else stderr_or_none(b),
+        "Tf": None if tf is None else max(tf.value, 0.0), "Tf_stderr": None if tf is None else stderr_or_none(tf),
+    })
 
 
 EXPERIMENT = Experiment(
@@ -81,6 +72,6 @@ EXPERIMENT = Experiment(
         Setting("edges_per_revolution", "float", "rising edges per revolution (default cpr/4: one channel)"),
     ),
     contributes={"J": "J"},
-    characterize=characterize,
+    session=session,
     rig=RigRun("free-spinup", "free_spinup.csv", {"current": 0.5}, order=50),
 )

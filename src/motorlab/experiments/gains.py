@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from motorlab.experiments import Experiment, Option, RigRun, Setting
+from motorlab.experiments import Experiment, FromSession, Option, RigRun, Setting
 from motorlab.experiments._shared import COLUMN, read_tables
 
 
@@ -16,17 +16,15 @@ def _gain(name: str, *, title: str, summary: str, inputs: str, unit: str, exampl
 
         return getattr(gains, name)(read_tables(paths), nominal=v["nominal"])
 
-    def characterize(ctx: Any) -> Any:
-        from motorlab.analyses import gains
-
-        return getattr(gains, name)(read_tables(ctx.files), nominal=ctx.setting("nominal"))
+    def session(ctx: Any) -> FromSession:
+        return FromSession({"nominal": ctx.setting("nominal")})
 
     return Experiment(
         name=name, title=title, summary=summary, analysis=f"motorlab.analyses.gains:{name}", inputs=inputs, run=run,
         options=(Option("nominal", unit, positive=True, metavar="GAIN", label="Nominal gain",
                         help=f"the gain it should have, to compare with, e.g. {example}"), COLUMN),
         reports=reports, shaft="electrical", order=order, settings=(Setting("nominal", unit, setting),),
-        characterize=characterize, rig=RigRun(name, f"{name}.csv", order=rig_order),
+        session=session, rig=RigRun(name, f"{name}.csv", order=rig_order),
     )
 
 

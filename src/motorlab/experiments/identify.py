@@ -5,7 +5,7 @@ from __future__ import annotations
 from typing import Any
 
 from motorlab.errors import OptionError
-from motorlab.experiments import Experiment, Option, RigRun, Setting
+from motorlab.experiments import KNOWN, Experiment, FromSession, Option, RigRun, Setting
 from motorlab.experiments._shared import COLUMN, EXCLUDE, noted, spans, without_spans
 
 PARAMETERS = ("K", "R", "L", "J", "b", "Tf")
@@ -45,7 +45,13 @@ def run(paths: list[str], v: dict[str, Any]) -> Any:
         from motorlab.stall_forecast import load_fit
 
         network = load_fit(v["thermal_fit"][0]).thermal
-    result = identify(runs, resistance=v["resistance"], torque_constant=v["torque_constant"], cpr=cpr,
+    resistance, torque_constant = v["resistance"], v["torque_constant"]
+    known = v.get(KNOWN) or {}
+    if resistance is None and not all(run.has("current") for run in runs) and "R" in known:
+        # a session's log without current: the unit's R (and K, to separate K from b) from its other experiments
+        resistance = known["R"].value
+        torque_constant = known["K"].value if "K" in known else torque_constant
+    result = identify(runs, resistance=resistance, torque_constant=torque_constant, cpr=cpr,
                       use_current=v["use_current"], thermal=v["thermal"] or network is not None, motor=v["motor"],
                       network=network, initial_temperature=v["initial_temperature"])
     if v["thermal"] or network is not None:  # the heat is in the model: its figure is among the warnings already
@@ -53,31 +59,16 @@ def run(paths: list[str], v: dict[str, Any]) -> Any:
     return noted(add_heat_warning(result, runs, resistance=v["resistance"]), left)
 
 
-def characterize(ctx: Any) -> Any:
-    """The session's logs; without current, R and K come from what the unit has measured."""
-    from motorlab.identify import read_runs
-
-    cpr = ctx.cpr
-    runs, left = without_spans(read_runs(ctx.files, cpr=cpr), {"exclude": ctx.setting("exclude")}, split=True)
+def session(ctx: Any) -> FromSession:
+    """The session's logs; the heat setting, and R and K from the unit for a log without current."""
     heat = str(ctx.setting("thermal") or "").strip()
-    if left is not None and heat and heat.lower() not in ("no", "false"):
-        raise OptionError("time spans cannot be left out of a fit of the winding's temperature (the heat of the "
-                          "whole log warms it): remove exclude or thermal from this experiment's table")
-    return noted(_identify_session(ctx, runs, cpr, heat), left)
-
-
-def _identify_session(ctx: Any, runs: list[Any], cpr: Any, heat: str) -> Any:
-    from motorlab.identify import identify
-
-    if all(run.has("current") for run in runs):
-        # heat: "yes", or the catalogue motor whose figures to use
-        return identify(runs, cpr=cpr, thermal=bool(heat) and heat.lower() not in ("no", "false"),
-                        motor=None if heat.lower() in ("", "yes", "true", "no", "false") else heat,
-                        initial_temperature=ctx.setting("initial_temperature"))
-    # Without current the feedforward gains need R (and K to separate K from b) from elsewhere.
-    r, k = ctx.estimate("R"), ctx.estimate("K")
-    return identify(
-        runs, cpr=cpr, resistance=None if r is None else r.value, torque_constant=None if k is None else k.value
+    thermal = bool(heat) and heat.lower() not in ("no", "false")
+    return FromSession(
+        {"cpr": ctx.cpr, "exclude": ctx.setting("exclude"), "thermal": thermal,
+         # heat: "yes", or the catalogue motor whose figures to use
+         "motor": heat if thermal and heat.lower() not in ("yes", "true") else None,
+         "initial_temperature": ctx.setting("initial_temperature")},
+        known={name: est for name in ("R", "K") if (est := ctx.estimate(name)) is not None},
     )
 
 
@@ -121,6 +112,6 @@ EXPERIMENT = Experiment(
     shaft="output, what the log drove, per unit of K·i",
     order=70,
     contributes={name: name for name in PARAMETERS},
-    characterize=characterize,
+    session=session,
     rig=RigRun("transient", "transient.csv", order=100),
 )

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from motorlab.experiments import Experiment, Option, RigRun, Setting
+from motorlab.experiments import Experiment, FromSession, Option, RigRun, Setting
 from motorlab.experiments._shared import COLUMN, read_tables
 
 OUTLIER_Z = 3.5  # as motorlab.analyses.lcr.OUTLIER_Z (checked by tests/test_experiments.py)
@@ -17,11 +17,9 @@ def run(paths: list[str], v: dict[str, Any]) -> Any:
     return lcr(read_tables(paths), frequency=v["frequency"], circuit=v["circuit"], threshold=v["outlier_z"])
 
 
-def characterize(ctx: Any) -> Any:
-    """The session's LCR readings."""
-    from motorlab.analyses.lcr import lcr
-
-    return lcr(read_tables(ctx.files), frequency=ctx.setting("frequency"))
+def session(ctx: Any) -> FromSession:
+    """The session's LCR readings, at the frequency its table gives."""
+    return FromSession({"frequency": ctx.setting("frequency")})
 
 
 EXPERIMENT = Experiment(
@@ -46,6 +44,6 @@ EXPERIMENT = Experiment(
     order=10,
     settings=(Setting("frequency", "Hz", "test frequency of the L/Q readings (default: file, else 1 kHz)"),),
     contributes={"R_dc": "R", "L": "L"},
-    characterize=characterize,
+    session=session,
     rig=RigRun("lcr", "lcr.csv", order=10),
 )

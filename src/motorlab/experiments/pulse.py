@@ -6,7 +6,7 @@ import math
 from typing import Any
 
 from motorlab.errors import LogFormatError, OptionError
-from motorlab.experiments import Experiment, Option, RigRun, Setting, stderr_or_none
+from motorlab.experiments import Experiment, FromSession, Option, RigRun, Setting, stderr_or_none
 from motorlab.experiments._shared import COLUMN
 
 DEFAULT_SKIP = 0.002  # as motorlab.analyses.pulse.DEFAULT_SKIP (checked by tests/test_experiments.py)
@@ -32,37 +32,32 @@ def run(paths: list[str], v: dict[str, Any]) -> Any:
         recs, amplifier_gain=ka, torque_constant=v["torque_constant"], amplifier_offset=v["amplifier_offset"],
         skip=v["skip"], tach_gain=v["tach_gain"], friction=v["friction"],
         amplifier_gain_stderr=v["amplifier_gain_stderr"], amplifier_offset_stderr=v["amplifier_offset_stderr"],
-        torque_constant_stderr=v["torque_constant_stderr"],
+        torque_constant_stderr=v["torque_constant_stderr"], gain_offset_correlation=v["gain_offset_correlation"],
     )
 
 
-def characterize(ctx: Any) -> Any:
+def session(ctx: Any) -> FromSession:
     """The session's pulse responses with the unit's K and the amplifier's and tachometer's fits."""
-    from motorlab.analyses._common import read_tables
-    from motorlab.analyses.pulse import pulse
-
     k = ctx.require("K", "the torque is Ka·K·V")
-    gain, gain_se, offset, offset_se, rho = ctx.setting("amplifier_gain"), 0.0, 0.0, 0.0, 0.0
-    if gain is None:
+    values: dict[str, Any] = {"Km": k.value, "Km_stderr": stderr_or_none(k) or 0.0,
+                              "Ka": ctx.setting("amplifier_gain"), "tach_gain": ctx.setting("tach_gain")}
+    notes: list[str] = []
+    if values["Ka"] is None:
         fit = ctx.fits.get("amplifier")
         if fit is None or "Ka" not in fit:
             raise OptionError("needs the amplifier gain: run the amplifier experiment or set amplifier_gain")
-        gain, gain_se = fit["Ka"].value, stderr_or_none(fit["Ka"]) or 0.0
+        values.update(Ka=fit["Ka"].value, Ka_stderr=stderr_or_none(fit["Ka"]) or 0.0)
         # The amplifier's zero offset I0 (its fit's intercept) drives the motor too: Tf is biased without it.
         if "I0" in fit:
-            offset, offset_se = fit["I0"].value, stderr_or_none(fit["I0"]) or 0.0
+            values.update(I0=fit["I0"].value, I0_stderr=stderr_or_none(fit["I0"]) or 0.0)
             names = fit.correlation_names
             if fit.correlation is not None and "Ka" in names and "I0" in names:
                 rho = float(fit.correlation[names.index("Ka"), names.index("I0")])
-                rho = rho if math.isfinite(rho) else 0.0
-    tach = ctx.setting("tach_gain")
-    if tach is None and "tachometer" in ctx.fits and "Kt_tach" in ctx.fits["tachometer"]:
-        tach = ctx.fits["tachometer"]["Kt_tach"].value
-    return pulse(
-        read_tables(ctx.files), amplifier_gain=gain, amplifier_gain_stderr=gain_se, amplifier_offset=offset,
-        amplifier_offset_stderr=offset_se, gain_offset_correlation=rho, torque_constant=k.value,
-        torque_constant_stderr=stderr_or_none(k) or 0.0, tach_gain=tach,
-    )
+                values["Ka_I0_correlation"] = rho if math.isfinite(rho) else 0.0
+        notes.append("the amplifier gain Ka and offset I0 are the unit's amplifier experiment's")
+    if values["tach_gain"] is None and "tachometer" in ctx.fits and "Kt_tach" in ctx.fits["tachometer"]:
+        values["tach_gain"] = ctx.fits["tachometer"]["Kt_tach"].value
+    return FromSession(values, notes=tuple(notes))
 
 
 EXPERIMENT = Experiment(
@@ -87,6 +82,9 @@ EXPERIMENT = Experiment(
         Option("Km-stderr", "N*m/A", nonnegative=True, default=0.0, dest="torque_constant_stderr",
                aliases=("K-stderr",), metavar="K", label="Uncertainty of the torque constant",
                help="standard error of K, carried into the results"),
+        Option("Ka-I0-correlation", "", default=0.0, dest="gain_offset_correlation", metavar="RHO",
+               label="Correlation of the amplifier gain and offset",
+               help="between −1 and 1, as the amplifier experiment's fit gives it; carried into Tf"),
         Option("skip", "s", nonnegative=True, default=DEFAULT_SKIP, metavar="TIME", label="Time left out after an edge",
                help="samples this long after each command edge are not fitted"),
         Option("tach-gain", "V*s/rad", positive=True, metavar="GAIN", label="Tachometer gain",
@@ -103,6 +101,6 @@ EXPERIMENT = Experiment(
         Setting("tach_gain", "V*s/rad", "tachometer gain (default: from the tachometer experiment)"),
     ),
     contributes={"J": "J", "b": "b", "Tf": "Tf"},
-    characterize=characterize,
+    session=session,
     rig=RigRun("pulse", "pulse.csv", order=90),
 )

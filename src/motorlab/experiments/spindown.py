@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from motorlab.experiments import Experiment, Option, RigRun, Setting
+from motorlab.experiments import Experiment, FromSession, Option, RigRun, Setting
 from motorlab.experiments._shared import COLUMN, CPR, CURRENT_UNIT, EXCLUDE, INERTIA, inertia_of, noted, without_spans
 
 
@@ -21,16 +21,11 @@ def run(paths: list[str], v: dict[str, Any]) -> Any:
                           guard=v["guard"]), left)
 
 
-def characterize(ctx: Any) -> Any:
+def session(ctx: Any) -> FromSession:
     """The session's spin-down: the flywheel's inertia from the rig, the cut-off if given."""
-    from motorlab.analyses import _common as common
-    from motorlab.analyses.spindown import spindown
-
-    recording = common.read_position_log(ctx.files, cpr=ctx.cpr)
-    (recording,), left = without_spans([recording], {"exclude": ctx.setting("exclude")}, split=False)
     inertia, inertia_se = ctx.loaded_inertia()
-    return noted(spindown(recording, cpr=ctx.cpr, inertia=inertia, inertia_stderr=inertia_se,
-                          cutoff=ctx.setting("cutoff")), left)
+    return FromSession({"cpr": ctx.cpr, "inertia": inertia, "inertia_stderr": inertia_se,
+                        "cutoff": ctx.setting("cutoff"), "exclude": ctx.setting("exclude")})
 
 
 EXPERIMENT = Experiment(
@@ -55,6 +50,6 @@ EXPERIMENT = Experiment(
     settings=(Setting("cutoff", "s", "instant the relay opened (default: found from the current dropping to zero)"),),
     contributes={"K": "K"},
     loaded=True,
-    characterize=characterize,
+    session=session,
     rig=RigRun("spindown", "spindown.txt", {"voltage": 12.0, "current_limit": 4.0}, order=20),
 )

@@ -5,7 +5,7 @@ from __future__ import annotations
 from typing import Any
 
 from motorlab.errors import OptionError
-from motorlab.experiments import Experiment, Option, RigRun, Setting
+from motorlab.experiments import FITS, Experiment, FromSession, Option, RigRun, Setting
 from motorlab.experiments._shared import COLUMN, CPR, CURRENT_UNIT, EXCLUDE, INERTIA, inertia_of, noted, without_spans
 
 
@@ -19,7 +19,8 @@ def run(paths: list[str], v: dict[str, Any]) -> Any:
         raise OptionError("the spin-up needs the inertia: give --inertia or the flywheel disc")
     recording = common.read_position_log(paths, cpr=v["cpr"], current_unit=v["current_unit"])
     (recording,), left = without_spans([recording], v, split=False)  # of the spin-up log, not the spin-down's
-    spindown_result = None
+    # a session gives its spin-down's fit (the one on the same rig) instead of a file
+    spindown_result = None if v["b"] is not None or v["Tf"] is not None else (v.get(FITS) or {}).get("spindown")
     if v["spindown"]:
         if v["b"] is not None or v["Tf"] is not None:
             raise OptionError("give the friction either with --spindown or with --b/--Tf, not both")
@@ -38,32 +39,22 @@ def run(paths: list[str], v: dict[str, Any]) -> Any:
     return noted(add_heat_warning(result, [recording]), left)
 
 
-def characterize(ctx: Any) -> Any:
+def session(ctx: Any) -> FromSession:
     """The session's spin-up: the friction of its spin-down, corrected for the gearbox when it can be."""
-    from motorlab.analyses import _common as common
-    from motorlab.analyses.spinup import spinup
-
     if ctx.session.rig.flywheel is None:  # the session validation refuses this; kept for library callers
         raise OptionError("the spin-up needs the flywheel's inertia: add [rig.flywheel]")
-    recording = common.read_position_log(ctx.files, cpr=ctx.cpr)
-    (recording,), left = without_spans([recording], {"exclude": ctx.setting("exclude")}, split=False)
     inertia, inertia_se = ctx.loaded_inertia()
-    assert inertia is not None  # a flywheel was checked above
+    values = {"cpr": ctx.cpr, "inertia": inertia, "inertia_stderr": inertia_se, "exclude": ctx.setting("exclude"),
+              "start": ctx.setting("start"), "end": ctx.setting("end")}
     friction = ctx.motoring_friction()
-    if friction is not None:
-        b, b_se, tf, tf_se, eta = friction
-        fit = spinup(recording, inertia=inertia, inertia_stderr=inertia_se, cpr=ctx.cpr, viscous_friction=b,
-                     viscous_friction_stderr=b_se, coulomb_friction=tf, coulomb_friction_stderr=tf_se,
-                     start=ctx.setting("start"), end=ctx.setting("end"))
-        fit.warnings.append(
-            f"friction from the spin-down corrected for the gearbox (η = {eta:.3g}, back-driving efficiency taken "
+    if friction is None:
+        spindown = ctx.fits.get("spindown")
+        return FromSession(values, fits={} if spindown is None else {"spindown": spindown})
+    b, b_se, tf, tf_se, eta = friction
+    note = (f"friction from the spin-down corrected for the gearbox (η = {eta:.3g}, back-driving efficiency taken "
             "equal): the coasting flywheel back-drives the gearbox and sees the motor's friction ÷ η, the motor "
-            "driving it passes only η of it; this K is the output's Kt = η·Ke (docs/gearbox.md)"
-        )
-        return noted(fit, left)
-    return noted(spinup(recording, inertia=inertia, inertia_stderr=inertia_se, cpr=ctx.cpr,
-                        spindown_result=ctx.fits.get("spindown"), start=ctx.setting("start"), end=ctx.setting("end")),
-                 left)
+            "driving it passes only η of it; this K is the output's Kt = η·Ke (docs/gearbox.md)")
+    return FromSession({**values, "b": b, "b_stderr": b_se, "Tf": tf, "Tf_stderr": tf_se}, notes=(note,))
 
 
 EXPERIMENT = Experiment(
@@ -100,6 +91,6 @@ EXPERIMENT = Experiment(
     ),
     contributes={"K": "K"},
     loaded=True,
-    characterize=characterize,
+    session=session,
     rig=RigRun("spinup", "spinup.txt", order=60),
 )

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from motorlab.experiments import Experiment, Option, RigRun, Setting
+from motorlab.experiments import Experiment, FromSession, Option, RigRun, Setting
 from motorlab.experiments._shared import COLUMN
 from motorlab.thermal import MAGNET_COEFFICIENTS
 
@@ -26,12 +26,10 @@ def run(paths: list[str], v: dict[str, Any]) -> Any:
                  rise=v["rise"])
 
 
-def characterize(ctx: Any) -> Any:
+def session(ctx: Any) -> FromSession:
     """The session's stall runs (voltage, magnet and ambient from the session's table)."""
-    from motorlab.analyses.stall import stall
-
-    return stall(read_runs(ctx.files), voltage=ctx.setting("voltage"), magnet=ctx.setting("magnet") or "ferrite",
-                 ambient=25.0 if ctx.setting("ambient") is None else ctx.setting("ambient"))
+    return FromSession({"voltage": ctx.setting("voltage"), "magnet": ctx.setting("magnet"),
+                        "ambient": ctx.setting("ambient")})
 
 
 EXPERIMENT = Experiment(
@@ -70,6 +68,6 @@ EXPERIMENT = Experiment(
         Setting("magnet", "str", "magnet material: ferrite (default) or ndfeb"),
         Setting("ambient", "float", "ambient temperature [°C] (default 25)"),
     ),
-    characterize=characterize,
+    session=session,
     rig=RigRun("stall", "stall.csv", settings={"voltage": 6.0, "duration": 120.0}, order=35),
 )

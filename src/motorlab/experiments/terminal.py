@@ -5,7 +5,7 @@ from __future__ import annotations
 from typing import Any
 
 from motorlab.errors import OptionError
-from motorlab.experiments import Experiment, Option, RigRun, Setting, stderr_or_none
+from motorlab.experiments import Experiment, FromSession, Option, RigRun, Setting, stderr_or_none
 from motorlab.experiments._shared import COLUMN, CPR
 
 
@@ -35,13 +35,11 @@ def run(paths: list[str], v: dict[str, Any]) -> Any:
     return add_heat_warning(result, rows if isinstance(rows, list) else [rows], hold=30.0)
 
 
-def characterize(ctx: Any) -> Any:
+def session(ctx: Any) -> FromSession:
     """The session's terminal rows with the unit's K."""
-    from motorlab.analyses.terminal import terminal
-
     k = ctx.require("K", "b = (K·I − Tf)/ω")
-    return terminal(_read(ctx.files, ctx.cpr), torque_constant=k.value, torque_constant_stderr=stderr_or_none(k),
-                    cpr=ctx.cpr, current_stderr=ctx.setting("current_stderr"))
+    return FromSession({"cpr": ctx.cpr, "K": k.value, "K_stderr": stderr_or_none(k),
+                        "current_stderr": ctx.setting("current_stderr")})
 
 
 EXPERIMENT = Experiment(
@@ -71,6 +69,6 @@ EXPERIMENT = Experiment(
     order=100,
     settings=(Setting("current_stderr", "A", "standard error of one current reading"),),
     contributes={"b": "b", "Tf": "Tf"},
-    characterize=characterize,
+    session=session,
     rig=RigRun("terminal", "terminal.csv", order=40),
 )

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from motorlab.experiments import Experiment, Option, RigRun
+from motorlab.experiments import Experiment, FromSession, Option, RigRun
 from motorlab.experiments._shared import COLUMN, read_tables
 
 
@@ -16,11 +16,9 @@ def run(paths: list[str], v: dict[str, Any]) -> Any:
                   motor_constant=v["motor_constant"], motor_constant_stderr=v["motor_constant_stderr"])
 
 
-def characterize(ctx: Any) -> Any:
+def session(ctx: Any) -> FromSession:
     """The session's torque rows with the rig's lever arm."""
-    from motorlab.analyses.torque import torque
-
-    return torque(read_tables(ctx.files), arm=ctx.session.rig.lever_arm)
+    return FromSession({"arm": ctx.session.rig.lever_arm})
 
 
 EXPERIMENT = Experiment(
@@ -51,6 +49,6 @@ EXPERIMENT = Experiment(
     order=30,
     contributes={"K": "K"},
     loaded=True,
-    characterize=characterize,
+    session=session,
     rig=RigRun("torque", "torque.csv", order=30),
 )
