@@ -1,4 +1,5 @@
-"""The figures of issue 15: long functions, long modules, library imports of the front ends, import circles.
+"""The figures of issues 15 and 33: long functions and modules, library imports of the front ends, import circles,
+the modules at the package's root and the imports of other modules' private names.
 
     python scripts/measure_architecture.py [--max-function 100] [--max-module 800]
 
@@ -22,13 +23,13 @@ def module_name(path: Path) -> str:
     return ".".join(parts)
 
 
-def imports(tree: ast.AST, name: str, is_package: bool) -> set[str]:
-    """Modules imported at module level or inside functions (motorlab ones only; not type-checking-only ones)."""
+def imports(tree: ast.AST, name: str, is_package: bool, modules: set[str] | None = None) -> set[str]:
+    """Modules imported at module level, inside functions or for type checking only (motorlab ones only).
+
+    ``from pkg import name`` depends on the module ``pkg.name`` when it is one (of ``modules``), else on ``pkg``.
+    """
     out: set[str] = set()
-    skip = {id(n) for node in ast.walk(tree) if _is_type_checking(node) for n in ast.walk(node)}
     for node in ast.walk(tree):
-        if id(node) in skip:
-            continue
         if isinstance(node, ast.Import):
             out.update(a.name for a in node.names)
         elif isinstance(node, ast.ImportFrom):
@@ -37,9 +38,19 @@ def imports(tree: ast.AST, name: str, is_package: bool) -> set[str]:
                 pkg = name.split(".") if is_package else name.split(".")[:-1]
                 pkg = pkg[: len(pkg) - (node.level - 1)]
                 base = ".".join([*pkg, base]) if base else ".".join(pkg)
-            out.add(base)
-            out.update(f"{base}.{a.name}" for a in node.names)
+            for a in node.names:
+                sub = f"{base}.{a.name}"
+                out.add(sub if modules is not None and sub in modules else base)
+                if modules is None:
+                    out.update((base, sub))
     return {m for m in out if m.startswith(("motorlab", "control.")) or m == "control"}
+
+
+def private_imports(tree: ast.AST) -> list[str]:
+    """``from motorlab.x import _name``: another module's private name (``__version__`` and the like are public)."""
+    return [f"{node.module}.{a.name}" for node in ast.walk(tree)
+            if isinstance(node, ast.ImportFrom) and node.level == 0 and (node.module or "").startswith("motorlab")
+            for a in node.names if a.name.startswith("_") and not a.name.startswith("__")]
 
 
 #: The front ends: the command line, and the browser app that runs it in child processes (its answers
@@ -63,7 +74,7 @@ def measure(max_function: int = 100, max_module: int = 800) -> Measures:
     """What exceeds the limits in ``src/motorlab``."""
     files = sorted((SRC / "motorlab").rglob("*.py"))
     modules = {module_name(p): p for p in files}
-    long_functions, long_modules, cli_imports, control_imports = [], [], [], []
+    long_functions, long_modules, cli_imports, control_imports, private = [], [], [], [], []
     code_lengths.clear()
     graph: dict[str, set[str]] = {}
     for name, path in modules.items():
@@ -80,7 +91,8 @@ def measure(max_function: int = 100, max_module: int = 800) -> Measures:
                     doc = node.body[0] if node.body and _is_docstring(node.body[0]) else None
                     doc_lines = (doc.end_lineno or doc.lineno) - doc.lineno + 1 if doc else 0
                     code_lengths[f"{name}.{node.name}"] = length - doc_lines
-        deps = set(imports(tree, name, path.name == "__init__.py"))
+        private.extend(f"{name}: {p}" for p in private_imports(tree))
+        deps = set(imports(tree, name, path.name == "__init__.py", set(modules)))
         deps = {m if m in modules else m.rsplit(".", 1)[0] for m in deps}
         if any(m == "control" or m.startswith("control.") for m in deps):
             control_imports.append(name)
@@ -88,7 +100,8 @@ def measure(max_function: int = 100, max_module: int = 800) -> Measures:
         if not name.startswith(FRONT_ENDS) and any(m.startswith(FRONT_ENDS) for m in graph[name]):
             cli_imports.append(name)
     cycles = find_cycles(graph)
-    return Measures(long_functions, long_modules, cli_imports, control_imports, cycles)
+    root = sorted(p.name for p in (SRC / "motorlab").glob("*.py"))
+    return Measures(long_functions, long_modules, cli_imports, control_imports, cycles, root, private)
 
 
 class Measures(NamedTuple):
@@ -97,6 +110,8 @@ class Measures(NamedTuple):
     cli_imports: list[str]
     control_imports: list[str]
     cycles: list[set[str]]
+    root_modules: list[str]
+    private_imports: list[str]
 
 
 def main() -> None:
@@ -104,7 +119,8 @@ def main() -> None:
     ap.add_argument("--max-function", type=int, default=100)
     ap.add_argument("--max-module", type=int, default=800)
     args = ap.parse_args()
-    long_functions, long_modules, cli_imports, control_imports, cycles = measure(args.max_function, args.max_module)
+    (long_functions, long_modules, cli_imports, control_imports, cycles, root,
+     private) = measure(args.max_function, args.max_module)
     over = sum(1 for n in code_lengths.values() if n > args.max_function)
     print(f"functions over {args.max_function} lines: {len(long_functions)} "
           f"({over} without their docstrings; lines with docstring / without)")
@@ -119,15 +135,18 @@ def main() -> None:
     print(f"library modules importing python-control: {len(control_imports)}")
     for m in control_imports:
         print(f"    {m}")
-    print(f"import circles (strongly connected groups, packages' __init__ excluded): {len(cycles)}")
+    print(f"import circles (strongly connected groups, type-checking imports and packages included): {len(cycles)}")
     for c in cycles:
         print("    " + " <-> ".join(sorted(c)))
+    print(f"modules at the package's root: {len(root)}: {', '.join(root)}")
+    print(f"imports of another module's private name: {len(private)}")
+    for p in private:
+        print(f"    {p}")
 
 
 def find_cycles(graph: dict[str, set[str]]) -> list[set[str]]:
-    """Strongly connected components of more than one module (Tarjan), ignoring edges to packages."""
-    packages = {m for m in graph if any(o.startswith(m + ".") for o in graph)}
-    g = {m: {d for d in deps if d not in packages} for m, deps in graph.items() if m not in packages}
+    """Strongly connected components of more than one module (Tarjan), packages' ``__init__`` included."""
+    g = graph
     index: dict[str, int] = {}
     low: dict[str, int] = {}
     stack: list[str] = []

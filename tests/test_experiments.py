@@ -122,7 +122,7 @@ def test_whole_number_options_take_digits_only() -> None:
 
 
 def test_every_option_has_a_label_in_words_and_every_report_a_name() -> None:
-    from motorlab.experiments import command_options
+    from motorlab.experiments._commands import command_options
     from motorlab.glossary import PARAMETERS
 
     options = [opt for exp in all_experiments().values() for opt in exp.options]

@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 import os
 import textwrap
-from typing import TYPE_CHECKING, Any
+from typing import Any, TypeAlias
 
 import numpy as np
 from matplotlib.axes import Axes
@@ -20,8 +20,11 @@ from matplotlib.figure import Figure
 
 from motorlab.errors import OptionError
 
-if TYPE_CHECKING:  # results.FitResult.plot draws with this module: no runtime import back
-    from motorlab.results import FitResult, Panel, Series
+# What is drawn: motorlab.results' FitResult, Panel and Series. Not imported, not even for type checking:
+# FitResult.plot draws with this module, and an import back would close a circle.
+FitResult: TypeAlias = Any
+Panel: TypeAlias = Any
+Series: TypeAlias = Any
 
 #: File types :func:`save_figure` writes.
 FIGURE_FORMATS = (".png", ".pdf", ".svg")

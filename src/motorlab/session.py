@@ -51,7 +51,7 @@ from pathlib import Path
 from typing import Any
 
 from motorlab.errors import InputError, MotorlabError, OptionError, SessionError
-from motorlab.experiments import all_experiments
+from motorlab.experiments import all_experiments, exclude_hint
 from motorlab.io._text import (
     MAX_INTEGER_DIGITS,
     MAX_NESTING,
@@ -61,7 +61,7 @@ from motorlab.io._text import (
     read_bytes,
 )
 from motorlab.plan import MATERIALS, disc_inertia
-from motorlab.timespans import setting_spans
+from motorlab.timespans import Span, parse_spans
 from motorlab.units import format_unit, parse_quantity
 
 #: Densities of flywheel materials [kg/m³]: the one table of :mod:`motorlab.plan`.
@@ -793,3 +793,24 @@ def read_truth(path: str | Path) -> dict[str, float]:
     if not set(out) - {"efficiency", "loss_torque"}:
         raise SessionError("no motor parameters (K, R, L, J, b, Tf) in the truth file", path=path)
     return out
+
+
+def setting_spans(value: Any, *, experiment: str) -> list[Span]:
+    """A session table's ``exclude`` (``"12.5:14.0"`` or a list of them) for ``experiment``.
+
+    Raises
+    ------
+    OptionError
+        An experiment whose analysis takes no spans (saying what to do), or a value that is no span.
+    """
+    if value is None:
+        return []
+    exp = all_experiments().get(experiment)
+    if exp is None or not any(o.kind == "spans" for o in exp.options):
+        raise OptionError(exclude_hint())
+    if not (isinstance(value, str) or (isinstance(value, list) and all(isinstance(v, str) for v in value))):
+        raise OptionError(f'expected "START:END" in seconds or a list of them, got {type(value).__name__}')
+    try:
+        return parse_spans(value)
+    except OptionError as exc:
+        raise OptionError(exc.message.removeprefix("exclude: ")) from None

@@ -15,7 +15,7 @@ from typing import Any
 
 from motorlab.cli.analyze import add_options
 from motorlab.cli.common import EXIT_PARTIAL, check_output_dir
-from motorlab.experiments import command_options
+from motorlab.experiments._commands import command_options
 
 
 def register(subparsers: Any) -> None:

@@ -14,11 +14,11 @@ from motorlab.control.plant import MechanismUnits, Plant, load_plant
 from motorlab.control.targets import TARGET_INFO
 from motorlab.control.tune import TuneResult, tune
 from motorlab.errors import OptionError
-from motorlab.experiments import command_options
+from motorlab.experiments._commands import command_options
 
 
 def register(subparsers: Any) -> None:
-    """Add the ``tune`` sub-command: its options from :func:`motorlab.experiments.command_options`."""
+    """Add the ``tune`` sub-command: its options from :func:`motorlab.experiments._commands.command_options`."""
     p = subparsers.add_parser(
         "tune",
         help="controller gains (LQR as WPILib SysId, or pole placement) checked in closed-loop simulation",

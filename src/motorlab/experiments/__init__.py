@@ -428,23 +428,6 @@ def schema() -> dict[str, Any]:
     return {name: exp.schema() for name, exp in all_experiments().items()}
 
 
-def command_options(command: str) -> tuple[Option, ...]:
-    """The options of ``motorlab tune`` or ``motorlab characterize`` (:mod:`motorlab.experiments._commands`).
-
-    Raises
-    ------
-    KeyError
-        Another command.
-    """
-    from motorlab.experiments import _commands
-
-    if command == "tune":
-        from motorlab.control.targets import TARGETS
-
-        return _commands.tune_options(TARGETS)
-    return {"characterize": _commands.CHARACTERIZE_OPTIONS}[command]
-
-
 def exclude_hint() -> str:
     """What to do when an analysis that takes no time spans is given some (``--exclude``)."""
     takes = [name for name, exp in all_experiments().items() if any(o.kind == "spans" for o in exp.options)]

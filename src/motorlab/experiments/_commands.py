@@ -76,3 +76,18 @@ CHARACTERIZE_OPTIONS = (
     Option("session", kind="files", positional=True, required=True, metavar="SESSION.toml",
            label="Session description", help="the session's TOML file (docs/session.md) with its logs"),
 )
+
+
+def command_options(command: str) -> tuple[Option, ...]:
+    """The options of ``motorlab tune`` or ``motorlab characterize``.
+
+    Raises
+    ------
+    KeyError
+        Another command.
+    """
+    if command == "tune":
+        from motorlab.control.targets import TARGETS
+
+        return tune_options(TARGETS)
+    return {"characterize": CHARACTERIZE_OPTIONS}[command]

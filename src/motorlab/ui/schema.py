@@ -1,7 +1,7 @@
 """The page's forms, from the experiment descriptions (one source for page, CLI, notebook and docs).
 
 Every option of ``motorlab analyze <experiment>`` (:mod:`motorlab.experiments`), ``motorlab
-characterize`` and ``motorlab tune`` (:func:`motorlab.experiments.command_options`) becomes a
+characterize`` and ``motorlab tune`` (:func:`motorlab.experiments._commands.command_options`) becomes a
 JSON-ready field: its long name (the form field name and the HTTP API's field name), its label in
 words, a one-line help, unit, default, choices and whether it is required. The same descriptions
 generate the CLI's parsers, so the page and the CLI cannot disagree (tests/ui/test_api.py checks
@@ -17,7 +17,8 @@ import re
 from typing import Any
 
 from motorlab.cli.common import plain_text
-from motorlab.experiments import Option, all_experiments, command_options
+from motorlab.experiments import Option, all_experiments
+from motorlab.experiments._commands import command_options
 from motorlab.units import format_unit
 
 #: Options the app sets itself (output format, figure files): not form fields (docs/ui.md).
