@@ -22,6 +22,7 @@ metres with a wheel radius), a text is read with pint (``"2 deg"``, ``"0.5 in"``
 
 from __future__ import annotations
 
+import contextlib
 import math
 import re
 from dataclasses import dataclass
@@ -175,11 +176,11 @@ def _parse(given: Any, name: str, units: MechanismUnits, scale: float) -> float:
         return counts * _TWO_PI / units.cpr
     from motorlab.units import registry
 
-    try:
+    quantity: Any = None
+    with contextlib.suppress(Exception):  # pint's many error types: parse_quantity below says what is wrong
         quantity = registry().Quantity(text)
-    except Exception:  # pint's many error types: parse_quantity below says what is wrong in one line
-        quantity = None
-    if quantity is not None and hasattr(quantity, "check") and quantity.check(f"[length]{'/[time]' if per_time else ''}"):
+    length = f"[length]{'/[time]' if per_time else ''}"
+    if quantity is not None and hasattr(quantity, "check") and quantity.check(length):
         if units.name != "m":
             raise OptionError(f"{label}: {text!r} is a length at a wheel: give the wheel radius too")
         return parse_quantity(text, f"m{per_time}", name=label) / units.per_radian

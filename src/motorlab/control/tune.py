@@ -220,6 +220,44 @@ def tune(
         For impossible settings.
     """
     units = units or MechanismUnits("rad", 1.0)
+    gains, tg = design_for_target(plant, loop, method=method, target=target, units=units, qp=qp, qv=qv, r=r,
+                                  period=period, delay=delay, rise_time=rise_time, overshoot=overshoot,
+                                  voltage=voltage)
+    ff = plant.feedforward
+    limits = max_profile(ff, voltage)
+    size = _step_size(ff, loop, step, units=units, voltage=voltage)
+    step_resp, prof_resp = _simulate_step_and_profile(
+        gains, ff, tg.equivalent_feedforward, plant.simulated, size, limits, voltage=voltage, cpr=units.cpr,
+        law="roadrunner" if target == "roadrunner" else "pid",
+    )
+    warnings = [*plant.notes, *_check(gains, step_resp, prof_resp, overshoot if method == "poles" else None, rise_time,
+                                      static_friction=ff.kS)]
+    return TuneResult(gains, tg, step_resp, prof_resp, limits, plant, units, warnings)
+
+
+def design_for_target(
+    plant: Plant,
+    loop: str = "velocity",
+    *,
+    method: str = "lqr",
+    target: str = "volts",
+    units: MechanismUnits | None = None,
+    qp: float | str | None = None,
+    qv: float | str | None = None,
+    r: float | str | None = None,
+    period: float = 0.02,
+    delay: float = 0.0,
+    rise_time: float | None = None,
+    overshoot: float = 5.0,
+    voltage: float = 12.0,
+) -> tuple[Gains, TargetGains]:
+    """The design of :func:`tune` without its simulations: (SI gains, the gains in the target's units).
+
+    Parameters and errors as :func:`tune`'s. The SI gains depend on the plant, the target's kind of
+    controller and the tolerances only, never on ``units`` (which reads user tolerances given as plain
+    numbers, and prints the target's numbers).
+    """
+    units = units or MechanismUnits("rad", 1.0)
     if loop not in LOOPS:
         raise OptionError(f"unknown loop {loop!r} (expected velocity or position)")
     if method not in METHODS:
@@ -230,16 +268,7 @@ def tune(
     tolerances = design_tolerances(ff, voltage, units, qp=qp, qv=qv, r=r)
     gains = _design(ff, loop, method, target, tolerances, units=units, period=period, delay=delay,
                     rise_time=rise_time, overshoot=overshoot)
-    tg = to_target(gains, ff, target, units=units, voltage=voltage, geometry=plant.geometry)
-    limits = max_profile(ff, voltage)
-    size = _step_size(ff, loop, step, units=units, voltage=voltage)
-    step_resp, prof_resp = _simulate_step_and_profile(
-        gains, ff, tg.equivalent_feedforward, plant.simulated, size, limits, voltage=voltage, cpr=units.cpr,
-        law="roadrunner" if target == "roadrunner" else "pid",
-    )
-    warnings = [*plant.notes, *_check(gains, step_resp, prof_resp, overshoot if method == "poles" else None, rise_time,
-                                      static_friction=ff.kS)]
-    return TuneResult(gains, tg, step_resp, prof_resp, limits, plant, units, warnings)
+    return gains, to_target(gains, ff, target, units=units, voltage=voltage, geometry=plant.geometry)
 
 
 #: Targets whose controller holds position and velocity together (Road Runner's HolonomicController):

@@ -47,8 +47,8 @@ def tune_options(targets: tuple[str, ...]) -> tuple[Option, ...]:
                help="LQR as WPILib SysId (lqr), or a rise time and overshoot (poles)"),
         Option("qp", kind="text", metavar="TOLERANCE", group=_DESIGN, label="Position error tolerance",
                help="LQR: the position error the loop may keep: a number in the length unit, a quantity such as "
-                    "\"2 deg\", \"0.5 in\" or \"100 ticks\", or a percentage of one revolution; left empty: the distance the velocity "
-                    "tolerance covers in one time constant kA/kV, the same in every unit"),
+                    "\"2 deg\", \"0.5 in\" or \"100 ticks\", or a percentage of one revolution; left empty: the "
+                    "distance the velocity tolerance covers in one time constant kA/kV, the same in every unit"),
         Option("qv", kind="text", metavar="TOLERANCE", group=_DESIGN, label="Velocity error tolerance",
                help="LQR: the velocity error the loop may keep: a number in the length unit per second, a quantity "
                     "such as \"30 rpm\" or \"0.2 m/s\", or a percentage of the free speed; left empty: 20 % of "
