@@ -72,7 +72,7 @@ def run(args: argparse.Namespace) -> int:
         voltage=args.voltage,
         step=args.step,
     )
-    snippet = emit_snippet(result.target, args.emit) if args.emit else None
+    snippet = emit_snippet(result.target, args.emit, drive=args.drive) if args.emit else None
     if args.plot is not None:
         import matplotlib
 

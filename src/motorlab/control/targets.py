@@ -319,7 +319,8 @@ def _roadrunner(gains: Gains, feedforward: Feedforward, units: MechanismUnits, v
         f"ticks: cpr = {units.cpr:g}; kV, kA [V per rad/s, rad/s²] × 2π/cpr = × {rad_per_tick:.6g} per tick",
         f"path gains: axialGain = {names[0]}/kV = {k_x:.6g}/{kv:.6g}; axialVelGain = {names[1]}/kV = "
         f"{k_v:.6g}/{kv:.6g} (HolonomicController turns the position error and the velocity error into a "
-        "velocity command that the feedforward converts to volts; lateral and heading the same)",
+        "velocity command that the feedforward converts to volts; lateral and heading the same, and TankDrive's "
+        "turnGain, turnVelGain)",
     ]
     notes = ["kS, kV, kA are for the encoder whose cpr was given (dead wheels or drive motors): the same "
              "encoder as Road Runner's inPerTick"]
