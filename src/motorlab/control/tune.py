@@ -441,7 +441,7 @@ def tune_summary(
     velocity_delay: float | None = None,
     plot: bool = True,
 ) -> dict[str, Any]:
-    """Velocity and position gains (SysId LQR defaults) for a motor, with a step-response figure.
+    """Velocity and position gains (LQR with the physical default tolerances) for a motor, with a step-response figure.
 
     Parameters
     ----------
