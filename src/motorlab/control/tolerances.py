@@ -81,16 +81,15 @@ class Tolerances:
 
 
 def describe_settings(settings: dict[str, float]) -> str:
-    """A design's tolerances (:meth:`Tolerances.settings`) in words: "errors of 5 % of a revolution, ..."."""
+    """A design's tolerances (:meth:`Tolerances.settings`) in words: "position 4.7 % of a revolution, ..."."""
     parts = []
     if "qp_revolutions" in settings:
-        parts.append(f"{_pct(settings['qp_revolutions'])} of a revolution")
+        parts.append(f"position {_pct(settings['qp_revolutions'])} of a revolution")
     if "qv_of_free_speed" in settings:
-        parts.append(f"{_pct(settings['qv_of_free_speed'])} of the free speed")
-    text = "errors of " + " and ".join(parts) if parts else ""
+        parts.append(f"velocity {_pct(settings['qv_of_free_speed'])} of the free speed")
     if "r_of_voltage" in settings:
-        text += f"{', ' if text else ''}{_pct(settings['r_of_voltage'])} of the voltage to correct them"
-    return text
+        parts.append(f"effort {_pct(settings['r_of_voltage'])} of the supply voltage")
+    return ", ".join(parts)
 
 
 def _pct(fraction: float) -> str:

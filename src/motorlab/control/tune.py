@@ -142,11 +142,11 @@ class TuneResult:
         plot_response(self.step, ax=axes[0], per_radian=per, unit=unit)
         plot_response(self.profile, ax=axes[1], per_radian=per, unit=unit)
         g = self.target.gains
-        fig.suptitle(
-            f"{self.gains.loop} loop ({self.gains.method}, {self.target.target}): "
-            + ", ".join(f"{k} = {v:.4g}" for k, v in g.items()),
-            fontsize=10,
-        )
+        import textwrap
+
+        title = (f"{self.gains.loop} loop ({self.gains.method}, {self.target.target}): "
+                 + ", ".join(f"{k} = {v:.4g}" for k, v in g.items()))
+        fig.suptitle("\n".join(textwrap.wrap(title, 100)), fontsize=10)
         fig.tight_layout()
         return fig
 
@@ -483,7 +483,7 @@ def tune_summary(
         g = res.target.gains
         resp = res.step.metrics
         lines.append(
-            f"{loop} loop ({res.target.target}, LQR with {describe_settings(res.gains.settings)}, "
+            f"{loop} loop ({res.target.target}, LQR tolerances: {describe_settings(res.gains.settings)}, "
             f"T={period:g} s, delay {delays[loop] * 1e3:g} ms): "
             + ", ".join(f"{k} = {v:.4g} {res.target.units.get(k, '')}" for k, v in g.items())
         )
