@@ -159,6 +159,7 @@ def test_user_tolerances_keep_their_units() -> None:
     for given_, units, expected, name in cases:
         tol = design_tolerances(FIT, 12.0, units, **given_)  # type: ignore[arg-type]
         assert getattr(tol, name) == pytest.approx(expected, rel=1e-12), (given_, units)
+    assert design_tolerances(FIT, 12.0, wheel, qv="inf").qv == math.inf  # that error not penalised
     with pytest.raises(OptionError, match="wheel radius"):
         design_tolerances(FIT, 12.0, _units("rad", None), qp="1 cm")
     with pytest.raises(OptionError, match="counts per revolution"):

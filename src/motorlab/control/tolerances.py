@@ -83,12 +83,11 @@ class Tolerances:
 def describe_settings(settings: dict[str, float]) -> str:
     """A design's tolerances (:meth:`Tolerances.settings`) in words: "position 4.7 % of a revolution, ..."."""
     parts = []
-    if "qp_revolutions" in settings:
-        parts.append(f"position {_pct(settings['qp_revolutions'])} of a revolution")
-    if "qv_of_free_speed" in settings:
-        parts.append(f"velocity {_pct(settings['qv_of_free_speed'])} of the free speed")
-    if "r_of_voltage" in settings:
-        parts.append(f"effort {_pct(settings['r_of_voltage'])} of the supply voltage")
+    for key, what, scale in (("qp_revolutions", "position", "a revolution"), ("qv_of_free_speed", "velocity",
+                             "the free speed"), ("r_of_voltage", "effort", "the supply voltage")):
+        if key in settings:
+            fraction = settings[key]
+            parts.append(f"{what} {_pct(fraction)} of {scale}" if math.isfinite(fraction) else f"{what} not limited")
     return ", ".join(parts)
 
 
@@ -139,7 +138,7 @@ def design_tolerances(
     values = {}
     for name, given in (("qp", qp), ("qv", qv), ("r", r)):
         value = defaults[name] if given is None else _parse(given, name, units, scales[name])
-        if not (value > 0 and math.isfinite(value)):
+        if not value > 0:  # also NaN; inf is allowed: that error is not penalised
             raise OptionError(f"--{name} must be a positive tolerance, got {given!r}")
         values[name] = value
     return Tolerances(values["qp"], values["qv"], values["r"], free, voltage)
@@ -188,6 +187,6 @@ def _parse(given: Any, name: str, units: MechanismUnits, scale: float) -> float:
 
 def _plain(value: float, name: str, units: MechanismUnits) -> float:
     """A plain number: volts for ``r``, else the user's length unit (per second for ``qv``)."""
-    if not math.isfinite(value):
-        raise OptionError(f"--{name}: {value!r} is not a finite number")
+    if math.isnan(value):
+        raise OptionError(f"--{name}: {value!r} is not a number")
     return value if name == "r" else units.to_si(value)

@@ -111,7 +111,8 @@ class TuneResult:
             "design": {
                 "period": self.gains.period,
                 "delay": self.gains.delay,
-                **self.gains.settings,
+                # An infinite tolerance (that error not penalised) is null in JSON.
+                **{k: (v if math.isfinite(v) else None) for k, v in self.gains.settings.items()},
                 "si_gains": self.gains.to_dict(),
                 "plant": {**self.plant.feedforward.to_dict(), "unit": "V, V*s/rad, V*s^2/rad"},
                 "simulated_on": self.step.settings["plant"],
