@@ -63,7 +63,8 @@ def _run(monkeypatch, capsys, *argv):
 
 
 def test_cli_json_shape(monkeypatch, capsys):
-    code, out, _ = _run(monkeypatch, capsys, "position", "--kv", "3.06", "--ka", "0.327", "--ks", "0.1", "--json")
+    code, out, _ = _run(monkeypatch, capsys, "position", "--kv", "3.06", "--ka", "0.327", "--ks", "0.1", "--json",
+                        "--qp", "1", "--qv", "1.5", "--r", "7")  # SysId's tolerances
     assert code == 0
     d = json.loads(out)
     assert d["loop"] == "position"

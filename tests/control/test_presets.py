@@ -22,8 +22,9 @@ def _gains(loop: str, kv: float, ka: float, target: str, *, cpr: float | None = 
     units = MechanismUnits.from_options("rotations", cpr=cpr)
     plant = Plant(Feedforward(0.0, kv / (2 * math.pi), ka / (2 * math.pi)))
     info = TARGET_INFO[target]
+    # SysId's tolerances, given explicitly (per rotation: the unit in use), since tune's defaults are physical.
     result = tune(plant, loop, target=target, units=units, period=info.period if period is None else period,
-                  delay=info.delay if delay is None else delay)
+                  delay=info.delay if delay is None else delay, qp=1.0, qv=1.5, r=7.0)
     return result.target.gains
 
 

@@ -32,15 +32,20 @@ def test_roadrunner_units_are_ticks():
     kotlin = emit_snippet(tg, "kotlin")
     assert "MecanumDrive.PARAMS.apply {" in kotlin
     assert "    kA = " in kotlin
-    # TankDrive.Params: the same feedforward, its turn controller instead of the holonomic path gains
-    tank = java.split("// TankDrive.java, class Params:")[1]
+    # MecanumDrive by default; TankDrive.Params on request: the same feedforward, its turn controller instead of
+    # the holonomic path gains, and never both classes' fields in one snippet.
+    assert "double turnGain" not in java
+    assert "TankDrive.Params" not in java
+    tank = emit_snippet(tg, "java", drive="tank")
     assert "public double kV = " in tank
     assert "public double turnGain = " in tank
-    assert "axialGain" not in tank
+    assert "double axialGain" not in tank
     assert "lateralInPerTick" not in tank
-    assert "turnGain" not in java.split("// TankDrive.java")[0]
+    assert "MecanumDrive.Params" not in tank
     assert tg.gains["turnGain"] == tg.gains["headingGain"]
-    assert "TankDrive.PARAMS.apply {" in kotlin
+    assert "TankDrive.PARAMS.apply {" in emit_snippet(tg, "kotlin", drive="tank")
+    with pytest.raises(OptionError, match="drive"):
+        emit_snippet(tg, "java", drive="swerve")
     with pytest.raises(OptionError, match="Java or Kotlin"):
         emit_snippet(tg, "python")
     with pytest.raises(OptionError, match="--cpr"):

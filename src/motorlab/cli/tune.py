@@ -12,6 +12,7 @@ from motorlab.control.design import Feedforward
 from motorlab.control.emit import LANGUAGES, emit_snippet
 from motorlab.control.plant import MechanismUnits, Plant, load_plant
 from motorlab.control.targets import TARGET_INFO
+from motorlab.control.tolerances import describe_settings
 from motorlab.control.tune import TuneResult, tune
 from motorlab.errors import OptionError
 from motorlab.experiments._commands import command_options
@@ -72,7 +73,7 @@ def run(args: argparse.Namespace) -> int:
         voltage=args.voltage,
         step=args.step,
     )
-    snippet = emit_snippet(result.target, args.emit) if args.emit else None
+    snippet = emit_snippet(result.target, args.emit, drive=args.drive) if args.emit else None
     if args.plot is not None:
         import matplotlib
 
@@ -102,6 +103,8 @@ def format_result(result: TuneResult) -> str:
     d = result.to_dict()
     u = d["units"]
     lines = [f"{d['loop']} loop, {d['method']} design, target {d['target']} (period {result.gains.period:g} s)"]
+    if result.gains.method == "lqr":
+        lines.append(f"design:      tolerances of {describe_settings(result.gains.settings)}")
     lines.append("gains:       " + ", ".join(f"{k} = {v:.6g} {u.get(k, '')}" for k, v in d["gains"].items()))
     lines.append("feedforward: " + ", ".join(f"{k} = {v:.6g} {u.get(k, '')}" for k, v in d["feedforward"].items()))
     r = d["response"]
@@ -112,7 +115,9 @@ def format_result(result: TuneResult) -> str:
         f"steady-state error {_fmt(r['steady_state_error'], u['steady_state_error'])}"
     )
     pr = d["profile"]
-    lines.append(f"trapezoidal profile: largest tracking error {pr['max_tracking_error']:.4g}")
+    tracked = u["velocity"] if d["loop"] == "velocity" else u["position"]
+    lines.append(f"{'velocity ramp' if d['loop'] == 'velocity' else 'trapezoidal profile'}: largest tracking error "
+                 f"{pr['max_tracking_error']:.4g} {tracked}")
     mp = d["max_profile"]
     pos = u["position"]
     lines.append(

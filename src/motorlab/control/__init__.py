@@ -10,7 +10,10 @@
 * :mod:`~motorlab.control.simulation`: closed-loop simulation on the nonlinear motor model
   (:func:`simulate_closed_loop`, :func:`max_profile`, :func:`plot_response`).
 * :mod:`~motorlab.control.emit`: ready-to-paste Java/Kotlin/Python (:func:`emit_snippet`).
-* :mod:`~motorlab.control.tune`: all of it in one call (:func:`tune`, :func:`tune_summary`).
+* :mod:`~motorlab.control.tolerances`: the LQR's default tolerances in physical terms (so that units never
+  change a design) and the user's tolerances read with their units.
+* :mod:`~motorlab.control.tune`: all of it in one call (:func:`tune`, :func:`tune_summary`;
+  :func:`design_for_target` without the simulations).
 """
 
 from motorlab.control.design import (
@@ -35,7 +38,7 @@ from motorlab.control.simulation import (
     trapezoid,
 )
 from motorlab.control.targets import TARGETS, TargetGains, to_target
-from motorlab.control.tune import TuneResult, tune, tune_summary
+from motorlab.control.tune import TuneResult, design_for_target, tune, tune_summary
 
 __all__ = [
     "SYSID_PRESETS",
@@ -49,6 +52,7 @@ __all__ = [
     "SysIdPreset",
     "TargetGains",
     "TuneResult",
+    "design_for_target",
     "design_pid_poles",
     "design_position_lqr",
     "design_velocity_lqr",

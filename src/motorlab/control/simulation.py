@@ -36,6 +36,10 @@ MAX_PERIODS = 2_000_000
 
 Reference = Callable[[float], tuple[float, float, float]]
 
+#: Control laws :func:`simulate_closed_loop` runs: WPILib's PIDController with SimpleMotorFeedforward, and
+#: Road Runner 1.0's HolonomicController with MotorFeedforward.
+LAWS = ("pid", "roadrunner")
+
 
 # ---- plants ------------------------------------------------------------------------------------
 def _ff_advance(
@@ -109,9 +113,13 @@ def _plant_for(plant: MotorParams | Feedforward) -> _FeedforwardPlant | _MotorPl
 
 # ---- references --------------------------------------------------------------------------------
 def step_reference(loop: str, size: float) -> Reference:
-    """A step of ``size`` [rad or rad/s] at t = 0: returns ``r(t) -> (position, velocity, acceleration)``."""
+    """A step of ``size`` [rad or rad/s] at t = 0: returns ``r(t) -> (position, velocity, acceleration)``.
+
+    A velocity step's position is the distance the reference covers, size·t (what a path follower such
+    as Road Runner's compares the measured position with).
+    """
     if loop == "velocity":
-        return lambda t: (math.nan, size, 0.0)
+        return lambda t: (size * max(t, 0.0), size, 0.0)
     return lambda t: (size, 0.0, 0.0)
 
 
@@ -166,10 +174,10 @@ def velocity_ramp(size: float, max_acceleration: float) -> tuple[Reference, floa
 
     def ref(t: float) -> tuple[float, float, float]:
         if t <= 0:
-            return math.nan, 0.0, 0.0
+            return 0.0, 0.0, 0.0
         if t < t_ramp:
-            return math.nan, sign * max_acceleration * t, sign * max_acceleration
-        return math.nan, size, 0.0
+            return sign * 0.5 * max_acceleration * t * t, sign * max_acceleration * t, sign * max_acceleration
+        return sign * 0.5 * max_acceleration * t_ramp * t_ramp + size * (t - t_ramp), size, 0.0
 
     return ref, t_ramp
 
@@ -345,6 +353,7 @@ def simulate_closed_loop(
     substeps: int = 10,
     kind: str = "step",
     target: float | None = None,
+    law: str = "pid",
 ) -> ClosedLoopResponse:
     """Run feedforward + PID at a fixed period on the nonlinear motor model.
 
@@ -375,6 +384,9 @@ def simulate_closed_loop(
         ``"step"`` or ``"profile"`` (which figures are meaningful).
     target
         Final reference value (default: the reference at ``duration``).
+    law
+        ``"pid"`` (WPILib's ``PIDController`` plus ``SimpleMotorFeedforward``) or ``"roadrunner"``
+        (Road Runner 1.0's ``HolonomicController`` feeding its ``MotorFeedforward``; see Notes).
 
     Returns
     -------
@@ -388,14 +400,26 @@ def simulate_closed_loop(
     e_k = r_k − y_k; integral += e_k·T (frozen while the output saturates in the direction of e,
     a simple anti-windup); derivative = (e_k − e_{k−1})/T (0 on the first run, no derivative kick);
     u_k = clamp(V_ff + kP·e + kI·∫e + kD·ė, ±voltage).
+
+    Road Runner's law (``law="roadrunner"``, road-runner ``Control.kt`` and the quickstart's
+    ``MecanumDrive.FollowTrajectoryAction``): the controller turns the errors of position and of velocity
+    into a velocity command v_c = v_r + g_x·(x_r − x) + g_v·(v_r − v) and the feedforward turns the command
+    into volts, V = kS·sign(v_c) + kV·v_c + kA·a_r (``MotorFeedforward.compute``: ``kS.withSign(vel)``, so
+    +kS when v_c is exactly 0). With kV·g_x and kV·g_v the position loop's kP and kD (a velocity loop's kI
+    and kP: the integral of the velocity error is the position error) this is
+    V = kS·sign(kV·v_r + fb) + kV·v_r + kA·a_r + fb, fb = kV·g_x·(x_r − x) + kV·g_v·(v_r − v): the static
+    friction feedforward follows the correction, not only the reference, so friction cannot hold the
+    robot short of its target. x_r − x uses the measured position, v the measured velocity.
     """
+    if law not in LAWS:
+        raise OptionError(f"unknown control law {law!r} (expected {' or '.join(LAWS)})")
     period = gains.period if period is None else period
     delay = gains.delay if delay is None else delay
     n_periods = _periods_to_run(duration, period=period, delay=delay, substeps=substeps, cpr=cpr)
     sim = _plant_for(plant)
     time, states, volts = _run_controller(
         gains, feedforward, sim, reference, n_periods=n_periods, period=period, delay=delay, substeps=substeps,
-        voltage=voltage, cpr=cpr,
+        voltage=voltage, cpr=cpr, law=law,
     )
     refs = np.array([reference(t) for t in time])
     ref_col = refs[:, 1] if gains.loop == "velocity" else refs[:, 0]
@@ -414,6 +438,7 @@ def simulate_closed_loop(
             "voltage": voltage,
             "cpr": cpr,
             "plant": "motor" if isinstance(sim, _MotorPlant) else "feedforward",
+            "law": law,
         },
     )
     resp.metrics = response_metrics(resp, resolution=0.0 if cpr is None else 2 * math.pi / cpr)
@@ -449,6 +474,7 @@ def _run_controller(
     substeps: int,
     voltage: float,
     cpr: float | None,
+    law: str = "pid",
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The controller loop of :func:`simulate_closed_loop` (see its Notes), from rest.
 
@@ -493,6 +519,14 @@ def _run_controller(
             vel_m = (pos_m - prev_pos) / period if k > 0 else 0.0
         prev_pos = pos_m
         r_pos, r_vel, r_acc = reference(t_k)
+        if law == "roadrunner":
+            u = min(max(_roadrunner_volts(gains, feedforward, (r_pos, r_vel, r_acc), pos_m, vel_m), -voltage),
+                    voltage)
+            block = sim.run(tuple(states[filled]), u, period, substeps)
+            states[filled + 1 : filled + 1 + substeps] = block
+            volts[filled : filled + substeps] = u
+            filled += substeps
+            continue
         error = (r_vel - vel_m) if loop == "velocity" else (r_pos - pos_m)
         derivative = 0.0 if prev_error is None else (error - prev_error) / period
         prev_error = error
@@ -507,6 +541,18 @@ def _run_controller(
         filled += substeps
     volts[-1] = volts[-2] if n > 0 else 0.0
     return time, states, volts
+
+
+def _roadrunner_volts(gains: Gains, ff: Feedforward, ref: tuple[float, float, float], position: float,
+                      velocity: float) -> float:
+    """Road Runner's command in volts (:func:`simulate_closed_loop`'s Notes): HolonomicController, then
+    MotorFeedforward with kS·sign of the velocity command."""
+    r_pos, r_vel, r_acc = ref
+    # Position and velocity gains in volts: a position loop's (kP, kD), a velocity loop's (kI, kP).
+    k_x, k_v = (gains.kP, gains.kD) if gains.loop == "position" else (gains.kI, gains.kP)
+    feedback = k_x * (r_pos - position) + k_v * (r_vel - velocity)
+    command = ff.kV * r_vel + feedback  # kV·v_c
+    return math.copysign(ff.kS, command) + command + ff.kA * r_acc
 
 
 def response_metrics(resp: ClosedLoopResponse, *, resolution: float = 0.0) -> dict[str, Any]:

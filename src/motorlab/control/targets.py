@@ -298,10 +298,12 @@ def _roadrunner(gains: Gains, feedforward: Feedforward, units: MechanismUnits, v
     rad_per_tick = 2 * math.pi / units.cpr
     ff = {"kS": feedforward.kS, "kV": feedforward.kV * rad_per_tick, "kA": feedforward.kA * rad_per_tick}
     kv = feedforward.kV
-    if gains.loop == "position":
-        path = {"axialGain": gains.kP / kv, "axialVelGain": gains.kD / kv}
-    else:
-        path = {"axialGain": 0.0, "axialVelGain": gains.kP / kv}
+    # HolonomicController: velocity command = axialGain·(position error) + axialVelGain·(velocity error),
+    # volts = kV·command: the position loop's kP and kD, or a velocity loop's kI (on the integral of the
+    # velocity error, the position error) and kP.
+    k_x, k_v, names = ((gains.kP, gains.kD, ("kP", "kD")) if gains.loop == "position"
+                       else (gains.kI, gains.kP, ("kI", "kP")))
+    path = {"axialGain": k_x / kv, "axialVelGain": k_v / kv}
     # TankDrive has no holonomic path gains (it follows paths with RAMSETE): its turn controller,
     # turnGain·e + turnVelGain·ė on the heading, plays the heading gains' part.
     g = {**path, "lateralGain": path["axialGain"], "lateralVelGain": path["axialVelGain"],
@@ -315,11 +317,10 @@ def _roadrunner(gains: Gains, feedforward: Feedforward, units: MechanismUnits, v
     }
     conv = [
         f"ticks: cpr = {units.cpr:g}; kV, kA [V per rad/s, rad/s²] × 2π/cpr = × {rad_per_tick:.6g} per tick",
-        ("path gains: axialGain = kP/kV = " f"{gains.kP:.6g}/{kv:.6g}; axialVelGain = kD/kV = {gains.kD:.6g}/{kv:.6g}"
-         if gains.loop == "position" else
-         f"path gains: axialGain = 0 (a velocity loop has no position gain); axialVelGain = kP/kV = "
-         f"{gains.kP:.6g}/{kv:.6g}") + " (HolonomicController turns a pose error into a velocity command that "
-        "the feedforward converts to volts; lateral and heading the same)",
+        f"path gains: axialGain = {names[0]}/kV = {k_x:.6g}/{kv:.6g}; axialVelGain = {names[1]}/kV = "
+        f"{k_v:.6g}/{kv:.6g} (HolonomicController turns the position error and the velocity error into a "
+        "velocity command that the feedforward converts to volts; lateral and heading the same, and TankDrive's "
+        "turnGain, turnVelGain)",
     ]
     notes = ["kS, kV, kA are for the encoder whose cpr was given (dead wheels or drive motors): the same "
              "encoder as Road Runner's inPerTick"]
@@ -338,7 +339,7 @@ def _roadrunner(gains: Gains, feedforward: Feedforward, units: MechanismUnits, v
         notes.append(f"maxWheelVel must stay below the free speed (V − kS)/kV = {free * units.per_radian / INCH:.4g} "
                      f"in/s at {voltage:g} V")
     else:
-        notes.append("give --wheel-radius (the encoder's wheel) to get inPerTick")
+        notes.append("give the radius of the encoder's wheel to get inPerTick")
     return TargetGains("roadrunner", gains.loop, g, ff, unit_map, conv, notes, feedforward, gains.period, voltage)
 
 
@@ -375,7 +376,7 @@ def _pedro(gains: Gains, feedforward: Feedforward, units: MechanismUnits, voltag
     ]
     notes = [
         "forwardZeroPowerAcceleration = −kS/kA assumes no viscous friction (K = kV): the coasting deceleration "
-        "is at least this large; give --K to the analysis for the viscous part",
+        "is at least this large; the analysis needs the back-EMF constant K to tell the viscous part",
         "yVelocity = lateral_ratio × xVelocity and lateralZeroPowerAcceleration = −kS/lateral_kA need the lateral "
         "ramp (motorlab analyze feedforward forward.json lateral.json; lateral_kA where its break-away shows "
         "the strafing inertia): the motors' friction kS decelerating the strafing robot's inertia, the same "

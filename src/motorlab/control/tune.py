@@ -33,6 +33,7 @@ from motorlab.control.simulation import (
     velocity_ramp,
 )
 from motorlab.control.targets import TargetGains, to_target
+from motorlab.control.tolerances import Tolerances, describe_settings, design_tolerances
 from motorlab.errors import OptionError
 from motorlab.model import MotorParams
 from motorlab.units import format_percent
@@ -110,7 +111,8 @@ class TuneResult:
             "design": {
                 "period": self.gains.period,
                 "delay": self.gains.delay,
-                **self.gains.settings,
+                # An infinite tolerance (that error not penalised) is null in JSON.
+                **{k: (v if math.isfinite(v) else None) for k, v in self.gains.settings.items()},
                 "si_gains": self.gains.to_dict(),
                 "plant": {**self.plant.feedforward.to_dict(), "unit": "V, V*s/rad, V*s^2/rad"},
                 "simulated_on": self.step.settings["plant"],
@@ -141,11 +143,11 @@ class TuneResult:
         plot_response(self.step, ax=axes[0], per_radian=per, unit=unit)
         plot_response(self.profile, ax=axes[1], per_radian=per, unit=unit)
         g = self.target.gains
-        fig.suptitle(
-            f"{self.gains.loop} loop ({self.gains.method}, {self.target.target}): "
-            + ", ".join(f"{k} = {v:.4g}" for k, v in g.items()),
-            fontsize=10,
-        )
+        import textwrap
+
+        title = (f"{self.gains.loop} loop ({self.gains.method}, {self.target.target}): "
+                 + ", ".join(f"{k} = {v:.4g}" for k, v in g.items()))
+        fig.suptitle("\n".join(textwrap.wrap(title, 100)), fontsize=10)
         fig.tight_layout()
         return fig
 
@@ -164,9 +166,9 @@ def tune(
     method: str = "lqr",
     target: str = "volts",
     units: MechanismUnits | None = None,
-    qp: float = 1.0,
-    qv: float = 1.5,
-    r: float = 7.0,
+    qp: float | str | None = None,
+    qv: float | str | None = None,
+    r: float | str | None = None,
     period: float = 0.02,
     delay: float = 0.0,
     rise_time: float | None = None,
@@ -187,11 +189,14 @@ def tune(
     target
         One of :data:`motorlab.control.targets.TARGETS`.
     units
-        The user's length unit; tolerances ``qp``, ``qv`` and ``step`` are in it. Default rad.
+        The user's length unit; plain numbers given as ``qp``, ``qv`` and ``step`` are in it. Default rad.
     qp, qv
-        LQR tolerances on position [unit] and velocity [unit/s].
+        LQR tolerances on position [unit] and velocity [unit/s]: a number, a text with a unit or a
+        percentage (:func:`motorlab.control.tolerances.design_tolerances`), or None for the physical
+        default: 20 % of the free speed, and the distance it covers in one time
+        constant kA/kV; the same in every unit.
     r
-        LQR control effort tolerance [V].
+        LQR control effort tolerance [V] (or a text, ``"50 %"`` of ``voltage``); None: 7/12 of ``voltage``.
     period
         Controller period [s].
     delay
@@ -216,6 +221,44 @@ def tune(
         For impossible settings.
     """
     units = units or MechanismUnits("rad", 1.0)
+    gains, tg = design_for_target(plant, loop, method=method, target=target, units=units, qp=qp, qv=qv, r=r,
+                                  period=period, delay=delay, rise_time=rise_time, overshoot=overshoot,
+                                  voltage=voltage)
+    ff = plant.feedforward
+    limits = max_profile(ff, voltage)
+    size = _step_size(ff, loop, step, units=units, voltage=voltage)
+    step_resp, prof_resp = _simulate_step_and_profile(
+        gains, ff, tg.equivalent_feedforward, plant.simulated, size, limits, voltage=voltage, cpr=units.cpr,
+        law="roadrunner" if target == "roadrunner" else "pid",
+    )
+    warnings = [*plant.notes, *_check(gains, step_resp, prof_resp, overshoot if method == "poles" else None, rise_time,
+                                      static_friction=ff.kS)]
+    return TuneResult(gains, tg, step_resp, prof_resp, limits, plant, units, warnings)
+
+
+def design_for_target(
+    plant: Plant,
+    loop: str = "velocity",
+    *,
+    method: str = "lqr",
+    target: str = "volts",
+    units: MechanismUnits | None = None,
+    qp: float | str | None = None,
+    qv: float | str | None = None,
+    r: float | str | None = None,
+    period: float = 0.02,
+    delay: float = 0.0,
+    rise_time: float | None = None,
+    overshoot: float = 5.0,
+    voltage: float = 12.0,
+) -> tuple[Gains, TargetGains]:
+    """The design of :func:`tune` without its simulations: (SI gains, the gains in the target's units).
+
+    Parameters and errors as :func:`tune`'s. The SI gains depend on the plant, the target's kind of
+    controller and the tolerances only, never on ``units`` (which reads user tolerances given as plain
+    numbers, and prints the target's numbers).
+    """
+    units = units or MechanismUnits("rad", 1.0)
     if loop not in LOOPS:
         raise OptionError(f"unknown loop {loop!r} (expected velocity or position)")
     if method not in METHODS:
@@ -223,36 +266,37 @@ def tune(
     if not (voltage > 0 and math.isfinite(voltage)):
         raise OptionError(f"supply voltage must be positive, got {voltage}")
     ff = plant.feedforward.check_plant()
-    gains = _design(
-        ff, loop, method, per_radian=units.per_radian, qp=qp, qv=qv, r=r, period=period, delay=delay,
-        rise_time=rise_time, overshoot=overshoot,
-    )
-    tg = to_target(gains, ff, target, units=units, voltage=voltage, geometry=plant.geometry)
-    limits = max_profile(ff, voltage)
-    size = _step_size(ff, loop, step, units=units, voltage=voltage)
-    step_resp, prof_resp = _simulate_step_and_profile(
-        gains, ff, tg.equivalent_feedforward, plant.simulated, size, limits, voltage=voltage, cpr=units.cpr
-    )
-    warnings = [*plant.notes, *_check(gains, step_resp, prof_resp, overshoot if method == "poles" else None, rise_time,
-                                      static_friction=ff.kS)]
-    return TuneResult(gains, tg, step_resp, prof_resp, limits, plant, units, warnings)
+    tolerances = design_tolerances(ff, voltage, units, qp=qp, qv=qv, r=r)
+    gains = _design(ff, loop, method, target, tolerances, units=units, period=period, delay=delay,
+                    rise_time=rise_time, overshoot=overshoot)
+    return gains, to_target(gains, ff, target, units=units, voltage=voltage, geometry=plant.geometry)
+
+
+#: Targets whose controller holds position and velocity together (Road Runner's HolonomicController):
+#: their LQR design is the position loop's whatever the loop, and a velocity loop's kI is its position gain.
+HOLONOMIC = ("roadrunner",)
 
 
 def _design(
-    ff: Feedforward, loop: str, method: str, *, per_radian: float, qp: float, qv: float, r: float, period: float,
-    delay: float, rise_time: float | None, overshoot: float,
+    ff: Feedforward, loop: str, method: str, target: str, tolerances: Tolerances, *, units: MechanismUnits,
+    period: float, delay: float, rise_time: float | None, overshoot: float,
 ) -> Gains:
-    """Gains of :func:`tune` by ``method``; the LQR tolerances ``qp``, ``qv`` are in the user's unit."""
-    n = per_radian
-    if method == "lqr":
+    """Gains of :func:`tune` by ``method`` (SI: volts per rad)."""
+    if method == "poles":
+        return design_pid_poles(loop, ff, rise_time=rise_time, overshoot=overshoot, period=period, delay=delay)
+    tol = tolerances
+    if loop == "position" or target in HOLONOMIC:
+        gains = design_position_lqr(ff.kV, ff.kA, qp=tol.qp, qv=tol.qv, r=tol.r, period=period, delay=delay)
         if loop == "velocity":
-            gains = design_velocity_lqr(ff.kV, ff.kA, qv=qv / n, r=r, period=period, delay=delay)
-        else:
-            gains = design_position_lqr(ff.kV, ff.kA, qp=qp / n, qv=qv / n, r=r, period=period, delay=delay)
-        # Report the tolerances in the user's units, as they were given.
-        user = {"qp": qp, "qv": qv} if loop == "position" else {"qv": qv}
-        return replace(gains, settings={**gains.settings, **user})
-    return design_pid_poles(loop, ff, rise_time=rise_time, overshoot=overshoot, period=period, delay=delay)
+            # The same controller seen from the velocity: kP on the velocity error, kI on its integral,
+            # the position error (Road Runner's axialVelGain and axialGain).
+            gains = Gains("velocity", gains.kD, gains.kP, 0.0, method="lqr", period=period, delay=delay)
+    else:
+        gains = design_velocity_lqr(ff.kV, ff.kA, qv=tol.qv, r=tol.r, period=period, delay=delay)
+    settings = tol.settings(units)
+    if loop == "velocity" and target not in HOLONOMIC:
+        settings = {k: v for k, v in settings.items() if not k.startswith("qp")}
+    return replace(gains, settings=settings)
 
 
 def _step_size(ff: Feedforward, loop: str, step: float | None, *, units: MechanismUnits, voltage: float) -> float:
@@ -265,8 +309,6 @@ def _step_size(ff: Feedforward, loop: str, step: float | None, *, units: Mechani
     """
     n = units.per_radian
     free = ff.free_speed(voltage)
-    if free <= 0:
-        raise OptionError(f"at {voltage:g} V the motor cannot overcome kS = {ff.kS:.3g} V")
     if step is None:
         size = 0.5 * free if loop == "velocity" else 2 * math.pi
     else:
@@ -291,6 +333,7 @@ def _simulate_step_and_profile(
     *,
     voltage: float,
     cpr: float | None,
+    law: str = "pid",
 ) -> tuple[ClosedLoopResponse, ClosedLoopResponse]:
     """The closed-loop step of ``size`` and the fastest profile to it, each run long enough to settle.
 
@@ -309,6 +352,7 @@ def _simulate_step_and_profile(
         voltage=voltage,
         cpr=cpr,
         kind="step",
+        law=law,
     )
     if loop == "velocity":
         ref, t_prof = velocity_ramp(size, limits.max_acceleration)
@@ -324,6 +368,7 @@ def _simulate_step_and_profile(
         cpr=cpr,
         kind="profile",
         target=size,
+        law=law,
     )
     return step_resp, prof_resp
 
@@ -397,7 +442,7 @@ def tune_summary(
     velocity_delay: float | None = None,
     plot: bool = True,
 ) -> dict[str, Any]:
-    """Velocity and position gains (SysId LQR defaults) for a motor, with a step-response figure.
+    """Velocity and position gains (LQR with the physical default tolerances) for a motor, with a step-response figure.
 
     Parameters
     ----------
@@ -439,7 +484,8 @@ def tune_summary(
         g = res.target.gains
         resp = res.step.metrics
         lines.append(
-            f"{loop} loop ({res.target.target}, LQR qp=1 qv=1.5 r=7, T={period:g} s, delay {delays[loop] * 1e3:g} ms): "
+            f"{loop} loop ({res.target.target}, LQR tolerances: {describe_settings(res.gains.settings)}, "
+            f"T={period:g} s, delay {delays[loop] * 1e3:g} ms): "
             + ", ".join(f"{k} = {v:.4g} {res.target.units.get(k, '')}" for k, v in g.items())
         )
         lines.append(

@@ -45,12 +45,17 @@ def tune_options(targets: tuple[str, ...]) -> tuple[Option, ...]:
                help='lengths in metres at the rim of this wheel, e.g. "2 in" or "48 mm"'),
         Option("method", kind="choice", choices=METHODS, default="lqr", group=_DESIGN, label="Design method",
                help="LQR as WPILib SysId (lqr), or a rise time and overshoot (poles)"),
-        Option("qp", "unit", kind="number", positive=True, default=1.0, group=_DESIGN,
-               label="Position error tolerance", help="LQR: the position error the loop may keep, in the length unit"),
-        Option("qv", "unit/s", kind="number", positive=True, default=1.5, group=_DESIGN,
-               label="Velocity error tolerance", help="LQR: the velocity error the loop may keep, in the length unit"),
-        Option("r", "V", positive=True, default=7.0, group=_DESIGN, label="Control effort tolerance",
-               help="LQR: the voltage the loop may spend on an error"),
+        Option("qp", kind="text", metavar="TOLERANCE", group=_DESIGN, label="Position error tolerance",
+               help="LQR: the position error the loop may keep: a number in the length unit, a quantity such as "
+                    "\"2 deg\", \"0.5 in\" or \"100 ticks\", or a percentage of one revolution; left empty: the "
+                    "distance the velocity tolerance covers in one time constant kA/kV, the same in every unit"),
+        Option("qv", kind="text", metavar="TOLERANCE", group=_DESIGN, label="Velocity error tolerance",
+               help="LQR: the velocity error the loop may keep: a number in the length unit per second, a quantity "
+                    "such as \"30 rpm\" or \"0.2 m/s\", or a percentage of the free speed; left empty: 20 % of "
+                    "the free speed"),
+        Option("r", kind="text", metavar="VOLTS", group=_DESIGN, label="Control effort tolerance",
+               help="LQR: the voltage the loop may spend on an error, in volts or a percentage of the supply "
+                    "voltage; left empty: 7 V of 12 (58 %)"),
         Option("period", "s", positive=True, group=_DESIGN, label="Controller period",
                help="how often the controller runs; left empty: the target's (20 ms; 1 ms on a CTRE or REV "
                     "controller, as SysId's presets)"),
@@ -64,6 +69,9 @@ def tune_options(targets: tuple[str, ...]) -> tuple[Option, ...]:
         Option("target", kind="choice", choices=targets, default="volts", group=_OUTPUT,
                label="Controller the gains are for",
                help="the library or device that runs the loop; the gains come in its units"),
+        Option("drive", kind="choice", choices=("mecanum", "tank"), default="mecanum", group=_OUTPUT,
+               label="Road Runner drive class",
+               help="the quickstart's drive class whose Params the Road Runner code fills: MecanumDrive or TankDrive"),
         Option("voltage", "V", positive=True, default=12.0, group=_OUTPUT, label="Supply voltage",
                help="the battery's nominal voltage (power and duty conversions, the fastest profile)"),
         Option("step", "unit", kind="number", group=_OUTPUT, label="Step size simulated",
