@@ -307,3 +307,60 @@ def test_recorded_dashboard_telemetry_of_the_opmode_analyses_to_the_truth(classe
     # kA: the command's ~1 hub transaction ahead of the encoder latch biases it low by up to ~2 % (see
     # test_mechanism_tests_give_the_feedforward_gains), which its stderr does not include.
     assert -0.04 < p["kA"]["value"] / truth["kA"] - 1 < 0.01
+
+
+#: Keys every OpMode publishes to FTC Dashboard (ftc/README.md's table); voltage and current where the log has them.
+KEYS = {"time_s", "position_counts", "position_rad", "velocity_rad_per_s"}
+
+
+@pytest.mark.parametrize(
+    ("experiment", "options", "power"),
+    [("spindown", {"run_s": 1, "coast_s": 1}, True), ("spindown", {"drive": "hub", "ina": "no", "run_s": 1,
+                                                                  "coast_s": 1}, False),
+     ("spinup", {"run_s": 1}, True), ("quasistatic", {"drive": "hub", "ina": "no", "ramp": 8}, True),
+     ("dynamic", {"drive": "hub", "ina": "no", "step_s": 0.5}, True)],
+)
+def test_every_opmode_publishes_each_logged_sample_to_dashboard(classes: Path, tmp_path: Path, experiment: str,
+                                                                options: dict, power: bool) -> None:
+    """Each packet holds one logged row: the same numbers as the log file, in SI with the units in the keys."""
+    args = [str(JAVA), "-cp", str(classes), SIM, f"out={tmp_path}", f"experiment={experiment}", "dashboard=yes",
+            "seed=8", *(f"{k}={v}" for k, v in options.items())]
+    done = subprocess.run(args, capture_output=True, text=True, timeout=120, check=False)
+    assert done.returncode == 0, done.stderr[-4000:]
+    lines = [json.loads(line) for line in done.stdout.splitlines() if line.startswith("{")]
+    summary, packets = lines[-1], [p["data"] for p in lines[:-1]]
+    assert summary["stop_reason"] == "complete"
+    assert len(packets) == summary["rows"] == summary["dashboard_packets"] > 100
+    expected = KEYS | ({"voltage_V", "current_A"} if power else set()) | ({"battery_V"} if "drive" in options else set())
+    assert all(set(p) == expected for p in packets), (set(packets[0]), expected)
+    rec = read_ftc_log(summary["log"])
+    sent = {key: np.array([float(p[key]) for p in packets]) for key in expected}  # every value a number
+    np.testing.assert_allclose(sent["time_s"], rec.time, atol=1e-6)
+    np.testing.assert_array_equal(sent["position_counts"], rec.signals["counts"])
+    np.testing.assert_allclose(sent["position_rad"], rec.signals["counts"] * 2 * np.pi / summary["truth"]["cpr"])
+    if power:
+        np.testing.assert_allclose(sent["voltage_V"], rec.signals["voltage"], atol=1e-4)
+        np.testing.assert_allclose(sent["current_A"], rec.signals["current"], atol=1e-5)
+
+
+def test_the_opmodes_compile_and_run_without_ftc_dashboard(classes: Path, tmp_path: Path) -> None:
+    """A project without FTC Dashboard: DashboardTelemetry.java deleted (ftc/README.md), no Dashboard library.
+    The OpModes compile against the SDK alone and run as before, publishing nothing."""
+    sdk = tmp_path / "sdk"
+    shutil.copytree(classes, sdk, ignore=shutil.ignore_patterns("acmerobotics", "motorlab"))
+    main_sources = sorted((FTC / "TeamCode/src/main").rglob("*.java"))
+    out = tmp_path / "teamcode"
+    out.mkdir()
+    _javac([s for s in main_sources if s.name != "DashboardTelemetry.java"], out, classpath=sdk)
+    assert not (out / "org/firstinspires/ftc/teamcode/motorlab/DashboardTelemetry.class").exists()
+    sim = tmp_path / "sim"  # the simulator's classes, Dashboard's stand-in left out
+    shutil.copytree(classes / "org/firstinspires/ftc/teamcode/motorlab/sim", sim / "org/firstinspires/ftc/teamcode/motorlab/sim",
+                    ignore=shutil.ignore_patterns("SimDashboard*"))
+    done = subprocess.run([str(JAVA), "-cp", os.pathsep.join(map(str, (out, sim, sdk))), SIM, f"out={tmp_path}",
+                           "experiment=quasistatic", "drive=hub", "ina=no", "ramp=8", "seed=9"],
+                          capture_output=True, text=True, timeout=120, check=False)
+    assert done.returncode == 0, done.stderr[-4000:]
+    summary = json.loads(done.stdout.strip().splitlines()[-1])
+    assert summary["stop_reason"] == "complete"
+    assert summary["dashboard_packets"] == 0
+    assert read_ftc_log(summary["log"]).time.size == summary["rows"] > 100
