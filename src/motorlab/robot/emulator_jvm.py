@@ -82,10 +82,12 @@ class JvmOpMode:
         """Run the OpMode until it ends or ``running()`` turns false (STOP); forward its packets meanwhile."""
         proc = subprocess.Popen(self.command, cwd=self.cwd, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
                                 stderr=subprocess.PIPE, text=True, encoding="utf-8")
-        assert proc.stdout is not None and proc.stderr is not None and proc.stdin is not None
+        stdin, stdout, stderr = proc.stdin, proc.stdout, proc.stderr
+        if stdin is None or stdout is None or stderr is None:  # pipes were asked for: never
+            raise RuntimeError("the OpMode process has no pipes")
         errors: list[str] = []
-        reader = threading.Thread(target=self._read, args=(proc.stdout,), daemon=True)
-        drain = threading.Thread(target=lambda: errors.append(proc.stderr.read()), daemon=True)  # type: ignore[union-attr]
+        reader = threading.Thread(target=self._read, args=(stdout,), daemon=True)
+        drain = threading.Thread(target=lambda: errors.append(stderr.read()), daemon=True)
         reader.start()
         drain.start()
         stop_sent = False
@@ -96,8 +98,8 @@ class JvmOpMode:
                 if not stop_sent and not running():
                     stop_sent = True
                     with contextlib.suppress(OSError):
-                        proc.stdin.write("stop\n")
-                        proc.stdin.close()
+                        stdin.write("stop\n")
+                        stdin.close()
                     deadline = time.monotonic() + STOP_GRACE
                     while proc.poll() is None and time.monotonic() < deadline:
                         time.sleep(0.02)
@@ -111,6 +113,6 @@ class JvmOpMode:
             proc.wait(STOP_GRACE)
             drain.join(1.0)
             self.stderr = "".join(errors)
-            for stream in (proc.stdin, proc.stdout, proc.stderr):
+            for stream in (stdin, stdout, stderr):
                 with contextlib.suppress(OSError):
                     stream.close()
