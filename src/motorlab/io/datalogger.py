@@ -40,7 +40,7 @@ from typing import Any
 import numpy as np
 
 from motorlab.errors import LogFormatError, OptionError
-from motorlab.io._text import PathArg, check_cpr, parse_number, read_text
+from motorlab.io._text import PathArg, TextFile, check_cpr, parse_number, read_text
 from motorlab.io.glitches import screen_glitches
 from motorlab.io.headers import (
     QUANTITIES,
@@ -160,50 +160,18 @@ def read_datalogger(path: PathArg, *, cpr: float | None = None, columns: Any = N
     time_at = lower.index(TIMESTAMP) if TIMESTAMP in lower else None
     status_at = lower.index(STATUS) if STATUS in lower else None
     loop_at = lower.index(LOOP) if LOOP in lower else None
-    fields: dict[int, tuple[str, str]] = {}
-    unread: list[str] = []
-    for k, field in enumerate(header):
-        if k in (time_at, status_at, loop_at):
-            continue
-        target = _target(field, rules, name)
-        if isinstance(target, tuple):
-            fields[k] = target
-        elif target == "unknown":
-            unread.append(field)
+    fields, unread = _fields(header, rules, name, skip=(time_at, status_at, loop_at))
     if not fields:
         first = unread[0] if unread else ""
         raise LogFormatError(f"Datalogger file: {unknown_column_message(first, rules)}", path=name, line=header_no)
     warnings = [f"{name}: field {f!r} names no quantity and is not read: map it with --column \"{f}=QUANTITY\""
                 for f in unread]
 
-    rows: list[tuple[int, list[str]]] = []
-    for number, line in numbered[1:]:
-        values = [v.strip() for v in line.split(",")]
-        if len(values) != len(header):
-            if text.may_be_truncated(number) and len(values) < len(header):
-                warnings.append(f"{name}:{number}: truncated last line dropped ({line[:40]!r})")
-                break
-            raise LogFormatError(
-                f"expected {len(header)} fields ({', '.join(header)}), found {len(values)}: a value holding a "
-                "comma (a decimal comma: the Datalogger formats numbers in the robot's language settings; "
-                "set the Control Hub's language to English, or format with Locale.US)", path=name, line=number)
-        rows.append((number, values))
+    rows = _split_rows(text, numbered[1:], header, warnings)
     statuses = Counter(values[status_at] for _n, values in rows) if status_at is not None else Counter()
     running = [r for r in rows if status_at is None or r[1][status_at] == RUNNING] if statuses.get(RUNNING) else rows
     init = [values for _n, values in rows if status_at is not None and values[status_at] == "INIT"]
-    for k in [k for k in fields if all(values[k] == "" for _n, values in running)]:
-        warnings.append(f"{name}: field {header[k]!r} is never set in a RUNNING row: not read")
-        del fields[k]
-    if not fields:
-        raise LogFormatError("no field is ever set after START: the OpMode logged nothing but its status",
-                             path=name, line=header_no)
-    unset = [r for r in running if any(r[1][k] == "" for k in fields)]
-    if unset:  # a field is "" until the OpMode first sets it
-        warnings.append(f"{name}: {len(unset)} row(s) with a field not yet set left out (first: line {unset[0][0]})")
-        running = [r for r in running if r not in unset]
-    if not running:
-        raise LogFormatError("no RUNNING row with every field set: the OpMode logged nothing after START",
-                             path=name, line=header_no)
+    running = _set_rows(running, fields, header, name, warnings)
 
     lines = np.array([n for n, _v in running], dtype=int)
     data = {k: np.array([parse_number(v[k], path=name, line=n, column=header[k]) for n, v in running])
@@ -218,31 +186,8 @@ def read_datalogger(path: PathArg, *, cpr: float | None = None, columns: Any = N
     metadata: dict[str, Any] = {"time": "row index"} if time_at is None else {}
 
     cpr = check_cpr(cpr)
-    signals: dict[str, np.ndarray] = {}
-    units: dict[str, str] = {}
-    for k, (signal, unit) in fields.items():
-        if signal in signals:
-            raise LogFormatError(f"fields {header[k]!r} and another are both read as {signal}: skip one with "
-                                 f"--column \"{header[k]}=skip\"", path=name, line=header_no)
-        units[signal] = unit
-        if unit == "count/s":
-            if cpr is None:
-                raise OptionError(f"{name}: field {header[k]!r} is a velocity in encoder ticks per second (the "
-                                  "SDK's getVelocity()): give the encoder's counts per revolution (cpr, --cpr N)")
-            signals[signal] = data[k] * (2 * math.pi / cpr)
-        elif signal == "counts" or unit == "count":
-            signals["counts"] = data[k]
-            if cpr is not None:
-                signals["position"] = data[k] * (2 * math.pi / cpr)
-        else:
-            signals[signal] = to_si(data[k], unit, SIGNALS[signal])
-
-    loops: dict[str, Any] = {}
-    if loop_at is not None:
-        counter = [float(v[loop_at]) for _n, v in running if v[loop_at].lstrip("-").isdigit()]
-        if counter:
-            loops = {"first": counter[0], "last": counter[-1],
-                     "missed": int(max(0.0, counter[-1] - counter[0] + 1 - len(counter)))}
+    signals, units = _signals(fields, data, header, cpr, name)
+    loops = _loop_counter([v[loop_at] for _n, v in running]) if loop_at is not None else {}
     unread_hint = f" (or, if the field {unread[0]!r} holds it, --column \"{unread[0]}=QUANTITY\")" if unread else ""
     lacks = {signal: f"a Datalogger file holds only the fields its OpMode logged: {how}{unread_hint}"
              for signal, how in LACKS.items() if signal not in signals}
@@ -261,3 +206,92 @@ def read_datalogger(path: PathArg, *, cpr: float | None = None, columns: Any = N
         "warnings": warnings,
     })
     return screen_glitches(Recording(time=time, signals=signals, metadata=metadata, source=name, lines=lines))
+
+
+def _fields(header: list[str], rules: Sequence[ColumnRule], name: str,
+            skip: tuple[int | None, ...]) -> tuple[dict[int, tuple[str, str]], list[str]]:
+    """Index -> (signal, unit) of the fields read, and the names of those no word names."""
+    fields: dict[int, tuple[str, str]] = {}
+    unread: list[str] = []
+    for k, field in enumerate(header):
+        if k in skip:
+            continue
+        target = _target(field, rules, name)
+        if isinstance(target, tuple):
+            fields[k] = target
+        elif target == "unknown":
+            unread.append(field)
+    return fields, unread
+
+
+def _split_rows(text: TextFile, numbered: list[tuple[int, str]], header: list[str],
+                warnings: list[str]) -> list[tuple[int, list[str]]]:
+    """(line number, fields) of each row; a row with another number of fields than the header refused."""
+    rows: list[tuple[int, list[str]]] = []
+    for number, line in numbered:
+        values = [v.strip() for v in line.split(",")]
+        if len(values) != len(header):
+            if text.may_be_truncated(number) and len(values) < len(header):
+                warnings.append(f"{text.path}:{number}: truncated last line dropped ({line[:40]!r})")
+                break
+            raise LogFormatError(
+                f"expected {len(header)} fields ({', '.join(header)}), found {len(values)}: a value holding a "
+                "comma (a decimal comma: the Datalogger formats numbers in the robot's language settings; "
+                "set the Control Hub's language to English, or format with Locale.US)", path=text.path, line=number)
+        rows.append((number, values))
+    return rows
+
+
+def _signals(fields: dict[int, tuple[str, str]], data: dict[int, np.ndarray], header: list[str], cpr: float | None,
+             name: str) -> tuple[dict[str, np.ndarray], dict[str, str]]:
+    """The fields' values in SI under their signal names (ticks through the cpr), and the units as written."""
+    signals: dict[str, np.ndarray] = {}
+    units: dict[str, str] = {}
+    for k, (signal, unit) in fields.items():
+        if signal in signals:
+            raise LogFormatError(f"fields {header[k]!r} and another are both read as {signal}: skip one with "
+                                 f"--column \"{header[k]}=skip\"", path=name, line=1)
+        units[signal] = unit
+        if unit == "count/s":
+            if cpr is None:
+                raise OptionError(f"{name}: field {header[k]!r} is a velocity in encoder ticks per second (the "
+                                  "SDK's getVelocity()): give the encoder's counts per revolution (cpr, --cpr N)")
+            signals[signal] = data[k] * (2 * math.pi / cpr)
+        elif signal == "counts" or unit == "count":
+            signals["counts"] = data[k]
+            if cpr is not None:
+                signals["position"] = data[k] * (2 * math.pi / cpr)
+        else:
+            signals[signal] = to_si(data[k], unit, SIGNALS[signal])
+    return signals, units
+
+
+def _loop_counter(values: list[str]) -> dict[str, Any]:
+    """First and last loop number, and the loops with no row (a Datalogger OpMode counts each loop)."""
+    counter = [float(v) for v in values if v.lstrip("-").isdigit()]
+    if not counter:
+        return {}
+    return {"first": counter[0], "last": counter[-1],
+            "missed": int(max(0.0, counter[-1] - counter[0] + 1 - len(counter)))}
+
+
+def _set_rows(running: list[tuple[int, list[str]]], fields: dict[int, tuple[str, str]], header: list[str],
+              name: str, warnings: list[str]) -> list[tuple[int, list[str]]]:
+    """The rows whose fields are all set (a field is "" until the OpMode first sets it); a field never set
+    is dropped from ``fields``. Refuses when nothing is left."""
+    for k in [k for k in fields if all(values[k] == "" for _n, values in running)]:
+        warnings.append(f"{name}: field {header[k]!r} is never set in a RUNNING row: not read")
+        del fields[k]
+    if not fields:
+        raise LogFormatError("no field is ever set after START: the OpMode logged nothing but its status",
+                             path=name, line=1)
+    unset = [r for r in running if any(r[1][k] == "" for k in fields)]
+    if unset:
+        warnings.append(f"{name}: {len(unset)} row(s) with a field not yet set left out (first: line {unset[0][0]})")
+        left_out = {n for n, _v in unset}
+        running = [r for r in running if r[0] not in left_out]
+    if not running:
+        raise LogFormatError("no RUNNING row with every field set: the OpMode logged nothing after START",
+                             path=name, line=1)
+    return running
+
