@@ -21,7 +21,9 @@ import pytest
 
 from motorlab.analyses.spindown import spindown
 from motorlab.feedforward import feedforward
-from motorlab.io import read_ftc_log
+from motorlab.io import read_csv, read_ftc_log
+from motorlab.robot.emulator import EmulatedRobot
+from motorlab.robot.emulator_jvm import JvmOpMode
 
 ROOT = Path(__file__).resolve().parents[1]
 FTC = ROOT / "ftc"
@@ -257,11 +259,8 @@ def test_the_log_handler_serves_the_opmode_logs_to_robot_pull(classes: Path, tmp
     assert sorted(p.name for p in (out / "motorlab").iterdir()) == [p.name for p in originals]
 
 
-def _sim_robot(classes: Path, out: Path, seconds: float, **options: object) -> tuple[object, object]:
+def _sim_robot(classes: Path, out: Path, seconds: float, **options: object) -> tuple[EmulatedRobot, JvmOpMode]:
     """An emulated robot whose "motorlab: quasistatic ramp" is the real OpMode in the JVM, in real time."""
-    from motorlab.robot.emulator import EmulatedRobot
-    from motorlab.robot.emulator_jvm import JvmOpMode
-
     args = [str(JAVA), "-cp", str(classes), SIM, f"out={out}", "realtime=yes", "dashboard=yes", "stdin_stop=yes",
             *(f"{k}={v}" for k, v in options.items())]
     robot = EmulatedRobot(opmodes=[{"name": "motorlab: quasistatic ramp", "group": "motorlab"}],
@@ -277,18 +276,16 @@ def test_recorded_dashboard_telemetry_of_the_opmode_analyses_to_the_truth(classe
     reads that log with no column, unit or cpr given, to kS = R·Tf/K, kV = K + R·b/K, kA = R·J/K of the plant.
     ``record`` stops the OpMode at --seconds, before its ramp ends: STOP reaches the OpMode."""
     from motorlab.cli import main
-    from motorlab.io import read_csv
 
     robot, opmode = _sim_robot(classes, tmp_path / "robot", 3.0, experiment="quasistatic", drive="hub", ina="no",
                                ramp=3, max_V=12, seed=21)
     log = tmp_path / "ramp.csv"
-    with robot:  # type: ignore[attr-defined]
-        assert main(["robot", "record", "--host", "127.0.0.1", "--dashboard-port",
-                     str(robot.dashboard_port), "--opmode", "motorlab: quasistatic ramp",  # type: ignore[attr-defined]
-                     "--seconds", "3", "-o", str(log)]) == 0
-    summary = opmode.summary  # type: ignore[attr-defined]
-    assert summary["stop_reason"] == "stopped from the Driver Station", (summary, opmode.stderr)  # type: ignore[attr-defined]
-    assert opmode.dropped == 0  # type: ignore[attr-defined]
+    with robot:
+        assert main(["robot", "record", "--host", "127.0.0.1", "--dashboard-port", str(robot.dashboard_port),
+                     "--opmode", "motorlab: quasistatic ramp", "--seconds", "3", "-o", str(log)]) == 0
+    summary = opmode.summary
+    assert summary["stop_reason"] == "stopped from the Driver Station", (summary, opmode.stderr)
+    assert opmode.dropped == 0
     rec = read_csv(log)
     assert {"voltage", "current", "counts", "position", "velocity", "battery"} <= set(rec.signals)
     # every sample the OpMode took while recording, with the OpMode's own clock (µs, not the packets' ms)
