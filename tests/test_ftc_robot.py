@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -270,7 +271,8 @@ def _sim_robot(classes: Path, out: Path, seconds: float, **options: object) -> t
     return robot, opmode
 
 
-def test_recorded_dashboard_telemetry_of_the_opmode_analyses_to_the_truth(classes: Path, tmp_path: Path) -> None:
+def test_recorded_dashboard_telemetry_of_the_opmode_analyses_to_the_truth(
+        classes: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     """record → analyze: the real QuasistaticOpMode publishes each sample to FTC Dashboard (numbers, units in
     the keys); ``motorlab robot record`` logs them from the emulated robot and ``motorlab analyze feedforward``
     reads that log with no column, unit or cpr given, to kS = R·Tf/K, kV = K + R·b/K, kA = R·J/K of the plant.
@@ -293,10 +295,9 @@ def test_recorded_dashboard_telemetry_of_the_opmode_analyses_to_the_truth(classe
     steps = np.diff(rec.time)
     assert 3e-3 < float(np.median(steps)) < 8e-3
     assert len({round(x * 1e6) for x in steps}) > 50
-    done = subprocess.run([sys.executable, "-m", "motorlab", "analyze", "feedforward", str(log), "--json"],
-                          capture_output=True, text=True, timeout=120, check=False)
-    assert done.returncode == 0, done.stderr
-    p = json.loads(done.stdout)["parameters"]
+    capsys.readouterr()
+    assert main(["analyze", "feedforward", str(log), "--json"]) == 0
+    p = json.loads(capsys.readouterr().out)["parameters"]
     t = summary["truth"]
     truth = {"kS": t["R"] * t["Tf"] / t["K"], "kV": t["K"] + t["R"] * t["b"] / t["K"], "kA": t["R"] * t["J"] / t["K"]}
     for name in ("kS", "kV"):
@@ -341,21 +342,25 @@ def test_every_opmode_publishes_each_logged_sample_to_dashboard(classes: Path, t
         np.testing.assert_allclose(sent["current_A"], rec.signals["current"], atol=1e-5)
 
 
+#: Java comments and string literals (what names a class without using it).
+_JAVA_NOISE = re.compile(r'/\*.*?\*/|//[^\n]*|"(?:\\.|[^"\\])*"', re.DOTALL)
+
+
 def test_the_opmodes_compile_and_run_without_ftc_dashboard(classes: Path, tmp_path: Path) -> None:
     """A project without FTC Dashboard: DashboardTelemetry.java deleted (ftc/README.md), no Dashboard library.
-    The OpModes compile against the SDK alone and run as before, publishing nothing."""
-    sdk = tmp_path / "sdk"
-    shutil.copytree(classes, sdk, ignore=shutil.ignore_patterns("acmerobotics", "motorlab"))
+    No other source names Dashboard or that class (so they compile against the SDK alone), and the OpModes,
+    run with neither on the class path, run as before and publish nothing."""
     main_sources = sorted((FTC / "TeamCode/src/main").rglob("*.java"))
-    out = tmp_path / "teamcode"
-    out.mkdir()
-    _javac([s for s in main_sources if s.name != "DashboardTelemetry.java"], out, classpath=sdk)
-    assert not (out / "org/firstinspires/ftc/teamcode/motorlab/DashboardTelemetry.class").exists()
-    sim = tmp_path / "sim"  # the simulator's classes, Dashboard's stand-in left out
-    package = "org/firstinspires/ftc/teamcode/motorlab/sim"
-    shutil.copytree(classes / package, sim / package, ignore=shutil.ignore_patterns("SimDashboard*"))
-    done = subprocess.run([str(JAVA), "-cp", os.pathsep.join(map(str, (out, sim, sdk))), SIM, f"out={tmp_path}",
-                           "experiment=quasistatic", "drive=hub", "ina=no", "ramp=8", "seed=9"],
+    code = {p.name: _JAVA_NOISE.sub(" ", p.read_text(encoding="utf-8")) for p in main_sources}
+    naming = [name for name, text in code.items() if name != "DashboardTelemetry.java"
+              and ("acmerobotics" in text or "DashboardTelemetry" in text)]
+    assert naming == []
+    assert "acmerobotics" in code["DashboardTelemetry.java"]
+    robot = tmp_path / "classes"  # the compiled OpModes and simulator without Dashboard, its stand-in, the class
+    shutil.copytree(classes, robot, ignore=shutil.ignore_patterns("acmerobotics", "DashboardTelemetry*",
+                                                                   "SimDashboard*"))
+    done = subprocess.run([str(JAVA), "-cp", str(robot), SIM, f"out={tmp_path}", "experiment=quasistatic",
+                           "drive=hub", "ina=no", "ramp=8", "seed=9"],
                           capture_output=True, text=True, timeout=120, check=False)
     assert done.returncode == 0, done.stderr[-4000:]
     summary = json.loads(done.stdout.strip().splitlines()[-1])

@@ -5,8 +5,6 @@ from __future__ import annotations
 
 import csv
 import math
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -83,16 +81,18 @@ def test_real_velocity_logs_ask_what_the_field_is_then_the_cpr(logs: Path, name:
 
 
 @pytest.mark.parametrize("name", [BATTERY[0], INTAKE[0]])
-def test_the_analysis_refuses_a_real_file_only_for_what_it_lacks(logs: Path, name: str) -> None:
+def test_the_analysis_refuses_a_real_file_only_for_what_it_lacks(logs: Path, name: str,
+                                                                 capsys: pytest.CaptureFixture[str]) -> None:
     """One line, exit 2: no voltage in the file, and how to log it; never the old ':2: a second text line'."""
+    from motorlab.cli import main
+
     extra = ["--column", "Intake=velocity", "--cpr", str(CPR)] if name in INTAKE else []
-    done = subprocess.run([sys.executable, "-m", "motorlab", "analyze", "feedforward", str(logs / name), *extra],
-                          capture_output=True, text=True, timeout=120, check=False)
-    assert done.returncode == 2
-    assert done.stderr.count("\n") == 1, done.stderr
-    assert "has no voltage" in done.stderr
-    assert "field named 'Voltage'" in done.stderr
-    assert "second text line" not in done.stderr
+    assert main(["analyze", "feedforward", str(logs / name), *extra]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1, err
+    assert f"{name}: this log has no voltage" in err
+    assert "field named 'Voltage'" in err
+    assert "second text line" not in err
 
 
 def test_the_upload_proposes_a_real_file_and_asks_in_words(logs: Path) -> None:
