@@ -71,4 +71,3 @@ def propose_datalogger(signals: Sequence[str]) -> str:
         if signal in signals:
             return experiment
     return "feedforward"
-

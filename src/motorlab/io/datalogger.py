@@ -294,4 +294,3 @@ def _set_rows(running: list[tuple[int, list[str]]], fields: dict[int, tuple[str,
         raise LogFormatError("no RUNNING row with every field set: the OpMode logged nothing after START",
                              path=name, line=1)
     return running
-
