@@ -80,8 +80,12 @@ class JvmOpMode:
 
     def __call__(self, broadcast: Callable[[dict[str, Any]], None], running: Callable[[], bool]) -> None:
         """Run the OpMode until it ends or ``running()`` turns false (STOP); forward its packets meanwhile."""
-        proc = subprocess.Popen(self.command, cwd=self.cwd, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-                                stderr=subprocess.PIPE, text=True, encoding="utf-8")
+        try:
+            proc = subprocess.Popen(self.command, cwd=self.cwd, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                                    stderr=subprocess.PIPE, text=True, encoding="utf-8")
+        except OSError as exc:  # no java: the OpMode ends at once, as one that throws in init
+            self.stderr = f"cannot start {self.command[0]}: {exc.strerror}"
+            return
         stdin, stdout, stderr = proc.stdin, proc.stdout, proc.stderr
         if stdin is None or stdout is None or stderr is None:  # pipes were asked for: never
             raise RuntimeError("the OpMode process has no pipes")
