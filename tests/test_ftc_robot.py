@@ -367,3 +367,26 @@ def test_the_opmodes_compile_and_run_without_ftc_dashboard(classes: Path, tmp_pa
     assert summary["stop_reason"] == "complete"
     assert summary["dashboard_packets"] == 0
     assert read_ftc_log(summary["log"]).time.size == summary["rows"] > 100
+
+
+#: The FTC Dashboard stubs and the upstream files they stand for (acmerobotics/ftc-dashboard).
+DASHBOARD_STUBS = {
+    "com/acmerobotics/dashboard/FtcDashboard.java":
+        "FtcDashboard/src/main/java/com/acmerobotics/dashboard/FtcDashboard.java",
+    "com/acmerobotics/dashboard/telemetry/TelemetryPacket.java":
+        "DashboardCore/src/main/java/com/acmerobotics/dashboard/telemetry/TelemetryPacket.java",
+}
+_PUBLIC = re.compile(r"^\s*(public [^=;{]*\))\s*\{", re.MULTILINE)
+
+
+@pytest.mark.skipif(not os.environ.get("MOTORLAB_FTC_DASHBOARD"),
+                    reason="set MOTORLAB_FTC_DASHBOARD to a checkout of acmerobotics/ftc-dashboard (any tag)")
+def test_the_dashboard_stubs_have_the_real_signatures() -> None:
+    """Every public method and constructor of the two stubs is declared the same upstream (docs/ftc-robot.md)."""
+    upstream_root = Path(os.environ["MOTORLAB_FTC_DASHBOARD"])
+    for stub, upstream in DASHBOARD_STUBS.items():
+        real = " ".join((upstream_root / upstream).read_text(encoding="utf-8").split())
+        mine = _PUBLIC.findall((FTC / "sdk-stubs/src/main/java" / stub).read_text(encoding="utf-8"))
+        assert mine, stub
+        for signature in mine:
+            assert " ".join(signature.split()) in real, (stub, signature)
