@@ -5,12 +5,15 @@ from __future__ import annotations
 
 import csv
 import math
+import tempfile
 from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
-from motorlab.errors import LogFormatError, OptionError
+from motorlab.errors import LogFormatError, MotorlabError, OptionError
 from motorlab.feedforward import feedforward
 from motorlab.io import detect_format, read_any, read_datalogger
 from motorlab.model import MotorParams, feedforward_from_params
@@ -171,3 +174,27 @@ def test_fields_with_tick_units_and_unset_rows(tmp_path: Path) -> None:
     assert rec.metadata["unread"] == ["Yaw"]
     assert any("--column \"Yaw=QUANTITY\"" in w for w in rec.metadata["warnings"])
     assert any("1 row(s) with a field not yet set" in w for w in rec.metadata["warnings"])
+
+
+FIELD = st.one_of(st.sampled_from(["", "RUNNING", "INIT", "12.332", "-0.000", "1e308", "nan", "²", "1_0", "7"]),
+                  st.text(max_size=6))
+
+
+@settings(max_examples=60, deadline=None, derandomize=True)
+@given(rows=st.lists(st.lists(FIELD, min_size=4, max_size=6), max_size=8), newline=st.booleans())
+def test_any_rows_under_a_datalogger_header_give_a_recording_or_one_line(rows: list[list[str]],
+                                                                        newline: bool) -> None:
+    text = "Timestamp,OpModeStatus,Loop Counter,Battery,Intake Velocity\n" + "\n".join(
+        ",".join(r) for r in rows) + ("\n" if newline else "")
+    with tempfile.TemporaryDirectory() as folder:
+        path = Path(folder) / "datalog.txt"
+        path.write_text(text, encoding="utf-8")
+        message = ""
+        try:
+            rec = read_datalogger(path, cpr=CPR)
+        except MotorlabError as exc:
+            message = str(exc)
+        else:
+            assert all(np.isfinite(v).all() for v in rec.signals.values())
+            assert np.all(np.diff(rec.time) >= 0)
+        assert "\n" not in message

@@ -268,7 +268,7 @@ def _signals(fields: dict[int, tuple[str, str]], data: dict[int, np.ndarray], he
 
 def _loop_counter(values: list[str]) -> dict[str, Any]:
     """First and last loop number, and the loops with no row (a Datalogger OpMode counts each loop)."""
-    counter = [float(v) for v in values if v.lstrip("-").isdigit()]
+    counter = [float(v) for v in values if v.isascii() and v.lstrip("-").isdigit()]
     if not counter:
         return {}
     return {"first": counter[0], "last": counter[-1],
