@@ -44,6 +44,8 @@ def propose(fmt: str, signals: Sequence[str], declared: str | None = None) -> st
         declared = BY_HEADER.get(declared, declared)
         if declared in all_experiments():
             return declared
+    if fmt == "datalogger":
+        return propose_datalogger(signals)
     if fmt in BY_FORMAT:
         return BY_FORMAT[fmt]
     for signal, experiment in BY_SIGNAL:
@@ -52,3 +54,20 @@ def propose(fmt: str, signals: Sequence[str], declared: str | None = None) -> st
     if "position" in signals or "counts" in signals:
         return "spindown" if "current" in signals else "identify"
     return "spindown"
+
+
+# ---- FTC SDK Datalogger files (motorlab.io.datalogger; issue 32) ---------------------------------------------
+
+
+def propose_datalogger(signals: Sequence[str]) -> str:
+    """The experiment of an FTC SDK Datalogger file: what its fields measure, else a mechanism's feedforward.
+
+    A Datalogger file is a robot's own log of its mechanisms (an intake, a drive: velocity, battery, the
+    power), so the gains kS, kV, kA are what it is for; what it lacks for them (the voltage applied, an
+    encoder position, the counts per revolution) is said in words when it is read and analysed
+    (``Recording.metadata["lacks"]``, the reader's ``cpr`` refusal).
+    """
+    for signal, experiment in BY_SIGNAL:
+        if signal in signals:
+            return experiment
+    return "feedforward"

@@ -100,6 +100,9 @@ class Recording:
             hint = ""
             if self.metadata.get("format") == "csv":
                 hint = f"; if a column holds it, map it with --column \"HEADER={name}\""
+            lacks = self.metadata.get("lacks")  # a reader's words on how to log what its format lacks
+            if isinstance(lacks, dict) and name in lacks:
+                hint = f": {lacks[name]}"
             raise LogFormatError(f"this log has no {name} (it has: {have}){hint}", path=self.source or None) from None
 
     def line_of(self, index: int) -> int | None:

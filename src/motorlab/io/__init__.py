@@ -18,6 +18,7 @@ WPILib data log           :func:`read_wpilog`                     :func:`write_w
                                                                   :func:`write_sysid_wpilog`
 Road Runner ramp (.json)  :func:`read_roadrunner_ramp`            :func:`write_roadrunner_ramp`
 Road Runner flight .log   :func:`read_flight_recorder`            :func:`write_flight_log`
+FTC SDK Datalogger        :func:`read_datalogger`
 ========================  ======================================  ==================================
 """
 
@@ -32,6 +33,7 @@ from typing import Any
 from motorlab.errors import LogFormatError, OptionError
 from motorlab.io._text import PathArg, check_distinct, check_input_file, decode_text, is_binary, is_number, read_bytes
 from motorlab.io.csv_table import COLUMNS, guess_delimiter, is_known_header, read_csv, split_fields, write_csv
+from motorlab.io.datalogger import is_datalogger_header, read_datalogger
 from motorlab.io.flightrecorder import read_flight_log_channels, read_flight_recorder, write_flight_log
 from motorlab.io.frc_json import read_frc_char_json, read_sysid_json
 from motorlab.io.ftc import read_ftc_log, write_ftc_log
@@ -57,6 +59,7 @@ READERS: dict[str, Callable[..., Recording]] = {
     "wpilog": read_wpilog,
     "roadrunner-ramp": read_roadrunner_ramp,
     "roadrunner-log": read_flight_recorder,
+    "datalogger": read_datalogger,
 }
 
 _CHANNEL = re.compile(r"^ch\d+(_v)?$", re.IGNORECASE)
@@ -125,6 +128,8 @@ def detect_format(path: PathArg) -> str:
         return "scope-times"
     if len(lower) > 1 and lower[0] in ("time_ms", "time_s") and all(_CHANNEL.match(f) for f in lower[1:]):
         return "scope-waveform"
+    if is_datalogger_header(split_fields(first, ",")):  # FTC SDK Datalogger: Timestamp,OpModeStatus,…
+        return "datalogger"
     if is_known_header(fields):
         return "csv"
     if all(is_number(f) for f in fields):
@@ -186,6 +191,7 @@ __all__ = [
     "find_rising_edges",
     "read_any",
     "read_csv",
+    "read_datalogger",
     "read_flight_log_channels",
     "read_flight_recorder",
     "read_frc_char_json",

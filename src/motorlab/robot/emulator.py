@@ -173,6 +173,7 @@ class EmulatedRobot:
         self._threads: list[threading.Thread] = []
         self._http: ThreadingHTTPServer | None = None
         self._ws: Any = None
+        self.external_opmode: Any = None  # an OpMode process instead of the plant: motorlab.robot.emulator_jvm
 
     # ---- life cycle -------------------------------------------------------------------------------
     @property
@@ -321,7 +322,10 @@ class EmulatedRobot:
 
     def _telemetry(self, run: int) -> None:
         """The running OpMode: a packet per loop, sent in batches every 100 ms, until stopped."""
-        samples = self.plant.run(min(self.lifetime, self.plant.duration))
+        external = self.external_opmode  # motorlab.robot.emulator_jvm: forwards the process's packets until STOP
+        if external is not None:
+            external(self.broadcast, lambda: self._run_id == run and not self._stopped.is_set())
+        samples = [] if external is not None else self.plant.run(min(self.lifetime, self.plant.duration))
         epoch = int(time.time() * 1000)
         start = time.monotonic()
         sent = 0

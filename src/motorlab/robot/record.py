@@ -18,7 +18,9 @@ timestamps (ms, relative to the first packet recorded), ``battery_V`` (the lates
 named as a motorlab column (``voltage_V``, ``position_counts`` …, see :data:`ALIASES`) becomes that
 signal, so ``motorlab analyze feedforward LOG.csv --cpr N`` reads voltage and encoder position; every
 other key is kept as ``x_<key>`` (read, but no signal). Values are written exactly as the robot sent
-them (Dashboard sends every value as a string).
+them (Dashboard sends every value as a string). An OpMode that sends its own sample time (``time_s``) and
+battery voltage (``battery_V``), as motorlab's own do (ftc/README.md), gives those columns instead of the
+packets' timestamps and the robot status's battery.
 """
 
 from __future__ import annotations
@@ -284,26 +286,53 @@ def write_log(data: Recording, path: str | Path, *, host: str = "", cpr: float |
         bad = ", ".join(f"{k}={v!r}" for k, v in list(data.skipped.items())[:3])
         raise RobotLinkError(f"no telemetry key of {data.opmode} is a number ({bad}): send numbers "
                              "(packet.put(\"voltage\", v))")
-    columns = _columns(keys)
+    clock, own_battery, per_second = _own_time_and_battery(keys)
+    shown = [k for k in keys if k not in (clock, own_battery)]
+    columns = _columns(shown)
     t0 = data.rows[0][0]
     lines = [f"# source: FTC Dashboard {host}", f"# opmode: {data.opmode}", f"# stop_reason: {data.stop_reason}",
              f"# robot_time_ms_at_zero: {t0}"]
     if cpr is not None:
         lines.append(f"# cpr: {cpr:g}")
-    lines += [f"# column {col}: telemetry key {key!r}" for key, col in zip(keys, columns, strict=True)]
+    if clock is not None:
+        lines.append(f"# column time_s: telemetry key {clock!r} (the OpMode's clock, from its first sample)")
+    if own_battery is not None:
+        lines.append(f"# column battery_V: telemetry key {own_battery!r}")
+    lines += [f"# column {col}: telemetry key {key!r}" for key, col in zip(shown, columns, strict=True)]
     lines.append(",".join(["time_s", "battery_V", *columns]))
     written = 0
+    c0: float | None = None
     for stamp, battery, values in data.rows:
         if any(values.get(k) is None or not _is_number(values[k]) for k in keys):
             continue  # a packet without every numeric key (an init screen, a status line)
         volts = repr(battery) if math.isfinite(battery) else "nan"
-        lines.append(",".join([f"{(stamp - t0) / 1000:.3f}", volts, *(values[k] for k in keys)]))
+        if clock is None:
+            stamp_s = f"{(stamp - t0) / 1000:.3f}"
+        else:
+            c0 = float(values[clock]) if c0 is None else c0
+            stamp_s = f"{(float(values[clock]) - c0) * per_second:.6f}"
+        volts = values[own_battery] if own_battery is not None else volts
+        lines.append(",".join([stamp_s, volts, *(values[k] for k in shown)]))
         written += 1
     if not written:
         raise RobotLinkError(f"no telemetry packet of {data.opmode} holds every numeric key at once: nothing to write")
     write_text_atomic(Path(path), "\n".join(lines) + "\n")
-    return {"rows": written, "columns": dict(zip(keys, columns, strict=True)),
+    named = dict(zip(shown, columns, strict=True)) | {k: c for k, c in ((clock, "time_s"), (own_battery, "battery_V"))
+                                                       if k is not None}
+    return {"rows": written, "columns": named,
             "skipped": dict(data.skipped), "stop_reason": data.stop_reason, "still_running": data.still_running}
+
+
+def _own_time_and_battery(keys: list[str]) -> tuple[str | None, str | None, float]:
+    """The keys an OpMode sends its own sample time and battery voltage under (``time_s`` or ``time_ms``,
+    ``battery_V``: motorlab's OpModes do), and the time key's seconds per unit. The OpMode's clock times a
+    sample where it was read (µs); a packet's timestamp is when it was queued, in whole ms."""
+    from motorlab.io._text import unit_factor
+
+    clock = next((k for k in keys if (c := column_name(k)) and COLUMNS[c][0] == "time"), None)
+    battery = next((k for k in keys if column_name(k) == "battery_V"), None)
+    per_second = unit_factor(COLUMNS[column_name(clock) or "time_s"][1], "s") if clock else 1.0
+    return clock, battery, per_second
 
 
 def _columns(keys: list[str]) -> list[str]:

@@ -31,6 +31,19 @@ public abstract class DynoOpMode extends LinearOpMode {
     private File logFile;
     private int rows;
     private int saturated;
+    private Publisher dashboard;
+
+    /**
+     * Where each sample goes besides the log and the Driver Station: FTC Dashboard's telemetry
+     * ({@link DashboardTelemetry}, when that file is in the project and Dashboard runs).
+     */
+    public interface Publisher {
+        /** False when there is nowhere to publish to (Dashboard not started). */
+        boolean isActive();
+
+        /** One sample; {@code power}: the voltage and current are measured (the log's columns). */
+        void publish(Sample s, boolean power, double batteryVolts, double countsPerRevolution);
+    }
 
     /** Experiment name written in the header ({@code # experiment:}) and the file name. */
     protected abstract String experiment();
@@ -64,6 +77,22 @@ public abstract class DynoOpMode extends LinearOpMode {
     /** Where logs go: /sdcard/FIRST/motorlab on the controller. */
     protected File logDirectory() {
         return new File(AppUtil.FIRST_FOLDER, config.folder);
+    }
+
+    /**
+     * FTC Dashboard's publisher, found by name so that a project without Dashboard (and without
+     * DashboardTelemetry.java) compiles and runs these OpModes as they are; null when there is none.
+     */
+    protected Publisher dashboard() {
+        String name = DynoOpMode.class.getName().replace("DynoOpMode", "DashboardTelemetry");
+        try {
+            Publisher publisher = (Publisher) Class.forName(name).getDeclaredConstructor().newInstance();
+            return publisher.isActive() ? publisher : null;
+        } catch (ReflectiveOperationException e) {
+            return null; // DashboardTelemetry.java deleted: no Dashboard in this project
+        } catch (LinkageError e) {
+            return null; // compiled against Dashboard, but its library is not on this robot
+        }
     }
 
     /** After the run, keep the result on the Driver Station until STOP. */
@@ -109,6 +138,7 @@ public abstract class DynoOpMode extends LinearOpMode {
             log = new DynoLog(new File(logDirectory(), fileName()), header(), powerColumns());
             logFile = log.file();
             rig.readEncoder(s);
+            dashboard = dashboard();
             Limits limits = new Limits(config, s.counts);
             ElapsedTime clock = newTimer();
             double lastTelemetry = -1.0;
@@ -128,6 +158,9 @@ public abstract class DynoOpMode extends LinearOpMode {
                     saturated++; // the row is still written: the count is shown at the end
                 }
                 log.write(s);
+                if (dashboard != null) {
+                    dashboard.publish(s, powerColumns(), rig.lastBatteryVoltage(), config.countsPerRevolution);
+                }
                 String reason = limits.check(s);
                 if (reason == null && config.stopOnB && gamepad1 != null && gamepad1.b) {
                     reason = "stopped with gamepad 1 B";
@@ -219,6 +252,7 @@ public abstract class DynoOpMode extends LinearOpMode {
         telemetry.addData("motor", "%s, %s counts/rev, ratio %s", config.motor, fmt(config.countsPerRevolution),
                 fmt(config.gearRatio));
         telemetry.addData("log folder", logDirectory().getPath());
+        telemetry.addData("FTC Dashboard", dashboard() != null ? "publishing each sample" : "not running");
         telemetry.addData(">", problem == null ? "Press START (gamepad 1 B stops)" : "CANNOT RUN: " + problem);
         telemetry.update();
     }

@@ -21,7 +21,10 @@ public final class Plant {
     public double hubPower = 0.0;
     public boolean brake = false;
 
+    /** Keep the simulated time no further ahead of the wall clock than 1 ms (a robot for the emulator). */
+    public boolean realtime = false;
     private long nanos = 0;
+    private long wallZero = -1;
     private double theta = 0.0, omega = 0.0, current = 0.0, terminal = 0.0;
     /** Angle on a 1 ms grid for the hub's velocity (counts over the last 50 ms, × 20). */
     private final double[] history = new double[64];
@@ -48,6 +51,23 @@ public final class Plant {
             while (historyMillis < millis) {
                 historyMillis++;
                 history[(int) (historyMillis % history.length)] = theta;
+            }
+        }
+        if (realtime) {
+            pace();
+        }
+    }
+
+    private void pace() {
+        if (wallZero < 0) {
+            wallZero = System.nanoTime() - nanos;
+        }
+        long ahead = nanos - (System.nanoTime() - wallZero);
+        if (ahead > 1000000L) {
+            try {
+                Thread.sleep(ahead / 1000000L, (int) (ahead % 1000000L));
+            } catch (InterruptedException e) {
+                Thread.currentThread().interrupt();
             }
         }
     }

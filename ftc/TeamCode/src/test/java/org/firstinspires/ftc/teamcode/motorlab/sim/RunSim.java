@@ -3,7 +3,11 @@ package org.firstinspires.ftc.teamcode.motorlab.sim;
 
 import com.qualcomm.robotcore.hardware.HardwareMap;
 import com.qualcomm.robotcore.util.ElapsedTime;
+import java.io.BufferedReader;
 import java.io.File;
+import java.io.IOException;
+import java.io.InputStreamReader;
+import java.nio.charset.Charset;
 import java.util.HashMap;
 import java.util.Locale;
 import java.util.Map;
@@ -19,6 +23,11 @@ import org.firstinspires.ftc.teamcode.motorlab.SpinUpOpMode;
  * builds a HardwareMap of simulated devices, runs the OpMode's runOpMode() with its clock driven by the
  * simulation, and prints one JSON line: why it stopped, the log file, the state of the drive at the end
  * and the truth (K, R, J, b, Tf at the counted shaft; cpr).
+ *
+ * <p>As a robot for motorlab's emulator ({@code motorlab.robot.emulator_jvm}): {@code dashboard=yes}
+ * installs {@link SimDashboard} (each telemetry packet printed as a JSON line before the summary),
+ * {@code realtime=yes} paces the simulation to the wall clock, and {@code stdin_stop=yes} stops the OpMode
+ * (requestOpModeStop, as the Driver Station's STOP) when a line "stop" or the end of stdin arrives.
  */
 public final class RunSim {
     private RunSim() {
@@ -43,6 +52,7 @@ public final class RunSim {
         plant.cpr = num(a, "cpr", plant.cpr);
         plant.supplyVolts = num(a, "supply_V", plant.supplyVolts);
         plant.supplyAmps = num(a, "supply_A", plant.supplyAmps);
+        plant.realtime = get(a, "realtime", "no").equals("yes");
         SimHub hub = new SimHub(plant, seed);
         SimIna219 ina = new SimIna219(hub, seed + 1000);
 
@@ -68,6 +78,10 @@ public final class RunSim {
         SimTelemetry telemetry = new SimTelemetry(get(a, "print", "no").equals("yes"));
         op.telemetry = telemetry;
         op.hardwareMap = map;
+        SimDashboard dashboard = get(a, "dashboard", "no").equals("yes") ? SimDashboard.install(System.out) : null;
+        if (get(a, "stdin_stop", "no").equals("yes")) {
+            stopOnStdin(op);
+        }
         op.runOpMode();
 
         StringBuilder json = new StringBuilder("{");
@@ -81,6 +95,7 @@ public final class RunSim {
         json.append(q("bulk_reads")).append(':').append(hub.bulkReads).append(',');
         json.append(q("ina_transactions")).append(':').append(ina.transactions).append(',');
         json.append(q("telemetry_updates")).append(':').append(telemetry.updates).append(',');
+        json.append(q("dashboard_packets")).append(':').append(dashboard == null ? 0 : dashboard.packets).append(',');
         json.append(q("screen")).append(":[");
         for (int k = 0; k < telemetry.screen().size(); k++) {
             json.append(k > 0 ? "," : "").append(q(telemetry.screen().get(k)));
@@ -178,6 +193,27 @@ public final class RunSim {
         throw new IllegalArgumentException("unknown experiment " + experiment);
     }
 
+    /** A line "stop" (or the end of stdin) stops the OpMode, as the Driver Station's STOP does. */
+    private static void stopOnStdin(final DynoOpMode op) {
+        Thread reader = new Thread(new Runnable() {
+            @Override
+            public void run() {
+                BufferedReader in = new BufferedReader(new InputStreamReader(System.in, Charset.forName("UTF-8")));
+                try {
+                    String line;
+                    do {
+                        line = in.readLine();
+                    } while (line != null && !line.trim().equals("stop"));
+                } catch (IOException e) {
+                    // stdin closed: stop
+                }
+                op.requestOpModeStop();
+            }
+        }, "stdin-stop");
+        reader.setDaemon(true);
+        reader.start();
+    }
+
     static ElapsedTime simulatedTimer(final Plant plant) {
         return new ElapsedTime() {
             @Override
@@ -197,7 +233,7 @@ public final class RunSim {
         return v == null ? fallback : Double.parseDouble(v);
     }
 
-    private static String q(String s) {
+    static String q(String s) {
         StringBuilder b = new StringBuilder("\"");
         for (char c : s.toCharArray()) {
             if (c == '"' || c == '\\') {
