@@ -76,14 +76,22 @@ def test_robot_without_road_runner_or_motorlab(robot_files: RobotFiles, tmp_path
 @pytest.mark.parametrize("cut", [0, 1000, 70000])
 def test_wifi_dropped_mid_download_leaves_nothing_half_written(robot_files: RobotFiles, tmp_path: Path,
                                                                capsys: pytest.CaptureFixture[str], cut: int) -> None:
+    """Every download cut after ``cut`` bytes: what is shorter arrives whole, what is longer is named (one line
+    each, "pull again") and leaves nothing behind; exit 3 (partial), or 2 when nothing arrived."""
     out = tmp_path / "pulled"
     with EmulatedRobot(robot_files, drop_after=cut, dashboard=False, lifetime=20) as flaky:
-        assert _pull(flaky, out) == 2
-    err = capsys.readouterr().err.strip()
-    assert "\n" not in err
-    assert "pull again" in err
-    leftovers = [p for p in out.rglob("*") if p.is_file()] if out.exists() else []
-    assert leftovers == []
+        code = _pull(flaky, out)
+    served = [*robot_files.logs, *robot_files.motorlab,
+              *(max(f, key=lambda p: p.stat().st_mtime) for f in robot_files.tuning.values())]
+    whole = [f for f in served if f.stat().st_size <= cut]
+    assert code == (3 if whole else 2)
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == len(served) - len(whole) if whole else len(err) == 1
+    assert all("pull again" in line for line in err)
+    kept = sorted(p.name for p in out.rglob("*") if p.is_file()) if out.exists() else []
+    assert kept == sorted(f.name for f in whole)
+    for f in whole:
+        assert next(out.rglob(f.name)).read_bytes() == f.read_bytes()
 
 
 def test_output_that_is_a_file_is_refused(robot: EmulatedRobot, tmp_path: Path,
