@@ -352,6 +352,7 @@ def test_record_on_every_version_stops_the_opmode_once_and_confirms_it(dashboard
     assert len(rows) >= 40
     assert all(math.isfinite(float(row["voltage_V"])) and float(row["position_counts"]) >= 0 for row in rows)
     assert "# stop_reason: 1 s elapsed" in text
+    assert "# stop_confirmed: yes" in text
 
 
 def test_stop_not_confirmed_says_the_opmode_may_still_run(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

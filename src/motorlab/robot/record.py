@@ -372,8 +372,10 @@ def write_log(data: Recording, path: str | Path, *, host: str = "", cpr: float |
                              "(packet.put(\"voltage\", v))")
     columns = _columns(keys)
     t0 = data.rows[0][0]
+    confirmed = ("yes: the robot's status showed the OpMode stopped" if data.stop_confirmed
+                 else "NO: the OpMode may still be running" if data.still_running else "not checked")
     lines = [f"# source: FTC Dashboard {host}", f"# opmode: {data.opmode}", f"# stop_reason: {data.stop_reason}",
-             f"# robot_time_ms_at_zero: {t0}"]
+             f"# stop_confirmed: {confirmed}", f"# robot_time_ms_at_zero: {t0}"]
     if cpr is not None:
         lines.append(f"# cpr: {cpr:g}")
     lines += [f"# column {col}: telemetry key {key!r}" + (f" ({note})" if (note := key_note(data.opmode, key)) else "")
@@ -390,7 +392,8 @@ def write_log(data: Recording, path: str | Path, *, host: str = "", cpr: float |
         raise RobotLinkError(f"no telemetry packet of {data.opmode} holds every numeric key at once: nothing to write")
     write_text_atomic(Path(path), "\n".join(lines) + "\n")
     return {"rows": written, "columns": dict(zip(keys, columns, strict=True)),
-            "skipped": dict(data.skipped), "stop_reason": data.stop_reason, "still_running": data.still_running}
+            "skipped": dict(data.skipped), "stop_reason": data.stop_reason, "still_running": data.still_running,
+            "stop_confirmed": data.stop_confirmed}
 
 
 def _columns(keys: list[str]) -> list[str]:
