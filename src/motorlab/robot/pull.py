@@ -313,7 +313,14 @@ def pull(host: str, out: str | os.PathLike[str], *, http_port: int = 8080, timeo
     robot = RobotHttp(host, http_port, timeout=timeout)
     result = PullResult(robot.address, folder)
     for part in (_tuning, _flight_logs, _motorlab_logs):
-        part(robot, result, folder)
+        try:
+            part(robot, result, folder)
+        except RobotUnreachable as exc:
+            if not result.files and not result.failed:
+                raise
+            result.failed.append(f"{exc}: the robot went away during the pull; what came is kept, pull again for "
+                                 "the rest")
+            break
     if not result.files and result.failed:
         more = f" (and {len(result.failed) - 1} more)" if len(result.failed) > 1 else ""
         raise RobotLinkError(f"nothing pulled: {result.failed[0]}{more}")
