@@ -457,3 +457,24 @@ def test_forward_ramp_logger_is_stopped_and_its_ramp_file_brought(tmp_path: Path
     assert str(brought) in out
     assert not (tmp_path / "ramp.csv").exists()
     assert main(["analyze", "feedforward", str(brought), "--cpr", "2000", "--json"]) == 0
+
+
+def test_a_dashboard_disabled_while_recording_says_the_opmode_may_run() -> None:
+    """Disabled mid-run, the Dashboard swallows STOP_OP_MODE: the recorder does not pretend it stopped."""
+    with EmulatedRobot(dashboard_version="0.5.0", lifetime=30) as robot:
+        recorder = Recorder("127.0.0.1", robot.dashboard_port, OPMODE, seconds=30, timeout=2)
+        thread = threading.Thread(target=recorder.run, daemon=True)
+        thread.start()
+        deadline = time.monotonic() + 10
+        while robot.status != "RUNNING" and time.monotonic() < deadline:
+            time.sleep(0.01)
+        time.sleep(0.3)
+        robot.enabled = False  # "Disable Dashboard" from the robot controller's menu
+        thread.join(5)
+        assert not thread.is_alive()
+        assert robot.status == "RUNNING"
+    assert recorder.data.still_running
+    assert not recorder.data.stop_confirmed
+    assert "FTC Dashboard is disabled on the robot while recording" in recorder.data.stop_reason
+    assert "MAY STILL BE RUNNING" in recorder.data.stop_reason
+    assert recorder.data.rows

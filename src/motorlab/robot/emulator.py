@@ -469,27 +469,30 @@ class EmulatedRobot:
             threading.Thread(target=behaviour, args=(self._run_id,), daemon=True).start()
 
     def _request_stop(self) -> None:
-        """The OpMode stops on the event loop's next turn: ``onOpModePostStop`` (status STOPPED), then the
-        SDK inits its default OpMode (``onOpModePreInit``: ``$Stop$Robot$``, INIT)."""
+        """The OpMode's loop ends on the event loop's next turn; when ``runOpMode`` returns (ForwardRampLogger
+        first saves its file: Tuning.kt:396-403), ``onOpModePostStop`` (status STOPPED), then the SDK inits
+        its default OpMode (``onOpModePreInit``: ``$Stop$Robot$``, INIT)."""
         with self._lock:
             if self.stop_ignored and self.active != STOP_TAG and self.status == "RUNNING":
                 return
             spec = self._spec(self.active)
-            was_running = self.status == "RUNNING"
+            saves = spec is not None and self.status == "RUNNING" and spec.behaviour == "forward_ramp_logger"
             self._run_id += 1
-            if self.active != STOP_TAG:
-                self.status = "STOPPED"
             run = self._run_id
-        if spec is not None and was_running and spec.behaviour == "forward_ramp_logger":
-            self._save_ramp(time.monotonic() - self._run_started)  # TuningFiles.save after the loop (Tuning.kt:403)
+            seconds = time.monotonic() - self._run_started
 
-        def default_op_mode() -> None:
+        def finish() -> None:
+            if saves:
+                self._save_ramp(seconds)
+            with self._lock:
+                if self._run_id == run and self.active != STOP_TAG:
+                    self.status = "STOPPED"
             time.sleep(0.005)
             with self._lock:
                 if self._run_id == run:
                     self.active, self.status = STOP_TAG, "INIT"
 
-        threading.Thread(target=default_op_mode, daemon=True).start()
+        threading.Thread(target=finish, daemon=True).start()
 
     def _ended(self, run: int) -> None:
         """The OpMode returned by itself: STOPPED, then the default OpMode."""
