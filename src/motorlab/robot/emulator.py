@@ -26,6 +26,14 @@ word), Road Runner's ``ForwardRampLogger`` (no Dashboard telemetry; runs until S
 ramp file) and ``ManualFeedforwardTuner`` (keys ``mode``, ``v0``…, ``vref`` [in/s]; runs until STOP),
 ``LocalizationTest`` and the Dashboard's own "Enable/Disable Dashboard".
 
+Citations read ``tag:path:line``. ``v0.x.y:…/DashboardCore.java`` is acmerobotics/ftc-dashboard at that tag,
+``DashboardCore/src/main/java/com/acmerobotics/dashboard/…`` (``FtcDashboard/src/main/java/com/acmerobotics/
+dashboard/FtcDashboard.java`` for ``FtcDashboard/…``); ``NanoHTTPD.java`` and ``NanoWSD.java`` are
+NanoHttpd/nanohttpd at ``nanohttpd-project-2.3.1`` (the version FtcDashboard's build.gradle pins),
+``core/src/main/java/fi/iki/elonen/NanoHTTPD.java`` and ``websocket/src/main/java/fi/iki/elonen/NanoWSD.java``;
+``FileServing.kt`` and ``Tuning.kt`` are acmerobotics/road-runner-ftc at 1f35428,
+``RoadRunner/src/main/java/com/acmerobotics/roadrunner/ftc/``.
+
 It listens on 127.0.0.1 only, and stops by itself after ``lifetime`` seconds or ``max_requests``
 requests and messages, whichever comes first.
 """
@@ -470,7 +478,7 @@ class EmulatedRobot:
 
     def _request_stop(self) -> None:
         """The OpMode's loop ends on the event loop's next turn; when ``runOpMode`` returns (ForwardRampLogger
-        first saves its file: Tuning.kt:396-403), ``onOpModePostStop`` (status STOPPED), then the SDK inits
+        first saves its file: Tuning.kt:399-403), ``onOpModePostStop`` (status STOPPED), then the SDK inits
         its default OpMode (``onOpModePreInit``: ``$Stop$Robot$``, INIT)."""
         with self._lock:
             if self.stop_ignored and self.active != STOP_TAG and self.status == "RUNNING":
@@ -584,7 +592,7 @@ class EmulatedRobot:
             self._packets(batch)
 
     def _run_toggle_dashboard(self, run: int) -> None:
-        """"Enable/Disable Dashboard": on start, toggles (v0.4.16:FtcDashboard/…/FtcDashboard.java:958-966)."""
+        """"Enable/Disable Dashboard": on start, toggles (v0.4.16:FtcDashboard/…/FtcDashboard.java:958-968)."""
         with self._lock:
             self.enabled = not self.enabled
         self._ended(run)
