@@ -17,8 +17,8 @@ from motorlab.robot import DEFAULT_DASHBOARD_PORT, DEFAULT_HOST, DEFAULT_HTTP_PO
 
 #: FTC Dashboard versions ``robot emulate`` plays (motorlab.robot.emulator.DASHBOARD_VERSIONS; kept here so
 #: that the parser does not import the emulator).
-DASHBOARD_VERSIONS = ("0.4.10", "0.4.11", "0.4.12", "0.4.13", "0.4.14", "0.4.15", "0.4.16", "0.5.0", "0.5.1",
-                      "0.6.0")
+DASHBOARD_VERSIONS = ("0.4.10", "0.4.11", "0.4.12", "0.4.13", "0.4.14", "0.4.15", "0.4.16", "0.4.17", "0.5.0",
+                      "0.5.1", "0.6.0")
 
 
 def _port(text: str) -> int:

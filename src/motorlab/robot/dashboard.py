@@ -1,6 +1,6 @@
 """A client for FTC Dashboard's WebSocket: robot status, OpModes, telemetry and the ``@Config`` tree.
 
-The protocol, as acmerobotics/ftc-dashboard defines it at every version teams run (v0.4.10 … v0.4.16,
+The protocol, as acmerobotics/ftc-dashboard defines it at every version teams run (v0.4.10 … v0.4.17,
 v0.5.0, v0.5.1, v0.6.0; ``DashboardCore/src/main/java/com/acmerobotics/dashboard/``:
 ``message/MessageType.java``, ``message/redux/*.java``, ``DashboardCore.java``; the server
 ``FtcDashboard/src/main/java/com/acmerobotics/dashboard/FtcDashboard.java``; the browser client

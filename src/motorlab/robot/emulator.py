@@ -9,7 +9,7 @@ for the routes and messages), for the tests and for ``motorlab robot emulate``:
   parsing and its 400/404 answers), ``/motorlab/logs`` and ``/motorlab/logs/download?file=``
   (``MotorlabLogFiles.java``); ``drop_after`` cuts every download after that many bytes (a lost Wi-Fi);
 * FTC Dashboard (port 8000 on a robot) as each version teams run defines it (``dashboard_version``:
-  0.4.10 … 0.4.16, 0.5.0, 0.5.1, 0.6.0; the upstream file and line of each behaviour are cited where it
+  0.4.10 … 0.4.17, 0.5.0, 0.5.1, 0.6.0; the upstream file and line of each behaviour are cited where it
   is written, as ``tag:path:line``): on open ``RECEIVE_CONFIG`` (and ``RECEIVE_CONFIG_BASELINE`` from
   v0.6.0 only), ``RECEIVE_OP_MODE_LIST`` as names (up to v0.5.0) or ``{name, group}`` (v0.5.1+);
   ``GET_ROBOT_STATUS`` (``batteryVoltage`` from v0.4.14); ``INIT_OP_MODE``/``START_OP_MODE``/
@@ -57,8 +57,8 @@ from motorlab.robot.dashboard import STOP_TAG
 LOOPBACK = "127.0.0.1"
 TUNING_TYPES = ("forward-ramp", "lateral-ramp", "angular-ramp", "accel")
 #: FTC Dashboard versions the emulator plays (every one teams pin; acmerobotics/ftc-dashboard tags).
-DASHBOARD_VERSIONS = ("0.4.10", "0.4.11", "0.4.12", "0.4.13", "0.4.14", "0.4.15", "0.4.16", "0.5.0", "0.5.1",
-                      "0.6.0")
+DASHBOARD_VERSIONS = ("0.4.10", "0.4.11", "0.4.12", "0.4.13", "0.4.14", "0.4.15", "0.4.16", "0.4.17", "0.5.0",
+                      "0.5.1", "0.6.0")
 #: NanoHTTPD's read timeout [s]: ``SOCKET_READ_TIMEOUT = 5000`` (NanoHttpd/nanohttpd
 #: nanohttpd-project-2.3.1:core/src/main/java/fi/iki/elonen/NanoHTTPD.java:1836), set on every accepted
 #: socket (:1771) by ``start()`` (:2297), which FtcDashboard calls (v0.4.16:FtcDashboard/src/main/java/com/
@@ -69,7 +69,8 @@ SOCKET_READ_TIMEOUT = 5.0
 _TYPES_04 = ("GET_ROBOT_STATUS", "RECEIVE_ROBOT_STATUS", "INIT_OP_MODE", "START_OP_MODE", "STOP_OP_MODE",
              "RECEIVE_OP_MODE_LIST", "GET_CONFIG", "SAVE_CONFIG", "RECEIVE_CONFIG", "RECEIVE_TELEMETRY",
              "RECEIVE_IMAGE", "RECEIVE_GAMEPAD_STATE")  # v0.4.16:…/MessageType.java:21-42
-_TYPES_05 = (*_TYPES_04, "RECEIVE_HARDWARE_CONFIG_LIST", "SET_HARDWARE_CONFIG")  # v0.5.0:…/MessageType.java:23-48
+# v0.4.17 and v0.5.0:…/MessageType.java:23-48
+_TYPES_05 = (*_TYPES_04, "RECEIVE_HARDWARE_CONFIG_LIST", "SET_HARDWARE_CONFIG")
 _TYPES_06 = (*_TYPES_05, "GET_CONFIG_BASELINE", "RECEIVE_CONFIG_BASELINE", "WRITE_HARDWARE_CONFIG",
              "DELETE_HARDWARE_CONFIG", "RECEIVE_LOGCAT_ERRORS")  # v0.6.0:…/MessageType.java:28-60
 
@@ -364,7 +365,7 @@ class EmulatedRobot:
             if self._v >= (0, 6, 0):  # v0.6.0:…/message/redux/ReceiveHardwareConfigList.java:10-11, HardwareConfig.java
                 self._send(conn, {"type": "RECEIVE_HARDWARE_CONFIG_LIST", "currentHardwareConfig": "robot",
                                   "hardwareConfigs": [{"name": "robot", "xmlContent": "<Robot/>", "readOnly": False}]})
-            elif self._v >= (0, 5, 0):  # v0.5.0:…/message/redux/ReceiveHardwareConfigList.java:9-10
+            elif self._v >= (0, 4, 17):  # v0.4.17, v0.5.0:…/message/redux/ReceiveHardwareConfigList.java:9-10
                 self._send(conn, {"type": "RECEIVE_HARDWARE_CONFIG_LIST", "hardwareConfigList": ["robot"],
                                   "currentHardwareConfig": "robot"})
             self._clients.append(conn)
@@ -421,7 +422,7 @@ class EmulatedRobot:
             self._drop(conn, "a frame that is not JSON")
             return False
         kind = message.get("type") if isinstance(message, dict) else None
-        known = _TYPES_06 if self._v >= (0, 6, 0) else _TYPES_05 if self._v >= (0, 5, 0) else _TYPES_04
+        known = _TYPES_06 if self._v >= (0, 6, 0) else _TYPES_05 if self._v >= (0, 4, 17) else _TYPES_04
         if kind not in known:
             # MessageDeserializer returns null for a type the enum lacks (v0.4.16:DashboardCore/…/message/
             # MessageDeserializer.java:20-24); DashboardCore's handler then throws a NullPointerException on
