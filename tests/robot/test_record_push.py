@@ -59,14 +59,20 @@ def test_record_captures_the_telemetry_and_analyze_feedforward_reads_it(
         assert abs(fit[name]["value"] - value) < 4 * fit[name]["stderr"] + 2e-3 * value, (name, fit[name], value)
 
 
-def test_stop_reaches_the_robot_within_100_ms(robot: EmulatedRobot) -> None:
-    recorder = Recorder("127.0.0.1", robot.dashboard_port, OPMODE, seconds=30)
+def _running(robot: EmulatedRobot, **options: float) -> tuple[Recorder, threading.Thread]:
+    """A recorder started in its own thread, once the emulated OpMode has run 0.3 s."""
+    recorder = Recorder("127.0.0.1", robot.dashboard_port, OPMODE, seconds=30, **options)
     thread = threading.Thread(target=recorder.run, daemon=True)
     thread.start()
     deadline = time.monotonic() + 10
     while robot.status != "RUNNING" and time.monotonic() < deadline:
         time.sleep(0.01)
     time.sleep(0.3)
+    return recorder, thread
+
+
+def test_stop_reaches_the_robot_within_100_ms(robot: EmulatedRobot) -> None:
+    recorder, thread = _running(robot)
     assert robot.status == "RUNNING"
     pressed = time.monotonic()
     recorder.stop()
@@ -82,13 +88,7 @@ def test_stop_reaches_the_robot_within_100_ms(robot: EmulatedRobot) -> None:
 
 def test_lost_connection_ends_the_recording_and_says_the_robot_may_run(robot_files: object, tmp_path: Path) -> None:
     with EmulatedRobot(lifetime=30) as flaky:
-        recorder = Recorder("127.0.0.1", flaky.dashboard_port, OPMODE, seconds=30)
-        thread = threading.Thread(target=recorder.run, daemon=True)
-        thread.start()
-        deadline = time.monotonic() + 10
-        while flaky.status != "RUNNING" and time.monotonic() < deadline:
-            time.sleep(0.01)
-        time.sleep(0.3)
+        recorder, thread = _running(flaky)
         flaky.stop()  # the Wi-Fi goes
         lost = time.monotonic()
         thread.join(10)
@@ -462,13 +462,7 @@ def test_forward_ramp_logger_is_stopped_and_its_ramp_file_brought(tmp_path: Path
 def test_a_dashboard_disabled_while_recording_says_the_opmode_may_run() -> None:
     """Disabled mid-run, the Dashboard swallows STOP_OP_MODE: the recorder does not pretend it stopped."""
     with EmulatedRobot(dashboard_version="0.5.0", lifetime=30) as robot:
-        recorder = Recorder("127.0.0.1", robot.dashboard_port, OPMODE, seconds=30, timeout=2)
-        thread = threading.Thread(target=recorder.run, daemon=True)
-        thread.start()
-        deadline = time.monotonic() + 10
-        while robot.status != "RUNNING" and time.monotonic() < deadline:
-            time.sleep(0.01)
-        time.sleep(0.3)
+        recorder, thread = _running(robot, timeout=2)
         robot.enabled = False  # "Disable Dashboard" from the robot controller's menu
         thread.join(5)
         assert not thread.is_alive()
