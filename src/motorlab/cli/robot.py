@@ -191,9 +191,12 @@ def run_record(args: argparse.Namespace) -> int:
     if "error" in outcome:
         raise outcome["error"]
     data = outcome["data"]
-    if ramp_kind and not data.rows and not data.still_running:
+    if data.still_running:  # said first: writing the log may fail (no telemetry) and must not hide it
+        print("motorlab: error: the OpMode may still be running: press STOP on the Driver Station "
+              f"({data.stop_reason})", file=sys.stderr)
+    elif ramp_kind and not data.rows:
         return _ramp_file(args, data, ramp_kind, before)
-    summary = write_log(outcome["data"], args.output, host=f"{args.host}:{args.dashboard_port}", cpr=args.cpr)
+    summary = write_log(data, args.output, host=f"{args.host}:{args.dashboard_port}", cpr=args.cpr)
     if args.json:
         print_json({"output": args.output, **summary})
     else:
@@ -202,10 +205,7 @@ def run_record(args: argparse.Namespace) -> int:
         for key, value in summary["skipped"].items():
             print(f"note: telemetry key {key!r} is not a number ({value!r}): left out")
         print(f"analyse with: motorlab analyze feedforward {args.output}" + ("" if args.cpr else " --cpr N"))
-    if summary["still_running"]:
-        print("motorlab: error: the OpMode may still be running: press STOP on the Driver Station", file=sys.stderr)
-        return 2
-    return 0
+    return 2 if data.still_running else 0
 
 
 def _ramp_file(args: argparse.Namespace, data: Any, kind: str, before: str | None) -> int:
