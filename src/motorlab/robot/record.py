@@ -138,6 +138,7 @@ class Recorder:
         self._recording = False
         self._seen_active = False
         self._stop_sent = False
+        self._stop_lock = threading.Lock()
         self.dash: Dashboard | None = None
         self.state = "connecting"
 
@@ -153,8 +154,9 @@ class Recorder:
             self._send_stop()
 
     def _send_stop(self) -> bool:
-        """Send ``STOP_OP_MODE`` once per recording; True when it went out (now or before)."""
-        with self._lock:
+        """Send ``STOP_OP_MODE`` once per recording; True when it went out (now or before). Its own lock, not
+        the data's: a reader of the telemetry (the app's live view) never delays a stop."""
+        with self._stop_lock:
             if self._stop_sent:
                 return True
             dash = self.dash
