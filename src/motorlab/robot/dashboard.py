@@ -202,8 +202,9 @@ class Dashboard:
                     self._cond.notify_all()
         except (ConnectionClosed, OSError) as exc:
             with self._cond:
-                self.closed = self.closed or (f"FTC Dashboard closed the connection ({type(exc).__name__}: it drops "
-                                              "a client on a message it does not know, or after 5 s of silence)")
+                self.closed = self.closed or (f"the connection to {self.address} closed ({type(exc).__name__}; "
+                                              "FTC Dashboard drops a client after 5 s without a message, or on "
+                                              "a message it does not know)")
                 self._cond.notify_all()
 
     def _heartbeat(self) -> None:
