@@ -47,3 +47,13 @@ def robot(robot_files: RobotFiles) -> Iterator[EmulatedRobot]:
     """The emulated robot, on free ports of 127.0.0.1, stopping by itself after 60 s at most."""
     with EmulatedRobot(robot_files, lifetime=60.0, max_requests=5000) as emulated:
         yield emulated
+
+
+#: The FTC Dashboard versions every versioned test runs against: the last 0.4 (what most teams pin), the
+#: quickstart's 0.5.0, the first with OpMode groups, and the newest (the only one with a config baseline).
+VERSIONS = ("0.4.16", "0.5.0", "0.5.1", "0.6.0")
+
+
+@pytest.fixture(params=VERSIONS)
+def dashboard_version(request: pytest.FixtureRequest) -> str:
+    return str(request.param)

@@ -76,14 +76,22 @@ def test_robot_without_road_runner_or_motorlab(robot_files: RobotFiles, tmp_path
 @pytest.mark.parametrize("cut", [0, 1000, 70000])
 def test_wifi_dropped_mid_download_leaves_nothing_half_written(robot_files: RobotFiles, tmp_path: Path,
                                                                capsys: pytest.CaptureFixture[str], cut: int) -> None:
+    """Every download cut after ``cut`` bytes: what is shorter arrives whole, what is longer is named (one line
+    each, "pull again") and leaves nothing behind; exit 3 (partial), or 2 when nothing arrived."""
     out = tmp_path / "pulled"
     with EmulatedRobot(robot_files, drop_after=cut, dashboard=False, lifetime=20) as flaky:
-        assert _pull(flaky, out) == 2
-    err = capsys.readouterr().err.strip()
-    assert "\n" not in err
-    assert "pull again" in err
-    leftovers = [p for p in out.rglob("*") if p.is_file()] if out.exists() else []
-    assert leftovers == []
+        code = _pull(flaky, out)
+    served = [*robot_files.logs, *robot_files.motorlab,
+              *(max(f, key=lambda p: p.stat().st_mtime) for f in robot_files.tuning.values())]
+    whole = [f for f in served if f.stat().st_size <= cut]
+    assert code == (3 if whole else 2)
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == len(served) - len(whole) if whole else len(err) == 1
+    assert all("pull again" in line for line in err)
+    kept = sorted(p.name for p in out.rglob("*") if p.is_file()) if out.exists() else []
+    assert kept == sorted(f.name for f in whole)
+    for f in whole:
+        assert next(out.rglob(f.name)).read_bytes() == f.read_bytes()
 
 
 def test_output_that_is_a_file_is_refused(robot: EmulatedRobot, tmp_path: Path,
@@ -109,3 +117,73 @@ def test_a_half_written_file_on_the_robot_comes_back_as_it_is(tmp_path: Path,
     assert (tmp_path / "out" / "tuning" / "forward-ramp" / cut.name).read_bytes() == cut.read_bytes()
     assert entry["command"] is None
     assert "not" in entry["note"]
+
+
+@pytest.fixture
+def odd_sdcard(tmp_path: Path, robot_files: RobotFiles) -> RobotFiles:
+    """The robot's files plus FlightRecorder logs with names Road Runner serves as they are ($, é, a literal
+    %41) and names its /logs/download cannot be asked for (a space, an &)."""
+    folder = tmp_path / "logs"
+    folder.mkdir()
+    names = ["2026_11_25__10_31_07_123__Auto$Blue.log", "2026_11_25__10_40_00_000__Départ.log",
+             "2026_11_25__10_41_00_000__Odd%41.log", "2026_11_25__10_42_00_000__Two Words.log",
+             "2026_11_25__10_43_00_000__A&B.log"]
+    logs = []
+    for k, name in enumerate(names):
+        (folder / name).write_bytes(bytes(range(256)) * (k + 3))
+        logs.append(folder / name)
+    return RobotFiles(robot_files.tuning, [*robot_files.logs, *logs], robot_files.motorlab)
+
+
+def test_odd_log_names_come_byte_for_byte_and_the_unaskable_are_named(
+        odd_sdcard: RobotFiles, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "pulled"
+    with EmulatedRobot(odd_sdcard, dashboard=False, lifetime=20) as robot:
+        assert _pull(robot, out) == 3
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 2
+    assert "Two Words.log" in err[0] + err[1]
+    assert "A&B.log" in err[0] + err[1]
+    assert all("copy it by USB" in line for line in err)
+    unaskable = {"2026_11_25__10_42_00_000__Two Words.log", "2026_11_25__10_43_00_000__A&B.log"}
+    for f in odd_sdcard.logs:
+        pulled = out / "logs" / f.name
+        assert pulled.exists() == (f.name not in unaskable), f.name
+        if f.name not in unaskable:
+            assert pulled.read_bytes() == f.read_bytes(), f.name
+    assert (out / "motorlab" / odd_sdcard.motorlab[0].name).read_bytes() == odd_sdcard.motorlab[0].read_bytes()
+    # Asked for as Road Runner reads them: the raw name, never percent-encoded (it would look for "%24").
+    asked = [path for _, path in robot.http_requests if path.startswith("/logs/download")]
+    assert "/logs/download?file=2026_11_25__10_31_07_123__Auto$Blue.log" in asked
+    assert "/logs/download?file=2026_11_25__10_40_00_000__Départ.log" in asked
+
+
+@pytest.mark.parametrize("failure", ["closed", "500"])
+def test_a_robot_without_a_log_folder_still_gives_every_other_file(
+        robot_files: RobotFiles, tmp_path: Path, capsys: pytest.CaptureFixture[str], failure: str) -> None:
+    """Road Runner's /logs throws on a robot without /sdcard/RoadRunner/logs (``LOG_ROOT.listFiles()!!``): the
+    connection closes without an answer (or a server answers 500); one line, exit 3, the rest byte for byte."""
+    out = tmp_path / "pulled"
+    with EmulatedRobot(robot_files, log_folder=False, logs_failure=failure, dashboard=False, lifetime=20) as robot:
+        assert _pull(robot, out, "--json") == 3
+    captured = capsys.readouterr()
+    err = captured.err.strip().splitlines()
+    assert len(err) == 1
+    assert "/logs" in err[0]
+    assert ("without an answer" if failure == "closed" else "HTTP 500") in err[0]
+    result = json.loads(captured.out)
+    assert result["failed"] == [err[0].removeprefix("motorlab: not pulled: ")]
+    expected = [*robot_files.motorlab, *(max(f, key=lambda p: p.stat().st_mtime) for f in robot_files.tuning.values())]
+    assert sorted(p.name for p in out.rglob("*") if p.is_file()) == sorted(f.name for f in expected)
+    for f in expected:
+        assert next(out.rglob(f.name)).read_bytes() == f.read_bytes()
+
+
+@pytest.mark.parametrize("name", ["plain.log", 'quote".log', "angle<b>.log", 'x" download="y">z.log', "é$%#?.log"])
+def test_the_logs_page_is_read_exactly_whatever_the_name(name: str) -> None:
+    """Road Runner writes each name three times, not escaped (FileServing.kt:155-164): solved exactly."""
+    from motorlab.robot.pull import log_entries
+
+    entry = f'<li><a href="/logs/download?file={name}" download="{name}">{name}</a> (123 bytes)</li>'
+    page = f"<!doctype html><html><head><title>Logs</title></head><body><ul>{entry}{entry}</ul></body></html>"
+    assert log_entries(page) == [(name, 123), (name, 123)]

@@ -12,8 +12,13 @@ import threading
 from pathlib import Path
 from typing import Any
 
-from motorlab.cli.common import print_json, quantity
+from motorlab.cli.common import EXIT_PARTIAL, print_json, quantity
 from motorlab.robot import DEFAULT_DASHBOARD_PORT, DEFAULT_HOST, DEFAULT_HTTP_PORT, RobotLinkError
+
+#: FTC Dashboard versions ``robot emulate`` plays (motorlab.robot.emulator.DASHBOARD_VERSIONS; kept here so
+#: that the parser does not import the emulator).
+DASHBOARD_VERSIONS = ("0.4.10", "0.4.11", "0.4.12", "0.4.13", "0.4.14", "0.4.15", "0.4.16", "0.4.17", "0.5.0",
+                      "0.5.1", "0.6.0")
 
 
 def _port(text: str) -> int:
@@ -72,7 +77,7 @@ def register(subparsers: Any) -> None:
                        description="Init and start the OpMode named (this command is the start button), record "
                                    "its telemetry with the battery voltage into a CSV motorlab reads, and stop it "
                                    "after --seconds, at Ctrl-C, or when the connection drops.")
-    _address(p, dashboard=True)
+    _address(p, http=True, dashboard=True)
     p.add_argument("--opmode", required=True, metavar="NAME", help="the OpMode, as the Driver Station lists it")
     p.add_argument("--seconds", type=_seconds, default=30.0, help="stop after this many seconds (30; at most 600)")
     p.add_argument("--cpr", type=quantity("dimensionless", positive=True),
@@ -90,6 +95,10 @@ def register(subparsers: Any) -> None:
     p.add_argument("--serve", metavar="DIR", help="serve DIR/tuning/<type>/*.json, DIR/logs/*, DIR/motorlab/* "
                                                  "(default: simulated files)")
     p.add_argument("--seconds", type=_seconds, default=600.0, help="stop by itself after this many seconds (600)")
+    p.add_argument("--dashboard-version", default="0.6.0", choices=DASHBOARD_VERSIONS,
+                   help="the FTC Dashboard version to behave as (0.6.0; teams run 0.4.x and 0.5.0 most)")
+    p.add_argument("--disabled", action="store_true", help="a Dashboard disabled on the robot (its menu's "
+                                                           "\"Disable Dashboard\")")
     p.set_defaults(func=run_emulate)
 
 
@@ -118,13 +127,17 @@ def _register_push(sub: Any) -> None:
 
 
 def run_pull(args: argparse.Namespace) -> int:
-    """Run ``motorlab robot pull``."""
+    """Run ``motorlab robot pull``: 0 every file came, 3 (partial) some failed (each named on stderr in one
+    line), 2 nothing could be pulled."""
     from motorlab.robot.pull import pull
 
     result = pull(args.host, args.output, http_port=args.http_port, timeout=args.timeout)
+    for line in result.failed:
+        print(f"motorlab: not pulled: {line}", file=sys.stderr)
+    code = EXIT_PARTIAL if result.failed else 0
     if args.json:
         print_json(result.to_dict())
-        return 0
+        return code
     for f in result.files:
         print(f"{f.path}  {f.size} bytes  ({'already there' if f.status == 'same' else f.status})")
         if f.command:
@@ -135,13 +148,17 @@ def run_pull(args: argparse.Namespace) -> int:
         print(f"note: {line}")
     if not result.files:
         print(f"nothing to pull from {result.address}")
-    return 0
+    if result.failed:
+        print(f"{len(result.files)} files pulled, {len(result.failed)} not (named above): exit code 3 (partial)")
+    return code
 
 
 def run_record(args: argparse.Namespace) -> int:
     """Run ``motorlab robot record``: Ctrl-C stops the OpMode at once and keeps what was recorded."""
-    from motorlab.robot.record import Recorder, write_log
+    from motorlab.robot.record import RAMP_LOGGERS, Recorder, latest_ramp_name, write_log
 
+    ramp_kind = RAMP_LOGGERS.get(args.opmode)
+    before = latest_ramp_name(args.host, args.http_port, ramp_kind, timeout=args.timeout) if ramp_kind else None
     recorder = Recorder(args.host, args.dashboard_port, args.opmode, seconds=args.seconds, timeout=args.timeout)
     outcome: dict[str, Any] = {}
     done = threading.Event()  # not Thread.join: a join interrupted by Ctrl-C can return early afterwards (CPython)
@@ -173,7 +190,13 @@ def run_record(args: argparse.Namespace) -> int:
                              "on the Driver Station")
     if "error" in outcome:
         raise outcome["error"]
-    summary = write_log(outcome["data"], args.output, host=f"{args.host}:{args.dashboard_port}", cpr=args.cpr)
+    data = outcome["data"]
+    if data.still_running:  # said first: writing the log may fail (no telemetry) and must not hide it
+        print("motorlab: error: the OpMode may still be running: press STOP on the Driver Station "
+              f"({data.stop_reason})", file=sys.stderr)
+    elif ramp_kind and not data.rows:
+        return _ramp_file(args, data, ramp_kind, before)
+    summary = write_log(data, args.output, host=f"{args.host}:{args.dashboard_port}", cpr=args.cpr)
     if args.json:
         print_json({"output": args.output, **summary})
     else:
@@ -182,9 +205,18 @@ def run_record(args: argparse.Namespace) -> int:
         for key, value in summary["skipped"].items():
             print(f"note: telemetry key {key!r} is not a number ({value!r}): left out")
         print(f"analyse with: motorlab analyze feedforward {args.output}" + ("" if args.cpr else " --cpr N"))
-    if summary["still_running"]:
-        print("motorlab: error: the OpMode may still be running: press STOP on the Driver Station", file=sys.stderr)
-        return 2
+    return 2 if data.still_running else 0
+
+
+def _ramp_file(args: argparse.Namespace, data: Any, kind: str, before: str | None) -> int:
+    """Road Runner's ramp loggers send no telemetry: bring the file they saved when stopped."""
+    from motorlab.robot.record import fetch_ramp_file
+
+    folder = Path(args.output).parent
+    path = fetch_ramp_file(args.host, args.http_port, kind, before, folder, timeout=args.timeout)
+    print(f"{args.opmode} sends no telemetry to FTC Dashboard; {data.stop_reason}; its ramp file, saved on the "
+          f"robot when it stopped: {path} ({path.stat().st_size} bytes, byte for byte)")
+    print(f"analyse with: motorlab analyze feedforward {path} --cpr N")
     return 0
 
 
@@ -261,9 +293,11 @@ def run_emulate(args: argparse.Namespace) -> int:
     with tempfile.TemporaryDirectory(prefix="motorlab-robot-") as tmp:
         files = _served(Path(args.serve)) if args.serve else _demo_files(Path(tmp))
         robot = EmulatedRobot(files, http_port=args.http_port, dashboard_port=args.dashboard_port,
+                              dashboard_version=args.dashboard_version, enabled=not args.disabled,
                               lifetime=args.seconds, max_requests=1_000_000)
         with robot:
-            print(f"emulated robot on 127.0.0.1: web server :{robot.http_port}, FTC Dashboard :{robot.dashboard_port}; "
+            print(f"emulated robot on 127.0.0.1: web server :{robot.http_port}, FTC Dashboard "
+                  f"{args.dashboard_version}{' (disabled)' if args.disabled else ''} :{robot.dashboard_port}; "
                   f"stops after {args.seconds:g} s or at Ctrl-C", file=sys.stderr)
             with contextlib.suppress(KeyboardInterrupt):
                 robot._stopped.wait(args.seconds)

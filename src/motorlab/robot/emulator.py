@@ -8,15 +8,31 @@ for the routes and messages), for the tests and for ``motorlab robot emulate``:
   ``/logs`` (Road Runner's HTML list, newest first), ``/logs/download?file=`` (Road Runner's query
   parsing and its 400/404 answers), ``/motorlab/logs`` and ``/motorlab/logs/download?file=``
   (``MotorlabLogFiles.java``); ``drop_after`` cuts every download after that many bytes (a lost Wi-Fi);
-* the Dashboard (port 8000 on a robot): on open ``RECEIVE_CONFIG``, ``RECEIVE_CONFIG_BASELINE``,
-  ``RECEIVE_OP_MODE_LIST``; ``GET_ROBOT_STATUS``; ``INIT_OP_MODE``/``START_OP_MODE``/``STOP_OP_MODE``
-  with the status the OpMode manager's notifications give (INIT, RUNNING, STOPPED, then the default
-  OpMode ``$Stop$Robot$``); ``GET_CONFIG``; ``SAVE_CONFIG`` applied leaf by leaf; while an OpMode runs,
-  telemetry packets every loop (10 ms) sent in batches every 100 ms.
+* FTC Dashboard (port 8000 on a robot) as each version teams run defines it (``dashboard_version``:
+  0.4.10 … 0.4.17, 0.5.0, 0.5.1, 0.6.0; the upstream file and line of each behaviour are cited where it
+  is written, as ``tag:path:line``): on open ``RECEIVE_CONFIG`` (and ``RECEIVE_CONFIG_BASELINE`` from
+  v0.6.0 only), ``RECEIVE_OP_MODE_LIST`` as names (up to v0.5.0) or ``{name, group}`` (v0.5.1+);
+  ``GET_ROBOT_STATUS`` (``batteryVoltage`` from v0.4.14); ``INIT_OP_MODE``/``START_OP_MODE``/
+  ``STOP_OP_MODE`` with the status the OpMode manager's notifications give (INIT, RUNNING, STOPPED,
+  then the default OpMode ``$Stop$Robot$``); ``GET_CONFIG``; ``SAVE_CONFIG`` applied leaf by leaf;
+  telemetry packets every loop sent in batches every 100 ms; NanoHTTPD's 5 s read timeout (an idle
+  client is dropped without a close frame) and the dropped connection on a message type the version
+  does not know; a disabled Dashboard (``enabled=False``) that answers only ``GET_ROBOT_STATUS``.
 
-The running OpMode is a drive motor obeying the feedforward model in encoder ticks,
-V = kS·sgn(v) + kV·v + kA·a (:class:`Plant`), under a voltage ramp with an offset; its telemetry keys are
-``voltage`` [V], ``position`` [ticks], ``velocity`` [ticks/s] and ``state`` (a word, not a number).
+The OpModes it offers are a table (:data:`OPMODES`: name, group, behaviour): motorlab's quasistatic
+ramp (a drive motor obeying V = kS·sgn(v) + kV·v + kA·a in encoder ticks, :class:`Plant`, under a
+voltage ramp; keys ``voltage`` [V], ``position`` [ticks], ``velocity`` [ticks/s] and ``state``, a
+word), Road Runner's ``ForwardRampLogger`` (no Dashboard telemetry; runs until STOP, then saves its
+ramp file) and ``ManualFeedforwardTuner`` (keys ``mode``, ``v0``…, ``vref`` [in/s]; runs until STOP),
+``LocalizationTest`` and the Dashboard's own "Enable/Disable Dashboard".
+
+Citations read ``tag:path:line``. ``v0.x.y:…/DashboardCore.java`` is acmerobotics/ftc-dashboard at that tag,
+``DashboardCore/src/main/java/com/acmerobotics/dashboard/…`` (``FtcDashboard/src/main/java/com/acmerobotics/
+dashboard/FtcDashboard.java`` for ``FtcDashboard/…``); ``NanoHTTPD.java`` and ``NanoWSD.java`` are
+NanoHttpd/nanohttpd at ``nanohttpd-project-2.3.1`` (the version FtcDashboard's build.gradle pins),
+``core/src/main/java/fi/iki/elonen/NanoHTTPD.java`` and ``websocket/src/main/java/fi/iki/elonen/NanoWSD.java``;
+``FileServing.kt`` and ``Tuning.kt`` are acmerobotics/road-runner-ftc at 1f35428,
+``RoadRunner/src/main/java/com/acmerobotics/roadrunner/ftc/``.
 
 It listens on 127.0.0.1 only, and stops by itself after ``lifetime`` seconds or ``max_requests``
 requests and messages, whichever comes first.
@@ -34,12 +50,58 @@ import urllib.parse
 from dataclasses import dataclass, field
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 from motorlab.robot.dashboard import STOP_TAG
 
 LOOPBACK = "127.0.0.1"
 TUNING_TYPES = ("forward-ramp", "lateral-ramp", "angular-ramp", "accel")
+#: FTC Dashboard versions the emulator plays (every one teams pin; acmerobotics/ftc-dashboard tags).
+DASHBOARD_VERSIONS = ("0.4.10", "0.4.11", "0.4.12", "0.4.13", "0.4.14", "0.4.15", "0.4.16", "0.4.17", "0.5.0",
+                      "0.5.1", "0.6.0")
+#: NanoHTTPD's read timeout [s]: ``SOCKET_READ_TIMEOUT = 5000`` (NanoHttpd/nanohttpd
+#: nanohttpd-project-2.3.1:core/src/main/java/fi/iki/elonen/NanoHTTPD.java:1836), set on every accepted
+#: socket (:1771) by ``start()`` (:2297), which FtcDashboard calls (v0.4.16:FtcDashboard/src/main/java/com/
+#: acmerobotics/dashboard/FtcDashboard.java:659, ``server.start()``).
+SOCKET_READ_TIMEOUT = 5.0
+#: Message types each version knows (DashboardCore/src/main/java/com/acmerobotics/dashboard/message/
+#: MessageType.java at each tag); any other type deserialises to null and drops the connection.
+_TYPES_04 = ("GET_ROBOT_STATUS", "RECEIVE_ROBOT_STATUS", "INIT_OP_MODE", "START_OP_MODE", "STOP_OP_MODE",
+             "RECEIVE_OP_MODE_LIST", "GET_CONFIG", "SAVE_CONFIG", "RECEIVE_CONFIG", "RECEIVE_TELEMETRY",
+             "RECEIVE_IMAGE", "RECEIVE_GAMEPAD_STATE")  # v0.4.16:…/MessageType.java:21-42
+# v0.4.17 and v0.5.0:…/MessageType.java:23-48
+_TYPES_05 = (*_TYPES_04, "RECEIVE_HARDWARE_CONFIG_LIST", "SET_HARDWARE_CONFIG")
+_TYPES_06 = (*_TYPES_05, "GET_CONFIG_BASELINE", "RECEIVE_CONFIG_BASELINE", "WRITE_HARDWARE_CONFIG",
+             "DELETE_HARDWARE_CONFIG", "RECEIVE_LOGCAT_ERRORS")  # v0.6.0:…/MessageType.java:28-60
+
+
+def version_tuple(version: str) -> tuple[int, ...]:
+    """``"0.5.1"`` → ``(0, 5, 1)``; :class:`ValueError` for a version the emulator does not play."""
+    if version not in DASHBOARD_VERSIONS:
+        raise ValueError(f"FTC Dashboard {version!r} is not emulated (versions: {', '.join(DASHBOARD_VERSIONS)})")
+    return tuple(int(part) for part in version.split("."))
+
+
+@dataclass(frozen=True)
+class OpModeSpec:
+    """One OpMode of the emulated robot: its name and group as registered, and what it does when started
+    (``behaviour``: a key of :attr:`EmulatedRobot.BEHAVIOURS`)."""
+
+    name: str
+    group: str
+    behaviour: str
+
+
+#: The OpModes the emulated robot offers, one row each (add a row, and a behaviour, to add one).
+OPMODES: tuple[OpModeSpec, ...] = (
+    OpModeSpec("motorlab: quasistatic ramp", "motorlab", "quasistatic_ramp"),
+    # road-runner-quickstart TeamCode/…/tuning/TuningOpModes.java:58-68 (group "quickstart", simple class names)
+    OpModeSpec("ForwardRampLogger", "quickstart", "forward_ramp_logger"),
+    OpModeSpec("ManualFeedforwardTuner", "quickstart", "manual_feedforward_tuner"),
+    OpModeSpec("LocalizationTest", "quickstart", "until_stop"),
+    # v0.4.16:FtcDashboard/…/FtcDashboard.java:942-948 (internalRegisterOpMode, group "dash")
+    OpModeSpec("Enable/Disable Dashboard", "dash", "toggle_dashboard"),
+)
 
 
 def _var(kind: str, value: Any) -> dict[str, Any]:
@@ -139,6 +201,18 @@ class EmulatedRobot:
         Ports (0 picks free ones; see :attr:`http_port`, :attr:`dashboard_port` after :meth:`start`).
     road_runner, motorlab_handler, dashboard
         Which services the robot has.
+    dashboard_version
+        The FTC Dashboard version played (one of :data:`DASHBOARD_VERSIONS`; 0.6.0 by default).
+    enabled
+        False: the Dashboard is disabled on the robot (its menu's "Disable Dashboard").
+    read_timeout
+        NanoHTTPD's socket read timeout [s] (5 s, :data:`SOCKET_READ_TIMEOUT`; shorter only in tests).
+    stop_ignored
+        True: an OpMode that does not stop when asked (a loop that never checks ``isStopRequested``).
+    log_folder
+        False: the robot has no ``/sdcard/RoadRunner/logs`` folder (``/logs`` then fails, see below);
+        ``logs_failure`` says how the failure reaches the client ("closed": NanoHTTPD drops the
+        connection, "500": a server error answer).
     drop_after
         Cut every download after this many bytes (a dropped Wi-Fi), or None.
     lifetime, max_requests
@@ -147,20 +221,25 @@ class EmulatedRobot:
 
     def __init__(self, files: RobotFiles | None = None, *, http_port: int = 0, dashboard_port: int = 0,
                  road_runner: bool = True, motorlab_handler: bool = True, dashboard: bool = True,
+                 dashboard_version: str = "0.6.0", enabled: bool = True,
+                 read_timeout: float = SOCKET_READ_TIMEOUT, stop_ignored: bool = False,
+                 log_folder: bool = True, logs_failure: str = "closed",
                  drop_after: int | None = None, lifetime: float = 120.0, max_requests: int = 20000,
-                 plant: Plant | None = None, opmodes: list[dict[str, str]] | None = None,
+                 plant: Plant | None = None, opmodes: list[OpModeSpec] | None = None,
                  config_tree: dict[str, Any] | None = None) -> None:
         self.files = files or RobotFiles()
         self.road_runner, self.motorlab_handler, self.has_dashboard = road_runner, motorlab_handler, dashboard
+        self.version, self._v = dashboard_version, version_tuple(dashboard_version)
+        self.enabled, self.read_timeout, self.stop_ignored = enabled, float(read_timeout), stop_ignored
+        self.log_folder, self.logs_failure = log_folder, logs_failure
         self.drop_after, self.lifetime, self.max_requests = drop_after, lifetime, max_requests
         self.plant = plant or Plant()
-        self.opmodes = opmodes or [{"name": "motorlab: quasistatic ramp", "group": "motorlab"},
-                                   {"name": "ForwardRampLogger", "group": "RoadRunner"},
-                                   {"name": "LocalizationTest", "group": "RoadRunner"}]
+        self.opmodes = list(opmodes or OPMODES)
         self.config = config_tree or default_config_tree()
         self.baseline = copy.deepcopy(self.config)
         self.received: list[dict[str, Any]] = []  # every Dashboard message, in order
         self.http_requests: list[tuple[str, str]] = []  # (client address, path)
+        self.dropped: list[str] = []  # why each dropped Dashboard client was dropped
         self.active, self.status = STOP_TAG, "INIT"
         self.battery = 12.8
         self.errors: list[str] = []
@@ -169,10 +248,12 @@ class EmulatedRobot:
         self._count = 0
         self._stopped = threading.Event()
         self._run_id = 0
+        self._run_started = 0.0
         self._http_port, self._dash_port = http_port, dashboard_port
         self._threads: list[threading.Thread] = []
         self._http: ThreadingHTTPServer | None = None
         self._ws: Any = None
+        self._scratch: Path | None = None
         self.external_opmode: Any = None  # an OpMode process instead of the plant: motorlab.robot.emulator_jvm
 
     # ---- life cycle -------------------------------------------------------------------------------
@@ -229,6 +310,10 @@ class EmulatedRobot:
         for thread in self._threads:
             if thread is not threading.current_thread():
                 thread.join(timeout=2.0)
+        if self._scratch is not None:
+            import shutil
+
+            shutil.rmtree(self._scratch, ignore_errors=True)
 
     def __enter__(self) -> EmulatedRobot:
         return self.start()
@@ -238,10 +323,25 @@ class EmulatedRobot:
 
     # ---- Dashboard --------------------------------------------------------------------------------
     def robot_status(self) -> dict[str, Any]:
+        """``RobotStatus`` as Gson writes it (DashboardCore/…/RobotStatus.java at the tag): ``batteryVoltage``
+        exists from v0.4.14 (v0.4.14:…/RobotStatus.java:23; absent at v0.4.13), the largest hub input voltage
+        (v0.4.16:FtcDashboard/…/FtcDashboard.java:1192-1212); ``enabled`` is ``core.enabled``."""
         with self._lock:
-            return {"enabled": True, "available": True, "activeOpMode": self.active,
-                    "activeOpModeStatus": self.status, "warningMessage": "", "errorMessage": "",
-                    "batteryVoltage": self.battery}
+            status: dict[str, Any] = {"enabled": self.enabled, "available": True, "activeOpMode": self.active,
+                                      "activeOpModeStatus": self.status, "warningMessage": "", "errorMessage": ""}
+            if self._v >= (0, 4, 14):
+                status["batteryVoltage"] = self.battery
+            return status
+
+    def op_mode_list_message(self) -> dict[str, Any]:
+        """``RECEIVE_OP_MODE_LIST`` at this version: names sorted (``List<String> opModeList``,
+        v0.5.0:DashboardCore/…/message/redux/ReceiveOpModeList.java:8; sorted at v0.5.0:FtcDashboard/…/
+        FtcDashboard.java:275), or ``OpModeInfo`` {name, group} sorted by group then name, ignoring case
+        (v0.5.1:…/ReceiveOpModeList.java:9, v0.6.0:FtcDashboard/…/FtcDashboard.java:295-301)."""
+        if self._v < (0, 5, 1):
+            return {"type": "RECEIVE_OP_MODE_LIST", "opModeList": sorted(m.name for m in self.opmodes)}
+        infos = sorted(self.opmodes, key=lambda m: (m.group.lower(), m.name.lower()))
+        return {"type": "RECEIVE_OP_MODE_LIST", "opModeInfoList": [{"name": m.name, "group": m.group} for m in infos]}
 
     def _send(self, conn: Any, message: dict[str, Any]) -> None:
         with contextlib.suppress(Exception):
@@ -253,21 +353,44 @@ class EmulatedRobot:
         for conn in clients:
             self._send(conn, message)
 
-    def _ws_client(self, conn: Any) -> None:
+    def _on_open(self, conn: Any) -> None:
+        """What a new client receives (v0.6.0:DashboardCore/…/DashboardCore.java:114-127, FtcDashboard.java:
+        1013-1043): the config tree; the baseline from v0.6.0 only (v0.6.0:…/DashboardCore.java:120-122,
+        absent at v0.5.1); the OpMode list; the hardware configurations from v0.5.0 (v0.5.0:FtcDashboard/…/
+        FtcDashboard.java:781-787). Sent whether the Dashboard is enabled or not (``onOpen`` has no check)."""
         with self._lock:
             self._send(conn, {"type": "RECEIVE_CONFIG", "configRoot": self.config})
-            self._send(conn, {"type": "RECEIVE_CONFIG_BASELINE", "configBaseline": self.baseline})
-            self._send(conn, {"type": "RECEIVE_OP_MODE_LIST", "opModeInfoList": self.opmodes})
+            if self._v >= (0, 6, 0):
+                self._send(conn, {"type": "RECEIVE_CONFIG_BASELINE", "configBaseline": self.baseline})
+            self._send(conn, self.op_mode_list_message())
+            if self._v >= (0, 6, 0):  # v0.6.0:…/message/redux/ReceiveHardwareConfigList.java:10-11, HardwareConfig.java
+                self._send(conn, {"type": "RECEIVE_HARDWARE_CONFIG_LIST", "currentHardwareConfig": "robot",
+                                  "hardwareConfigs": [{"name": "robot", "xmlContent": "<Robot/>", "readOnly": False}]})
+            elif self._v >= (0, 4, 17):  # v0.4.17, v0.5.0:…/message/redux/ReceiveHardwareConfigList.java:9-10
+                self._send(conn, {"type": "RECEIVE_HARDWARE_CONFIG_LIST", "hardwareConfigList": ["robot"],
+                                  "currentHardwareConfig": "robot"})
             self._clients.append(conn)
+
+    def _ws_client(self, conn: Any) -> None:
+        self._on_open(conn)
+        last_frame = time.monotonic()
         try:
             while not self._stopped.is_set():
                 try:
-                    frame = conn.recv(timeout=0.05)
+                    frame = conn.recv(timeout=0.02)
                 except TimeoutError:
+                    if time.monotonic() - last_frame > self.read_timeout:
+                        # NanoHTTPD's socket timeout (NanoHTTPD.java:1771) throws in WebSocketFrame.read;
+                        # readWebsocket's catch and finally close the streams: no close frame
+                        # (nanohttpd-project-2.3.1:websocket/src/main/java/fi/iki/elonen/NanoWSD.java:245-260, 143-160).
+                        self._drop(conn, f"no frame for {self.read_timeout:g} s (NanoHTTPD's read timeout)")
+                        return
                     continue
+                last_frame = time.monotonic()
                 if not self.count():
                     return
-                self._on_message(conn, json.loads(frame))
+                if not self._on_message(conn, frame):
+                    return
         except Exception:
             return
         finally:
@@ -275,38 +398,227 @@ class EmulatedRobot:
                 if conn in self._clients:
                     self._clients.remove(conn)
 
-    def _on_message(self, conn: Any, message: dict[str, Any]) -> None:
-        kind = message.get("type")
+    def _drop(self, conn: Any, why: str) -> None:
+        """Close the TCP connection without a WebSocket close frame, as NanoWSD's ``doClose`` does
+        (it closes the socket's streams only: NanoWSD.java:143-160)."""
+        import socket
+
+        with self._lock:
+            self.dropped.append(why)
+            if conn in self._clients:
+                self._clients.remove(conn)
+        with contextlib.suppress(OSError):
+            conn.socket.shutdown(socket.SHUT_RDWR)
+        with contextlib.suppress(OSError):
+            conn.socket.close()
+
+    def _on_message(self, conn: Any, frame: str | bytes) -> bool:
+        """One frame, as ``DashWebSocket.onMessage`` then ``DashboardCore``'s handler treat it; False when
+        the connection was dropped."""
+        try:
+            message = json.loads(frame)
+        except ValueError:
+            # Gson's JsonSyntaxException is unchecked: NanoWSD's readWebsocket does not catch it, its
+            # finally closes the socket (v0.4.16:FtcDashboard/…/FtcDashboard.java:602; NanoWSD.java:245-260).
+            self._drop(conn, "a frame that is not JSON")
+            return False
+        kind = message.get("type") if isinstance(message, dict) else None
+        known = _TYPES_06 if self._v >= (0, 6, 0) else _TYPES_05 if self._v >= (0, 4, 17) else _TYPES_04
+        if kind not in known:
+            # MessageDeserializer returns null for a type the enum lacks (v0.4.16:DashboardCore/…/message/
+            # MessageDeserializer.java:20-24); DashboardCore's handler then throws a NullPointerException on
+            # message.getType() (v0.4.16:…/DashboardCore.java:124 when disabled, :128 when enabled), which
+            # NanoWSD does not catch: the socket is closed (NanoWSD.java:245-260).
+            self._drop(conn, f"an unknown message type {kind!r} (Dashboard {self.version})")
+            return False
         with self._lock:
             self.received.append(message)
-        if kind == "GET_ROBOT_STATUS":
+        if not self.enabled and kind != "GET_ROBOT_STATUS":
+            return True  # "Swallow any messages when the server is disabled" (v0.4.16:…/DashboardCore.java:123-126)
+        if kind == "GET_ROBOT_STATUS":  # v0.4.16:FtcDashboard/…/FtcDashboard.java:609-611
             self._send(conn, {"type": "RECEIVE_ROBOT_STATUS", "status": self.robot_status()})
-        elif kind == "GET_CONFIG":
+        elif kind == "GET_CONFIG":  # v0.4.16:…/DashboardCore.java:129-134
             with self._lock:
                 self._send(conn, {"type": "RECEIVE_CONFIG", "configRoot": self.config})
-        elif kind == "SAVE_CONFIG":
+        elif kind == "GET_CONFIG_BASELINE":  # v0.6.0:…/DashboardCore.java:150-155
+            with self._lock:
+                self._send(conn, {"type": "RECEIVE_CONFIG_BASELINE", "configBaseline": self.baseline})
+        elif kind == "SAVE_CONFIG":  # v0.4.16:…/DashboardCore.java:135-144, then updateConfig to all (:211-215)
             with self._lock:
                 self._update(self.config, message.get("configDiff") or {}, "")
                 tree = copy.deepcopy(self.config)
             self.broadcast({"type": "RECEIVE_CONFIG", "configRoot": tree})
-        elif kind == "INIT_OP_MODE":
+        elif kind == "INIT_OP_MODE":  # v0.4.16:FtcDashboard/…/FtcDashboard.java:613-617 → onOpModePreInit (:1233-1242)
+            self._init(str(message.get("opModeName")))
+        elif kind == "START_OP_MODE":  # :618-621 → onOpModePreStart (:1245-1250)
+            self._start()
+        elif kind == "STOP_OP_MODE":  # :622-625, eventLoop.requestOpModeStop → onOpModePostStop (:1253-1257)
+            self._request_stop()
+        return True
+
+    def _spec(self, name: str) -> OpModeSpec | None:
+        return next((m for m in self.opmodes if m.name == name), None)
+
+    def _init(self, name: str) -> None:
+        with self._lock:
+            if self._spec(name) is None:
+                return
+            self._run_id += 1
+            self.active, self.status = name, "INIT"
+        self.broadcast({"type": "RECEIVE_TELEMETRY", "telemetry": []})  # clearTelemetry (DashboardCore.java:184-190)
+
+    def _start(self) -> None:
+        with self._lock:
+            spec = self._spec(self.active)
+            if spec is None or self.status != "INIT":
+                return
+            self.status = "RUNNING"
+            self._run_id += 1
+            self._run_started = time.monotonic()
+            behaviour = getattr(self, self.BEHAVIOURS[spec.behaviour])
+            threading.Thread(target=behaviour, args=(self._run_id,), daemon=True).start()
+
+    def _request_stop(self) -> None:
+        """The OpMode's loop ends on the event loop's next turn; when ``runOpMode`` returns (ForwardRampLogger
+        first saves its file: Tuning.kt:399-403), ``onOpModePostStop`` (status STOPPED), then the SDK inits
+        its default OpMode (``onOpModePreInit``: ``$Stop$Robot$``, INIT)."""
+        with self._lock:
+            if self.stop_ignored and self.active != STOP_TAG and self.status == "RUNNING":
+                return
+            spec = self._spec(self.active)
+            saves = spec is not None and self.status == "RUNNING" and spec.behaviour == "forward_ramp_logger"
+            self._run_id += 1
+            run = self._run_id
+            seconds = time.monotonic() - self._run_started
+
+        def finish() -> None:
+            if saves:
+                self._save_ramp(seconds)
             with self._lock:
-                names = [m["name"] for m in self.opmodes]
-                if message.get("opModeName") in names:
-                    self._run_id += 1
-                    self.active, self.status = message["opModeName"], "INIT"
-            self.broadcast({"type": "RECEIVE_TELEMETRY", "telemetry": []})  # clearTelemetry on init
-        elif kind == "START_OP_MODE":
+                if self._run_id == run and self.active != STOP_TAG:
+                    self.status = "STOPPED"
+            time.sleep(0.005)
             with self._lock:
-                if self.active != STOP_TAG and self.status == "INIT":
-                    self.status = "RUNNING"
-                    self._run_id += 1
-                    run = self._run_id
-                    threading.Thread(target=self._telemetry, args=(run,), daemon=True).start()
-        elif kind == "STOP_OP_MODE":
-            with self._lock:
+                if self._run_id == run:
+                    self.active, self.status = STOP_TAG, "INIT"
+
+        threading.Thread(target=finish, daemon=True).start()
+
+    def _ended(self, run: int) -> None:
+        """The OpMode returned by itself: STOPPED, then the default OpMode."""
+        with self._lock:
+            if self._run_id == run:
                 self._run_id += 1
                 self.active, self.status = STOP_TAG, "INIT"
+
+    def _running(self, run: int) -> bool:
+        with self._lock:
+            return self._run_id == run and not self._stopped.is_set()
+
+    def _packets(self, packets: list[dict[str, Any]]) -> None:
+        """Send a batch of telemetry, unless disabled (``sendTelemetryPacket`` returns at once:
+        v0.4.16:…/DashboardCore.java:161-163)."""
+        if self.enabled and packets:
+            self.broadcast({"type": "RECEIVE_TELEMETRY", "telemetry": packets})
+
+    @staticmethod
+    def packet(stamp_ms: int, data: dict[str, str], log: list[str] | None = None) -> dict[str, Any]:
+        """A ``TelemetryPacket`` as Gson writes it (v0.4.16:DashboardCore/…/telemetry/TelemetryPacket.java:
+        15-19; ``data`` a SortedMap of strings, :54-56)."""
+        return {"timestamp": stamp_ms, "data": dict(sorted(data.items())), "log": log or [],
+                "field": {"ops": []}, "fieldOverlay": {"ops": []}}
+
+    # ---- OpMode behaviours (one method per OPMODES behaviour) ------------------------------------
+    BEHAVIOURS: ClassVar[dict[str, str]] = {
+        "quasistatic_ramp": "_run_quasistatic_ramp",
+        "forward_ramp_logger": "_run_until_stop",
+        "manual_feedforward_tuner": "_run_manual_feedforward_tuner",
+        "until_stop": "_run_until_stop",
+        "toggle_dashboard": "_run_toggle_dashboard",
+    }
+
+    def _run_quasistatic_ramp(self, run: int) -> None:
+        """motorlab's ramp: a packet per loop, sent in batches every 100 ms, until stopped or done."""
+        external = self.external_opmode  # motorlab.robot.emulator_jvm: forwards the process's packets until STOP
+        if external is not None:
+            external(self.broadcast, lambda: self._running(run))
+            self._ended(run)
+            return
+        samples = self.plant.run(min(self.lifetime, self.plant.duration))
+        epoch = int(time.time() * 1000)
+        start = time.monotonic()
+        sent = 0
+        while sent < len(samples):
+            time.sleep(0.1)  # DEFAULT_TELEMETRY_TRANSMISSION_INTERVAL (v0.4.16:…/DashboardCore.java:30)
+            if not self._running(run):
+                return
+            now = time.monotonic() - start
+            batch = []
+            while sent < len(samples) and samples[sent][0] <= now:
+                t, volts, x, v = samples[sent]
+                batch.append(self.packet(epoch + round(t * 1000), {
+                    "voltage": f"{volts:.4f}", "position": f"{x:.0f}", "velocity": f"{v:.3f}", "state": "ramping"}))
+                sent += 1
+            self._packets(batch)
+        self._ended(run)
+
+    def _run_until_stop(self, run: int) -> None:
+        """An OpMode that sends nothing to the Dashboard and runs until STOP (Road Runner's
+        ForwardRampLogger: ``while (opModeIsActive())``, Tuning.kt:370, and no telemetry)."""
+        while self._running(run):
+            time.sleep(0.02)
+
+    def _run_manual_feedforward_tuner(self, run: int) -> None:
+        """Road Runner's ManualFeedforwardTuner (road-runner-ftc Tuning.kt:519-618): until STOP
+        (``while (!isStopRequested)``, :553), every loop ``mode``, ``v0``… (each forward encoder's velocity
+        × inPerTick [in/s], :580) and ``vref`` (the profile's velocity [in/s], :594), through
+        MultipleTelemetry; the profile goes DISTANCE = 64 in forward and back. The emulated drive follows
+        vref with the lag of the emulated motor (τ = kA/kV)."""
+        epoch = int(time.time() * 1000)
+        start = time.monotonic()
+        # in, in/s, in/s²: DISTANCE; the quickstart's MecanumDrive.PARAMS maxWheelVel, maxProfileAccel
+        distance, vmax, amax = 64.0, 50.0, 50.0
+        ramp = vmax / amax
+        leg = ramp + (distance - vmax * ramp) / vmax + ramp
+        tau = self.plant.kA / self.plant.kV
+        v = 0.0
+        step = 0.01
+        t_loop = 0.0
+        while self._running(run):
+            time.sleep(0.1)
+            now = time.monotonic() - start
+            batch = []
+            while t_loop <= now:
+                k, phase = divmod(t_loop, leg)
+                ref = vmax * min(1.0, phase / ramp, max(0.0, (leg - phase) / ramp))
+                ref = ref if int(k) % 2 == 0 else -ref
+                v += (ref - v) * (1 - math.exp(-step / tau))
+                batch.append(self.packet(epoch + round(t_loop * 1000), {
+                    "mode": "TUNING_MODE", "v0": repr(v), "v1": repr(v * 0.998), "vref": repr(ref)}))
+                t_loop += step
+            self._packets(batch)
+
+    def _run_toggle_dashboard(self, run: int) -> None:
+        """"Enable/Disable Dashboard": on start, toggles (v0.4.16:FtcDashboard/…/FtcDashboard.java:958-968)."""
+        with self._lock:
+            self.enabled = not self.enabled
+        self._ended(run)
+
+    def _save_ramp(self, seconds: float) -> None:
+        """ForwardRampLogger's file, written when it stops: ``<millis>.json`` (FileServing.kt:99-113)."""
+        import tempfile
+
+        from motorlab.rig.ftc import RampSettings, simulate_ramp
+
+        with self._lock:
+            if self._scratch is None:
+                self._scratch = Path(tempfile.mkdtemp(prefix="motorlab-emulated-sdcard-"))
+            folder = self._scratch / "forward-ramp"
+            folder.mkdir(exist_ok=True)
+            path = folder / f"{int(time.time() * 1000)}.json"
+        simulate_ramp(path, kind="forward", settings=RampSettings(duration=max(0.5, min(seconds, 20.0))), seed=1)
+        with self._lock:
+            self.files.tuning.setdefault("forward-ramp", []).append(path)
 
     def _update(self, node: dict[str, Any], diff: dict[str, Any], path: str) -> None:
         """``CustomVariable.update``: every leaf the diff names takes the diff's value."""
@@ -320,37 +632,10 @@ class EmulatedRobot:
         else:
             node["__value"] = diff.get("__value")
 
-    def _telemetry(self, run: int) -> None:
-        """The running OpMode: a packet per loop, sent in batches every 100 ms, until stopped."""
-        external = self.external_opmode  # motorlab.robot.emulator_jvm: forwards the process's packets until STOP
-        if external is not None:
-            external(self.broadcast, lambda: self._run_id == run and not self._stopped.is_set())
-        samples = [] if external is not None else self.plant.run(min(self.lifetime, self.plant.duration))
-        epoch = int(time.time() * 1000)
-        start = time.monotonic()
-        sent = 0
-        while sent < len(samples):
-            time.sleep(0.1)
-            with self._lock:
-                if self._run_id != run or self._stopped.is_set():
-                    return
-            now = time.monotonic() - start
-            batch = []
-            while sent < len(samples) and samples[sent][0] <= now:
-                t, volts, x, v = samples[sent]
-                batch.append({"timestamp": epoch + round(t * 1000),
-                              "data": {"voltage": f"{volts:.4f}", "position": f"{x:.0f}", "velocity": f"{v:.3f}",
-                                       "state": "ramping"},
-                              "log": [], "field": {"ops": []}, "fieldOverlay": {"ops": []}})
-                sent += 1
-            self.broadcast({"type": "RECEIVE_TELEMETRY", "telemetry": batch})
-        with self._lock:  # the OpMode ends by itself
-            if self._run_id == run:
-                self.active, self.status = STOP_TAG, "INIT"
-
     # ---- HTTP -------------------------------------------------------------------------------------
     def listing_html(self) -> str:
-        """Road Runner's ``/logs`` page (FileServing.kt, LogFiles)."""
+        """Road Runner's ``/logs`` page, names written as they are, not escaped (road-runner-ftc 1f35428:
+        RoadRunner/src/main/java/com/acmerobotics/roadrunner/ftc/FileServing.kt:150-168)."""
         parts = ["<!doctype html><html><head><title>Logs</title></head><body><ul>"]
         for f in sorted(self.files.logs, key=lambda p: p.stat().st_mtime, reverse=True):
             parts.append(f'<li><a href="/logs/download?file={f.name}" download="{f.name}">{f.name}</a> '
@@ -371,12 +656,21 @@ def _handler_class(robot: EmulatedRobot) -> type[BaseHTTPRequestHandler]:
             if not robot.count():
                 self.close_connection = True
                 return
-            robot.http_requests.append((self.client_address[0], self.path))
-            path, _, query = self.path.partition("?")
+            # NanoHTTPD reads the request line with the platform's charset (new InputStreamReader without
+            # one: NanoHTTPD.java:917), UTF-8 on Android; http.server decodes it as Latin-1.
+            raw = self.path.encode("iso-8859-1").decode("utf-8", "replace")
+            robot.http_requests.append((self.client_address[0], raw))
+            path, _, query = raw.partition("?")  # the query after the first "?" (NanoHTTPD.java:681-684)
+            path = urllib.parse.unquote(path)  # decodePercent(uri) (NanoHTTPD.java:684)
             if robot.road_runner and path.startswith("/tuning/"):
                 self._tuning(path)
             elif robot.road_runner and path == "/logs":
-                self._fixed(200, "text/html", robot.listing_html().encode())
+                if not robot.log_folder:
+                    self._handler_threw()  # LOG_ROOT.listFiles()!! on a robot without the folder (FileServing.kt:153)
+                    return
+                page = robot.listing_html()
+                ascii_only = page.isascii()  # NanoHTTPD switches to UTF-8 when ASCII cannot encode it (:2199-2203)
+                self._fixed(200, "text/html" if ascii_only else "text/html; charset=UTF-8", page.encode())
             elif robot.road_runner and path == "/logs/download":
                 self._rr_download(query)
             elif robot.motorlab_handler and path == "/motorlab/logs":
@@ -385,7 +679,7 @@ def _handler_class(robot: EmulatedRobot) -> type[BaseHTTPRequestHandler]:
                 body = json.dumps({"folder": "/sdcard/FIRST/motorlab", "files": files}).encode()
                 self._fixed(200, "application/json", body)
             elif robot.motorlab_handler and path == "/motorlab/logs/download":
-                name = urllib.parse.parse_qs(query).get("file", [""])[0]
+                name = urllib.parse.parse_qs(query).get("file", [""])[0]  # getParameters(): decoded (:839-850)
                 match = [f for f in robot.files.motorlab if f.name == name]
                 if not match:
                     self._fixed(404, "text/plain", f"no log named {name}".encode())
@@ -393,6 +687,17 @@ def _handler_class(robot: EmulatedRobot) -> type[BaseHTTPRequestHandler]:
                     self._fixed(200, "text/plain", match[0].read_bytes(), drop=True)
             else:
                 self._fixed(404, "text/plain", b"")
+
+        def _handler_threw(self) -> None:
+            """A handler that throws: NanoHTTPD catches no RuntimeException in ``HTTPSession.execute``
+            (NanoHTTPD.java:953-985); ``ClientHandler.run`` logs it and closes the socket (:184-200), so the
+            client gets no answer. ``logs_failure="500"`` plays a server that answers 500 instead."""
+            if robot.logs_failure == "500":
+                self._fixed(500, "text/plain", b"SERVER INTERNAL ERROR: java.lang.NullPointerException")
+                return
+            self.close_connection = True
+            with contextlib.suppress(OSError):
+                self.connection.shutdown(2)
 
         def _tuning(self, path: str) -> None:
             parts = path.split("/")
@@ -414,17 +719,28 @@ def _handler_class(robot: EmulatedRobot) -> type[BaseHTTPRequestHandler]:
                 self._fixed(404, "text/plain", b"")
 
         def _rr_download(self, query: str) -> None:
-            pairs = [p for p in query.split("&") if p]
+            """Road Runner's download route (FileServing.kt:171-189): the raw query (``queryParameterString``,
+            not URL-decoded: NanoHTTPD.java:839) split on "&" then "=" (Kotlin's split, trailing empty parts
+            dropped), ``File(LOG_ROOT, parts[1])``."""
+            pairs = query.split("&")
+            while pairs and not pairs[-1]:
+                pairs.pop()
             if len(pairs) != 1:
                 self._fixed(400, "text/plain", f"expected one query parameter, got {len(pairs)}".encode())
                 return
-            key, _, name = pairs[0].partition("=")
-            if key != "file":
-                self._fixed(400, "text/plain", f"expected file query parameter, got {key}".encode())
+            parts = pairs[0].split("=")
+            while parts and not parts[-1]:
+                parts.pop()
+            if not parts or parts[0] != "file":
+                got = parts[0] if parts else ""
+                self._fixed(400, "text/plain", f"expected file query parameter, got {got}".encode())
                 return
-            match = [f for f in robot.files.logs if f.name == name]
+            if len(parts) < 2:
+                self._handler_threw()  # parts[1]: ArrayIndexOutOfBoundsException
+                return
+            match = [f for f in robot.files.logs if f.name == parts[1]]
             if not match:
-                self._fixed(404, "text/plain", f"file /sdcard/RoadRunner/logs/{name} doesn't exist".encode())
+                self._fixed(404, "text/plain", f"file /sdcard/RoadRunner/logs/{parts[1]} doesn't exist".encode())
                 return
             self._chunked("application/json", match[0].read_bytes(), {})
 

@@ -22,6 +22,20 @@ MAX_BODY = 256 * 1024 * 1024
 WHERE = "connect this computer to the robot's Wi-Fi (Control Hub 192.168.43.1, phone 192.168.49.1) or give --host"
 
 
+class RobotUnreachable(RobotLinkError):
+    """No connection to the robot's web server at all (refused, no route, no answer to connect)."""
+
+
+class _Connection(http.client.HTTPConnection):
+    """A connection that sends the request line in UTF-8: Road Runner's ``/logs/download`` reads the query
+    as it arrives, without URL-decoding (FileServing.kt:172), and NanoHTTPD decodes the request line
+    with the platform's charset, UTF-8 on Android (NanoHTTPD.java:917), so a log named with a non-ASCII
+    character is asked for by its UTF-8 bytes (http.client allows ASCII only)."""
+
+    def _encode_request(self, request: str) -> bytes:
+        return request.encode("utf-8")
+
+
 @dataclass
 class Reply:
     """One HTTP answer: status, headers (lower-case names) and the whole body."""
@@ -54,19 +68,29 @@ class RobotHttp:
     def get(self, path: str, *, max_bytes: int = MAX_BODY) -> Reply:
         """``GET path``; the whole body, or :class:`RobotLinkError` naming what failed and what to do."""
         start = time.monotonic()
-        conn = http.client.HTTPConnection(self.host, self.port, timeout=self.timeout)
+        conn = _Connection(self.host, self.port, timeout=self.timeout)
         try:
+            try:
+                conn.connect()
+            except ConnectionRefusedError:
+                raise RobotUnreachable(f"no robot web server at {self.address} (connection refused): is the robot "
+                                       f"controller app running? {WHERE}") from None
+            except TimeoutError:
+                raise RobotUnreachable(f"no answer from {self.address} within {self.timeout:g} s: {WHERE}") from None
+            except OSError as exc:
+                reason = exc.strerror or type(exc).__name__
+                raise RobotUnreachable(f"cannot reach {self.address} ({reason}): {WHERE}") from None
             try:
                 conn.request("GET", path, headers={"Accept-Encoding": "identity"})
                 response = conn.getresponse()
-            except ConnectionRefusedError:
-                raise RobotLinkError(f"no robot web server at {self.address} (connection refused): is the robot "
-                                     f"controller app running? {WHERE}") from None
+            except http.client.RemoteDisconnected:
+                raise RobotLinkError(f"{path} from {self.address}: the robot closed the connection without an answer "
+                                     "(its handler failed)") from None
             except TimeoutError:
-                raise RobotLinkError(f"no answer from {self.address} within {self.timeout:g} s: {WHERE}") from None
+                raise RobotLinkError(f"{path} from {self.address}: no answer within {self.timeout:g} s") from None
             except OSError as exc:
                 reason = exc.strerror or type(exc).__name__
-                raise RobotLinkError(f"cannot reach {self.address} ({reason}): {WHERE}") from None
+                raise RobotLinkError(f"{path} from {self.address}: the connection broke ({reason})") from None
             headers = {k.lower(): v for k, v in response.getheaders()}
             body = self._read_body(response, path, start, max_bytes)
             return Reply(response.status, headers, body)

@@ -12,7 +12,12 @@ What the robot serves on port 8080 (read from the projects' sources, commits nam
 * Road Runner's ``LogFiles``: ``GET /logs`` is an HTML list, newest first, of
   ``<li><a href="/logs/download?file=NAME" download="NAME">NAME</a> (SIZE bytes)</li>``;
   ``GET /logs/download?file=NAME`` sends the file (chunked, ``application/json`` whatever it holds). The
-  query string is split on ``&`` and ``=`` and not URL-decoded, so the name is sent as it is listed.
+  query string is split on ``&`` and ``=`` and not URL-decoded (FileServing.kt:172-182), so the name is
+  sent as it is listed, its bytes in UTF-8 (NanoHTTPD reads the request line in the platform's charset,
+  UTF-8 on Android: NanoHTTPD.java:917): ``$``, ``%``, ``#`` or ``é`` arrive as they are. A name holding
+  white space, ``&``, ``=`` or a control character cannot be asked for at all (the request line or the
+  query would be cut there): it is named as not pulled. On a robot without a log folder ``/logs`` throws
+  (``LOG_ROOT.listFiles()!!``, FileServing.kt:153) and the robot answers nothing or 500.
 * motorlab's own handler (``ftc/…/motorlab/MotorlabLogFiles.java``): ``GET /motorlab/logs`` answers JSON
   ``{"folder": …, "files": [{"name", "bytes", "modified_ms"}, …]}`` and
   ``GET /motorlab/logs/download?file=NAME`` the file with its ``Content-Length``.
@@ -20,23 +25,28 @@ What the robot serves on port 8080 (read from the projects' sources, commits nam
 Files are written under ``DIR/tuning/<type>/``, ``DIR/logs/`` and ``DIR/motorlab/`` (the robot's own
 folders, so two types' ``<millis>.json`` never collide), through a temporary name and a rename: a file
 is either complete or absent. A file whose size differs from the size the robot listed is refused.
+
+One file or route that fails never costs the others: each failure is kept as one line
+(:attr:`PullResult.failed`), the rest arrive byte for byte, and the CLI's exit code says "partial"
+(3). Only a robot that cannot be reached at all stops the pull at once.
 """
 
 from __future__ import annotations
 
-import html
+import contextlib
 import json
 import os
 import re
 import tempfile
 import urllib.parse
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from motorlab import progress
 from motorlab.robot import RobotLinkError
-from motorlab.robot.http import Reply, RobotHttp
+from motorlab.robot.http import Reply, RobotHttp, RobotUnreachable
 
 #: Road Runner's ``TuningFiles.FileType`` base names (FileServing.kt).
 TUNING_TYPES = ("forward-ramp", "lateral-ramp", "angular-ramp", "accel")
@@ -44,10 +54,15 @@ TUNING_TYPES = ("forward-ramp", "lateral-ramp", "angular-ramp", "accel")
 MOTORLAB_LIST = "/motorlab/logs"
 MOTORLAB_DOWNLOAD = "/motorlab/logs/download"
 
-#: One entry of Road Runner's ``/logs`` page (LogFiles.registerRoutes in FileServing.kt):
-#: ``<li><a href="/logs/download?file=NAME" download="NAME">NAME</a> (SIZE bytes)</li>``; read loosely
-#: (the link, then the size if it follows) so that a page written a little differently still lists its files.
+#: One entry of Road Runner's ``/logs`` page (LogFiles.registerRoutes, FileServing.kt:155-164), the name
+#: written three times as it is (not escaped): ``<li><a href="/logs/download?file=NAME" download="NAME">NAME</a>
+#: (SIZE bytes)</li>``. :func:`log_entries` reads it exactly; this looser pattern is the fallback for a
+#: page written a little differently.
 _LOG_ENTRY = re.compile(r'href="/logs/download\?file=([^"]*)"[^>]*>[^<]*</a>(?:\s*\((\d+) bytes\))?')
+_ENTRY_START = '<li><a href="/logs/download?file='
+#: What Road Runner's query parsing cuts at, or the request line cannot carry (FileServing.kt:172-177;
+#: NanoHTTPD's StringTokenizer splits the request line on white space, NanoHTTPD.java:667-679).
+_UNASKABLE = re.compile(r"[\s&=\x00-\x1f\x7f]")
 #: A name the robot may give: one path component, no separators, nothing hidden.
 _SAFE_NAME = re.compile(r"^[^/\\\x00-\x1f]{1,255}$")
 
@@ -79,10 +94,11 @@ class PullResult:
     folder: Path
     files: list[PulledFile] = field(default_factory=list)
     missing: list[str] = field(default_factory=list)
+    failed: list[str] = field(default_factory=list)
 
     def to_dict(self) -> dict[str, Any]:
         return {"address": self.address, "folder": str(self.folder), "files": [f.to_dict() for f in self.files],
-                "missing": list(self.missing)}
+                "missing": list(self.missing), "failed": list(self.failed)}
 
 
 def _check_name(name: str, where: str) -> str:
@@ -120,23 +136,37 @@ def write_atomic(folder: Path, name: str, data: bytes) -> str:
 
 
 def _tuning(robot: RobotHttp, result: PullResult, out: Path) -> None:
-    found = 0
+    found = -len(result.failed)  # a failed type is there (not a 404)
     for kind in TUNING_TYPES:
-        reply = robot.get(f"/tuning/{kind}/latest.json")
-        if reply.status == 404:
-            continue
-        if reply.status != 200:
-            raise RobotLinkError(f"/tuning/{kind}/latest.json from {robot.address}: HTTP {reply.status}")
-        name = reply.headers.get("x-filename")
-        if not name:
-            raise RobotLinkError(f"/tuning/{kind}/latest.json from {robot.address}: no X-Filename header "
-                                 "(not Road Runner's FileServing.kt?)")
-        _check_name(name, f"/tuning/{kind}/latest.json")
-        _keep(result, out / "tuning" / kind, name, reply.body, f"/tuning/{kind}/latest.json")
-        found += 1
-    if not found:
+        path = f"/tuning/{kind}/latest.json"
+        with _each(result, path):
+            reply = robot.get(path)
+            if reply.status == 404:
+                continue
+            found += 1
+            if reply.status != 200:
+                raise RobotLinkError(f"{path} from {robot.address}: HTTP {reply.status}")
+            name = reply.headers.get("x-filename")
+            if not name:
+                raise RobotLinkError(f"{path} from {robot.address}: no X-Filename header (not Road Runner's "
+                                     "FileServing.kt?)")
+            _check_name(name, path)
+            _keep(result, out / "tuning" / kind, name, reply.body, path)
+    if not found + len(result.failed):
         result.missing.append(f"no Road Runner tuning files ({', '.join(TUNING_TYPES)}: 404): run a ramp logger "
                               "(ForwardRampLogger …) first, or the robot has no Road Runner 1.0")
+
+
+@contextlib.contextmanager
+def _each(result: PullResult, what: str) -> Iterator[None]:
+    """One file or route: its failure becomes one line of ``result.failed`` (a robot that cannot be reached
+    at all stops the pull)."""
+    try:
+        yield
+    except RobotUnreachable:
+        raise
+    except RobotLinkError as exc:
+        result.failed.append(str(exc) if what in str(exc) else f"{what}: {exc}")
 
 
 def _listed(robot: RobotHttp, path: str) -> Reply | None:
@@ -144,30 +174,55 @@ def _listed(robot: RobotHttp, path: str) -> Reply | None:
     if reply.status == 404:
         return None
     if reply.status != 200:
-        raise RobotLinkError(f"{path} from {robot.address}: HTTP {reply.status}")
+        raise RobotLinkError(f"{path} from {robot.address}: HTTP {reply.status} "
+                             f"({reply.body[:120].decode('utf-8', 'replace').strip()}); the other files are pulled")
     return reply
 
 
+def log_entries(page: str) -> list[tuple[str, int | None]]:
+    """(name, size) of each file Road Runner's ``/logs`` page lists, any character in the name: the entry
+    ``NAME" download="NAME">NAME</a> (SIZE`` is solved for the one NAME written three times."""
+    entries: list[tuple[str, int | None]] = []
+    chunks = page.split(_ENTRY_START)[1:]
+    for chunk in chunks:
+        m = re.match(r'(?s)(.*)</a> \((\d+) bytes\)</li>', chunk)
+        if m:
+            text, size = m.group(1), int(m.group(2))
+            n = (len(text) - len('" download="') - len('">')) // 3
+            name = text[:n]
+            if n > 0 and text == f'{name}" download="{name}">{name}':
+                entries.append((name, size))
+                continue
+        loose = _LOG_ENTRY.search('href="/logs/download?file=' + chunk)
+        if loose:
+            entries.append((loose.group(1), int(loose.group(2)) if loose.group(2) else None))
+    return entries
+
+
 def _flight_logs(robot: RobotHttp, result: PullResult, out: Path) -> None:
-    reply = _listed(robot, "/logs")
-    if reply is None:
-        result.missing.append("no FlightRecorder log list (/logs: 404): the robot has no Road Runner 1.0 "
-                              "(its FileServing.kt serves the FlightRecorder logs)")
-        return
-    entries = [(html.unescape(m.group(1)), int(m.group(2)) if m.group(2) else None)
-               for m in _LOG_ENTRY.finditer(reply.body.decode("utf-8", "replace"))]
-    with progress.task("Pulling FlightRecorder logs", total=len(entries), unit="file") as step:
-        for name, size in entries:
-            _check_name(name, "/logs")
-            query = name if re.fullmatch(r"[A-Za-z0-9._~-]+", name) else urllib.parse.quote(name)
-            path = f"/logs/download?file={query}"
-            got = robot.get(path)
-            if got.status != 200:
-                raise RobotLinkError(f"{path} from {robot.address}: HTTP {got.status} "
-                                     f"({got.body[:120].decode('utf-8', 'replace').strip()})")
-            note = _size_note(path, robot.address, size, len(got.body))
-            _keep(result, out / "logs", name, got.body, path, note)
-            step.advance(detail=name)
+    with _each(result, "/logs"):
+        reply = _listed(robot, "/logs")
+        if reply is None:
+            result.missing.append("no FlightRecorder log list (/logs: 404): the robot has no Road Runner 1.0 "
+                                  "(its FileServing.kt serves the FlightRecorder logs)")
+            return
+        entries = log_entries(reply.body.decode("utf-8", "replace"))
+        with progress.task("Pulling FlightRecorder logs", total=len(entries), unit="file") as step:
+            for name, size in entries:
+                path = f"/logs/download?file={name}"
+                with _each(result, path):
+                    _check_name(name, "/logs")
+                    if _UNASKABLE.search(name):
+                        raise RobotLinkError(f"/logs lists {name!r}, which Road Runner's /logs/download cannot be "
+                                             "asked for (it cuts the query at white space, & and =, and does not "
+                                             "URL-decode): not pulled; rename it on the robot or copy it by USB")
+                    got = robot.get(path)
+                    if got.status != 200:
+                        raise RobotLinkError(f"{path} from {robot.address}: HTTP {got.status} "
+                                             f"({got.body[:120].decode('utf-8', 'replace').strip()})")
+                    note = _size_note(path, robot.address, size, len(got.body))
+                    _keep(result, out / "logs", name, got.body, path, note)
+                step.advance(detail=name)
 
 
 def _size_note(path: str, address: str, listed: int | None, got: int) -> str | None:
@@ -182,25 +237,28 @@ def _size_note(path: str, address: str, listed: int | None, got: int) -> str | N
 
 
 def _motorlab_logs(robot: RobotHttp, result: PullResult, out: Path) -> None:
-    reply = _listed(robot, MOTORLAB_LIST)
-    if reply is None:
-        result.missing.append(f"no motorlab log handler ({MOTORLAB_LIST}: 404): copy ftc/…/motorlab (with "
-                              "MotorlabLogFiles.java) into TeamCode to pull the OpModes' logs over Wi-Fi")
-        return
-    try:
-        listing = json.loads(reply.body)
-        entries = [(str(e["name"]), int(e["bytes"])) for e in listing["files"]]
-    except (ValueError, KeyError, TypeError):
-        raise RobotLinkError(f"{MOTORLAB_LIST} from {robot.address}: not motorlab's JSON file list") from None
-    with progress.task("Pulling motorlab logs", total=len(entries), unit="file") as step:
-        for name, size in entries:
-            _check_name(name, MOTORLAB_LIST)
-            path = f"{MOTORLAB_DOWNLOAD}?file={urllib.parse.quote(name)}"
-            got = robot.get(path)
-            if got.status != 200:
-                raise RobotLinkError(f"{path} from {robot.address}: HTTP {got.status}")
-            _keep(result, out / "motorlab", name, got.body, path, _size_note(path, robot.address, size, len(got.body)))
-            step.advance(detail=name)
+    with _each(result, MOTORLAB_LIST):
+        reply = _listed(robot, MOTORLAB_LIST)
+        if reply is None:
+            result.missing.append(f"no motorlab log handler ({MOTORLAB_LIST}: 404): copy ftc/…/motorlab (with "
+                                  "MotorlabLogFiles.java) into TeamCode to pull the OpModes' logs over Wi-Fi")
+            return
+        try:
+            listing = json.loads(reply.body)
+            entries = [(str(e["name"]), int(e["bytes"])) for e in listing["files"]]
+        except (ValueError, KeyError, TypeError):
+            raise RobotLinkError(f"{MOTORLAB_LIST} from {robot.address}: not motorlab's JSON file list") from None
+        with progress.task("Pulling motorlab logs", total=len(entries), unit="file") as step:
+            for name, size in entries:
+                path = f"{MOTORLAB_DOWNLOAD}?file={urllib.parse.quote(name)}"  # getParameters() decodes it
+                with _each(result, path):
+                    _check_name(name, MOTORLAB_LIST)
+                    got = robot.get(path)
+                    if got.status != 200:
+                        raise RobotLinkError(f"{path} from {robot.address}: HTTP {got.status}")
+                    _keep(result, out / "motorlab", name, got.body, path,
+                          _size_note(path, robot.address, size, len(got.body)))
+                step.advance(detail=name)
 
 
 def _keep(result: PullResult, folder: Path, name: str, data: bytes, source: str, note: str | None = None) -> None:
@@ -245,8 +303,9 @@ def pull(host: str, out: str | os.PathLike[str], *, http_port: int = 8080, timeo
     Raises
     ------
     RobotLinkError
-        No robot at the address, or a robot with none of the three services, or a transfer that broke
-        (what was complete before is kept; nothing half-written is left).
+        No robot at the address, a robot with none of the three services, or nothing pulled because every
+        file failed. A file or route that fails while others arrive is a line of ``failed`` instead
+        (nothing half-written is left).
     """
     folder = Path(out)
     if folder.exists() and not folder.is_dir():
@@ -254,7 +313,17 @@ def pull(host: str, out: str | os.PathLike[str], *, http_port: int = 8080, timeo
     robot = RobotHttp(host, http_port, timeout=timeout)
     result = PullResult(robot.address, folder)
     for part in (_tuning, _flight_logs, _motorlab_logs):
-        part(robot, result, folder)
+        try:
+            part(robot, result, folder)
+        except RobotUnreachable as exc:
+            if not result.files and not result.failed:
+                raise
+            result.failed.append(f"{exc}: the robot went away during the pull; what came is kept, pull again for "
+                                 "the rest")
+            break
+    if not result.files and result.failed:
+        more = f" (and {len(result.failed) - 1} more)" if len(result.failed) > 1 else ""
+        raise RobotLinkError(f"nothing pulled: {result.failed[0]}{more}")
     if not result.files and len(result.missing) == 3:
         raise RobotLinkError(f"{robot.address} answers but serves neither Road Runner's files nor motorlab's logs: "
                              "install Road Runner 1.0 or copy ftc/…/motorlab into TeamCode, run an OpMode, pull again")

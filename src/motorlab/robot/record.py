@@ -5,27 +5,35 @@ Safety, in this order of precedence:
 * nothing starts unless :func:`record` is called with the OpMode's name (the person's explicit
   command); an OpMode already active on the robot is never replaced: the call refuses;
 * :meth:`Recorder.stop` (Ctrl-C, the app's Stop button, the time limit) sends ``STOP_OP_MODE`` at
-  once, from any thread: one WebSocket frame, well within 100 ms;
-* the connection is watched by the Dashboard browser's own heartbeat, ``GET_ROBOT_STATUS``, here every
-  0.2 s; no answer for :data:`LOST_AFTER` s counts as lost: the recorder reconnects (for up to
-  :data:`RECONNECT_FOR` s) only to send ``STOP_OP_MODE``, and says that the robot may still be running
-  when it cannot (an OpMode keeps running on the robot when the laptop's Wi-Fi drops: FTC Dashboard has
-  no watchdog; the Driver Station's STOP is the one that always works).
+  once, from any thread: one WebSocket frame, well within 100 ms, and once only; the stop is then
+  confirmed by reading the robot status back (the OpMode no longer active, or STOPPED) within
+  ``timeout`` s, else the recording says THE OPMODE MAY STILL BE RUNNING. An OpMode that ends by itself
+  is not sent a STOP. Road Runner's ``ForwardRampLogger`` and ``ManualFeedforwardTuner`` never end by
+  themselves (``while (opModeIsActive())``, ``while (!isStopRequested)`` in road-runner-ftc Tuning.kt):
+  ``--seconds`` is what stops them;
+* the connection is watched by the Dashboard browser's own heartbeat, ``GET_ROBOT_STATUS`` (the
+  :class:`~motorlab.robot.dashboard.Dashboard` sends one every second as the browser does; the recorder
+  every 0.2 s for the battery column); no answer for :data:`LOST_AFTER` s counts as lost: the recorder
+  reconnects (for up to :data:`RECONNECT_FOR` s) only to send ``STOP_OP_MODE``, and says that the robot
+  may still be running when it cannot (an OpMode keeps running on the robot when the laptop's Wi-Fi
+  drops: FTC Dashboard has no watchdog; the Driver Station's STOP is the one that always works). A
+  Dashboard disabled while recording swallows STOP (DashboardCore.java:123-126): said the same way.
 
 The log is a CSV motorlab reads (:func:`motorlab.io.read_csv`): ``time_s`` from the packets' own robot
 timestamps (ms, relative to the first packet recorded), ``battery_V`` (the latest robot status's
-``batteryVoltage``, the largest hub input voltage), then one column per numeric telemetry key. A key
+``batteryVoltage``, the largest hub input voltage; NaN when the robot does not know it or its Dashboard is
+older than v0.4.14), then one column per numeric telemetry key. A key
 named as a motorlab column (``voltage_V``, ``position_counts`` …, see :data:`ALIASES`) becomes that
 signal, so ``motorlab analyze feedforward LOG.csv --cpr N`` reads voltage and encoder position; every
-other key is kept as ``x_<key>`` (read, but no signal). Values are written exactly as the robot sent
-them (Dashboard sends every value as a string). An OpMode that sends its own sample time (``time_s``) and
-battery voltage (``battery_V``), as motorlab's own do (ftc/README.md), gives those columns instead of the
-packets' timestamps and the robot status's battery.
+other key is kept as ``x_<key>`` (read, but no signal), its name as the OpMode wrote it (Road Runner's
+``ManualFeedforwardTuner``: ``v0``, ``v1``… and ``vref`` [in/s], ``mode`` a word; see :data:`KNOWN_KEYS`).
+Values are written exactly as the robot sent them (Dashboard sends every value as a string). An OpMode that
+sends its own sample time (``time_s``) and battery voltage (``battery_V``), as motorlab's own do
+(ftc/README.md), gives those columns instead of the packets' timestamps and the robot status's battery.
 """
 
 from __future__ import annotations
 
-import contextlib
 import math
 import re
 import threading
@@ -37,7 +45,7 @@ from typing import Any
 
 from motorlab.io.csv_table import COLUMNS, column_name
 from motorlab.robot import RobotLinkError
-from motorlab.robot.dashboard import Dashboard, is_idle
+from motorlab.robot.dashboard import DISABLED, Dashboard, battery_volts, is_idle
 
 #: Seconds without any message from Dashboard (it answers the 0.2 s status requests) = connection lost.
 LOST_AFTER = 1.0
@@ -49,6 +57,17 @@ STATUS_RATE = 5.0
 MAX_SECONDS = 600.0
 MAX_PACKETS = 100_000
 
+#: Road Runner's ramp loggers (road-runner-ftc Tuning.kt): no Dashboard telemetry; run until STOP, then
+#: save ``/sdcard/RoadRunner/tuning/<type>/<millis>.json`` (``TuningFiles.save``), served at
+#: ``/tuning/<type>/latest.json`` (FileServing.kt).
+RAMP_LOGGERS = {"ForwardRampLogger": "forward-ramp", "LateralRampLogger": "lateral-ramp",
+                "AngularRampLogger": "angular-ramp"}
+#: Telemetry keys of Road Runner's tuning OpModes, what they hold (road-runner-ftc Tuning.kt:
+#: ManualFeedforwardTuner, lines 554, 580, 594), written into the log's header.
+KNOWN_KEYS = {"vref": "Road Runner ManualFeedforwardTuner: the motion profile's velocity [in/s]",
+              "mode": "Road Runner ManualFeedforwardTuner: TUNING_MODE or DRIVER_MODE (a word)"}
+_ENCODER_VELOCITY = re.compile(r"v(\d+)")
+
 #: Telemetry key (lower case, spaces and dashes as underscores) -> motorlab column.
 ALIASES = {
     "voltage": "voltage_V", "volts": "voltage_V", "applied_voltage": "voltage_V", "voltage_v": "voltage_V",
@@ -58,6 +77,17 @@ ALIASES = {
     "current": "current_A", "current_a": "current_A",
     "battery": "battery_V", "battery_voltage": "battery_V",
 }
+
+
+def key_note(opmode: str, key: str) -> str:
+    """What a telemetry key of a known OpMode holds (Road Runner's ManualFeedforwardTuner), or ""."""
+    if opmode != "ManualFeedforwardTuner":
+        return ""
+    if key in KNOWN_KEYS:
+        return KNOWN_KEYS[key]
+    m = _ENCODER_VELOCITY.fullmatch(key)
+    return (f"Road Runner ManualFeedforwardTuner: forward encoder {m.group(1)}'s velocity × inPerTick [in/s]"
+            if m else "")
 
 
 def column_for(key: str) -> str:
@@ -87,6 +117,7 @@ class Recording:
     stop_reason: str = ""
     stop_reason_note: str = ""
     still_running: bool = False
+    stop_confirmed: bool = False  # the robot's status read back after STOP shows the OpMode stopped
 
     def numeric_keys(self) -> list[str]:
         return [k for k in self.keys if k not in self.skipped]
@@ -108,19 +139,37 @@ class Recorder:
         self._battery = float("nan")
         self._recording = False
         self._seen_active = False
+        self._stop_sent = False
+        self._stop_lock = threading.Lock()
         self.dash: Dashboard | None = None
         self.state = "connecting"
 
-    def stop(self, reason: str = "stopped by the user") -> None:
-        """End the run now: ``STOP_OP_MODE`` is sent from this thread at once (if started)."""
+    def stop(self, reason: str = "stopped by the user", *, send: bool = True) -> None:
+        """End the run now: ``STOP_OP_MODE`` is sent from this thread at once (if started, and not sent
+        before); ``send=False`` when the OpMode already ended by itself."""
         with self._lock:
             if not self._stop_reason:
                 self._stop_reason = reason
             started = self._recording
         self._stop.set()
-        if started and self.dash is not None:
-            with contextlib.suppress(RobotLinkError):  # the run loop sees the loss and reconnects to stop it
-                self.dash.stop_op_mode()
+        if started and send:
+            self._send_stop()
+
+    def _send_stop(self) -> bool:
+        """Send ``STOP_OP_MODE`` once per recording; True when it went out (now or before). Its own lock, not
+        the data's: a reader of the telemetry (the app's live view) never delays a stop."""
+        with self._stop_lock:
+            if self._stop_sent:
+                return True
+            dash = self.dash
+            if dash is None:
+                return False
+            try:  # the run loop sees a loss and reconnects to stop it
+                dash.stop_op_mode()
+            except RobotLinkError:
+                return False
+            self._stop_sent = True
+            return True
 
     def _on_telemetry(self, packets: list[dict[str, Any]]) -> None:
         if not self._recording:
@@ -155,7 +204,7 @@ class Recorder:
         if not is_idle(status):
             raise RobotLinkError(f"an OpMode is already active on the robot ({status.get('activeOpMode')}, "
                                  f"{status.get('activeOpModeStatus')}): stop it on the Driver Station first")
-        self._battery = float(status.get("batteryVoltage", math.nan))
+        self._battery = battery_volts(status)
         self.state = "init"
         dash.init_op_mode(self.data.opmode)
         self._seen_active = self._wait_status(dash, lambda s: s.get("activeOpMode") == self.data.opmode,
@@ -163,7 +212,8 @@ class Recorder:
         with self._lock:
             self._recording = not self._stop.is_set()
         if not self._recording:
-            dash.stop_op_mode()
+            dash.stop_op_mode()  # stopped while initialising: nothing started, the INIT ends
+            self._stop_sent = True
             return
         self.state = "running"
         dash.start_op_mode()
@@ -199,14 +249,19 @@ class Recorder:
             if dash.closed or time.monotonic() - dash.last_message > LOST_AFTER:
                 raise _Lost(dash.closed or f"no answer from {dash.address} for {LOST_AFTER:g} s")
             try:
-                dash.send({"type": "GET_ROBOT_STATUS"})
+                dash.request_status()
             except RobotLinkError as exc:
                 raise _Lost(str(exc)) from None
-            latest = dash._latest.get("RECEIVE_ROBOT_STATUS", (0, {}))[1].get("status") or {}
-            if isinstance(latest, dict):
-                self._battery = float(latest.get("batteryVoltage", self._battery))
+            latest = dash.latest_status()
+            if latest:
+                self._battery = battery_volts(latest) if "batteryVoltage" in latest else self._battery
+                if latest.get("enabled") is False:
+                    self.data.still_running = True
+                    self.stop(f"{DISABLED.split(':')[0]} while recording: it ignores STOP_OP_MODE; THE OPMODE MAY "
+                              "STILL BE RUNNING, press STOP on the Driver Station", send=False)
+                    return
                 if self._recording and self._seen_active and latest.get("activeOpMode") not in (None, self.data.opmode):
-                    self.stop("the OpMode ended on the robot")
+                    self.stop("the OpMode ended on the robot", send=False)
                     return
 
     def _stop_after_loss(self, why: str) -> None:
@@ -233,20 +288,17 @@ class Recorder:
             self._start(dash)
             if self._recording:
                 self._watch(dash)
+            self._final_stop(dash)
             if not self.data.stop_reason:
                 self.data.stop_reason = self._stop_reason or "stopped"
             if self.data.stop_reason_note:
                 self.data.stop_reason += f" ({self.data.stop_reason_note})"
-            self._final_stop(dash)
         except _Lost as lost:
             self._recording = False
             self._stop_after_loss(str(lost))
         except BaseException:
-            if self._recording:  # Ctrl-C or a bug: stop the robot before anything else
-                try:
-                    dash.stop_op_mode()
-                except RobotLinkError:
-                    self._stop_after_loss("the connection closed")
+            if self._recording and not self._send_stop():  # Ctrl-C or a bug: stop the robot before anything else
+                self._stop_after_loss("the connection closed")
             raise
         finally:
             self._recording = False
@@ -255,12 +307,39 @@ class Recorder:
         return self.data
 
     def _final_stop(self, dash: Dashboard) -> None:
+        """Send STOP if it was not sent yet (once), then confirm it by reading the status back."""
         if not self._recording:
             return
-        dash.stop_op_mode()
+        ended_by_itself = self._stop_reason == "the OpMode ended on the robot"
+        if not self.data.still_running and not ended_by_itself:
+            if not self._send_stop():
+                raise _Lost(dash.closed or "STOP_OP_MODE could not be sent")
+            self._confirm_stop(dash)
+        else:
+            self.data.stop_confirmed = ended_by_itself
         time.sleep(0.25)  # the last telemetry batch (sent every ~100 ms) arrives
         with self._lock:
             self._recording = False
+
+    def _confirm_stop(self, dash: Dashboard) -> None:
+        """The robot status after STOP: the OpMode no longer active, or STOPPED (``onOpModePostStop``, then
+        the SDK's default OpMode ``$Stop$Robot$``); else the recording says it may still run."""
+        deadline = time.monotonic() + self.timeout
+        status: dict[str, Any] = {}
+        while time.monotonic() < deadline:
+            try:
+                status = dash.status(timeout=max(0.1, deadline - time.monotonic()))
+            except RobotLinkError:
+                break
+            if status.get("activeOpMode") != self.data.opmode or status.get("activeOpModeStatus") == "STOPPED":
+                self.data.stop_confirmed = True
+                return
+            time.sleep(0.02)
+        self.data.still_running = True
+        shown = f"{status.get('activeOpMode')} {status.get('activeOpModeStatus')}" if status else "no status"
+        self.data.stop_reason_note = " ".join(filter(None, [
+            self.data.stop_reason_note, f"STOP sent but the robot still shows {shown} after {self.timeout:g} s: "
+            "THE OPMODE MAY STILL BE RUNNING, press STOP on the Driver Station"]))
 
 
 class _Lost(Exception):
@@ -278,8 +357,17 @@ def write_log(data: Recording, path: str | Path, *, host: str = "", cpr: float |
     """Write the recording as a CSV motorlab reads (temporary file + rename); a summary of what was written."""
     from motorlab.io._output import write_text_atomic
 
-    keys = data.numeric_keys()
+    # Dashboard sends a packet's keys sorted (a SortedMap: TelemetryPacket.java): the signals motorlab reads
+    # come first, in its own column order, then the other keys as they came.
+    order = list(COLUMNS)
+    keys = sorted(data.numeric_keys(),
+                  key=lambda k: order.index(column_for(k)) if column_for(k) in order else len(order))
     if not data.rows:
+        if data.opmode in RAMP_LOGGERS:
+            kind = RAMP_LOGGERS[data.opmode]
+            raise RobotLinkError(f"{data.opmode} sends no telemetry to FTC Dashboard ({data.stop_reason}): it saved "
+                                 f"its ramp file on the robot when stopped; bring it with motorlab robot pull "
+                                 f"(/tuning/{kind}/latest.json), then motorlab analyze feedforward FILE --cpr N")
         raise RobotLinkError(f"{data.opmode} sent no telemetry to FTC Dashboard ({data.stop_reason}): the OpMode must "
                              "send packets (FtcDashboard.getInstance().sendTelemetryPacket, or MultipleTelemetry)")
     if not keys:
@@ -290,15 +378,18 @@ def write_log(data: Recording, path: str | Path, *, host: str = "", cpr: float |
     shown = [k for k in keys if k not in (clock, own_battery)]
     columns = _columns(shown)
     t0 = data.rows[0][0]
+    confirmed = ("yes: the robot's status showed the OpMode stopped" if data.stop_confirmed
+                 else "NO: the OpMode may still be running" if data.still_running else "not checked")
     lines = [f"# source: FTC Dashboard {host}", f"# opmode: {data.opmode}", f"# stop_reason: {data.stop_reason}",
-             f"# robot_time_ms_at_zero: {t0}"]
+             f"# stop_confirmed: {confirmed}", f"# robot_time_ms_at_zero: {t0}"]
     if cpr is not None:
         lines.append(f"# cpr: {cpr:g}")
     if clock is not None:
         lines.append(f"# column time_s: telemetry key {clock!r} (the OpMode's clock, from its first sample)")
     if own_battery is not None:
         lines.append(f"# column battery_V: telemetry key {own_battery!r}")
-    lines += [f"# column {col}: telemetry key {key!r}" for key, col in zip(shown, columns, strict=True)]
+    lines += [f"# column {col}: telemetry key {key!r}" + (f" ({note})" if (note := key_note(data.opmode, key)) else "")
+              for key, col in zip(shown, columns, strict=True)]
     lines.append(",".join(["time_s", "battery_V", *columns]))
     written = 0
     c0: float | None = None
@@ -320,7 +411,8 @@ def write_log(data: Recording, path: str | Path, *, host: str = "", cpr: float |
     named = dict(zip(shown, columns, strict=True)) | {k: c for k, c in ((clock, "time_s"), (own_battery, "battery_V"))
                                                        if k is not None}
     return {"rows": written, "columns": named,
-            "skipped": dict(data.skipped), "stop_reason": data.stop_reason, "still_running": data.still_running}
+            "skipped": dict(data.skipped), "stop_reason": data.stop_reason, "still_running": data.still_running,
+            "stop_confirmed": data.stop_confirmed}
 
 
 def _own_time_and_battery(keys: list[str]) -> tuple[str | None, str | None, float]:
@@ -343,3 +435,39 @@ def _columns(keys: list[str]) -> list[str]:
             col = f"x_{col.removeprefix('x_')}_"
         out.append(col)
     return out
+
+
+def latest_ramp_name(host: str, http_port: int, kind: str, *, timeout: float = 5.0) -> str | None:
+    """The name of the robot's newest ``kind`` ramp file (``X-Filename`` of ``/tuning/<kind>/latest.json``),
+    or None (none yet, or no Road Runner web routes)."""
+    from motorlab.robot.http import RobotHttp
+
+    try:
+        reply = RobotHttp(host, http_port, timeout=timeout).get(f"/tuning/{kind}/latest.json")
+    except RobotLinkError:
+        return None
+    return reply.headers.get("x-filename") if reply.status == 200 else None
+
+
+def fetch_ramp_file(host: str, http_port: int, kind: str, before: str | None, folder: Path, *,
+                    timeout: float = 5.0) -> Path:
+    """The ramp file a Road Runner ramp logger saved when it stopped (a newer name than ``before``), written
+    byte for byte into ``folder`` under the robot's name; :class:`RobotLinkError` when none came within
+    ``timeout`` s (``TuningFiles.save`` runs after the OpMode's loop ends)."""
+    from motorlab.robot.http import RobotHttp
+    from motorlab.robot.pull import _check_name, write_atomic
+
+    robot = RobotHttp(host, http_port, timeout=timeout)
+    path = f"/tuning/{kind}/latest.json"
+    deadline = time.monotonic() + timeout
+    while True:
+        reply = robot.get(path)
+        name = reply.headers.get("x-filename") if reply.status == 200 else None
+        if name and name != before:
+            _check_name(name, path)
+            write_atomic(folder, name, reply.body)
+            return folder / name
+        if time.monotonic() > deadline:
+            raise RobotLinkError(f"{path} from {robot.address}: no new ramp file within {timeout:g} s of the stop "
+                                 f"(HTTP {reply.status}): pull it later with motorlab robot pull")
+        time.sleep(0.2)
