@@ -23,7 +23,7 @@ import pytest
 from motorlab.analyses.spindown import spindown
 from motorlab.feedforward import feedforward
 from motorlab.io import read_csv, read_ftc_log
-from motorlab.robot.emulator import EmulatedRobot
+from motorlab.robot.emulator import EmulatedRobot, OpModeSpec
 from motorlab.robot.emulator_jvm import JvmOpMode
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -264,7 +264,7 @@ def _sim_robot(classes: Path, out: Path, seconds: float, **options: object) -> t
     """An emulated robot whose "motorlab: quasistatic ramp" is the real OpMode in the JVM, in real time."""
     args = [str(JAVA), "-cp", str(classes), SIM, f"out={out}", "realtime=yes", "dashboard=yes", "stdin_stop=yes",
             *(f"{k}={v}" for k, v in options.items())]
-    robot = EmulatedRobot(opmodes=[{"name": "motorlab: quasistatic ramp", "group": "motorlab"}],
+    robot = EmulatedRobot(opmodes=[OpModeSpec("motorlab: quasistatic ramp", "motorlab", "quasistatic_ramp")],
                           lifetime=seconds + 30)
     opmode = JvmOpMode(args)
     robot.external_opmode = opmode
