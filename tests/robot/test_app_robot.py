@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import copy
 import json
+import re
 import time
 import warnings
 from pathlib import Path
@@ -20,9 +21,18 @@ from motorlab.robot.emulator import EmulatedRobot, RobotFiles
 from motorlab.ui.app import create_app
 
 
+def page_client() -> TestClient:
+    """A client of a new app holding the robot token its page holds (as the page's own requests do)."""
+    client = TestClient(create_app(host="127.0.0.1", port=8765), base_url="http://127.0.0.1:8765")
+    token = re.search(r'name="motorlab-token" content="([^"]+)"', client.get("/").text)
+    assert token
+    client.headers["X-Motorlab-Token"] = token.group(1)
+    return client
+
+
 @pytest.fixture
 def client() -> TestClient:
-    return TestClient(create_app(host="127.0.0.1", port=8765), base_url="http://127.0.0.1:8765")
+    return page_client()
 
 
 def test_connect_to_the_robot_pulls_and_serves_the_files(client: TestClient, robot: EmulatedRobot,
@@ -109,7 +119,7 @@ def test_stopped_is_said_only_once_the_log_is_written(robot: EmulatedRobot, monk
         return real(*args, **kwargs)  # type: ignore[arg-type]
 
     monkeypatch.setattr(record, "write_log", slow)
-    client = TestClient(create_app(host="127.0.0.1", port=8765), base_url="http://127.0.0.1:8765")
+    client = page_client()
     fields = {"host": "127.0.0.1", "dashboard-port": str(robot.dashboard_port), "opmode": "motorlab: quasistatic ramp",
               "seconds": "20"}
     start = client.post("/api/robot/record/start", data=fields)
