@@ -1,7 +1,7 @@
 // The robot link (issue 24, docs/robot.md): bring the robot's files home, record a run with an always-visible
 // Stop, send gains to the robot. Registers its own task and steps (docs/ui.md, "The page's code").
 import { el } from "../dom.js";
-import { getJson, post } from "../api.js";
+import { getJson, post, send } from "../api.js";
 import { save, state, task as taskState } from "../store.js";
 import { registerStep, registerTask } from "../tasks.js";
 import { addFiles } from "./fit.js";
@@ -52,7 +52,7 @@ registerStep("robot-pull", {
       try {
         const answer = await post("api/robot/pull", form());
         const files = [];
-        for (const f of answer.files) files.push(new File([await (await fetch(f.url)).blob()], f.name));
+        for (const f of answer.files) files.push(new File([await (await send(f.url)).blob()], f.name));
         const scratch = { files: [], options: {}, runs: {} };
         if (files.length) await addFiles(scratch, files);
         const tasks = new Set();
@@ -116,7 +116,7 @@ registerStep("robot-record", {
         if (s.still_running) after.append(el("p", { class: "error", role: "alert", text: "The OpMode may still be running: press STOP on the Driver Station." }));
         if (s.error) after.append(el("p", { class: "error", role: "alert", text: s.error }));
         if (s.log) after.append(el("button", { class: "primary", type: "button", text: "Fit this run", onclick: async () => {
-          const file = new File([await (await fetch(s.log)).blob()], "run.csv");
+          const file = new File([await (await send(s.log)).blob()], "run.csv");
           await addFiles(taskState("mechanism"), [file]); ctx.goTask("mechanism", "fit");
         } }));
       }
