@@ -113,14 +113,18 @@ def test_every_state_changing_route_refuses_a_foreign_page(watched: list[str], r
     token = page_token(client)
     for method, path in routes:
         for headers, named in FOREIGN:
-            answer = client.request(method, path, data=robot_form(robot), headers={**headers, "X-Motorlab-Token": token},
+            answer = client.request(method, path, data=robot_form(robot),
+                                    headers={**headers, "X-Motorlab-Token": token},
                                     files={"file": ("run.csv", b"time_s,voltage_V\n0,1\n"),
                                            "params": ("fit.json", b"{}")})
             assert answer.status_code == 403, (method, path, headers, answer.text)
             message = answer.json()["error"]
-            assert named in message and "\n" not in message and "only the motorlab page" in message
+            assert named in message
+            assert "\n" not in message
+            assert "only the motorlab page" in message
     assert watched == []  # no command, no worker, no upload folder
-    assert robot.received == [] and robot.http_requests == []  # the robot heard nothing
+    assert robot.received == []
+    assert robot.http_requests == []
     assert not any(tmp_path.iterdir())  # nothing written
     assert client.get("/api/robot/record", headers={"X-Motorlab-Token": token}).json()["state"] == "idle"
 
@@ -130,7 +134,8 @@ def test_the_robot_routes_need_the_page_token(robot: EmulatedRobot) -> None:
     token = page_token(client)
     for headers in ({}, {"X-Motorlab-Token": "guessed"}, {"X-Motorlab-Token": token[:-1]}):
         answer = client.post("/api/robot/record/start", data=robot_form(robot), headers={"Origin": APP, **headers})
-        assert answer.status_code == 403 and "reload the page" in answer.json()["error"]
+        assert answer.status_code == 403
+        assert "reload the page" in answer.json()["error"]
         assert client.get("/api/robot/record", headers=headers).status_code == 403
     assert robot.received == []
     # Another launch has another token: a page of the previous one cannot drive this one.
@@ -164,7 +169,8 @@ def test_every_interface_compares_the_origin_with_the_host() -> None:
     still be the Host the request was sent to."""
     client = TestClient(create_app(host="0.0.0.0", port=8765, token="t"), base_url="http://192.168.1.5:8765")
     refused = client.post("/api/tune?token=t", headers={"Origin": "http://192.168.1.9:8765"})
-    assert refused.status_code == 403 and "192.168.1.9" in refused.json()["error"]
+    assert refused.status_code == 403
+    assert "192.168.1.9" in refused.json()["error"]
 
 
 # ---- the same in a real browser ---------------------------------------------------------------------------
@@ -212,7 +218,8 @@ def test_cross_site_browser(page: Any, foreign_site: str, robot: EmulatedRobot, 
     assert "127.0.0.1:" in page.d.find_element("tag name", "body").text
     time.sleep(0.5)  # anything the app had started would have reached the robot by now
     assert robot.received == [], robot.received  # the emulated robot heard nothing: no INIT, no START
-    assert robot.status == "INIT" and robot.active == "$Stop$Robot$"
+    assert robot.status == "INIT"
+    assert robot.active == "$Stop$Robot$"
     # The app's own page still works: it lists the OpModes through the same guard.
     page.open(browser.LAPTOP)
     page.click("Connect to the robot")

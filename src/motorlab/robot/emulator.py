@@ -156,7 +156,8 @@ class EmulatedRobot:
         self.plant = plant or Plant()
         self.opmodes = opmodes or [{"name": "motorlab: quasistatic ramp", "group": "motorlab"},
                                    {"name": "ForwardRampLogger", "group": "RoadRunner"},
-                                   {"name": "LocalizationTest", "group": "RoadRunner"}]
+                                   {"name": "LocalizationTest", "group": "RoadRunner"},
+                                   {"name": "ManualFeedforwardTuner", "group": "RoadRunner"}]
         self.config = config_tree or default_config_tree()
         self.baseline = copy.deepcopy(self.config)
         self.received: list[dict[str, Any]] = []  # every Dashboard message, in order
@@ -321,7 +322,11 @@ class EmulatedRobot:
 
     def _telemetry(self, run: int) -> None:
         """The running OpMode: a packet per loop, sent in batches every 100 ms, until stopped."""
-        samples = self.plant.run(min(self.lifetime, self.plant.duration))
+        from motorlab.robot import emulator_drive  # the drive under ManualFeedforwardTuner (issue 32, item 7)
+
+        samples = emulator_drive.packets(self, self.active) or [
+            (t, {"voltage": f"{volts:.4f}", "position": f"{x:.0f}", "velocity": f"{v:.3f}", "state": "ramping"})
+            for t, volts, x, v in self.plant.run(min(self.lifetime, self.plant.duration))]
         epoch = int(time.time() * 1000)
         start = time.monotonic()
         sent = 0
@@ -333,10 +338,8 @@ class EmulatedRobot:
             now = time.monotonic() - start
             batch = []
             while sent < len(samples) and samples[sent][0] <= now:
-                t, volts, x, v = samples[sent]
-                batch.append({"timestamp": epoch + round(t * 1000),
-                              "data": {"voltage": f"{volts:.4f}", "position": f"{x:.0f}", "velocity": f"{v:.3f}",
-                                       "state": "ramping"},
+                t, data = samples[sent]
+                batch.append({"timestamp": epoch + round(t * 1000), "data": data,
                               "log": [], "field": {"ops": []}, "fieldOverlay": {"ops": []}})
                 sent += 1
             self.broadcast({"type": "RECEIVE_TELEMETRY", "telemetry": batch})
