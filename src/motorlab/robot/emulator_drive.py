@@ -24,6 +24,7 @@ value written during a run acts from the next run here).
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
 from typing import TYPE_CHECKING, Any
 
 from motorlab.robot.config import leaves
@@ -37,8 +38,8 @@ NAME = "ManualFeedforwardTuner"
 DISTANCE = 64.0
 #: Forward encoders of a mecanum drive (leftFront, leftBack, rightBack, rightFront): telemetry v0…v3.
 ENCODERS = 4
-#: The longest run generated [s]: the OpMode runs until STOP; the emulator's lifetime ends it anyway.
-LONGEST = 120.0
+#: The longest run [s]: the real OpMode runs until STOP; this one ends by itself after it.
+LONGEST = 600.0
 
 
 def _legs(distance: float, max_vel: float, min_accel: float, max_accel: float) -> tuple[float, float, float, float]:
@@ -71,42 +72,66 @@ def duration(distance: float, max_vel: float, min_accel: float, max_accel: float
 
 
 def _motor_step(v: float, volts: float, plant: Plant, dt: float) -> float:
-    """One Euler step of kA·dv/dt = V − kS·sgn(v) − kV·v [ticks/s], with stiction and no reversal by friction."""
+    """Velocity [ticks/s] after ``dt`` at ``volts`` from ``v``: kA·dv/dt = V − kS·sgn(v) − kV·v solved exactly.
+
+    At rest the motor stays put while |V| ≤ kS (stiction); friction stops it, never reverses it: a solution
+    that would cross zero within the step ends at rest.
+    """
     if v == 0.0 and abs(volts) <= plant.kS:
         return 0.0
     direction = math.copysign(1.0, v if v != 0.0 else volts)
-    new = v + (volts - plant.kS * direction - plant.kV * v) / plant.kA * dt
+    final = (volts - plant.kS * direction) / plant.kV  # where the velocity heads, with this sign of friction
+    new = final + (v - final) * math.exp(-plant.kV / plant.kA * dt)
     return 0.0 if new * direction < 0 else new
 
 
-def run(plant: Plant, params: dict[str, float], *, battery: float,
-        seconds: float) -> list[tuple[float, dict[str, str]]]:
+class Rows:
+    """The OpMode's telemetry rows, computed as the emulator reaches them (a list that fills itself in order).
+
+    The emulator sends what is due every 100 ms; computing a minute of loops at START instead would hold
+    the interpreter long enough for the emulator to miss the client's heartbeats on a busy machine.
+    """
+
+    def __init__(self, rows: Iterator[tuple[float, dict[str, str]]], count: int) -> None:
+        self._rows, self._count, self._done = rows, count, list[tuple[float, dict[str, str]]]()
+
+    def __len__(self) -> int:
+        return self._count
+
+    def __getitem__(self, k: int) -> tuple[float, dict[str, str]]:
+        if not 0 <= k < self._count:
+            raise IndexError(k)
+        while len(self._done) <= k:
+            self._done.append(next(self._rows))
+        return self._done[k]
+
+
+def run(plant: Plant, params: dict[str, float], *, battery: float, seconds: float) -> Rows:
     """(t [s], telemetry data) every loop of ``ManualFeedforwardTuner`` with ``params`` (``MecanumDrive.PARAMS``'s
     leaves by name: kS, kV, kA, inPerTick, maxWheelVel, minProfileAccel, maxProfileAccel) on ``plant``."""
     per_tick = params["inPerTick"] or 1.0
     shape = (DISTANCE, params["maxWheelVel"], params["minProfileAccel"], params["maxProfileAccel"])
     leg = duration(*shape)
-    steps = max(1, round(plant.period / 1e-3))
-    dt = plant.period / steps
-    v = 0.0  # the drive's true velocity [ticks/s]
-    out = []
-    for k in range(int(seconds / plant.period) + 1):
-        t = k * plant.period
-        forwards = int(t // leg) % 2 == 0
-        ref, acc = trapezoid(t % leg, *shape)
-        ref, acc = (ref, acc) if forwards else (-ref, -acc)
-        volts = (params["kS"] * (math.copysign(1.0, ref) if ref else 0.0)
-                 + params["kV"] / per_tick * ref + params["kA"] / per_tick * acc)
-        power = max(-1.0, min(1.0, volts / battery))  # setDrivePowers divides by max(1, |power|)
-        measured = per_tick * round(v)  # the encoder's velocity: whole ticks per second
-        data = {"mode": "TUNING_MODE", **{f"v{i}": repr(measured) for i in range(ENCODERS)}, "vref": repr(ref)}
-        out.append((t, data))
-        for _ in range(steps):
-            v = _motor_step(v, power * battery, plant, dt)
-    return out
+    count = int(seconds / plant.period) + 1
+
+    def rows() -> Iterator[tuple[float, dict[str, str]]]:
+        v = 0.0  # the drive's true velocity [ticks/s]
+        for k in range(count):
+            t = k * plant.period
+            forwards = int(t // leg) % 2 == 0
+            ref, acc = trapezoid(t % leg, *shape)
+            ref, acc = (ref, acc) if forwards else (-ref, -acc)
+            volts = (params["kS"] * (math.copysign(1.0, ref) if ref else 0.0)
+                     + params["kV"] / per_tick * ref + params["kA"] / per_tick * acc)
+            power = max(-1.0, min(1.0, volts / battery))  # setDrivePowers divides by max(1, |power|)
+            measured = repr(per_tick * round(v))  # the encoder's velocity: whole ticks per second
+            yield t, {"mode": "TUNING_MODE", **{f"v{i}": measured for i in range(ENCODERS)}, "vref": repr(ref)}
+            v = _motor_step(v, power * battery, plant, plant.period)
+
+    return Rows(rows(), count)
 
 
-def packets(robot: EmulatedRobot, opmode: str) -> list[tuple[float, dict[str, str]]] | None:
+def packets(robot: EmulatedRobot, opmode: str) -> Rows | None:
     """The telemetry of ``opmode`` when it is this drive's OpMode (None for another: the emulator's ramp)."""
     if opmode != NAME:
         return None
