@@ -133,7 +133,7 @@ registerStep("robot-record", {
     const select = el("select", { id: "robot-opmode" });
     const seconds = el("input", { id: "robot-seconds", value: "20", inputmode: "decimal" });
     const cpr = el("input", { id: "robot-cpr", value: state.shared.cpr || "", inputmode: "decimal", onchange: (e) => { state.shared.cpr = e.target.value.trim(); save(); } });
-    const live = el("pre", { class: "live", "aria-live": "polite" });
+    const live = el("pre", { class: "live", "aria-live": "polite", style: "white-space:pre-wrap;overflow-wrap:anywhere" });
     const bar = stopBar();
     const after = el("div", {});
     const load = el("button", { type: "button", text: "List the robot's OpModes" });
@@ -185,7 +185,7 @@ function checkFigure(label, c) {
   const figure = el("figure", { class: "plot", style: "min-width:0;margin:0" }, el("figcaption", { text: `${label}: RMS tracking error ${c.rms.toPrecision(3)} ${c.unit}` }), div);
   const layout = { height: 300, margin: { t: 16, r: 12, b: 44, l: 58 }, font: { size: 12, family: "system-ui, sans-serif" },
     legend: { orientation: "h", y: -0.3 }, xaxis: { title: { text: "time in s" } }, yaxis: { title: { text: `velocity in ${c.unit}` } } };
-  const traces = [{ x: c.time, y: c.target, name: "target (vref)", mode: "lines" }, { x: c.time, y: c.measured, name: "measured", mode: "lines" }];
+  const traces = [{ x: c.time, y: c.target, name: "target (vref)", mode: "lines", line: { dash: "dash", width: 3 } }, { x: c.time, y: c.measured, name: "measured", mode: "lines" }];
   if (window.Plotly) window.Plotly.react(div, traces, layout, { responsive: true, displaylogo: false });
   return figure;
 }
@@ -219,7 +219,7 @@ registerStep("robot-push", {
     };
     const fail = (e) => out.append(el("p", { class: "error", role: "alert", text: e.message }));
     const bar = stopBar();
-    const live = el("pre", { class: "live", "aria-live": "polite" });
+    const live = el("pre", { class: "live", "aria-live": "polite", style: "white-space:pre-wrap;overflow-wrap:anywhere" });
     const status = el("p", { class: "status", role: "status" });
     const compare = el("div", {});
     const opmode = el("input", { id: "robot-check-opmode", value: "ManualFeedforwardTuner" });
@@ -247,7 +247,7 @@ registerStep("robot-push", {
           }
           try {
             await post("api/robot/push/apply", f);
-            out.append(el("p", { role: "status", text: "Written, read back and checked. " + plan.lifetime }), el("details", {}, el("summary", { text: "The code to paste into your robot code" }), el("pre", { style: "overflow-x:auto" }, el("code", { text: plan.snippet }))),
+            out.append(el("p", { role: "status", text: `Written, read back and checked. ${plan.lifetime.charAt(0).toUpperCase()}${plan.lifetime.slice(1)}.` }), el("details", {}, el("summary", { text: "The code to paste into your robot code" }), el("pre", { style: "overflow-x:auto" }, el("code", { text: plan.snippet }))),
               el("p", { text: `The old values are kept: ${plan.changes.map((c) => `${c.path.split(".").pop()} ${c.old}`).join(", ")}.` }),
               el("button", { type: "button", text: "Put the old values back", onclick: async () => {
                 try { await post("api/robot/push/restore", form()); out.append(el("p", { role: "status", text: "The old values are back on the robot." })); } catch (e) { fail(e); }
