@@ -207,3 +207,25 @@ def test_a_check_needs_a_verification_opmode(client: TestClient, robot: Emulated
         time.sleep(0.1)
     assert "ManualFeedforwardTuner" in state["error"]
     assert client.get("/api/robot/checks").json()["before"] is None
+
+
+def test_stop_works_whatever_started_the_opmode(robot: EmulatedRobot) -> None:
+    """An OpMode started elsewhere (the Driver Station; a page of the app before it restarted): the page's Stop
+    sends STOP_OP_MODE to the robot it names, with no token needed (a stale page must still stop the robot)."""
+    from motorlab.robot.dashboard import Dashboard
+
+    with Dashboard("127.0.0.1", robot.dashboard_port) as dash:
+        dash.init_op_mode("motorlab: quasistatic ramp")
+        dash.status()
+        dash.start_op_mode()
+        dash.status()
+    assert robot.status == "RUNNING"
+    fresh = TestClient(create_app(host="127.0.0.1", port=8765), base_url="http://127.0.0.1:8765")  # no token
+    stop = fresh.post("/api/robot/record/stop", data={"host": "127.0.0.1", "dashboard-port": str(robot.dashboard_port)},
+                      headers={"Origin": "http://127.0.0.1:8765"})
+    assert stop.status_code == 200, stop.text
+    assert stop.json()["sent"] == "STOP_OP_MODE"
+    assert robot.active == STOP_TAG
+    gone = fresh.post("/api/robot/record/stop", data={"host": "127.0.0.1", "dashboard-port": "1"})
+    assert gone.status_code == 400
+    assert "press STOP on the Driver Station" in gone.json()["error"]

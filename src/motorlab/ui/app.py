@@ -377,6 +377,9 @@ CSP = (
 SAFE_METHODS = ("GET", "HEAD", "OPTIONS")
 #: The header in which the page sends the robot token (``<meta name="motorlab-token">`` of the page).
 ROBOT_TOKEN_HEADER = "x-motorlab-token"
+#: The one robot route without the token (still only from the app's page): Stop, which must work from a page
+#: left open while the app restarted.
+ROBOT_STOP = "/api/robot/record/stop"
 
 
 class Guard:
@@ -388,8 +391,8 @@ class Guard:
     ``?token=`` or in the cookie the page gets with it. A POST (any method but GET, HEAD, OPTIONS) whose
     ``Origin`` is not ``scheme://Host`` of this request (the Host checked above), or without Origin whose
     ``Sec-Fetch-Site`` is not ``same-origin`` or ``none``, is refused: another web page sent it (a
-    cross-site form or ``fetch``). Neither header (curl, a script) passes. ``/api/robot/*`` also needs
-    ``X-Motorlab-Token``, random at each launch and held only by the served page.
+    cross-site form or ``fetch``). Neither header (curl, a script) passes. ``/api/robot/*`` but Stop also
+    needs ``X-Motorlab-Token``, random at each launch and held only by the served page.
     """
 
     def __init__(self, app: ASGIApp, *, hosts: set[str] | None, token: str | None, max_body: int,
@@ -444,7 +447,7 @@ class Guard:
             await self._refuse(send, 403, f"refused: {sender} asked this app to act; only the motorlab page "
                                           "itself can, so use the app in its own tab")
             return
-        if scope["path"].startswith("/api/robot/") and not hmac.compare_digest(
+        if scope["path"].startswith("/api/robot/") and scope["path"] != ROBOT_STOP and not hmac.compare_digest(
                 headers.get(ROBOT_TOKEN_HEADER.encode(), b""), self.robot_token.encode()):
             await self._refuse(send, 403, "the robot link answers only the page this app served: reload the page "
                                           "(its robot token changes each time the app starts)")

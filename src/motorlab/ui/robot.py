@@ -9,7 +9,9 @@ Routes (mounted by :func:`motorlab.ui.app.create_app`); fields named as the CLI'
 * ``POST /api/robot/record/start`` (``host``, ``dashboard-port``, ``opmode``, ``seconds``, ``cpr``): starts
   the OpMode (this request is the person's Start); one recording at a time;
 * ``GET /api/robot/record``: the recording's state, rows, keys and the latest points for the live plot;
-* ``POST /api/robot/record/stop``: sends ``STOP_OP_MODE`` at once (the page's always-visible Stop);
+* ``POST /api/robot/record/stop``: sends ``STOP_OP_MODE`` at once (the page's always-visible Stop): through
+  the recording when one runs, else to the robot the form names (``host``, ``dashboard-port``); the one
+  robot route that needs no token (a page left open across a restart of the app must still stop the robot);
 * ``GET /api/robot/record/log``: the CSV, once stopped;
 * a recording started with ``check`` = ``before`` or ``after`` is a verification run (Road Runner's
   ``ManualFeedforwardTuner``): the drive's gains on the robot are read first, and the run's tracking error
@@ -212,9 +214,28 @@ def _record_routes(link: _Link) -> list[Route]:
         return JSONResponse(answer)
 
     async def stop(request: Request) -> Response:
-        if link.recorder is not None:
+        """Stop the app's recording at once; with none running, send STOP_OP_MODE to the robot named in the form
+        (an OpMode started elsewhere, or left running by a link that broke: Stop works whatever started it)."""
+        if link.thread is not None and link.thread.is_alive():
             link.recorder.stop("stopped from the app")
-        return JSONResponse({"stopped": True})
+            return JSONResponse({"stopped": True})
+        form = await request.form()
+        if not form.get("host"):
+            return JSONResponse({"stopped": True})
+
+        def send_stop(host: str, port: int) -> None:
+            from motorlab.robot.dashboard import Dashboard
+
+            with Dashboard(host, port) as dash:
+                dash.stop_op_mode()
+                dash.status()  # its answer comes after the STOP: the robot has read it
+
+        try:
+            await run_in_threadpool(send_stop, _host(form.get("host")),
+                                    _port(form.get("dashboard-port"), DEFAULT_DASHBOARD_PORT))
+        except MotorlabError as exc:
+            return _error(f"{exc}: press STOP on the Driver Station")
+        return JSONResponse({"stopped": True, "sent": "STOP_OP_MODE"})
 
     async def log(request: Request) -> Response:
         path = link.outcome.get("log")

@@ -78,28 +78,43 @@ let poller = null;
 const stopPolling = () => { if (poller) { clearInterval(poller); poller = null; } };
 
 // The red Stop bar: in view on every step that can start an OpMode, whether or not one runs (sticky at the
-// bottom of the window), one element never rebuilt under the pointer. Stop sends STOP_OP_MODE at once.
+// bottom of the window), one element never rebuilt under the pointer. Stop sends STOP_OP_MODE at once: through
+// the app's recording, or straight to the robot when the app runs none (an OpMode started elsewhere).
+const IDLE = " Nothing runs on the robot from this page now. The Driver Station's STOP always works too.";
 function stopBar() {
-  const said = el("span", { text: " Nothing runs on the robot from this page now. The Driver Station's STOP always works too." });
+  const said = el("span", { text: IDLE });
+  const stop = async () => {
+    try { await post("api/robot/record/stop", form()); } catch (e) { said.replaceChildren(el("strong", { class: "error", role: "alert", text: ` ${e.message}` })); }
+  };
   const bar = el("div", { class: "stop-bar", role: "region", "aria-label": "Stop the robot" },
-    el("button", { class: "stop", type: "button", text: "Stop the robot", onclick: async () => { await post("api/robot/record/stop", new FormData()); } }),
-    said);
-  bar.running = (name) => { said.textContent = name ? ` ${name} runs on the robot. The Driver Station's STOP always works too.` : " Nothing runs on the robot from this page now. The Driver Station's STOP always works too."; };
+    el("button", { class: "stop", type: "button", text: "Stop the robot", onclick: stop }), said);
+  bar.running = (name) => { said.textContent = name ? ` ${name} runs on the robot. The Driver Station's STOP always works too.` : IDLE; };
   return bar;
 }
 
-// Start `opmode` (the person confirmed), then poll the app's recording five times a second until it stops.
-async function startRun(fields, { live, bar, status, onStopped }) {
-  await post("api/robot/record/start", form(fields));
-  bar.running(fields.opmode);
+// Follow the app's recording five times a second until it stops (also one started before this step was shown).
+function watch({ live, bar, status, onStopped }) {
   stopPolling();
   const tick = async () => {
     const s = await getJson("api/robot/record");
     const last = (k) => (s.series[k] && s.series[k].length ? s.series[k][s.series[k].length - 1] : "");
     live.textContent = s.state === "idle" ? "" : `${s.opmode}: ${s.state}, ${s.rows} packets\n` + (s.keys || []).map((k) => `${k} = ${last(k)}`).join("\n");
-    if (s.state === "stopped") { stopPolling(); bar.running(""); await onStopped(s); }
+    if (s.state === "stopped" || s.state === "idle") { stopPolling(); bar.running(""); if (s.state === "stopped") await onStopped(s); } else bar.running(s.opmode);
   };
   poller = setInterval(() => tick().catch((e) => { status.textContent = e.message; }), 200);
+}
+
+// Start `opmode` (the person confirmed just before), then follow it.
+async function startRun(fields, view) {
+  await post("api/robot/record/start", form(fields));
+  view.bar.running(fields.opmode);  // from the first moment, before the first status arrives
+  watch(view);
+}
+
+// Shown again while an OpMode started from this page runs (the person left the step and came back).
+async function resume(view) {
+  const s = await getJson("api/robot/record");
+  if (s.state !== "idle" && s.state !== "stopped") watch(view);
 }
 
 const explain = (after, s) => {
@@ -176,6 +191,7 @@ registerStep("robot-record", {
         el("div", { class: "field" }, el("label", { for: "robot-seconds", text: "Stop after (s)" }), seconds),
         el("div", { class: "field" }, el("label", { for: "robot-cpr", text: "Encoder counts per revolution" }), cpr)),
       el("p", {}, start), status, live, after, bar);
+    resume({ live, bar, status, onStopped: stopped }).catch(() => {});
   },
 });
 
@@ -224,16 +240,15 @@ registerStep("robot-push", {
     const compare = el("div", {});
     const opmode = el("input", { id: "robot-check-opmode", value: "ManualFeedforwardTuner" });
     const seconds = el("input", { id: "robot-check-seconds", value: "8", inputmode: "decimal" });
+    const checked = async (s) => {
+      if (s.error) status.replaceChildren(el("span", { class: "error", role: "alert", text: s.error }));
+      else if (s.check) status.textContent = `The check ${s.check} writing is done (${s.stop_reason}).`;
+      await showChecks(compare);
+    };
     const check = (label) => async () => {
       if (!window.confirm(`Start “${opmode.value}” on the robot now (the check ${label} writing)? It drives the robot forwards and backwards along 64 inches, over and over, for ${seconds.value} s or until you press Stop. Keep 2 m clear in front of and behind it.`)) return;
       status.textContent = "";
-      try {
-        await startRun({ opmode: opmode.value, seconds: seconds.value, check: label }, { live, bar, status, onStopped: async (s) => {
-          if (s.error) status.replaceChildren(el("span", { class: "error", role: "alert", text: s.error }));
-          else status.textContent = `The check ${label} writing is done (${s.stop_reason}).`;
-          await showChecks(compare);
-        } });
-      } catch (e) { status.textContent = e.message; }
+      try { await startRun({ opmode: opmode.value, seconds: seconds.value, check: label }, { live, bar, status, onStopped: checked }); } catch (e) { status.textContent = e.message; }
     };
     const show = el("button", { class: "primary", type: "button", text: "Show old and new values", onclick: async () => {
       try {
@@ -274,5 +289,6 @@ registerStep("robot-push", {
       el("p", {}, el("button", { type: "button", text: "Check after writing", onclick: check("after") })),
       status, live, compare, bar);
     showChecks(compare).catch(() => {});
+    resume({ live, bar, status, onStopped: checked }).catch(() => {});
   },
 });
