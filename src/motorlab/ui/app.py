@@ -447,8 +447,9 @@ class Guard:
             await self._refuse(send, 403, f"refused: {sender} asked this app to act; only the motorlab page "
                                           "itself can, so use the app in its own tab")
             return
-        if scope["path"].startswith("/api/robot/") and scope["path"] != ROBOT_STOP and not hmac.compare_digest(
-                headers.get(ROBOT_TOKEN_HEADER.encode(), b""), self.robot_token.encode()):
+        if scope["path"].startswith("/api/robot/") and scope["path"] != ROBOT_STOP and not (
+                self.robot_token and hmac.compare_digest(headers.get(ROBOT_TOKEN_HEADER.encode(), b""),
+                                                         self.robot_token.encode())):
             await self._refuse(send, 403, "the robot link answers only the page this app served: reload the page "
                                           "(its robot token changes each time the app starts)")
             return

@@ -168,8 +168,10 @@ def _record_routes(link: _Link) -> list[Route]:
             outcome: dict[str, Any] = {"cpr": cpr, "host": f"{recorder.host}:{recorder.port}", "check": check}
 
             def work() -> None:
+                gains: dict[str, float] = {}
                 try:
-                    gains = _drive_gains(recorder.host, recorder.port) if check else {}  # before anything moves
+                    if check:  # the gains the check runs with, read before anything moves
+                        gains = _drive_gains(recorder.host, recorder.port)
                     recorder.run()
                 except MotorlabError as exc:
                     outcome["error"] = " ".join(str(exc).split())
