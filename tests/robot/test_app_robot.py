@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import copy
 import json
+import math
+import re
 import time
 import warnings
 from pathlib import Path
@@ -20,9 +22,18 @@ from motorlab.robot.emulator import EmulatedRobot, RobotFiles
 from motorlab.ui.app import create_app
 
 
+def page_client() -> TestClient:
+    """A client of a new app holding the robot token its page holds (as the page's own requests do)."""
+    client = TestClient(create_app(host="127.0.0.1", port=8765), base_url="http://127.0.0.1:8765")
+    token = re.search(r'name="motorlab-token" content="([^"]+)"', client.get("/").text)
+    assert token
+    client.headers["X-Motorlab-Token"] = token.group(1)
+    return client
+
+
 @pytest.fixture
 def client() -> TestClient:
-    return TestClient(create_app(host="127.0.0.1", port=8765), base_url="http://127.0.0.1:8765")
+    return page_client()
 
 
 def test_connect_to_the_robot_pulls_and_serves_the_files(client: TestClient, robot: EmulatedRobot,
@@ -109,7 +120,7 @@ def test_stopped_is_said_only_once_the_log_is_written(robot: EmulatedRobot, monk
         return real(*args, **kwargs)  # type: ignore[arg-type]
 
     monkeypatch.setattr(record, "write_log", slow)
-    client = TestClient(create_app(host="127.0.0.1", port=8765), base_url="http://127.0.0.1:8765")
+    client = page_client()
     fields = {"host": "127.0.0.1", "dashboard-port": str(robot.dashboard_port), "opmode": "motorlab: quasistatic ramp",
               "seconds": "20"}
     start = client.post("/api/robot/record/start", data=fields)
@@ -128,3 +139,93 @@ def test_stopped_is_said_only_once_the_log_is_written(robot: EmulatedRobot, monk
     assert state["state"] == "stopped"
     assert state["log"], seen  # said "stopped" with the log, never before it
     assert "saving the log" in seen
+
+
+def _record(client: TestClient, robot: EmulatedRobot, opmode: str, seconds: float, **extra: str) -> dict:
+    """Start ``opmode`` through the app, let it run ``seconds`` (the app stops it), and return the final state."""
+    fields = {"host": "127.0.0.1", "dashboard-port": str(robot.dashboard_port), "opmode": opmode,
+              "seconds": str(seconds), **extra}
+    start = client.post("/api/robot/record/start", data=fields)
+    assert start.status_code == 200, start.text
+    deadline = time.monotonic() + seconds + 20
+    while (state := client.get("/api/robot/record").json())["state"] != "stopped":
+        assert time.monotonic() < deadline, state["state"]
+        time.sleep(0.1)
+    assert "error" not in state, state["error"]
+    return dict(state)
+
+
+def test_tune_and_prove_it(client: TestClient, robot: EmulatedRobot) -> None:
+    """Issue 32, item 7, through the app's API: record a ramp, fit it, check the drive with the gains on the
+    robot (the quickstart's zeros), push the fit's gains, check again: the emulated drive follows its gains,
+    so the tracking error falls, and both runs are kept with the gains they ran with."""
+    _record(client, robot, "motorlab: quasistatic ramp", 3, cpr="537.6")
+    log = client.get("/api/robot/record/log").content
+    fit = client.post("/api/analyze/feedforward", data={"cpr": "537.6"}, files={"file": ("run.csv", log)})
+    assert fit.status_code == 200, fit.text
+    kv = fit.json()["parameters"]["kV"]
+    truth = robot.plant.kV * robot.plant.cpr / (2 * math.pi)  # V·s/rad
+    assert abs(kv["value"] - truth) < 4 * kv["stderr"] + 1e-3 * truth
+    assert client.get("/api/robot/checks").json()["before"] is None
+
+    before = _record(client, robot, "ManualFeedforwardTuner", 3, check="before")
+    assert before["check"] == "before"
+    assert robot.active == STOP_TAG  # the app stopped it: the tuner runs until STOP
+    fields = {"host": "127.0.0.1", "dashboard-port": str(robot.dashboard_port), "target": "roadrunner",
+              "cpr": "537.6", "confirm": "yes"}
+    pushed = client.post("/api/robot/push/apply", data=fields, files={"params": ("fit.json", fit.content)})
+    assert pushed.status_code == 200, pushed.text
+    _record(client, robot, "ManualFeedforwardTuner", 3, check="after")
+
+    checks = client.get("/api/robot/checks").json()
+    old, new = checks["before"], checks["after"]
+    assert old["gains"] == {"kS": 0.0, "kV": 0.0, "kA": 0.0, "inPerTick": 1.0}  # what the run ran with
+    assert new["gains"]["kV"] == pytest.approx(robot.plant.kV, rel=0.01)
+    assert old["unit"] == new["unit"] == "ticks/s"
+    assert len(new["time"]) == len(new["target"]) == len(new["measured"]) > 200
+    assert max(new["target"]) == pytest.approx(robot.config["__value"]["MecanumDrive"]["__value"]["PARAMS"]
+                                               ["__value"]["maxWheelVel"]["__value"], rel=0.05)
+    assert old["rms"] > 10 * new["rms"]  # with zeros the drive never moves; with the fit it follows
+    assert new["rms"] < 1.5  # ticks/s: the encoder's whole-tick velocity and one loop of lag
+    assert "Before: RMS tracking error" in checks["words"]
+    assert "times better" in checks["words"]
+    # The restore puts the zeros back: the next check would track as badly as the first.
+    assert client.post("/api/robot/push/restore", data=fields).status_code == 200
+    assert leaves(robot.config)["MecanumDrive.PARAMS.kV"][1] == 0.0
+
+
+def test_a_check_needs_a_verification_opmode(client: TestClient, robot: EmulatedRobot) -> None:
+    state = client.post("/api/robot/record/start", data={"host": "127.0.0.1", "opmode": "x", "check": "later"})
+    assert state.status_code == 400
+    assert "before or after" in state.json()["error"]
+    fields = {"host": "127.0.0.1", "dashboard-port": str(robot.dashboard_port), "opmode": "motorlab: quasistatic ramp",
+              "seconds": "0.5", "check": "before"}
+    assert client.post("/api/robot/record/start", data=fields).status_code == 200
+    deadline = time.monotonic() + 20
+    while (state := client.get("/api/robot/record").json())["state"] != "stopped":
+        assert time.monotonic() < deadline
+        time.sleep(0.1)
+    assert "ManualFeedforwardTuner" in state["error"]
+    assert client.get("/api/robot/checks").json()["before"] is None
+
+
+def test_stop_works_whatever_started_the_opmode(robot: EmulatedRobot) -> None:
+    """An OpMode started elsewhere (the Driver Station; a page of the app before it restarted): the page's Stop
+    sends STOP_OP_MODE to the robot it names, with no token needed (a stale page must still stop the robot)."""
+    from motorlab.robot.dashboard import Dashboard
+
+    with Dashboard("127.0.0.1", robot.dashboard_port) as dash:
+        dash.init_op_mode("motorlab: quasistatic ramp")
+        dash.status()
+        dash.start_op_mode()
+        dash.status()
+    assert robot.status == "RUNNING"
+    fresh = TestClient(create_app(host="127.0.0.1", port=8765), base_url="http://127.0.0.1:8765")  # no token
+    stop = fresh.post("/api/robot/record/stop", data={"host": "127.0.0.1", "dashboard-port": str(robot.dashboard_port)},
+                      headers={"Origin": "http://127.0.0.1:8765"})
+    assert stop.status_code == 200, stop.text
+    assert stop.json()["sent"] == "STOP_OP_MODE"
+    assert robot.active == STOP_TAG
+    gone = fresh.post("/api/robot/record/stop", data={"host": "127.0.0.1", "dashboard-port": "1"})
+    assert gone.status_code == 400
+    assert "press STOP on the Driver Station" in gone.json()["error"]

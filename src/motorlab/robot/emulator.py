@@ -570,32 +570,25 @@ class EmulatedRobot:
 
     def _run_manual_feedforward_tuner(self, run: int) -> None:
         """Road Runner's ManualFeedforwardTuner (road-runner-ftc Tuning.kt:519-618): until STOP
-        (``while (!isStopRequested)``, :553), every loop ``mode``, ``v0``… (each forward encoder's velocity
-        × inPerTick [in/s], :580) and ``vref`` (the profile's velocity [in/s], :594), through
-        MultipleTelemetry; the profile goes DISTANCE = 64 in forward and back. The emulated drive follows
-        vref with the lag of the emulated motor (τ = kA/kV)."""
+        (``while (!isStopRequested)``, :553), every loop ``mode``, ``v0``… (each forward encoder's velocity,
+        :580) and ``vref`` (the profile's velocity, :594), through MultipleTelemetry; the profile goes
+        DISTANCE = 64 in forward and back. The emulated drive is driven by the feedforward of the ``@Config``
+        gains it has (:mod:`motorlab.robot.emulator_drive`): wrong gains track worse."""
+        from motorlab.robot import emulator_drive
+
+        rows = emulator_drive.packets(self, emulator_drive.NAME)
+        assert rows is not None
         epoch = int(time.time() * 1000)
         start = time.monotonic()
-        # in, in/s, in/s²: DISTANCE; the quickstart's MecanumDrive.PARAMS maxWheelVel, maxProfileAccel
-        distance, vmax, amax = 64.0, 50.0, 50.0
-        ramp = vmax / amax
-        leg = ramp + (distance - vmax * ramp) / vmax + ramp
-        tau = self.plant.kA / self.plant.kV
-        v = 0.0
-        step = 0.01
-        t_loop = 0.0
+        sent = 0
         while self._running(run):
-            time.sleep(0.1)
+            time.sleep(0.1)  # DEFAULT_TELEMETRY_TRANSMISSION_INTERVAL (v0.4.16:…/DashboardCore.java:30)
             now = time.monotonic() - start
             batch = []
-            while t_loop <= now:
-                k, phase = divmod(t_loop, leg)
-                ref = vmax * min(1.0, phase / ramp, max(0.0, (leg - phase) / ramp))
-                ref = ref if int(k) % 2 == 0 else -ref
-                v += (ref - v) * (1 - math.exp(-step / tau))
-                batch.append(self.packet(epoch + round(t_loop * 1000), {
-                    "mode": "TUNING_MODE", "v0": repr(v), "v1": repr(v * 0.998), "vref": repr(ref)}))
-                t_loop += step
+            while sent < len(rows) and rows[sent][0] <= now:
+                t, data = rows[sent]
+                batch.append(self.packet(epoch + round(t * 1000), data))
+                sent += 1
             self._packets(batch)
 
     def _run_toggle_dashboard(self, run: int) -> None:

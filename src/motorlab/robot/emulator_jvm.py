@@ -13,7 +13,7 @@ stdin, which stops the OpMode as the Driver Station's STOP does (``requestOpMode
 
 Use::
 
-    robot = EmulatedRobot(opmodes=[{"name": "motorlab: quasistatic ramp", "group": "motorlab"}])
+    robot = EmulatedRobot(opmodes=[OpModeSpec("motorlab: quasistatic ramp", "motorlab", "quasistatic_ramp")])
     robot.external_opmode = JvmOpMode(["java", "-cp", classes, "...RunSim", "experiment=quasistatic", ...])
 """
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import hmac
 import json
 import logging
 import secrets
@@ -358,7 +359,11 @@ async def plotly_js(request: Request) -> Response:
 
 
 async def index(request: Request) -> Response:
-    return FileResponse(_static_dir() / "index.html", media_type="text/html")
+    """The page, holding this launch's robot token (a page elsewhere cannot read it: no CORS header)."""
+    page = (_static_dir() / "index.html").read_text(encoding="utf-8")
+    meta = f'<meta name="motorlab-token" content="{request.app.state.robot_token}">'
+    return Response(page.replace("<head>", f"<head>\n{meta}", 1), media_type="text/html",
+                    headers={"cache-control": "no-store"})
 
 
 #: Content-Security-Policy of every response: the page may load nothing from another host.
@@ -368,16 +373,45 @@ CSP = (
 )
 
 
+#: Methods that change nothing (RFC 9110, 9.2.1): any other one must come from the app's own page.
+SAFE_METHODS = ("GET", "HEAD", "OPTIONS")
+#: The header in which the page sends the robot token (``<meta name="motorlab-token">`` of the page).
+ROBOT_TOKEN_HEADER = "x-motorlab-token"
+#: The one robot route without the token (still only from the app's page): Stop, which must work from a page
+#: left open while the app restarted.
+ROBOT_STOP = "/api/robot/record/stop"
+
+
 class Guard:
-    """ASGI middleware: the Host header must be the served address; the token when one is set; a body limit.
+    """ASGI middleware: the Host header must be the served address; the token when one is set; a body limit;
+    a state-changing request only from the app's own page; the robot routes only with the page's robot token.
 
     A foreign Host means a page elsewhere reached this app through DNS rebinding (Jupyter and Vite
     refuse such requests too). With a token (``--host`` other than loopback), a request carries it as
-    ``?token=`` or in the cookie the page gets with it.
+    ``?token=`` or in the cookie the page gets with it. A POST (any method but GET, HEAD, OPTIONS) whose
+    ``Origin`` is not ``scheme://Host`` of this request (the Host checked above), or without Origin whose
+    ``Sec-Fetch-Site`` is not ``same-origin`` or ``none``, is refused: another web page sent it (a
+    cross-site form or ``fetch``). Neither header (curl, a script) passes. ``/api/robot/*`` but Stop also
+    needs ``X-Motorlab-Token``, random at each launch and held only by the served page.
     """
 
-    def __init__(self, app: ASGIApp, *, hosts: set[str] | None, token: str | None, max_body: int) -> None:
+    def __init__(self, app: ASGIApp, *, hosts: set[str] | None, token: str | None, max_body: int,
+                 robot_token: str = "") -> None:
         self.app, self.hosts, self.token, self.max_body = app, hosts, token, max_body
+        self.robot_token = robot_token
+
+    @staticmethod
+    def _foreign(scope: Scope, headers: dict[bytes, bytes]) -> str | None:
+        """Who sent a state-changing request when it was not the app's own page, else None."""
+        if scope["method"] in SAFE_METHODS:
+            return None
+        origin = headers.get(b"origin")
+        if origin is not None:
+            own = f"{scope.get('scheme', 'http')}://{headers.get(b'host', b'').decode('latin-1')}".lower()
+            given = origin.decode("latin-1").lower()
+            return None if given == own else f"a page at {given}"
+        site = headers.get(b"sec-fetch-site", b"none").decode("latin-1").lower()
+        return None if site in ("same-origin", "none") else f"a {site} page"
 
     async def _refuse(self, send: Callable[[Any], Awaitable[None]], status: int, message: str) -> None:
         body = json.dumps({"error": message}).encode()
@@ -408,6 +442,16 @@ class Guard:
             return
         if not self._token_ok(scope, headers):
             await self._refuse(send, 403, "this app needs its token: open the URL it printed")
+            return
+        if (sender := self._foreign(scope, headers)) is not None:
+            await self._refuse(send, 403, f"refused: {sender} asked this app to act; only the motorlab page "
+                                          "itself can, so use the app in its own tab")
+            return
+        if scope["path"].startswith("/api/robot/") and scope["path"] != ROBOT_STOP and not (
+                self.robot_token and hmac.compare_digest(headers.get(ROBOT_TOKEN_HEADER.encode(), b""),
+                                                         self.robot_token.encode())):
+            await self._refuse(send, 403, "the robot link answers only the page this app served: reload the page "
+                                          "(its robot token changes each time the app starts)")
             return
         if scope["method"] == "POST":
             length = headers.get(b"content-length", b"")
@@ -474,7 +518,10 @@ def create_app(*, host: str = "127.0.0.1", port: int = 8765, token: str | None =
     # multipart form before raising; the app answers that request with a 400 naming the problem, so
     # the warning is noise in the server's log (its errors still show).
     logging.getLogger("python_multipart.multipart").setLevel(logging.ERROR)
-    return Guard(Starlette(routes=routes), hosts=allowed_hosts(host, port), token=token, max_body=max_body)
+    app = Starlette(routes=routes)
+    app.state.robot_token = secrets.token_urlsafe(32)  # a new one at each launch: the page holds it
+    return Guard(app, hosts=allowed_hosts(host, port), token=token, max_body=max_body,
+                 robot_token=app.state.robot_token)
 
 
 def is_loopback(host: str) -> bool:

@@ -9,8 +9,14 @@ Routes (mounted by :func:`motorlab.ui.app.create_app`); fields named as the CLI'
 * ``POST /api/robot/record/start`` (``host``, ``dashboard-port``, ``opmode``, ``seconds``, ``cpr``): starts
   the OpMode (this request is the person's Start); one recording at a time;
 * ``GET /api/robot/record``: the recording's state, rows, keys and the latest points for the live plot;
-* ``POST /api/robot/record/stop``: sends ``STOP_OP_MODE`` at once (the page's always-visible Stop);
+* ``POST /api/robot/record/stop``: sends ``STOP_OP_MODE`` at once (the page's always-visible Stop): through
+  the recording when one runs, else to the robot the form names (``host``, ``dashboard-port``); the one
+  robot route that needs no token (a page left open across a restart of the app must still stop the robot);
 * ``GET /api/robot/record/log``: the CSV, once stopped;
+* a recording started with ``check`` = ``before`` or ``after`` is a verification run (Road Runner's
+  ``ManualFeedforwardTuner``): the drive's gains on the robot are read first, and the run's tracking error
+  (:mod:`motorlab.robot.tracking`) is kept under that label; ``GET /api/robot/checks`` gives both runs,
+  their gains and a sentence comparing them;
 * ``POST /api/robot/push/plan``, ``/apply``, ``/restore`` (``params`` uploaded, ``target``, ``cpr``,
   ``wheel-radius``, ``config``, ``confirm``, ``while-running``): old and new values; the write after the
   person's confirmation; the old values back. The old values are kept in the app's folder while it runs.
@@ -23,6 +29,7 @@ from __future__ import annotations
 import shutil
 import tempfile
 import threading
+from datetime import UTC
 from pathlib import Path
 from typing import Any
 
@@ -48,6 +55,7 @@ class _Link:
         self.recorder: Any = None
         self.thread: threading.Thread | None = None
         self.outcome: dict[str, Any] = {}
+        self.checks: dict[str, dict[str, Any]] = {}  # "before"/"after" -> a verification run
         self.lock = threading.Lock()
 
     @property
@@ -147,6 +155,9 @@ def _record_routes(link: _Link) -> list[Route]:
         with link.lock:
             if link.thread is not None and link.thread.is_alive():
                 return _error("a recording is running: stop it first", 409)
+            check = str(form.get("check") or "")
+            if check not in ("", *CHECKS):
+                return _error(f"check must be {' or '.join(CHECKS)}, not {check!r}")
             try:
                 seconds = float(str(form.get("seconds") or 30))
                 cpr = float(str(form["cpr"])) if form.get("cpr") else None
@@ -154,20 +165,25 @@ def _record_routes(link: _Link) -> list[Route]:
                                     str(form.get("opmode") or ""), seconds=seconds)
             except (MotorlabError, ValueError) as exc:
                 return _error(str(exc))
-            outcome: dict[str, Any] = {"cpr": cpr, "host": f"{recorder.host}:{recorder.port}"}
+            outcome: dict[str, Any] = {"cpr": cpr, "host": f"{recorder.host}:{recorder.port}", "check": check}
 
             def work() -> None:
+                gains: dict[str, float] = {}
                 try:
+                    if check:  # the gains the check runs with, read before anything moves
+                        gains = _drive_gains(recorder.host, recorder.port)
                     recorder.run()
                 except MotorlabError as exc:
                     outcome["error"] = " ".join(str(exc).split())
                 except Exception as exc:  # a link that broke in a way of its own: say so, keep what was recorded
                     outcome["error"] = f"the link to the robot ended with {type(exc).__name__}: {exc}"
                 try:  # what was recorded is kept even when the link ended badly
-                    log = link.folder / "record" / "run.csv"
+                    log = link.folder / "record" / (f"check-{check}.csv" if check else "run.csv")
                     log.parent.mkdir(parents=True, exist_ok=True)
                     outcome["summary"] = write_log(recorder.data, log, host=outcome["host"], cpr=cpr)
                     outcome["log"] = log
+                    if check and "error" not in outcome:
+                        link.checks[check] = _check(recorder.data, gains, seconds)
                 except (MotorlabError, OSError) as exc:
                     outcome.setdefault("error", " ".join(str(exc).split()))
 
@@ -195,14 +211,33 @@ def _record_routes(link: _Link) -> list[Route]:
                                   "series": series, "stop_reason": data.stop_reason,
                                   "still_running": data.still_running}
         if not running:
-            answer.update({k: v for k, v in link.outcome.items() if k in ("summary", "error")})
+            answer.update({k: v for k, v in link.outcome.items() if k in ("summary", "error", "check")})
             answer["log"] = "api/robot/record/log" if "log" in link.outcome else None
         return JSONResponse(answer)
 
     async def stop(request: Request) -> Response:
-        if link.recorder is not None:
+        """Stop the app's recording at once; with none running, send STOP_OP_MODE to the robot named in the form
+        (an OpMode started elsewhere, or left running by a link that broke: Stop works whatever started it)."""
+        if link.thread is not None and link.thread.is_alive():
             link.recorder.stop("stopped from the app")
-        return JSONResponse({"stopped": True})
+            return JSONResponse({"stopped": True})
+        form = await request.form()
+        if not form.get("host"):
+            return JSONResponse({"stopped": True})
+
+        def send_stop(host: str, port: int) -> None:
+            from motorlab.robot.dashboard import Dashboard
+
+            with Dashboard(host, port) as dash:
+                dash.stop_op_mode()
+                dash.status()  # its answer comes after the STOP: the robot has read it
+
+        try:
+            await run_in_threadpool(send_stop, _host(form.get("host")),
+                                    _port(form.get("dashboard-port"), DEFAULT_DASHBOARD_PORT))
+        except MotorlabError as exc:
+            return _error(f"{exc}: press STOP on the Driver Station")
+        return JSONResponse({"stopped": True, "sent": "STOP_OP_MODE"})
 
     async def log(request: Request) -> Response:
         path = link.outcome.get("log")
@@ -210,8 +245,57 @@ def _record_routes(link: _Link) -> list[Route]:
             return _error("no recorded log yet", 404)
         return FileResponse(path, filename="run.csv", media_type="text/csv")
 
+    async def checks(request: Request) -> Response:
+        return JSONResponse({**{k: link.checks.get(k) for k in CHECKS}, "words": check_words(link.checks)})
+
     return [Route("/api/robot/record/start", start, methods=["POST"]), Route("/api/robot/record", state),
-            Route("/api/robot/record/stop", stop, methods=["POST"]), Route("/api/robot/record/log", log)]
+            Route("/api/robot/record/stop", stop, methods=["POST"]), Route("/api/robot/record/log", log),
+            Route("/api/robot/checks", checks)]
+
+
+#: The labels of the verification runs, in the order they are made.
+CHECKS = ("before", "after")
+
+
+def _drive_gains(host: str, port: int) -> dict[str, float]:
+    """The drive's kS [V], kV [V·s/tick], kA [V·s²/tick] and inPerTick on the robot now (Road Runner's PARAMS)."""
+    from motorlab.robot.config import leaves, target_paths
+    from motorlab.robot.dashboard import Dashboard
+
+    with Dashboard(host, port) as dash:
+        tree = dash.config()
+    paths = target_paths(tree, "roadrunner", {"kS": 0.0, "kV": 0.0, "kA": 0.0})
+    flat = leaves(tree)
+    paths["inPerTick"] = paths["kS"].rsplit(".", 1)[0] + ".inPerTick"
+    return {g: float(flat[p][1]) for g, p in paths.items() if p in flat}
+
+
+def _check(data: Any, gains: dict[str, float], seconds: float) -> dict[str, Any]:
+    """A verification run as the page shows it: the curves, the errors, and the gains it ran with."""
+    from datetime import datetime
+
+    from motorlab.robot.tracking import tracking
+
+    unit = "ticks/s" if gains.get("inPerTick", 1.0) == 1.0 else "in/s"  # Road Runner's distance unit per second
+    return {**tracking(data, unit=unit).to_dict(), "gains": gains, "opmode": data.opmode, "seconds": seconds,
+            "stop_reason": data.stop_reason, "recorded": datetime.now(UTC).isoformat(timespec="seconds")}
+
+
+def _gain_words(gains: dict[str, float]) -> str:
+    units = {"kS": "V", "kV": "V·s/tick", "kA": "V·s²/tick"}
+    return ", ".join(f"{g} {gains[g]:.4g} {u}" for g, u in units.items() if g in gains)
+
+
+def check_words(checks: dict[str, dict[str, Any]]) -> str:
+    """One sentence per verification run, and how the second compares with the first."""
+    said = [f"{label.capitalize()}: RMS tracking error {c['rms']:.3g} {c['unit']} (largest {c['worst']:.3g} "
+            f"{c['unit']}) with {_gain_words(c['gains'])}." for label in CHECKS if (c := checks.get(label))]
+    before, after = checks.get("before"), checks.get("after")
+    if before and after and before["unit"] == after["unit"] and after["rms"] > 0:
+        ratio = before["rms"] / after["rms"]
+        said.append(f"The new gains track {ratio:.3g} times better." if ratio >= 1 else
+                    f"The new gains track {1 / ratio:.3g} times worse: put the old values back and check the fit.")
+    return " ".join(said)
 
 
 def _number(text: str | None) -> float | None:

@@ -11,17 +11,21 @@ async function parse(response) {
   return body;
 }
 
-export async function getJson(url) { return parse(await fetch(url)); }
+// This launch's robot token, held by the served page only (docs/ui.md, "Security"); the robot routes need it.
+const token = (document.querySelector('meta[name="motorlab-token"]') || {}).content || "";
+export const send = (url, init = {}) => fetch(url, { ...init, headers: { ...init.headers, "X-Motorlab-Token": token } });
+
+export async function getJson(url) { return parse(await send(url)); }
 
 export async function post(url, form, { signal } = {}) {
-  return parse(await fetch(url, { method: "POST", body: form, signal }));
+  return parse(await send(url, { method: "POST", body: form, signal }));
 }
 
 // POST with `Accept: application/x-ndjson`: progress lines go to onProgress, an early part of the answer
 // (a session's table before its report) to onPartial, the last line is the answer.
 // A server that does not stream answers with plain JSON, which is read as before.
 export async function run(url, form, { signal, onProgress, onPartial } = {}) {
-  const response = await fetch(url, { method: "POST", body: form, signal, headers: { Accept: "application/x-ndjson" } });
+  const response = await send(url, { method: "POST", body: form, signal, headers: { Accept: "application/x-ndjson" } });
   const type = response.headers.get("content-type") || "";
   if (!type.includes("ndjson") || !response.body) return parse(response);
   const reader = response.body.getReader();
