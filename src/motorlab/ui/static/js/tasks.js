@@ -32,7 +32,7 @@ registerTask({
   title: "Characterise motors on a bench",
   short: "Bench",
   needs: "A session: its .toml file with its logs chosen together, its folder, or a .zip of the folder.",
-  steps: [["session", "Your session and its report"], ["gains", "Gains for your code"]],
+  steps: [["session", "Your session and its report"], ["fit", "Dynamometer runs"], ["gains", "Gains for your code"]],
   targets: ["ftc-pidf", "ftc-power", "wpilib", "volts"],
   target: () => "ftc-pidf",
 });
