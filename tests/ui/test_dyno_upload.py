@@ -19,6 +19,8 @@ from typing import Any
 import httpx
 import pytest
 
+import ui_browser as browser  # tests/ui/browser.py, loaded by conftest.py
+
 from motorlab import cli
 from motorlab.proposal import propose_dynamometer, run_group
 from motorlab.ui.worker import detect
@@ -64,3 +66,32 @@ def test_the_apps_joint_stall_fit_is_the_cli_s(server: Any, dyno_dir: Path, tmp_
     out = out.getvalue()
     assert response.text == out  # byte for byte: the same joint fit of the same files
     assert [row["file"] for row in response.json()["details"]["runs"]] == list(RUNS)
+
+
+def _card(page: Any, title: str) -> Any:
+    """The fit card whose heading holds ``title`` (found by its words)."""
+    xpath = f"//section[.//h3[contains(normalize-space(.), {title!r})]]"
+    return page.wait(lambda: [e for e in page.d.find_elements("xpath", xpath) if e.is_displayed()], f"the card {title!r}")[0]
+
+
+@browser.needs_browser
+@pytest.mark.parametrize("size", [browser.LAPTOP, browser.PHONE], ids=["laptop", "phone"])
+def test_runs_dropped_on_the_first_screen_fit_together(page: Any, dyno_dir: Path, size: tuple[int, int]) -> None:
+    page.open(size)
+    page.upload("Choose or drop any log", *(dyno_dir / name for name in (*RUNS, CURVE)))
+    page.wait_text("Proposed: Locked rotor (stall) runs and heat")
+    page.wait_text("Proposed: Motor curve")
+    proposed = [line for line in page.text().splitlines() if line.startswith("Proposed:")]
+    assert len(proposed) == 3 and not any("lever" in line.lower() for line in proposed), proposed
+    assert page.d.execute_script("return document.body.dataset.view") == "bench/fit"
+    stall = _card(page, "Locked rotor")
+    assert f"From {RUNS[0]}, {RUNS[1]}" in stall.text  # one joint fit of the motor's runs
+    page.check()
+    stall.find_element("xpath", ".//button[normalize-space(.)='Run the fit']").click()
+    page.wait(lambda: "All 2 runs together" in _card(page, "Locked rotor").text
+              and "Fitting each run alone" not in _card(page, "Locked rotor").text, "each run beside the joint fit")
+    text = _card(page, "Locked rotor").text
+    assert f"{RUNS[0]} alone" in text and f"{RUNS[1]} alone" in text
+    assert "Back-EMF constant" in text
+    page.check()
+    page.shot(f"ui-dyno-{size[0]}.png")
