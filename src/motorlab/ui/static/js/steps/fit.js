@@ -8,6 +8,7 @@ import { EXPERIMENT_WORDS, plain } from "../words.js";
 import * as plots from "../plots.js";
 import { leftOut, result as resultView } from "../results.js";
 import { eachRunTable, fitEachAlone, fitsEachAlone } from "../runs.js";
+import { findTask } from "../tasks.js";
 
 // Options shown at once (the others under "More options"), besides required, shared and needed ones.
 const PRIMARY = { spindown: ["inertia", "disc-radius", "disc-thickness", "ratio"], feedforward: ["mechanism"], torque: ["arm"], terminal: ["inertia"] };
@@ -45,7 +46,7 @@ function fileRow(ctx, entry) {
   }
   if (info.format === "session") {
     return el("li", { class: "file" }, el("strong", { text: entry.name }), ": a session description. ",
-      el("a", { href: "#/bench/session", text: "Characterise motors on a bench with it" }), " ", remove);
+      el("a", { href: "#/bench/session", text: `${findTask("bench").title} with it` }), " ", remove);
   }
   const select = el("select", { id, onchange: (e) => { entry.experiment = e.target.value; entry.chosen = true; save(); ctx.rerender(); } });
   for (const key of Object.keys(ctx.app.schema.analyze)) {

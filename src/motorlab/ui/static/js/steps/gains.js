@@ -5,7 +5,7 @@ import { post, run as runRequest, isAbort } from "../api.js";
 import { save, state } from "../store.js";
 import { argvOf, appendValues, field, isShared } from "../fields.js";
 import { duration, number, prettyUnit, quantity } from "../format.js";
-import { GAIN_WORDS, MEASURED_BY, parameterWords, plain, targetLabel } from "../words.js";
+import { GAIN_WORDS, MEASURED_BY, fieldWords, parameterWords, plain, targetLabel } from "../words.js";
 import * as plots from "../plots.js";
 import { addFiles, groups, runAll } from "./fit.js";
 
@@ -102,7 +102,7 @@ function targetPicker(ctx, onChange) {
 
 function loopPicker(ctx, onChange) {
   const g = ctx.state.gains, name = uid("loop");
-  return el("fieldset", { class: "targets" }, el("legend", { text: "What the loop controls" }),
+  return el("fieldset", { class: "targets" }, el("legend", { text: fieldWords("loop") }),
     [["velocity", "speed"], ["position", "position"]].map(([key, words]) => el("label", { class: "choice" },
       el("input", { type: "radio", name, value: key, checked: key === g.loop, onchange: () => { g.loop = key; save(); onChange(); } }), el("span", { text: words }))));
 }

@@ -5,6 +5,7 @@ import { getJson, post } from "../api.js";
 import { save, state, task as taskState } from "../store.js";
 import { registerStep, registerTask } from "../tasks.js";
 import { addFiles } from "./fit.js";
+import { fieldWords } from "../words.js";
 
 registerTask({
   key: "robot",
@@ -136,7 +137,7 @@ registerStep("robot-record", {
       el("div", { class: "fields" },
         el("div", { class: "field" }, el("label", { for: "robot-opmode", text: "OpMode" }), select),
         el("div", { class: "field" }, el("label", { for: "robot-seconds", text: "Stop after (s)" }), seconds),
-        el("div", { class: "field" }, el("label", { for: "robot-cpr", text: "Encoder counts per revolution" }), cpr)),
+        el("div", { class: "field" }, el("label", { for: "robot-cpr", text: fieldWords("cpr") }), cpr)),
       el("p", {}, start), bar, status, live, after);
     show().catch(() => {});
   },
@@ -183,7 +184,7 @@ registerStep("robot-push", {
     host.append(el("div", { class: "fields" },
       el("div", { class: "field" }, el("label", { for: "robot-fit", text: "The fit (a motorlab result file, .json)" }), fit),
       el("div", { class: "field" }, el("label", { for: "robot-target", text: "Whose fields" }), target),
-      el("div", { class: "field" }, el("label", { for: "robot-push-cpr", text: "Encoder counts per revolution" }), cpr),
+      el("div", { class: "field" }, el("label", { for: "robot-push-cpr", text: fieldWords("cpr") }), cpr),
       el("div", { class: "field" }, el("label", { for: "robot-radius", text: "Wheel radius (Pedro)" }), radius)),
       el("p", {}, show), out);
   },
