@@ -155,6 +155,33 @@ TASKS: dict[str, Task] = {
 }
 
 
+#: Words of the analyses' messages a student does not use, and what the page says instead (pattern, words): the
+#: page shows every warning, note and progress line through these (the CLI and the report keep the terms an
+#: expert looks up). Patterns are regular expressions (JavaScript's and Python's alike), applied in order.
+PLAIN_WORDS: tuple[tuple[str, str], ...] = (
+    (r"Newey(?:[–-]| and )West(?: covariance| sandwich)?", "allowing for noise that lingers from sample to sample"),
+    (r"χ²", "misfit"),
+    (r"\bfrom a prior on\b", "from a typical value of"),
+    (r"\ba prior on\b", "a typical value of"),
+    (r"\bthe prior\b", "typical motors"),
+    (r"\bprior\b", "typical value"),
+    (r"\bthe seeds' experiments\b", "the bench experiments"),
+    (r"\bthe seeds'", "the reference documents'"),
+    (r"\bseeds\b", "reference documents"),
+    (r"per unit of K·i", "as the motor's torque sees them"),
+    (r"K·i", "the motor's torque"),
+)
+
+
+def plain_words(text: str) -> str:
+    """``text`` with :data:`PLAIN_WORDS` applied (what the page shows)."""
+    import re
+
+    for pattern, words in PLAIN_WORDS:
+        text = re.sub(pattern, words, text)
+    return text
+
+
 def choice_words(option: str, choice: str) -> str:
     """A choice of ``option`` in words (the choice itself when :data:`CHOICES` has none)."""
     return CHOICES.get(option, {}).get(choice, choice)

@@ -69,6 +69,14 @@ def test_the_schema_holds_the_words_the_page_needs() -> None:
         t["label"] for t in s["targets"] if t["key"] == "wpilib")
 
 
+def test_the_schemas_words_are_a_students() -> None:
+    """Every label, help, choice, title and name the page shows from the schema, held to the jargon list."""
+    import ui_browser as browser
+
+    jargon = sorted({w for w in _words(schema()) if w and browser.JARGON.search(w)})
+    assert not jargon, jargon[:8]
+
+
 def test_the_page_shows_the_schemas_titles(page: Any, server: Any, tmp_path: Path) -> None:
     import ui_browser as browser  # tests/ui/browser.py, loaded by conftest.py
 
@@ -87,3 +95,26 @@ def test_the_page_shows_the_schemas_titles(page: Any, server: Any, tmp_path: Pat
     assert shown == [exp["title"] for exp in s["analyze"].values()]
     assert page.d.title == f"motorlab · {s['tasks']['expert']['short']}"
     page.check()
+
+
+def test_numbers_are_rounded_to_their_uncertainty_with_a_unit(page: Any) -> None:
+    """format.js, run in the page: two significant digits of the standard error, no false precision, units."""
+    import ui_browser as browser
+
+    page.open(browser.PHONE, fresh=False)
+    shown = page.d.execute_async_script("""
+      const done = arguments[arguments.length - 1];
+      import('/static/js/format.js').then((f) => done([
+        f.quantity(0.018967894, 1.3e-9, 'm'), f.quantity(0.125318, 0.0000153, 'V*s/rad'),
+        f.quantity(9.6123e-5, 1.2e-7, 'V*s/tick'), f.quantity(0.00069, 0.00001, 'H'),
+        f.overshoot(4.11e-4), f.overshoot(9.489), f.overshoot(null),
+        f.quantity(0, null, '1/s'), f.prettyUnit('hub/(tick/s)'), f.prettyUnit('hub')]));""")
+    assert shown == [
+        "18.968 mm (uncertainty below 0.01 %)",  # not (1.8967894 ± 0.0000013) × 10⁻²
+        "0.125318 ± 0.000015 V·s/rad",
+        "(9.612 ± 0.012) × 10⁻⁵ V·s/tick",
+        "690 ± 10 µH",
+        "no overshoot", "9.5 %", "no overshoot",  # not "4.11 × 10⁻⁴ %"
+        "0 s⁻¹",  # not "0 1/s"
+        "output/(tick/s)", "output",  # the controller's output, not "hub" as a unit
+    ]

@@ -100,9 +100,9 @@ DESCRIPTIONS = {
 @functools.cache
 def schema() -> dict[str, Any]:
     """``{"analyze": {experiment: {...}}, "characterize": {...}, "tune": {...}, "parameters", "targets", "tasks",
-    "gains", "measured_by"}``: every word the page shows for what the descriptions and the glossary name."""
+    "gains", "measured_by", "plain_words"}``: every word the page shows for what the descriptions and the glossary name."""
     from motorlab.control.targets import TARGET_INFO
-    from motorlab.glossary import GAINS, MEASURED_BY, PARAMETERS, TASKS
+    from motorlab.glossary import GAINS, MEASURED_BY, PARAMETERS, PLAIN_WORDS, TASKS
 
     analyze = {
         name: {
@@ -128,6 +128,7 @@ def schema() -> dict[str, Any]:
         "tasks": {key: task.to_dict() for key, task in TASKS.items()},
         "gains": dict(GAINS),
         "measured_by": dict(MEASURED_BY),
+        "plain_words": [list(pair) for pair in PLAIN_WORDS],
     }
 
 

@@ -8,6 +8,7 @@ export const EXPERIMENT_WORDS = {};  // experiment -> its description's title
 export const GAIN_WORDS = {};        // gain in a target's code -> its name in words
 export const MEASURED_BY = {};       // parameter -> the measurement that gives it
 const FIELD_LABELS = {};             // option name -> its label (for server text that names a --option)
+let PLAIN_WORDS = [];                // [RegExp, words]: an expert's term in the server's text -> a student's words
 
 let SCHEMA = null;
 export function setSchema(s) {
@@ -20,6 +21,7 @@ export function setSchema(s) {
   for (const [key, p] of Object.entries(s.parameters || {})) GAIN_WORDS[key] = p.name;
   Object.assign(GAIN_WORDS, s.gains || {});
   Object.assign(MEASURED_BY, s.measured_by || {});
+  PLAIN_WORDS = (s.plain_words || []).map(([pattern, words]) => [new RegExp(pattern, "gu"), words]);
   for (const task of TASKS) Object.assign(task, (s.tasks || {})[task.key] || {});
 }
 
@@ -51,8 +53,10 @@ export function helpWords(f) {
     .replace(/\s*\(\d[^()]*\)\s*$/, "").replace(/\s+—\s*default.*$/, "").trim());
 }
 
-// Server text (errors, notes, help) with every "--option" named in words, so no flag shows outside a code box.
+// Server text (errors, notes, help, progress) with every "--option" named in words, so no flag shows outside a code
+// box, and an expert's terms in a student's words (the schema's plain_words, motorlab.glossary.PLAIN_WORDS).
 export function plain(text) {
   if (!text) return "";
-  return String(text).replace(/(^|[^\w-])--([A-Za-z][\w-]*)/g, (m, pre, name) => `${pre}“${FIELD_LABELS[name] || name.replace(/-/g, " ")}”`);
+  const named = String(text).replace(/(^|[^\w-])--([A-Za-z][\w-]*)/g, (m, pre, name) => `${pre}“${FIELD_LABELS[name] || name.replace(/-/g, " ")}”`);
+  return PLAIN_WORDS.reduce((t, [pattern, words]) => t.replace(pattern, words), named);
 }

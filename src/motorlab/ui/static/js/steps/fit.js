@@ -161,7 +161,7 @@ async function runGroup(ctx, key, files) {
 function progress(key, p) {
   const bar = $(`[data-group="${key}"] progress`), text = $(`[data-group="${key}"] .run-status`);
   if (bar && p.total) { bar.max = p.total; bar.value = p.done || 0; }
-  if (text) text.textContent = `${p.what || "working"}${p.total ? `: ${p.done || 0} of ${p.total} ${p.unit || ""}` : ""}${p.detail ? ` (${p.detail})` : ""}`;
+  if (text) text.textContent = plain(`${p.what || "working"}${p.total ? `: ${p.done || 0} of ${p.total} ${p.unit || ""}` : ""}${p.detail ? ` (${p.detail})` : ""}`);
 }
 
 function groupCard(ctx, key, files) {
