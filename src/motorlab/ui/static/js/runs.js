@@ -5,7 +5,7 @@ import { el } from "./dom.js";
 import { run as runRequest } from "./api.js";
 import { appendValues } from "./fields.js";
 import { quantity } from "./format.js";
-import { parameterWords } from "./words.js";
+import { parameterWords, plain } from "./words.js";
 
 // The answers set side by side (the rest is in the joint result above).
 const HEADLINE = { stall: ["K", "R", "t_limit"], curve: ["K", "R", "Kt"] };
@@ -42,7 +42,7 @@ export function eachRunTable(exp, joint, each) {
   const keys = (HEADLINE[exp] || Object.keys(joint.parameters || {}).slice(0, 3)).filter((k) => (joint.parameters || {})[k]);
   const head = keys.map((k) => { const [name, symbol] = parameterWords(k); return el("th", { scope: "col" }, name, symbol ? el("span", { class: "symbol", text: ` ${symbol}` }) : null); });
   const rows = each.map((one) => el("tr", {}, el("th", { scope: "row", text: `${one.file} alone` }),
-    one.error ? el("td", { colspan: keys.length, class: "error", text: one.error }) : keys.map((k) => el("td", { class: "num", text: cell(one.result, k) }))));
+    one.error ? el("td", { colspan: keys.length, class: "error", text: plain(one.error) }) : keys.map((k) => el("td", { class: "num", text: cell(one.result, k) }))));
   rows.push(el("tr", { class: "joint" }, el("th", { scope: "row", text: `All ${each.length} runs together (the answer above)` }),
     keys.map((k) => el("td", { class: "num", text: cell(joint, k) }))));
   return el("div", { class: "scroll" }, el("table", { class: "each-run" },
