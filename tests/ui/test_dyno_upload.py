@@ -18,7 +18,6 @@ from typing import Any
 
 import httpx
 import pytest
-
 import ui_browser as browser  # tests/ui/browser.py, loaded by conftest.py
 
 from motorlab import cli
@@ -33,7 +32,8 @@ CURVE = "775pro-motor-curve-data-20151208.csv"
 def test_every_vex_export_is_proposed_as_what_it_is(dyno_dir: Path) -> None:
     locked = sorted(dyno_dir.glob("*-locked-rotor-data-*v-*.csv"))
     curves = sorted(dyno_dir.glob("*-motor-curve-data-*.csv"))
-    assert len(locked) >= 30 and len(curves) == 6
+    assert len(locked) >= 30
+    assert len(curves) == 6
     found = detect(["--", *map(str, locked + curves)])
     for entry in found:
         assert "error" not in entry, entry
@@ -71,7 +71,9 @@ def test_the_apps_joint_stall_fit_is_the_cli_s(server: Any, dyno_dir: Path, tmp_
 def _card(page: Any, title: str) -> Any:
     """The fit card whose heading holds ``title`` (found by its words)."""
     xpath = f"//section[.//h3[contains(normalize-space(.), {title!r})]]"
-    return page.wait(lambda: [e for e in page.d.find_elements("xpath", xpath) if e.is_displayed()], f"the card {title!r}")[0]
+    shown = lambda: [e for e in page.d.find_elements("xpath", xpath) if e.is_displayed()]  # noqa: E731
+    found = page.wait(shown, f"the card {title!r}")
+    return found[0]
 
 
 @browser.needs_browser
@@ -82,7 +84,8 @@ def test_runs_dropped_on_the_first_screen_fit_together(page: Any, dyno_dir: Path
     page.wait_text("Proposed: Locked rotor (stall) runs and heat")
     page.wait_text("Proposed: Motor curve")
     proposed = [line for line in page.text().splitlines() if line.startswith("Proposed:")]
-    assert len(proposed) == 3 and not any("lever" in line.lower() for line in proposed), proposed
+    assert len(proposed) == 3, proposed
+    assert not any("lever" in line.lower() for line in proposed), proposed
     assert page.d.execute_script("return document.body.dataset.view") == "bench/fit"
     stall = _card(page, "Locked rotor")
     assert f"From {RUNS[0]}, {RUNS[1]}" in stall.text  # one joint fit of the motor's runs
@@ -91,7 +94,8 @@ def test_runs_dropped_on_the_first_screen_fit_together(page: Any, dyno_dir: Path
     page.wait(lambda: "All 2 runs together" in _card(page, "Locked rotor").text
               and "Fitting each run alone" not in _card(page, "Locked rotor").text, "each run beside the joint fit")
     text = _card(page, "Locked rotor").text
-    assert f"{RUNS[0]} alone" in text and f"{RUNS[1]} alone" in text
+    assert f"{RUNS[0]} alone" in text
+    assert f"{RUNS[1]} alone" in text
     assert "Back-EMF constant" in text
     page.check()
     page.shot(f"ui-dyno-{size[0]}.png")

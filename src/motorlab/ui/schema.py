@@ -100,7 +100,8 @@ DESCRIPTIONS = {
 @functools.cache
 def schema() -> dict[str, Any]:
     """``{"analyze": {experiment: {...}}, "characterize": {...}, "tune": {...}, "parameters", "targets", "tasks",
-    "gains", "measured_by", "plain_words"}``: every word the page shows for what the descriptions and the glossary name."""
+    "gains", "measured_by", "plain_words"}``: every word the page shows for what the descriptions and the
+    glossary name."""
     from motorlab.control.targets import TARGET_INFO
     from motorlab.glossary import GAINS, MEASURED_BY, PARAMETERS, PLAIN_WORDS, TASKS
 
