@@ -112,7 +112,8 @@ def format_result(result: TuneResult) -> str:
         f"steady-state error {_fmt(r['steady_state_error'], u['steady_state_error'])}"
     )
     pr = d["profile"]
-    lines.append(f"trapezoidal profile: largest tracking error {pr['max_tracking_error']:.4g}")
+    lines.append(f"trapezoidal profile: largest tracking error {pr['max_tracking_error']:.4g} "
+                 f"{u['velocity'] if d['loop'] == 'velocity' else u['position']}")  # r − y, in the loop's unit
     mp = d["max_profile"]
     pos = u["position"]
     lines.append(
