@@ -68,6 +68,17 @@ def test_the_apps_joint_stall_fit_is_the_cli_s(server: Any, dyno_dir: Path, tmp_
     assert [row["file"] for row in response.json()["details"]["runs"]] == list(RUNS)
 
 
+def _drop(page: Any, words: str, paths: list[Path]) -> None:
+    """Drop ``paths`` together on the box whose label holds ``words`` (a drop event carrying the files)."""
+    box = page.field(words).find_element("xpath", "./ancestor::label")
+    page.d.execute_script("""
+      const [box, files] = arguments;
+      const dt = new DataTransfer();
+      for (const [name, bytes] of files) dt.items.add(new File([new Uint8Array(bytes)], name, { type: "text/csv" }));
+      box.dispatchEvent(new DragEvent("drop", { dataTransfer: dt, bubbles: true, cancelable: true }));
+    """, box, [[p.name, list(p.read_bytes())] for p in paths])
+
+
 def _card(page: Any, title: str) -> Any:
     """The fit card whose heading holds ``title`` (found by its words)."""
     xpath = f"//section[.//h3[contains(normalize-space(.), {title!r})]]"
@@ -80,7 +91,11 @@ def _card(page: Any, title: str) -> Any:
 @pytest.mark.parametrize("size", [browser.LAPTOP, browser.PHONE], ids=["laptop", "phone"])
 def test_runs_dropped_on_the_first_screen_fit_together(page: Any, dyno_dir: Path, size: tuple[int, int]) -> None:
     page.open(size)
-    page.upload("Choose or drop any log", *(dyno_dir / name for name in (*RUNS, CURVE)))
+    paths = [dyno_dir / name for name in (*RUNS, CURVE)]
+    if size == browser.LAPTOP:
+        page.upload("Choose or drop any log", *paths)
+    else:  # dropped together on the box, as a person drags them from a folder
+        _drop(page, "Choose or drop any log", paths)
     page.wait_text("Proposed: Locked rotor (stall) runs and heat")
     page.wait_text("Proposed: Motor curve")
     proposed = [line for line in page.text().splitlines() if line.startswith("Proposed:")]
