@@ -35,8 +35,8 @@ _FLAG_TEXT = re.compile(r"(?<![\w-])--[A-Za-z][\w-]*")
 #: Terms a student does not use, outside code boxes (issue 31, point 6): the statistics' authors and symbols,
 #: "prior", the reference documents ("the seeds'", "(seed 1"; a simulation's "seed 5" is the person's own
 #: word), K·i, "hub" as a unit, a rate of zero written "0 1/s".
-JARGON = re.compile(r"Newey|χ²|\bchi\b|chi²|chi-squared?|\bpriors?\b|\bseeds\b|\(seed \d|K·i|\d\s*hub\b|\bhub\s*/|/\s*hub\b"
-                    r"|SysId mechanism, per unit|(?<![\w.])0 1/s")
+JARGON = re.compile(r"Newey|χ²|\bchi\b|chi²|chi-squared?|\bpriors?\b|\bseeds\b|\(seed \d|K·i"
+                    r"|\d\s*hub\b|\bhub\s*/|/\s*hub\b|SysId mechanism, per unit|(?<![\w.])0 1/s")
 
 #: Visible text outside code boxes, and visible fields without a name in words (run in the page).
 _AUDIT = """
