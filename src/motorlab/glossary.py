@@ -3,6 +3,11 @@
 The key is the name in results (``analyze --json``'s ``parameters``, ``results.json``, ``tune``'s
 gains); docs/glossary.md is the same list for people. The browser app shows results as
 "Back-EMF constant K" with these, never a bare key.
+
+The other words the browser app shows and the experiment descriptions do not hold are here too, in one
+place, served by ``GET /api/schema`` (the page keeps no copy of its own, issue 33): each choice of an option
+in words (:data:`CHOICES`), the gains a target's code names (:data:`GAINS`), which measurement gives a
+parameter the gains need (:data:`MEASURED_BY`) and the app's tasks (:data:`TASKS`).
 """
 
 from __future__ import annotations
@@ -75,7 +80,7 @@ PARAMETERS: dict[str, Parameter] = {
     "kP": _P("Proportional gain", "kP", ""),
     "kI": _P("Integral gain", "kI", ""),
     "kD": _P("Derivative gain", "kD", ""),
-    "kF": _P("Velocity feedforward (hub F)", "F", ""),
+    "kF": _P("Velocity feedforward F of the FTC motor controller", "F", ""),
 }
 
 
@@ -83,3 +88,100 @@ def describe(key: str) -> dict[str, Any]:
     """The description of ``key`` as JSON (the key itself as the name when it is not listed)."""
     found = PARAMETERS.get(key)
     return found.to_dict() if found is not None else {"name": key, "symbol": key, "unit": ""}
+
+
+#: Option name -> {choice: the choice in words}, as a form's menu shows it (a choice not listed shows as is).
+CHOICES: dict[str, dict[str, str]] = {
+    "loop": {"velocity": "speed (velocity loop)", "position": "position (position loop)"},
+    "method": {"lqr": "LQR (as WPILib SysId)", "poles": "pole placement"},
+    "units": {"rad": "radians", "rotations": "rotations", "degrees": "degrees", "ticks": "encoder ticks",
+              "m": "metres"},
+    "mechanism": {"simple": "none (flywheel, drivetrain)", "elevator": "elevator (constant gravity)",
+                  "arm": "arm (gravity × cos angle)"},
+    "side": {"both": "both sides", "left": "left side", "right": "right side"},
+    "circuit": {"series": "series", "parallel": "parallel"},
+    "friction": {"auto": "automatic", "viscous": "viscous only (b)", "coulomb": "Coulomb only (Tf)",
+                 "both": "viscous and Coulomb (b and Tf)"},
+    "magnet": {"ferrite": "ferrite", "ndfeb": "neodymium (NdFeB)"},
+    "current-unit": {"A": "amperes", "mA": "milliamperes"},
+}
+
+#: Gains a target's code names that :data:`PARAMETERS` does not (Road Runner's, CTRE's and REV's names).
+GAINS: dict[str, str] = {
+    "P": "Proportional gain", "I": "Integral gain", "D": "Derivative gain", "F": "Feedforward gain",
+    "axialGain": "Axial position gain", "axialVelGain": "Axial velocity gain",
+    "lateralGain": "Lateral position gain", "lateralVelGain": "Lateral velocity gain",
+    "headingGain": "Heading gain", "headingVelGain": "Heading velocity gain",
+    "turnGain": "Turn gain", "turnVelGain": "Turn velocity gain", "inPerTick": "Inches per tick",
+}
+
+#: Parameter -> the measurement that gives it (the gains step offers it when the model lacks the parameter).
+MEASURED_BY: dict[str, str] = {
+    "K": "a spin-down log (or a free spin-up or terminal-speed run)",
+    "R": "an LCR meter table (or a terminal-speed run)",
+    "J": "a spin-down with the flywheel's inertia given (or a free spin-up)",
+    "kV": "a SysId file or a Road Runner ramp",
+    "kA": "a SysId file or a Road Runner ramp",
+}
+
+
+@dataclass(frozen=True)
+class Task:
+    """One task of the browser app's first screen: ``title`` as the student would say it, ``short`` for the
+    tab's title and ``needs``, the files it takes."""
+
+    title: str
+    short: str
+    needs: str
+
+    def to_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+
+#: The app's tasks (ui/static/js/tasks.js lists their steps; these are their words).
+TASKS: dict[str, Task] = {
+    "drive": Task("Tune a Road Runner or Pedro Pathing drive", "Drive",
+                  "The files Road Runner's ramp loggers save (ForwardRampLogger …, .json) or its FlightRecorder "
+                  "logs (.log)."),
+    "mechanism": Task("Tune a mechanism: flywheel, arm, elevator or drivetrain", "Mechanism",
+                      "A WPILib SysId file (.json, .wpilog) or an FTC OpMode log (a spin-down), with an LCR table "
+                      "when you have one."),
+    "bench": Task("Characterise motors on a bench", "Bench",
+                  "A session: its .toml file with its logs chosen together, its folder, or a .zip of the folder; "
+                  "or a dynamometer's runs (locked-rotor runs, a motor curve: VEX's exports), fitted together."),
+    "expert": Task("Analyse one experiment", "One experiment",
+                   "For instructors and experts: any log of a bench experiment (LCR table, spin-down, torque on "
+                   "a lever, terminal speed …)."),
+}
+
+
+#: Words of the analyses' messages a student does not use, and what the page says instead (pattern, words): the
+#: page shows every warning, note and progress line through these (the CLI and the report keep the terms an
+#: expert looks up). Patterns are regular expressions (JavaScript's and Python's alike), applied in order.
+PLAIN_WORDS: tuple[tuple[str, str], ...] = (
+    (r"Newey(?:[–-]| and )West(?: covariance| sandwich)?", "allowing for noise that lingers from sample to sample"),
+    (r"χ²", "misfit"),
+    (r"\bfrom a prior on\b", "from a typical value of"),
+    (r"\ba prior on\b", "a typical value of"),
+    (r"\bthe prior\b", "typical motors"),
+    (r"\bprior\b", "typical value"),
+    (r"\bthe seeds' experiments\b", "the bench experiments"),
+    (r"\bthe seeds'", "the reference documents'"),
+    (r"\bseeds\b", "reference documents"),
+    (r"per unit of K·i", "as the motor's torque sees them"),
+    (r"K·i", "the motor's torque"),
+)
+
+
+def plain_words(text: str) -> str:
+    """``text`` with :data:`PLAIN_WORDS` applied (what the page shows)."""
+    import re
+
+    for pattern, words in PLAIN_WORDS:
+        text = re.sub(pattern, words, text)
+    return text
+
+
+def choice_words(option: str, choice: str) -> str:
+    """A choice of ``option`` in words (the choice itself when :data:`CHOICES` has none)."""
+    return CHOICES.get(option, {}).get(choice, choice)

@@ -32,6 +32,12 @@ FLAGS = (
 
 _FLAG_TEXT = re.compile(r"(?<![\w-])--[A-Za-z][\w-]*")
 
+#: Terms a student does not use, outside code boxes (issue 31, point 6): the statistics' authors and symbols,
+#: "prior", the reference documents ("the seeds'", "(seed 1"; a simulation's "seed 5" is the person's own
+#: word), K·i, "hub" as a unit, a rate of zero written "0 1/s".
+JARGON = re.compile(r"Newey|χ²|\bchi\b|chi²|chi-squared?|\bpriors?\b|\bseeds\b|\(seed \d|K·i"
+                    r"|\d\s*hub\b|\bhub\s*/|/\s*hub\b|SysId mechanism, per unit|(?<![\w.])0 1/s")
+
 #: Visible text outside code boxes, and visible fields without a name in words (run in the page).
 _AUDIT = """
 const visible = (e) => { const r = e.getBoundingClientRect(); const s = getComputedStyle(e);
@@ -147,10 +153,12 @@ class Page:
 
     # -- checking ------------------------------------------------------------------------------------
     def check(self) -> None:
-        """No flag outside code boxes, every visible field named in words, nothing scrolls sideways."""
+        """No flag or jargon outside code boxes, every visible field named in words, nothing scrolls sideways."""
         texts, unnamed, scroll_width, width = self.d.execute_script(_AUDIT)
         flags = [t for t in texts if _FLAG_TEXT.search(t)]
         assert not flags, f"command-line flags outside a code box: {flags[:5]}"
+        jargon = [t for t in texts if JARGON.search(t)]
+        assert not jargon, f"words a student does not use, outside a code box: {jargon[:5]}"
         assert not unnamed, f"fields without a name in words: {unnamed[:5]}"
         assert scroll_width <= width, f"the page is {scroll_width} px wide in a {width} px window"
 

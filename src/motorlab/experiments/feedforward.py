@@ -95,7 +95,7 @@ EXPERIMENT = Experiment(
         EXCLUDE, COLUMN,
     ),
     reports=("kS", "kV", "kA", "kG"),
-    shaft="output + the SysId mechanism, per unit of K·i",
+    shaft="output shaft, with the mechanism the test drove",
     order=80,
     # A SysId log is usually taken on a mechanism: its J, b, Tf are reported, not the motor's.
     contributes={},

@@ -64,7 +64,7 @@ EXPERIMENT = Experiment(
                help="standard error of Tf"),
     ),
     reports=("J", "alpha"),
-    shaft="output, bare gearmotor, per unit of K·i",
+    shaft="output shaft of the bare gearmotor; friction and inertia as the motor's torque sees them",
     order=110,
     settings=(
         Setting("current", "A", "constant current driving the free motor (required)", required=True),

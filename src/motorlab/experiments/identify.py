@@ -109,7 +109,7 @@ EXPERIMENT = Experiment(
                 "log names), or the catalogue motor whose thermal figures to use"),
         Setting("initial_temperature", "float", "with thermal: the winding's temperature at the log's start [°C]"),
     ),
-    shaft="output, what the log drove, per unit of K·i",
+    shaft="output shaft, with what the log drove; friction and inertia as the motor's torque sees them",
     order=70,
     contributes={name: name for name in PARAMETERS},
     session=session,

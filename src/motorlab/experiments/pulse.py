@@ -94,7 +94,7 @@ EXPERIMENT = Experiment(
         COLUMN,
     ),
     reports=("J", "Tf", "b", "gamma"),
-    shaft="output, bare gearmotor, per unit of K·i",
+    shaft="output shaft of the bare gearmotor; friction and inertia as the motor's torque sees them",
     order=60,
     settings=(
         Setting("amplifier_gain", "A/V", "amplifier gain Ka (default: from the amplifier experiment)"),

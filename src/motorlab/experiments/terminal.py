@@ -65,7 +65,7 @@ EXPERIMENT = Experiment(
         COLUMN,
     ),
     reports=("b", "Tf"),
-    shaft="output, bare gearmotor, per unit of K·i",
+    shaft="output shaft of the bare gearmotor; friction and inertia as the motor's torque sees them",
     order=100,
     settings=(Setting("current_stderr", "A", "standard error of one current reading"),),
     contributes={"b": "b", "Tf": "Tf"},

@@ -165,7 +165,11 @@ def read_csv(path: PathArg, *, cpr: float | None = None, columns: Any = None) ->
             "no header line naming the columns (e.g. time_s,voltage_V,current_A)", path=name, line=header_no
         )
     rules = parse_column_mapping(columns) if columns is not None else current_mapping()
-    targets = _resolve_header(header, path=name, line=header_no, rules=rules)
+    try:
+        targets = _resolve_header(header, path=name, line=header_no, rules=rules)
+    except LogFormatError:
+        _refuse_at_once(text, header, header_no, delimiter, rules)  # before any question about a column
+        raise
 
     used = [i for i, t in enumerate(targets) if t is not None]
     table = fast_table(text, header_no + 1, len(header), delimiter)
@@ -179,7 +183,7 @@ def read_csv(path: PathArg, *, cpr: float | None = None, columns: Any = None) ->
     else:
         data, line_arr, warnings = _parse_rows(text, start, header, delimiter, used)
     if data.shape[0] == 0:
-        raise LogFormatError("no data rows after the header", path=name, line=header_no)
+        raise LogFormatError(NO_ROWS, path=name, line=header_no)
     del text, table  # the file's bytes are not needed any more (a 2M-row table: 100 MB)
     # A header in words only (Time,Amps,Volts,Torque 6V (N · m)) is an instrument's export (a dynamometer's
     # DAQ), not a robot's log of sensor reads: a sample that jumps away and back there is an event of the run
@@ -191,6 +195,61 @@ def read_csv(path: PathArg, *, cpr: float | None = None, columns: Any = None) ->
                                         "whose single-sample excursions are events of the run")
     return _assemble(name, data, line_arr, warnings, header, targets, used, metadata, comments, cpr,
                      spikes=not worded)
+
+
+#: What a table must hold, said when a file is refused before any question about its columns (issue 31, point 7).
+EXPECTED = ("motorlab expected a table of measurements: a header naming each column with its unit "
+            "(time_s,voltage_V,current_A) or in words (Time,Amps,Volts), then one row of numbers per sample; "
+            "or a log of a format it reads (docs/formats.md)")
+NO_ROWS = f"no data rows after the header: {EXPECTED}"
+
+
+def _refuse_at_once(text: TextFile, header: list[str], header_no: int, delimiter: str | None,
+                    rules: tuple[ColumnRule, ...]) -> None:
+    """Refuse in one step a table whose columns would otherwise be asked about one by one (issue 31, point 7).
+
+    A header with no row under it has nothing to read whatever its columns are; a table none of whose
+    columns motorlab knows and none of whose columns can be time (no column rises from row to row: random
+    numbers, a spreadsheet of something else) would take a question per column before being refused. Both
+    are refused here, in words that say what motorlab expected. The rows are parsed once, in C, and only
+    when no column is known (bounded time on a file of any size).
+    """
+    name = text.path
+    if not _has_data_row(text, header_no):
+        raise LogFormatError(NO_ROWS, path=name, line=header_no)
+    named = [f for f in header if f.strip() and not f.startswith(EXTRA_PREFIX)]
+    if not named or not all(_unknown(f, rules) for f in named):
+        return  # a column it knows: asking about the others is the quick way to read the file
+    table = fast_table(text, header_no + 1, len(header), delimiter)
+    if table is None or table.values.shape[0] < 2:
+        return  # not a clean numeric table: the line-by-line reader names the problem
+    steps = np.diff(table.values, axis=0)
+    if not np.any(np.all(steps >= 0, axis=0) & np.any(steps > 0, axis=0)):
+        shown = ", ".join(named[:4]) + (" …" if len(named) > 4 else "")
+        raise LogFormatError(f"motorlab knows none of its columns ({shown}) and none of them can be time (none "
+                             f"rises from row to row): {EXPECTED}", path=name, line=header_no)
+
+
+def _has_data_row(text: TextFile, header_no: int) -> bool:
+    """Whether any line after the header (line ``header_no``) is neither blank nor a comment."""
+    count = 64
+    while True:
+        head = text.head(count)
+        if any(number > header_no and not line.startswith("#") for number, line in head):
+            return True
+        if len(head) < count:
+            return False
+        count *= 4
+
+
+def _unknown(field: str, rules: tuple[ColumnRule, ...]) -> bool:
+    """Whether no rule, known name or name in words gives the column a quantity."""
+    if any(rule.header.casefold() == field.strip().casefold() for rule in rules) or column_name(field) is not None:
+        return False
+    try:
+        return resolve_column(field, rules) == "unknown"
+    except LogFormatError:
+        return False  # a quantity with a unit motorlab cannot read: not unknown, the header's error says so
 
 
 def _parse_rows(

@@ -39,6 +39,24 @@ def _jsonable_default(value: Any) -> Any:
     return str(value)
 
 
+def _choice_labels(opt: Option) -> list[str] | None:
+    """Each choice in words (:data:`motorlab.glossary.CHOICES`; a target's and a catalogue motor's own names)."""
+    if not opt.choices:
+        return None
+    from motorlab.glossary import choice_words
+
+    if opt.name == "target":
+        from motorlab.control.targets import TARGET_INFO
+
+        return [TARGET_INFO[c].label if c in TARGET_INFO else c for c in opt.choices]
+    if opt.name == "motor":
+        from motorlab.catalog import list_motors
+
+        names = {m.key: m.name for m in list_motors()}
+        return [names.get(c, c) for c in opt.choices]
+    return [choice_words(opt.name, c) for c in opt.choices]
+
+
 def field(opt: Option) -> dict[str, Any]:
     """One option (or positional argument) as a JSON-ready form field."""
     flag = opt.kind == "flag"
@@ -57,6 +75,7 @@ def field(opt: Option) -> dict[str, Any]:
         "unit_display": format_unit(unit) if unit else "",
         "default": None if flag else _jsonable_default(opt.default),
         "choices": list(opt.choices) if opt.choices else None,
+        "choice_labels": _choice_labels(opt),
         "required": opt.required,
         "repeatable": opt.kind in ("files", "columns", "spans"),  # --column: one rule per column
         "positive": opt.positive,
@@ -81,9 +100,11 @@ DESCRIPTIONS = {
 
 @functools.cache
 def schema() -> dict[str, Any]:
-    """``{"analyze": {experiment: {...}}, "characterize": {...}, "tune": {...}, "parameters", "targets"}``."""
+    """``{"analyze": {experiment: {...}}, "characterize": {...}, "tune": {...}, "parameters", "targets", "tasks",
+    "gains", "measured_by", "plain_words"}``: every word the page shows for what the descriptions and the
+    glossary name."""
     from motorlab.control.targets import TARGET_INFO
-    from motorlab.glossary import PARAMETERS
+    from motorlab.glossary import GAINS, MEASURED_BY, PARAMETERS, PLAIN_WORDS, TASKS
 
     analyze = {
         name: {
@@ -106,6 +127,10 @@ def schema() -> dict[str, Any]:
         },
         "parameters": {key: p.to_dict() for key, p in PARAMETERS.items()},
         "targets": [info.to_dict() for info in TARGET_INFO.values()],
+        "tasks": {key: task.to_dict() for key, task in TASKS.items()},
+        "gains": dict(GAINS),
+        "measured_by": dict(MEASURED_BY),
+        "plain_words": [list(pair) for pair in PLAIN_WORDS],
     }
 
 

@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from motorlab.proposal import propose
+from motorlab.proposal import propose, run_group, task_of
 
 #: Points sent per curve (a 2M-sample log is thinned by a stride for the browser).
 MAX_POINTS = 4000
@@ -106,10 +106,13 @@ def _detect_one(path: str, columns: Sequence[str] = ()) -> dict[str, Any]:
     units = dict(SIGNALS)
     if needs:  # read with the stand-in: angles are encoder ticks until the student gives the counts
         units.update(position="tick", velocity="tick/s")
-    experiment = propose(fmt, names, str(recording.metadata.get("experiment") or "") or None)
+    experiment = propose(fmt, names, str(recording.metadata.get("experiment") or "") or None,
+                         timed=recording.metadata.get("time") != "row index")
     entry.update(
         experiment=experiment,
-        task=entry["task"] or ("mechanism" if experiment in ("spindown", "identify", "feedforward") else "expert"),
+        group=run_group(experiment, path),  # runs fitted together (a motor's stall runs), or None
+        task=entry["task"] or task_of(experiment)
+        or ("mechanism" if experiment in ("spindown", "identify", "feedforward") else "expert"),
         needs=needs,
         cpr=None if needs else recording.metadata.get("cpr"),
         time=_thin(recording.time),

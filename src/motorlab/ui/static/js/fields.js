@@ -21,8 +21,8 @@ export function field(f, values, onChange, { note = "" } = {}) {
     input = el("input", { type: "checkbox", id, name: f.name, checked: current === "true", onchange: (e) => set(e.target.checked ? "true" : "") });
   } else if (f.kind === "choice") {
     input = el("select", { id, name: f.name, onchange: (e) => set(e.target.value) });
-    input.append(el("option", { value: "", text: f.default !== null && f.default !== undefined ? `${choiceLabel(f.name, f.default)} (default)` : "automatic" }));
-    for (const c of f.choices) input.append(el("option", { value: String(c), text: choiceLabel(f.name, c), selected: String(c) === String(current) }));
+    input.append(el("option", { value: "", text: f.default !== null && f.default !== undefined ? `${choiceLabel(f, f.default)} (default)` : "automatic" }));
+    for (const c of f.choices) input.append(el("option", { value: String(c), text: choiceLabel(f, c), selected: String(c) === String(current) }));
   } else {
     const placeholder = f.default !== null && f.default !== undefined && f.default !== "" ? `default ${f.default}` : (f.unit ? `e.g. in ${prettyUnit(f.unit)}` : "");
     input = el("input", { type: "text", id, name: f.name, value: current, placeholder, autocomplete: "off", spellcheck: "false",

@@ -4,9 +4,12 @@ const PREFIXES = [[1e9, "G"], [1e6, "M"], [1e3, "k"], [1, ""], [1e-3, "m"], [1e-
 const PREFIXABLE = /^(H|ohm|Ω|V|A|W|Hz|F|s|m|N\*m)$/;  // simple units only: "mV·s/rad" reads worse than 0.0123 V·s/rad
 const SUPERSCRIPT = { "-": "⁻", "0": "⁰", "1": "¹", "2": "²", "3": "³", "4": "⁴", "5": "⁵", "6": "⁶", "7": "⁷", "8": "⁸", "9": "⁹" };
 
+// The FTC motor controller's output (32767 = full power), which the server's units call "hub".
+const CONTROLLER_OUTPUT = "output";
+
 export function prettyUnit(unit) {
   if (!unit || unit === "1") return "";
-  return String(unit).replace(/\bohm\b/g, "Ω").replace(/\*/g, "·").replace(/\^(-?\d+)/g, (_, p) => [...p].map((c) => SUPERSCRIPT[c]).join(""))
+  return String(unit).replace(/\bhub\b/g, CONTROLLER_OUTPUT).replace(/^1\/([A-Za-z]+)$/, "$1^-1").replace(/\bohm\b/g, "Ω").replace(/\*/g, "·").replace(/\^(-?\d+)/g, (_, p) => [...p].map((c) => SUPERSCRIPT[c]).join(""))
     .replace(/\bdeg\b/g, "°");
 }
 
@@ -35,6 +38,9 @@ function withPrefix(prefix, unit) {
   return prettyUnit(prefix + u);
 }
 
+// Relative uncertainty below which a value is shown to 5 significant digits (no false precision).
+const FINEST = 1e-4;
+
 // "690 ± 10 µH"; value null -> "not determined".
 export function quantity(value, stderr, unit) {
   if (value === null || value === undefined || (typeof value === "number" && !Number.isFinite(value))) return "not determined";
@@ -44,6 +50,8 @@ export function quantity(value, stderr, unit) {
   const v = value / f;
   if (stderr === null || stderr === undefined || !Number.isFinite(stderr) || stderr <= 0) return `${sig(v, 4)} ${u}`.trim();
   const e = stderr / f;
+  // an uncertainty below 0.01 % is the file's rounding or the model's, not the measurement's: no digits for it
+  if (v !== 0 && e / Math.abs(v) < FINEST) return `${sig(v, 5)} ${u} (uncertainty below 0.01 %)`.replace(/\s+\(/, " (");
   // the uncertainty to 2 significant digits, the value to the same decimal place
   const place = Math.floor(Math.log10(e)) - 1;
   const dec = Math.max(0, -place);
@@ -70,4 +78,10 @@ export function number(value, digits = 4) {
 export function duration(seconds) {
   if (seconds === null || seconds === undefined) return "not reached";
   return quantity(seconds, null, "s");
+}
+
+// An overshoot in percent for people: "no overshoot" below what a plot or a robot shows (0.1 %).
+export function overshoot(percent) {
+  if (percent === null || percent === undefined || !Number.isFinite(percent) || percent < 0.1) return "no overshoot";
+  return `${number(percent, 2)} %`;
 }

@@ -19,8 +19,8 @@ export function render(host, ctx) {
 
   const status = el("p", { class: "status", role: "status" });
   const input = el("input", { type: "file", multiple: true, id: "any-file" });
-  input.addEventListener("change", async () => {
-    const files = [...input.files];
+  // several files at once, chosen or dropped: a motor's runs are fitted together (motorlab analyze stall A B C)
+  const take = async (files) => {
     if (!files.length) return;
     status.textContent = "reading…";
     if (files.some((f) => /\.(toml|zip)$/i.test(f.name))) {
@@ -35,11 +35,13 @@ export function render(host, ctx) {
     const target = taskState(key);
     target.files.push(...scratch.files);
     ctx.goTask(key, "fit");
-  });
-  host.append(el("section", { class: "card" },
-    el("h3", { text: "Not sure? Start from a file" }),
-    el("label", { class: "drop", for: "any-file" }, el("span", { text: "Choose or drop any log: motorlab says what it is and which task it belongs to" }), input),
-    status));
+  };
+  input.addEventListener("change", () => take([...input.files]));
+  const drop = el("label", { class: "drop", for: "any-file" }, el("span", { text: "Choose or drop any log (or several): motorlab says what each is and which task it belongs to" }), input);
+  drop.addEventListener("dragover", (e) => { e.preventDefault(); drop.classList.add("over"); });
+  drop.addEventListener("dragleave", () => drop.classList.remove("over"));
+  drop.addEventListener("drop", (e) => { e.preventDefault(); drop.classList.remove("over"); take([...e.dataTransfer.files]); });
+  host.append(el("section", { class: "card" }, el("h3", { text: "Not sure? Start from a file" }), drop, status));
   host.append(el("p", { class: "small" }, "Results are kept in this browser until you ",
     el("button", { class: "link", type: "button", text: "start over", onclick: async () => { await forget(); ctx.rerender(); } }), "."));
 }

@@ -7,6 +7,8 @@ import { argvOf, appendValues, field, isShared } from "../fields.js";
 import { EXPERIMENT_WORDS, plain } from "../words.js";
 import * as plots from "../plots.js";
 import { leftOut, result as resultView } from "../results.js";
+import { eachRunTable, fitEachAlone, fitsEachAlone } from "../runs.js";
+import { findTask } from "../tasks.js";
 
 // Options shown at once (the others under "More options"), besides required, shared and needed ones.
 const PRIMARY = { spindown: ["inertia", "disc-radius", "disc-thickness", "ratio"], feedforward: ["mechanism"], torque: ["arm"], terminal: ["inertia"] };
@@ -44,7 +46,7 @@ function fileRow(ctx, entry) {
   }
   if (info.format === "session") {
     return el("li", { class: "file" }, el("strong", { text: entry.name }), ": a session description. ",
-      el("a", { href: "#/bench/session", text: "Characterise motors on a bench with it" }), " ", remove);
+      el("a", { href: "#/bench/session", text: `${findTask("bench").title} with it` }), " ", remove);
   }
   const select = el("select", { id, onchange: (e) => { entry.experiment = e.target.value; entry.chosen = true; save(); ctx.rerender(); } });
   for (const key of Object.keys(ctx.app.schema.analyze)) {
@@ -100,7 +102,9 @@ export function groups(t) {
   const out = new Map();
   for (const f of t.files) {
     if (!f.info || f.info.error || !f.experiment) continue;
-    const key = f.info.format === "ftc-log" ? f.experiment : `${f.experiment}:${f.id}`;
+    // runs fitted together (a motor's stall runs: motorlab analyze stall A.csv B.csv), as the upload proposed
+    const key = f.info.group && f.experiment === f.info.experiment ? f.info.group
+      : f.info.format === "ftc-log" ? f.experiment : `${f.experiment}:${f.id}`;
     if (!out.has(key)) out.set(key, []);
     out.get(key).push(f);
   }
@@ -141,6 +145,10 @@ async function runGroup(ctx, key, files) {
     ]);
     Object.assign(run, { status: "done", result: answer, panels, finished: Date.now(), excluded: files.reduce((n, f) => n + (f.excluded || []).length, 0) });
     t.gains.use[key] = true;
+    if (fitsEachAlone(files)) {  // each run's own answer beside the joint one (runs.js)
+      run.each = []; ctx.rerender();
+      run.each = await fitEachAlone(exp, files, fields, values, columnRules(files), { signal: controller.signal }).catch(() => null);
+    }
   } catch (e) {
     Object.assign(run, isAbort(e) ? { status: "stopped" } : { status: "failed", error: e.message });
   } finally {
@@ -153,7 +161,7 @@ async function runGroup(ctx, key, files) {
 function progress(key, p) {
   const bar = $(`[data-group="${key}"] progress`), text = $(`[data-group="${key}"] .run-status`);
   if (bar && p.total) { bar.max = p.total; bar.value = p.done || 0; }
-  if (text) text.textContent = `${p.what || "working"}${p.total ? `: ${p.done || 0} of ${p.total} ${p.unit || ""}` : ""}${p.detail ? ` (${p.detail})` : ""}`;
+  if (text) text.textContent = plain(`${p.what || "working"}${p.total ? `: ${p.done || 0} of ${p.total} ${p.unit || ""}` : ""}${p.detail ? ` (${p.detail})` : ""}`);
 }
 
 function groupCard(ctx, key, files) {
@@ -183,7 +191,7 @@ function groupCard(ctx, key, files) {
     if (spans) card.append(el("p", { class: "small left-out" }, `${sentence(spans.text)} `,
       el("button", { type: "button", class: "link", text: "Put them back", onclick: () => { values.exclude = ""; save(); runGroup(ctx, key, files); } })));
     if (!same) card.append(el("p", { class: "small", text: "The files have changed since this result: run the fit again to update it." }));
-    card.append(...resultView(run.result));
+    card.append(...resultView(run.result), eachRunTable(exp, run.result, run.each) || "");
     const host = el("div", { class: "plots" });
     const exclude = el("div", { class: "actions exclude" });
     const table = files.length === 1 && (files[0].info || {}).format === "csv";

@@ -4,8 +4,8 @@ import { commandBox, debounce, el, uid } from "../dom.js";
 import { post, run as runRequest, isAbort } from "../api.js";
 import { save, state } from "../store.js";
 import { argvOf, appendValues, field, isShared } from "../fields.js";
-import { duration, number, prettyUnit, quantity } from "../format.js";
-import { GAIN_WORDS, MEASURED_BY, parameterWords, plain, targetLabel } from "../words.js";
+import { duration, number, overshoot, prettyUnit, quantity } from "../format.js";
+import { GAIN_WORDS, MEASURED_BY, fieldWords, parameterWords, plain, targetLabel } from "../words.js";
 import * as plots from "../plots.js";
 import { addFiles, groups, runAll } from "./fit.js";
 
@@ -102,7 +102,7 @@ function targetPicker(ctx, onChange) {
 
 function loopPicker(ctx, onChange) {
   const g = ctx.state.gains, name = uid("loop");
-  return el("fieldset", { class: "targets" }, el("legend", { text: "What the loop controls" }),
+  return el("fieldset", { class: "targets" }, el("legend", { text: fieldWords("loop") }),
     [["velocity", "speed"], ["position", "position"]].map(([key, words]) => el("label", { class: "choice" },
       el("input", { type: "radio", name, value: key, checked: key === g.loop, onchange: () => { g.loop = key; save(); onChange(); } }), el("span", { text: words }))));
 }
@@ -129,7 +129,7 @@ function gainsTable(d) {
   return el("table", { class: "params", id: "gains-table" }, el("caption", { text: `Gains for ${targetLabel(d.target)}` }),
     el("tbody", {}, Object.entries(d.gains).map(([k, v]) => row(k, v)), Object.entries(d.feedforward).map(([k, v]) => row(k, v)),
       el("tr", {}, el("th", { scope: "row", text: "Rise time (10 to 90 %)" }), el("td", { class: "num", text: duration(r.rise_time) })),
-      el("tr", {}, el("th", { scope: "row", text: "Overshoot" }), el("td", { class: "num", text: r.overshoot === null || r.overshoot === undefined ? "none" : `${number(r.overshoot, 3)} %` })),
+      el("tr", {}, el("th", { scope: "row", text: "Overshoot" }), el("td", { class: "num", text: overshoot(r.overshoot) })),
       el("tr", {}, el("th", { scope: "row", text: "Settling time" }), el("td", { class: "num", text: duration(r.settling_time) })),
       el("tr", {}, el("th", { scope: "row", text: "Error left after settling" }), el("td", { class: "num", text: quantity(r.steady_state_error, null, unitOf) }))));
 }

@@ -6,6 +6,7 @@ import { quantity } from "../format.js";
 import { save, state, task as taskState } from "../store.js";
 import { registerStep, registerTask } from "../tasks.js";
 import { addFiles } from "./fit.js";
+import { fieldWords } from "../words.js";
 
 registerTask({
   key: "robot",
@@ -189,7 +190,7 @@ registerStep("robot-record", {
       el("div", { class: "fields" },
         el("div", { class: "field" }, el("label", { for: "robot-opmode", text: "OpMode" }), select),
         el("div", { class: "field" }, el("label", { for: "robot-seconds", text: "Stop after (s)" }), seconds),
-        el("div", { class: "field" }, el("label", { for: "robot-cpr", text: "Encoder counts per revolution" }), cpr)),
+        el("div", { class: "field" }, el("label", { for: "robot-cpr", text: fieldWords("cpr") }), cpr)),
       el("p", {}, start), status, live, after, bar);
     resume({ live, bar, status, onStopped: stopped }).catch(() => {});
   },
@@ -278,7 +279,7 @@ registerStep("robot-push", {
       el("div", { class: "fields" },
         el("div", { class: "field" }, el("label", { for: "robot-fit", text: kept ? "Another fit (a motorlab result file, .json)" : "The fit (a motorlab result file, .json)" }), fit),
         el("div", { class: "field" }, el("label", { for: "robot-target", text: "Whose fields" }), target),
-        el("div", { class: "field" }, el("label", { for: "robot-push-cpr", text: "Encoder counts per revolution" }), cpr),
+        el("div", { class: "field" }, el("label", { for: "robot-push-cpr", text: fieldWords("cpr") }), cpr),
         el("div", { class: "field" }, el("label", { for: "robot-radius", text: "Wheel radius (Pedro)" }), radius)),
       el("h3", { text: "Check the drive" }),
       el("div", { class: "fields" },

@@ -71,7 +71,7 @@ function progress(p) {
   const bar = $(".session progress"), text = $(".session .run-status");
   if (bar && p.total) { bar.max = p.total; bar.value = p.done || 0; }
   const counted = p.total ? `${p.done || 0} of ${p.total} ${p.unit}${p.total === 1 ? "" : "s"} done` : "";
-  if (text) { text.dataset.progress = "1"; text.textContent = `${p.what || "working"}: ${counted}${p.detail ? ` (${p.detail})` : ""}`; }
+  if (text) { text.dataset.progress = "1"; text.textContent = plain(`${p.what || "working"}: ${counted}${p.detail ? ` (${p.detail})` : ""}`); }
 }
 
 function resultsTable(r) {
