@@ -160,6 +160,8 @@ def stall(
     answer_voltage: float = 12.0,
     limit: float = 150.0,
     rise: float = 100.0,
+    back_emf: float | None = None,
+    back_emf_stderr: float | None = None,
 ) -> FitResult:
     """K, R₂₅ and the two-node thermal network from locked-rotor runs.
 
@@ -179,6 +181,10 @@ def stall(
     answer_voltage, limit, rise
         The answers: how long a stall at ``answer_voltage`` [V] takes to bring the winding to ``limit``
         [°C], and the stall current held indefinitely for a ``rise`` [K] of the winding.
+    back_emf, back_emf_stderr
+        The motor's back-EMF constant and its standard error [V·s/rad] (from its curve or a spin-down), when
+        known: no shaft's torque per amp exceeds it, so a form of the torque model that puts K above it by more
+        than their combined uncertainty is refused, and a K above it is said.
 
     Returns
     -------
@@ -217,19 +223,7 @@ def stall(
     # The torque against the heating model's current, not the measured one: the model's is free of the
     # ammeter's noise, which would bias the slope low (errors in the regressor).
     smooth = [replace(data[j], current=heat.model_current[pos]) for pos, j in enumerate(fitted)]
-    torque = fit_torque(smooth, heat.case, beta)
-    if torque is not None and math.isfinite(torque.tau0_stderr):
-        torque = _offset_uncertainty(torque, smooth, heat)
-        if len(torque.per_run) == 2 and not abs(torque.tau0) > 3 * torque.tau0_stderr:
-            torque = fit_torque(smooth, heat.case, torque.beta, offset=False, check=False) or torque
-    if torque is not None and torque.beta:
-        torque = _with_case_uncertainty(torque, smooth, heat)
-    if torque is not None:
-        if torque.warning:
-            warnings.append(torque.warning)
-        note = current_dependence(torque)
-        if note:
-            warnings.append(note)
+    torque = _torque(smooth, heat, beta, _back_emf(back_emf, back_emf_stderr), warnings)
     result = _result(runs, used, fitted, heat, torque, warnings, recs,
                      {"beta": beta, "ambient": ambient, "answer_voltage": answer_voltage, "limit": limit,
                       "rise": rise, "until": until, "magnet": magnet if magnet_coefficient is None else "given"})
@@ -287,6 +281,49 @@ def _same_shaft(runs: list[Run], used: list[int], warnings: list[str]) -> list[i
     return out
 
 
+def _back_emf(value: float | None, stderr: float | None) -> tuple[float, float] | None:
+    """The back-EMF bound (value, standard error) [V·s/rad], refused in one line when not a positive number."""
+    if value is None:
+        return None
+    if not (math.isfinite(value) and value > 0):
+        raise OptionError(f"the back-EMF constant must be a positive number of V·s/rad, got {value!r}")
+    se = 0.0 if stderr is None else float(stderr)
+    if not (math.isfinite(se) and se >= 0):
+        raise OptionError(f"the back-EMF constant's standard error must be 0 or more, got {stderr!r}")
+    return float(value), se
+
+
+def _torque(smooth: list[StallData], heat: HeatFit, beta: float, bound: tuple[float, float] | None,
+            warnings: list[str]) -> TorqueFit | None:
+    """K (and τ₀ when the data select it) from the runs' torque against the heating model's current, with the
+    standard errors of the heating model's case temperatures and the between-run scatter; the words that go
+    with it appended to ``warnings``."""
+    torque = fit_torque(smooth, heat.case, beta, back_emf=bound)
+    if torque is None:
+        return None
+    if torque.form == "offset":
+        torque = _offset_uncertainty(torque, smooth, heat)
+        z = abs(torque.tau0) / torque.tau0_stderr
+        if len(torque.per_run) == 2:
+            if not z > 3:
+                torque = fit_torque(smooth, heat.case, beta, offset=False, back_emf=bound) or torque
+            torque.selection = (f"form chosen by the offset's z (two runs; the held-out test needs three): τ₀ = "
+                                f"{torque.tau0 if torque.form == 'offset' else 0.0:.3g}, {z:.1f} standard errors of "
+                                "the torque and the heating model" + ("" if z > 3 else ": under 3, no offset"))
+    if torque.beta:
+        torque = _with_case_uncertainty(torque, smooth, heat)
+    if torque.warning:
+        warnings.append(torque.warning)
+    note = current_dependence(torque)
+    if note:
+        warnings.append(note)
+    if bound is not None and torque.K > bound[0]:
+        warnings.append(f"K = {torque.K:.4g} ± {torque.K_stderr:.2g} N·m/A is {100 * (torque.K / bound[0] - 1):.1f} % "
+                        f"above the motor's back-EMF constant {bound[0]:.4g} V·s/rad, which no shaft's torque per amp "
+                        "exceeds: the torque channel reads high (an offset or its scale)")
+    return torque
+
+
 def _offset_uncertainty(torque: TorqueFit, data: list[StallData], heat: HeatFit) -> TorqueFit:
     """τ₀'s standard error with the uncertainty of the heating model it is fitted against (the model's current
     and case temperature, from the heating fit's whole covariance by the delta method). Two runs determine τ₀
@@ -305,7 +342,7 @@ def _offset_uncertainty(torque: TorqueFit, data: list[StallData], heat: HeatFit)
             initial[j] = float(moved[len(SHARED) + pos])
         sims = simulate_runs(np.exp(moved[: len(SHARED)]), initial, data, torque.beta, ambient)
         runs = [replace(d, current=s[0]) for d, s in zip(data, sims, strict=True)]
-        refit = fit_torque(runs, [s[2] for s in sims], torque.beta, check=False)
+        refit = fit_torque(runs, [s[2] for s in sims], torque.magnet, offset=True, beta=torque.beta)
         grad[k] = ((refit.tau0 if refit is not None else torque.tau0) - torque.tau0) / step
     extra = float(grad @ np.nan_to_num(heat.fit.covariance) @ grad)
     torque.tau0_stderr = math.sqrt(torque.tau0_stderr**2 + max(extra, 0.0))
@@ -321,8 +358,8 @@ def _with_case_uncertainty(torque: TorqueFit, data: list[StallData], heat: HeatF
         shared = list(base)
         shared[k] *= math.exp(1e-3)
         sims = simulate_runs(shared, heat.initial, data, torque.beta, heat.thermal.ambient_temperature)
-        moved = fit_torque(data, [s[2] for s in sims], torque.beta, offset=math.isfinite(torque.tau0_stderr),
-                           check=False)
+        moved = fit_torque(data, [s[2] for s in sims], torque.magnet, offset=torque.form == "offset",
+                           beta=torque.beta)
         grad[k] = ((moved.K if moved is not None else torque.K) - torque.K) / 1e-3
     extra = float(grad @ np.nan_to_num(heat.log_covariance) @ grad)
     torque.K_stderr = math.sqrt(torque.K_stderr**2 + max(extra, 0.0))
