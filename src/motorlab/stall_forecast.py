@@ -51,6 +51,9 @@ class StallModel:
     #: resistance [Ω] the heating model did not account for then, the time it was measured at [s] and the run's
     #: set point [V]. A forecast that continues the run (at that voltage, from its start) holds it on from there.
     contact: dict[str, float] = field(default_factory=dict)
+    #: Where the thermal network comes from, in words (``details["network"]`` of the fit): fitted to the run, held
+    #: at the motor's other runs', or the population's winding.
+    network: str = "fitted to these runs"
 
 
 def load_fit(path: str | Path) -> StallModel:
@@ -95,11 +98,13 @@ def load_fit(path: str | Path) -> StallModel:
         raise InputError(exc.message, path=str(path)) from None
     note = str((params.get("K") or {}).get("note", ""))
     r_ca = params.get("R_ca") if isinstance(params.get("R_ca"), dict) else {}
+    network = str(details.get("network") or "fitted to these runs")
     return StallModel(r, thermal, value("K"), value("tau0") if math.isfinite(value("tau0")) else 0.0,
                       "magnets' coefficient applied" in note,
                       float(details.get("initial_temperature_C") or thermal.ambient_temperature),
                       float(details.get("max_winding_temperature_C") or math.inf), str(path),
-                      bool(r_ca) and not r_ca.get("determined", True), _contact(details.get("brush_contact")))
+                      bool(r_ca) and not r_ca.get("determined", True) and network == "fitted to these runs",
+                      _contact(details.get("brush_contact")), network)
 
 
 def _contact(entry: Any) -> dict[str, float]:
@@ -169,6 +174,9 @@ def forecast(model: StallModel, voltage: float, duration: float, *, initial_temp
                             f"hottest winding temperature the fit saw ({model.hottest:.0f} °C): extrapolated")
     if model.case_loss_from_prior:
         out.warnings.append(_case_loss_band(model, t, voltage, t0, run.current, contact))
+    if model.network != "fitted to these runs":
+        out.warnings.append(f"the thermal network of this forecast is {model.network}, not the fitted run's own "
+                            f"(no single network fits it): {_winding_band(model, t, voltage, t0, run.current, contact)}")
     if contact and abs(contact["relative"]) >= 0.01 and t[-1] > contact["from_s"]:
         out.warnings.append(
             f"the fitted run's resistance ended {100 * contact['relative']:+.1f} % "
@@ -214,6 +222,22 @@ def _case_loss_band(model: StallModel, t: np.ndarray, voltage: float, t0: float,
             f"fitted run, too short for the case to settle (a prior on the case's time constant, or a bound, set it): "
             f"with R_ca {CASE_PRIOR_FACTOR:g} times smaller or larger the current at {float(t[-1]):.0f} s would be "
             f"{min(ends):.4g}–{max(ends):.4g} A instead of {float(current[-1]):.4g} A; fit a longer run to pin it")
+
+
+def _winding_band(model: StallModel, t: np.ndarray, voltage: float, t0: float, current: np.ndarray,
+                  contact: dict[str, float]) -> str:
+    """The forecast's current at its end with the winding's time constant (its heat capacity C_w) a factor
+    :data:`WINDING_BAND_FACTOR` either way: the band of a network not fitted to the run."""
+    ends = []
+    for factor in (1 / WINDING_BAND_FACTOR, WINDING_BAND_FACTOR):
+        th = replace(model.thermal, winding_capacity=model.thermal.winding_capacity * factor)
+        ends.append(float(_response(replace(model, thermal=th), t, float(voltage), t0, contact).current[-1]))
+    return (f"with the winding's heat capacity {WINDING_BAND_FACTOR:g} times smaller or larger the current at "
+            f"{float(t[-1]):.0f} s would be {min(ends):.4g}–{max(ends):.4g} A instead of {float(current[-1]):.4g} A")
+
+
+#: The factor either way on the winding's heat capacity of a forecast whose network is not the run's own.
+WINDING_BAND_FACTOR = 2.0
 
 
 def stall_answers(model: StallModel, voltage: float, *, limit: float = WINDING_LIMIT, rise: float = 100.0,

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -57,6 +57,8 @@ class HeatFit:
     run_rms: list[float]  # relative RMS residual per run [-]
     log_covariance: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
     prior: bool = False  # R_ca from the prior on the case's time constant (the runs could not tell it)
+    held: bool = False  # the network held at another fit's (the motor's other runs), not fitted to these runs
+    winding_from_prior: bool = False  # R_wc·C_w held near the population's (no single network fits the run)
 
 
 def _thermal(values: Sequence[float], magnet: float, ambient: float) -> ThermalModel:
@@ -126,6 +128,11 @@ def _guess(runs: Sequence[StallData], reference: int, ambient: float) -> list[fl
 #: others: 177–200 s). It replaced 800 s (VEX's BAG 2 V run, where R_ca is not determined either).
 PRIOR_CASE_TIME_CONSTANT = 186.0
 PRIOR_LOG_SIGMA = 0.408
+#: The winding's time constant R_wc·C_w a run whose own network is no motor's is held near [s], and the spread of
+#: its logarithm: the geometric mean and spread of the 21 healthy runs' 120 s fits of VEX's nine motors
+#: (docs/experiments/stall.md, "a winding slower than its case": 3–107 s).
+PRIOR_WINDING_TIME_CONSTANT = 20.0
+PRIOR_WINDING_LOG_SIGMA = 0.92
 
 
 def _needs_prior(fit: LeastSquares, hi: Sequence[float]) -> bool:
@@ -148,8 +155,13 @@ def reference_run(runs: Sequence[StallData]) -> int:
     return int(np.argmin(r0))
 
 
-def fit_heating(runs: Sequence[StallData], *, magnet: float, ambient: float) -> HeatFit:
+def fit_heating(runs: Sequence[StallData], *, magnet: float, ambient: float, winding_prior: bool = False,
+                network: Sequence[float] | None = None) -> HeatFit:
     """Fit R₂₅, the thermal network and each run's initial temperature to the runs' currents.
+
+    ``winding_prior`` adds a prior on the winding's time constant R_wc·C_w (:data:`PRIOR_WINDING_TIME_CONSTANT`),
+    for a run whose best network is no motor's (a winding slower than its case). ``network`` (R_wc, R_ca, C_w, C_c)
+    holds the network at another fit's (the motor's other runs): only R₂₅ and the initial temperatures are fitted.
 
     Raises
     ------
@@ -160,16 +172,26 @@ def fit_heating(runs: Sequence[StallData], *, magnet: float, ambient: float) -> 
     reference = reference_run(runs)
     free = [j for j in range(len(runs)) if j != reference]
     start = _guess(runs, reference, ambient)
+    if network is not None:
+        start = [start[0], *map(float, network)]
     t0_guess = [ambient + max(r0[j] / r0[reference] - 1, 0.0) / COPPER_COEFFICIENT for j in free]
     x0 = [*np.log(start), *t0_guess]
     names = [*SHARED, *(f"T0_{j}" for j in free)]
     lo = [math.log(BOUNDS[n][0]) for n in SHARED] + [ambient - 30.0] * len(free)
     hi = [math.log(BOUNDS[n][1]) for n in SHARED] + [ambient + 250.0] * len(free)
     x0 = list(np.clip(x0, np.array(lo) + 1e-9, np.array(hi) - 1e-9))
+    # the parameters fitted: all, or R₂₅ and the initial temperatures with the network held
+    active = [k for k in range(len(x0)) if network is None or not 1 <= k < len(SHARED)]
+    held = np.asarray(x0, dtype=float)
     picks = [decimate(r.time) for r in runs]
     thin = [StallData(r.source, r.time[p], r.voltage[p], r.current[p], None) for r, p in zip(runs, picks, strict=True)]
     meas = [r.current for r in thin]
     groups = np.concatenate([np.full(r.time.size, j) for j, r in enumerate(thin)])
+
+    def whole(xa: np.ndarray) -> np.ndarray:
+        x = held.copy()
+        x[active] = xa
+        return x
 
     def initial_of(x: np.ndarray) -> list[float]:
         t0 = [ambient] * len(runs)
@@ -177,26 +199,38 @@ def fit_heating(runs: Sequence[StallData], *, magnet: float, ambient: float) -> 
             t0[j] = float(x[len(SHARED) + k])
         return t0
 
-    def residual(x: np.ndarray) -> np.ndarray:
+    def residual(xa: np.ndarray) -> np.ndarray:
+        x = whole(xa)
         sims = simulate_runs(np.exp(x[: len(SHARED)]), initial_of(x), thin, magnet, ambient)
         return np.concatenate([(s[0] - m) / m for s, m in zip(sims, meas, strict=True)])
 
-    if groups.size <= len(x0):
-        raise FitError(f"{groups.size} healthy samples cannot determine {len(x0)} parameters")
-    fit = fit_least_squares(residual, x0, names, bounds=(lo, hi), x_scale=[1.0] * len(x0), covariance="hac",
-                            groups=groups, max_nfev=200 * len(x0))
-    # R_ca "from the prior" when the runs alone cannot tell it (too short for the case to approach its steady
-    # rise); the prior on the case's time constant R_ca·C_c (the population of real motors) is applied in every
-    # fit, weighted as one sample of the fit's own scatter: a 120 s run determines R_ca·C_c poorly even when it
-    # bounds R_ca (VEX's NeveRest 6 V: 42 s ± 8 % from its first 120 s, 253 s from its whole 300 s).
-    prior = _needs_prior(fit, hi)
-    weight = max(fit.rmse, 1e-4) / PRIOR_LOG_SIGMA
+    if groups.size <= len(active):
+        raise FitError(f"{groups.size} healthy samples cannot determine {len(active)} parameters")
+    sub = [names[k] for k in active]
+    bounds = ([lo[k] for k in active], [hi[k] for k in active])
+    fit = fit_least_squares(residual, [x0[k] for k in active], sub, bounds=bounds, x_scale=[1.0] * len(active),
+                            covariance="hac", groups=groups, max_nfev=200 * len(x0))
+    prior = False
+    if network is None:
+        # R_ca "from the prior" when the runs alone cannot tell it (too short for the case to approach its steady
+        # rise); the prior on the case's time constant R_ca·C_c (the population of real motors) is applied in every
+        # fit, weighted as one sample of the fit's own scatter: a 120 s run determines R_ca·C_c poorly even when it
+        # bounds R_ca (VEX's NeveRest 6 V: 42 s ± 8 % from its first 120 s, 253 s from its whole 300 s).
+        prior = _needs_prior(fit, hi)
+        weight = max(fit.rmse, 1e-4) / PRIOR_LOG_SIGMA
+        w_weight = max(fit.rmse, 1e-4) / PRIOR_WINDING_LOG_SIGMA
 
-    def with_prior(x: np.ndarray) -> np.ndarray:
-        return np.append(residual(x), weight * (x[2] + x[4] - math.log(PRIOR_CASE_TIME_CONSTANT)))
+        def with_prior(x: np.ndarray) -> np.ndarray:
+            out = np.append(residual(x), weight * (x[2] + x[4] - math.log(PRIOR_CASE_TIME_CONSTANT)))
+            if winding_prior:
+                out = np.append(out, w_weight * (x[1] + x[3] - math.log(PRIOR_WINDING_TIME_CONSTANT)))
+            return out
 
-    fit = fit_least_squares(with_prior, list(fit.values), names, bounds=(lo, hi), x_scale=[1.0] * len(x0),
-                            covariance="hac", groups=np.append(groups, len(runs)), max_nfev=200 * len(x0))
+        fit = fit_least_squares(with_prior, list(fit.values), names, bounds=(lo, hi), x_scale=[1.0] * len(x0),
+                                covariance="hac", groups=np.append(groups, [len(runs)] * (1 + winding_prior)),
+                                max_nfev=200 * len(x0))
+    else:
+        fit = _expand(fit, active, held, names)
     shared = np.exp(fit.values[: len(SHARED)])
     t0 = initial_of(fit.values)
     sims = simulate_runs(shared, t0, runs, magnet, ambient)
@@ -213,7 +247,25 @@ def fit_heating(runs: Sequence[StallData], *, magnet: float, ambient: float) -> 
         thermal=_thermal(shared, magnet, ambient),
         model_current=[s[0] for s in sims], winding=[s[1] for s in sims], case=[s[2] for s in sims],
         run_rms=rms, log_covariance=fit.covariance[: len(SHARED), : len(SHARED)],
+        held=network is not None,
     )
+
+
+def _expand(fit: LeastSquares, active: list[int], held: np.ndarray, names: list[str]) -> LeastSquares:
+    """A fit of some parameters as one of all: the held ones at their values, standard error 0, not determined by
+    these runs."""
+    n = held.size
+    values, stderr, cov = held.copy(), np.zeros(n), np.zeros((n, n))
+    values[active], stderr[active] = fit.values, fit.stderr
+    cov[np.ix_(active, active)] = fit.covariance
+    corr = np.eye(n)
+    corr[np.ix_(active, active)] = fit.correlation
+    determined = np.zeros(n, dtype=bool)
+    determined[active] = fit.determined
+    jac = np.zeros((fit.jacobian.shape[0], n))
+    jac[:, active] = fit.jacobian
+    return replace(fit, names=list(names), values=values, stderr=stderr, covariance=cov, correlation=corr,
+                   determined=determined, jacobian=jac)
 
 
 #: The forms of the torque model a fit chooses between: τ = K₂₅·(1 + β·(T_c − 25 °C))·i through the origin, or

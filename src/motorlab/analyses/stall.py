@@ -22,6 +22,8 @@ import numpy as np
 from motorlab.analyses._common import reader_warnings, sources_of
 from motorlab.analyses._stall_cuts import NO_CURRENT, Cut, find_cut, first_full_sample, set_point
 from motorlab.analyses._stall_fit import (
+    PRIOR_WINDING_LOG_SIGMA,
+    PRIOR_WINDING_TIME_CONSTANT,
     REFERENCE_SAMPLES,
     SHARED,
     HeatFit,
@@ -34,10 +36,10 @@ from motorlab.analyses._stall_fit import (
 )
 from motorlab.analyses._stall_report import answers, make_panels, parameters_of, run_rows
 from motorlab.decimate import consecutive
-from motorlab.errors import FitError, LogFormatError, OptionError
+from motorlab.errors import FitError, LogFormatError, MotorlabError, OptionError
 from motorlab.recording import Recording
 from motorlab.results import FitResult
-from motorlab.thermal import MAGNET_COEFFICIENTS, WINDING_LIMIT
+from motorlab.thermal import MAGNET_COEFFICIENTS, WINDING_LIMIT, ThermalModel
 
 #: Fewest healthy samples a run needs to enter the fit.
 MIN_SAMPLES = 5
@@ -143,6 +145,10 @@ def _runs_of(recs: list[Recording], voltage: float | None, until: float | None,
             if len(recs) == 1 or "current" not in exc.message:
                 raise
             refused.append(exc)
+        except OptionError as exc:  # no voltage column (a peak-power export among the runs): named, left out
+            if len(recs) == 1:
+                raise
+            refused.append(exc)
     if not runs:
         raise refused[0]
     warnings.extend(f"{exc}: left out" for exc in refused)
@@ -162,6 +168,8 @@ def stall(
     rise: float = 100.0,
     back_emf: float | None = None,
     back_emf_stderr: float | None = None,
+    network: ThermalModel | None = None,
+    network_source: str = "",
 ) -> FitResult:
     """K, R₂₅ and the two-node thermal network from locked-rotor runs.
 
@@ -185,6 +193,10 @@ def stall(
         The motor's back-EMF constant and its standard error [V·s/rad] (from its curve or a spin-down), when
         known: no shaft's torque per amp exceeds it, so a form of the torque model that puts K above it by more
         than their combined uncertainty is refused, and a K above it is said.
+    network, network_source
+        A thermal network to hold (the fit of the motor's other runs, :func:`motorlab.stall_forecast.load_fit`) and
+        where it comes from, in words: only R₂₅ and the initial temperatures are fitted (a run no single network
+        fits, forecast from the motor's other runs).
 
     Returns
     -------
@@ -207,6 +219,9 @@ def stall(
     if not (math.isfinite(ambient) and -40 <= ambient <= 80):
         raise OptionError(f"the ambient temperature must lie between −40 and 80 °C, got {ambient!r}")
     warnings = reader_warnings(recs)
+    recs, from_curve = _curves(recs, warnings)
+    if back_emf is None and from_curve is not None:
+        back_emf, back_emf_stderr = from_curve
     runs, recs = _runs_of(recs, voltage, until, warnings)
     used = [k for k, r in enumerate(runs) if r.end - r.start >= MIN_SAMPLES]
     for k, r in enumerate(runs):
@@ -215,8 +230,17 @@ def stall(
     if not used:
         raise FitError("no run has a healthy stretch of at least 5 samples to fit")
     used = _same_shaft(runs, used, warnings)
-    heat, excluded, unexplained = _fit_with_exclusions([runs[k] for k in used], beta, ambient, warnings)
-    if not unexplained:
+    if network is not None:
+        heat = fit_heating([runs[k].data() for k in used], magnet=beta, ambient=ambient, network=(
+            network.winding_to_case, network.case_to_ambient, network.winding_capacity, network.case_capacity))
+        excluded, unexplained = [], ""
+        warnings.append(f"the thermal network is held at that of {network_source or 'another fit'} (the motor's other "
+                        f"runs: R_wc·C_w = {network.winding_to_case * network.winding_capacity:.3g} s, R_ca·C_c = "
+                        f"{network.case_to_ambient * network.case_capacity:.3g} s); only R at 25 °C and the runs' "
+                        "initial temperatures are fitted to these runs")
+    else:
+        heat, excluded, unexplained = _fit_with_exclusions([runs[k] for k in used], beta, ambient, warnings)
+    if not unexplained and network is None:
         heat = _drop_implausible_starts([runs[k].data() for k in used], heat, excluded, beta, ambient, warnings)
     data = [runs[k].data() for k in used]
     fitted = [j for j in range(len(used)) if j not in excluded]
@@ -226,7 +250,8 @@ def stall(
     torque = _torque(smooth, heat, beta, _back_emf(back_emf, back_emf_stderr), warnings)
     result = _result(runs, used, fitted, heat, torque, warnings, recs,
                      {"beta": beta, "ambient": ambient, "answer_voltage": answer_voltage, "limit": limit,
-                      "rise": rise, "until": until, "magnet": magnet if magnet_coefficient is None else "given"})
+                      "rise": rise, "until": until, "magnet": magnet if magnet_coefficient is None else "given",
+                      "network_source": network_source})
     if unexplained:
         _mark_unexplained(result, unexplained)
     return result
@@ -279,6 +304,42 @@ def _same_shaft(runs: list[Run], used: list[int], warnings: list[str]) -> list[i
         else:
             out.append(k)
     return out
+
+
+def _curves(recs: list[Recording], warnings: list[str]) -> tuple[list[Recording], tuple[float, float] | None]:
+    """The recordings that are runs, and the back-EMF constant (value, standard error) [V·s/rad] of a motor curve
+    among them (a file with a speed column, fitted by :func:`motorlab.analyses.curve.curve`), named in
+    ``warnings``. A curve that cannot be fitted is named and left out.
+
+    Raises
+    ------
+    FitError
+        Every file is a curve: no locked-rotor run.
+    """
+    from motorlab.analyses.curve import curve
+
+    runs, bound = [], None
+    for rec in recs:
+        if "speed" not in rec:
+            runs.append(rec)
+            continue
+        name = str(rec.source or "a curve").replace("\\", "/").rsplit("/", 1)[-1]
+        try:
+            ke = curve(rec)["K"]
+        except MotorlabError as exc:
+            warnings.append(f"{name}: a motor curve (it has a speed column) that cannot be fitted ({exc}): left out")
+            continue
+        if not (ke.determined and math.isfinite(ke.value) and ke.value > 0):
+            warnings.append(f"{name}: a motor curve whose back-EMF constant is not determined: left out")
+            continue
+        se = float(ke.stderr) if math.isfinite(ke.stderr) else 0.0
+        if bound is None or ke.value < bound[0]:
+            bound = (float(ke.value), se)
+        warnings.append(f"{name}: a motor curve, not a locked-rotor run: its back-EMF constant K = {ke.value:.4g} ± "
+                        f"{se:.1g} V·s/rad bounds the stall K (no shaft's torque per amp exceeds it)")
+    if not runs:
+        raise FitError("every file is a motor curve: give the locked-rotor runs (time, current, voltage, torque) too")
+    return runs, bound
 
 
 def _back_emf(value: float | None, stderr: float | None) -> tuple[float, float] | None:
@@ -389,8 +450,16 @@ def _fit_with_exclusions(runs: list[Run], beta: float, ambient: float,
         tau_w = heat.values["R_wc"] * heat.values["C_w"]
         failing = [j for j, rms in enumerate(heat.run_rms)
                    if rms > UNEXPLAINED_RMS or (tau_w < MIN_WINDING_TIME_CONSTANT and data[j].time.size >= 30)]
-        if len(data) == 1 and data[0].time.size >= 30 and tau_w > heat.values["R_ca"] * heat.values["C_c"]:
-            failing = [0]  # a winding slower than its case: no motor's network (a lone run: its own network)
+        if (len(data) == 1 and data[0].time.size >= 30 and tau_w > heat.values["R_ca"] * heat.values["C_c"]
+                and heat.run_rms[0] <= UNEXPLAINED_RMS):
+            # a winding slower than its case: no motor's network. The run is forecast from the population's winding
+            # (or, given, the motor's other runs' network) instead; said, with the run's figures.
+            slow = _slow_start(data[0], heat)
+            if slow:
+                heat = fit_heating(data, magnet=beta, ambient=ambient, winding_prior=True)
+                heat.winding_from_prior = True
+                warnings.append(f"{data[0].source}: no single thermal network fits this run: {slow}")
+                return heat, excluded, ""
         if len(failing) == len(data):  # nothing to compare with: say so, and what the run's own heat allows
             text = " ".join(_lone_unexplained(data[j], heat, j) for j in failing)
             warnings.append(text)
@@ -456,7 +525,10 @@ def _slow_start(run: StallData, heat: HeatFit) -> str:
             f"winding slower to reach its case (R_wc·C_w = {tau_w:.0f} s) than the case is to reach the air "
             f"(R_ca·C_c = {tau_c:.0f} s), a network no motor has (VEX's healthy runs: 3–114 s against 49–660 s); "
             "likely cause: brush contact (the brushes' contact resistance falling as they warm and bed in hides "
-            "the copper's rise at first), not heat. No thermal network from it, and no forecast")
+            "the copper's rise at first), not heat. Its network is the population's winding instead (R_wc·C_w held "
+            f"near {PRIOR_WINDING_TIME_CONSTANT:.0f} s, a factor {math.exp(PRIOR_WINDING_LOG_SIGMA):.1f} either way; "
+            "its forecast says so); for a better forecast, fit the motor's other runs and give that fit as the "
+            "network (--network FIT.json): their network with this run's R")
 
 
 def _lone_unexplained(run: StallData, heat: HeatFit, pos: int) -> str:
@@ -539,7 +611,17 @@ def _result(runs: list[Run], used: list[int], fitted: list[int], heat: HeatFit, 
         "until_s": opts["until"],
         "magnet": opts["magnet"],
         "shaft": "the stalled shaft where torque is measured (a bare motor: the motor shaft)",
+        "network": ("held at " + (opts.get("network_source") or "another fit's") if heat.held else
+                    "the population's winding (the run alone needs a winding slower than its case)"
+                    if heat.winding_from_prior else "fitted to these runs"),
     }
+    if torque is not None:
+        details["K_runs"] = [{"file": runs[used[fitted[pos]]].source.replace("\\", "/").rsplit("/", 1)[-1],
+                              "mean current (A)": r[0], "K (N·m/A)": r[1], "stderr (N·m/A)": r[2]}
+                             for pos, r in enumerate(torque.per_run)] if len(torque.per_run) == len(fitted) else []
+        details["K_model"] = {"form": torque.form, "beta_per_K": torque.beta, "magnet_bound_per_K": torque.magnet,
+                              "between_run_sd": torque.between, "pooled_K": torque.pooled[0],
+                              "selection": torque.selection, "refused": list(torque.refused)}
     if len(data) == 1:
         details["brush_contact"] = _contact_at_end(data[0], heat.model_current[0], runs[used[fitted[0]]].set_point)
     current = np.concatenate([d.current for d in data])
