@@ -98,13 +98,13 @@ def load_fit(path: str | Path) -> StallModel:
         raise InputError(exc.message, path=str(path)) from None
     note = str((params.get("K") or {}).get("note", ""))
     r_ca = params.get("R_ca") if isinstance(params.get("R_ca"), dict) else {}
-    network = str(details.get("network") or "fitted to these runs")
+    source = str(details.get("network") or "fitted to these runs")
     return StallModel(r, thermal, value("K"), value("tau0") if math.isfinite(value("tau0")) else 0.0,
                       "magnets' coefficient applied" in note,
                       float(details.get("initial_temperature_C") or thermal.ambient_temperature),
                       float(details.get("max_winding_temperature_C") or math.inf), str(path),
-                      bool(r_ca) and not r_ca.get("determined", True) and network == "fitted to these runs",
-                      _contact(details.get("brush_contact")), network)
+                      bool(r_ca) and not r_ca.get("determined", True) and source == "fitted to these runs",
+                      _contact(details.get("brush_contact")), source)
 
 
 def _contact(entry: Any) -> dict[str, float]:
@@ -175,8 +175,9 @@ def forecast(model: StallModel, voltage: float, duration: float, *, initial_temp
     if model.case_loss_from_prior:
         out.warnings.append(_case_loss_band(model, t, voltage, t0, run.current, contact))
     if model.network != "fitted to these runs":
+        band = _winding_band(model, t, voltage, t0, run.current, contact)
         out.warnings.append(f"the thermal network of this forecast is {model.network}, not the fitted run's own "
-                            f"(no single network fits it): {_winding_band(model, t, voltage, t0, run.current, contact)}")
+                            f"(no single network fits it): {band}")
     if contact and abs(contact["relative"]) >= 0.01 and t[-1] > contact["from_s"]:
         out.warnings.append(
             f"the fitted run's resistance ended {100 * contact['relative']:+.1f} % "

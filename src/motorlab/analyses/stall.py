@@ -133,7 +133,8 @@ def _runs_of(recs: list[Recording], voltage: float | None, until: float | None,
     LogFormatError
         A lone file without current, or every file without.
     """
-    runs, kept, refused = [], [], []
+    runs, kept = [], []
+    refused: list[LogFormatError | OptionError] = []
     for rec in recs:
         try:
             runs.append(_run_of(rec, voltage, until))
@@ -233,7 +234,8 @@ def stall(
     if network is not None:
         heat = fit_heating([runs[k].data() for k in used], magnet=beta, ambient=ambient, network=(
             network.winding_to_case, network.case_to_ambient, network.winding_capacity, network.case_capacity))
-        excluded, unexplained = [], ""
+        excluded: list[int] = []
+        unexplained = ""
         warnings.append(f"the thermal network is held at that of {network_source or 'another fit'} (the motor's other "
                         f"runs: R_wc·C_w = {network.winding_to_case * network.winding_capacity:.3g} s, R_ca·C_c = "
                         f"{network.case_to_ambient * network.case_capacity:.3g} s); only R at 25 °C and the runs' "
