@@ -86,7 +86,7 @@ EXPERIMENT = Experiment(
                label="The motor's back-EMF constant", help="instead of a curve (from a spin-down or a datasheet): "
                "bounds K"),
         Option("network", kind="files", metavar="FIT.json", label="Thermal network of the motor's other runs",
-               help="a stall fit (--json) of the same motor's other runs: its network is held and only R and the "
+               help="a stall fit (as JSON) of the same motor's other runs: its network is held and only R and the "
                     "start temperatures are fitted (a run no single network fits)"),
         COLUMN,
     ),
