@@ -427,6 +427,16 @@ def fit_torque(runs: Sequence[StallData], case: Sequence[np.ndarray], magnet: fl
             else:
                 break
         chosen = fine[0] if fine else order[0]
+    elif chosen == "offset" and "origin" in solved:
+        # K above every run's own torque per amp (a negative τ₀) claims a motor stronger than any row shows: only a
+        # back-EMF constant can confirm it; without one the form is refused (the rows contradict it)
+        own = [r[1] for r in _per_run(with_torque, solved["offset"].beta, 0.0)]
+        if solved["offset"].K > max(own):
+            refused.append(f"{_FORM_WORDS['offset']} gives K = {solved['offset'].K:.4g} N·m/A with τ₀ = "
+                           f"{solved['offset'].tau0:.3g} N·m, above every run's own torque per amp ({min(own):.4g}–"
+                           f"{max(own):.4g}): the rows contradict it, and no back-EMF constant (a curve, "
+                           "--back-emf) is given that could confirm it: refused")
+            chosen = "origin"
     s = solved[chosen]
     warning = _beta_words(s, magnet) if beta is None else None
     per_run = _per_run(with_torque, s.beta, s.tau0)
