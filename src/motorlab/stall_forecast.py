@@ -54,6 +54,9 @@ class StallModel:
     #: Where the thermal network comes from, in words (``details["network"]`` of the fit): fitted to the run, held
     #: at the motor's other runs', or the population's winding.
     network: str = "fitted to these runs"
+    #: The covariance of the logarithms of (R, R_wc, R_ca, C_w, C_c) from the fit's standard errors and correlation
+    #: (empty: unknown), for the forecast's band.
+    log_covariance: tuple[tuple[float, ...], ...] = ()
 
 
 def load_fit(path: str | Path) -> StallModel:
@@ -104,7 +107,35 @@ def load_fit(path: str | Path) -> StallModel:
                       float(details.get("initial_temperature_C") or thermal.ambient_temperature),
                       float(details.get("max_winding_temperature_C") or math.inf), str(path),
                       bool(r_ca) and not r_ca.get("determined", True) and source == "fitted to these runs",
-                      _contact(details.get("brush_contact")), source)
+                      _contact(details.get("brush_contact")), source, _log_covariance(doc))
+
+
+#: The fit's parameters a forecast's band comes from, in the order of its correlation matrix.
+BAND_PARAMETERS = ("R", "R_wc", "R_ca", "C_w", "C_c")
+
+
+def _log_covariance(doc: dict[str, Any]) -> tuple[tuple[float, ...], ...]:
+    """The covariance of the logarithms of :data:`BAND_PARAMETERS` from a fit file's standard errors (relative) and
+    correlation; () when they are not all there (a parameter not determined counts as held: no spread)."""
+    params = doc.get("parameters") or {}
+    corr = ((doc.get("fit") or {}).get("correlation") or {})
+    names, matrix = corr.get("names"), corr.get("matrix")
+    if names != list(BAND_PARAMETERS) or not isinstance(matrix, list):
+        return ()
+    rel = []
+    for name in BAND_PARAMETERS:
+        entry = params.get(name) or {}
+        value, se = entry.get("value"), entry.get("stderr")
+        if (isinstance(value, int | float) and isinstance(se, int | float) and value > 0 and math.isfinite(se)
+                and entry.get("determined", True) is not False):
+            rel.append(float(se) / float(value))
+        else:
+            rel.append(0.0)
+    try:
+        c = np.nan_to_num(np.asarray(matrix, dtype=float)) * np.outer(rel, rel)
+    except (TypeError, ValueError):
+        return ()
+    return tuple(tuple(float(v) for v in row) for row in c) if c.shape == (5, 5) else ()
 
 
 def _contact(entry: Any) -> dict[str, float]:
@@ -127,9 +158,13 @@ class Forecast:
     case_temperature: np.ndarray
     answers: dict[str, Any] = field(default_factory=dict)
     warnings: list[str] = field(default_factory=list)
+    #: The band of the current: ± 2 standard errors from the fit's covariance of R and the network [A].
+    current_low: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    current_high: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     def columns(self) -> dict[str, np.ndarray]:
-        """The CSV columns ``time_s, current_A, torque_Nm, winding_temperature_C, case_temperature_C``."""
+        """The CSV columns ``time_s, current_A, torque_Nm, winding_temperature_C, case_temperature_C`` (the band,
+        :attr:`current_low` and :attr:`current_high`, is in the answers and the JSON)."""
         return {"time_s": self.time, "current_A": self.current, "torque_Nm": self.torque,
                 "winding_temperature_C": self.winding_temperature, "case_temperature_C": self.case_temperature}
 
@@ -167,6 +202,8 @@ def forecast(model: StallModel, voltage: float, duration: float, *, initial_temp
     else:
         torque = np.full(t.size, np.nan)
     out = Forecast(t, run.current, torque, run.winding_temperature, run.case_temperature)
+    spread = _current_stderr(model, t, float(voltage), t0, contact, run.current)
+    out.current_low, out.current_high = run.current - 2 * spread, run.current + 2 * spread
     out.answers = stall_answers(model, voltage, limit=limit, rise=rise, initial_temperature=t0)
     hottest = float(np.max(run.winding_temperature))
     if hottest > model.hottest + 1:
@@ -204,6 +241,31 @@ def _response(model: StallModel, t: np.ndarray, voltage: float, t0: float, conta
     return replace(rest, time=t, current=np.concatenate([first.current[:k], rest.current]),
                    winding_temperature=np.concatenate([first.winding_temperature[:k], rest.winding_temperature]),
                    case_temperature=np.concatenate([first.case_temperature[:k], rest.case_temperature]))
+
+
+def _current_stderr(model: StallModel, t: np.ndarray, voltage: float, t0: float, contact: dict[str, float],
+                    current: np.ndarray) -> np.ndarray:
+    """The standard error of the forecast current at each time [A]: the delta method over the logarithms of R and
+    the network with the fit's covariance (zeros when the fit file has none)."""
+    if not model.log_covariance:
+        return np.zeros(t.size)
+    cov = np.asarray(model.log_covariance, dtype=float)
+    step = 1e-3
+    grads = []
+    for k, name in enumerate(BAND_PARAMETERS):
+        if cov[k, k] <= 0:
+            grads.append(np.zeros(t.size))
+            continue
+        th = model.thermal
+        moved = {"R_wc": "winding_to_case", "R_ca": "case_to_ambient", "C_w": "winding_capacity",
+                 "C_c": "case_capacity"}
+        if name == "R":
+            m = replace(model, resistance=model.resistance * math.exp(step))
+        else:
+            m = replace(model, thermal=replace(th, **{moved[name]: getattr(th, moved[name]) * math.exp(step)}))
+        grads.append((_response(m, t, voltage, t0, contact).current - current) / step)
+    g = np.asarray(grads)
+    return np.sqrt(np.maximum(np.einsum("it,ij,jt->t", g, cov, g), 0.0))
 
 
 #: The spread of the prior on the case's time constant (a factor either way), as the fit uses it (the

@@ -30,8 +30,13 @@ def test_virtual_run_fit_and_forecast(tmp_path: Path, capsys) -> None:
     assert "extrapolat" in text
     header = next(line for line in out.read_text().splitlines() if not line.startswith("#"))
     assert header == "time_s,current_A,torque_Nm,winding_temperature_C,case_temperature_C"
+    assert "2 standard errors of the fit" in text
     rec = read_csv(out)
     assert rec["current"][0] > rec["current"][-1]
+    assert cli.main(["simulate", "stall", "--params", str(fit_path), "--voltage", "12", "--duration", "30",
+                     "-o", str(tmp_path / "again.csv"), "--json"]) == 0
+    final = json.loads(capsys.readouterr().out)["final"]
+    assert final["current_low_A"] < final["current_A"] < final["current_high_A"]  # a band, not a line
 
 
 def test_refusals_are_one_line(tmp_path: Path, capsys) -> None:
