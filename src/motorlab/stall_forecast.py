@@ -51,6 +51,12 @@ class StallModel:
     #: resistance [Ω] the heating model did not account for then, the time it was measured at [s] and the run's
     #: set point [V]. A forecast that continues the run (at that voltage, from its start) holds it on from there.
     contact: dict[str, float] = field(default_factory=dict)
+    #: Where the thermal network comes from, in words (``details["network"]`` of the fit): fitted to the run, held
+    #: at the motor's other runs', or the population's winding.
+    network: str = "fitted to these runs"
+    #: The covariance of the logarithms of (R, R_wc, R_ca, C_w, C_c) from the fit's standard errors and correlation
+    #: (empty: unknown), for the forecast's band.
+    log_covariance: tuple[tuple[float, ...], ...] = ()
 
 
 def load_fit(path: str | Path) -> StallModel:
@@ -95,11 +101,41 @@ def load_fit(path: str | Path) -> StallModel:
         raise InputError(exc.message, path=str(path)) from None
     note = str((params.get("K") or {}).get("note", ""))
     r_ca = params.get("R_ca") if isinstance(params.get("R_ca"), dict) else {}
+    source = str(details.get("network") or "fitted to these runs")
     return StallModel(r, thermal, value("K"), value("tau0") if math.isfinite(value("tau0")) else 0.0,
                       "magnets' coefficient applied" in note,
                       float(details.get("initial_temperature_C") or thermal.ambient_temperature),
                       float(details.get("max_winding_temperature_C") or math.inf), str(path),
-                      bool(r_ca) and not r_ca.get("determined", True), _contact(details.get("brush_contact")))
+                      bool(r_ca) and not r_ca.get("determined", True) and source == "fitted to these runs",
+                      _contact(details.get("brush_contact")), source, _log_covariance(doc))
+
+
+#: The fit's parameters a forecast's band comes from, in the order of its correlation matrix.
+BAND_PARAMETERS = ("R", "R_wc", "R_ca", "C_w", "C_c")
+
+
+def _log_covariance(doc: dict[str, Any]) -> tuple[tuple[float, ...], ...]:
+    """The covariance of the logarithms of :data:`BAND_PARAMETERS` from a fit file's standard errors (relative) and
+    correlation; () when they are not all there (a parameter not determined counts as held: no spread)."""
+    params = doc.get("parameters") or {}
+    corr = ((doc.get("fit") or {}).get("correlation") or {})
+    names, matrix = corr.get("names"), corr.get("matrix")
+    if names != list(BAND_PARAMETERS) or not isinstance(matrix, list):
+        return ()
+    rel = []
+    for name in BAND_PARAMETERS:
+        entry = params.get(name) or {}
+        value, se = entry.get("value"), entry.get("stderr")
+        if (isinstance(value, int | float) and isinstance(se, int | float) and value > 0 and math.isfinite(se)
+                and entry.get("determined", True) is not False):
+            rel.append(float(se) / float(value))
+        else:
+            rel.append(0.0)
+    try:
+        c = np.nan_to_num(np.asarray(matrix, dtype=float)) * np.outer(rel, rel)
+    except (TypeError, ValueError):
+        return ()
+    return tuple(tuple(float(v) for v in row) for row in c) if c.shape == (5, 5) else ()
 
 
 def _contact(entry: Any) -> dict[str, float]:
@@ -122,9 +158,13 @@ class Forecast:
     case_temperature: np.ndarray
     answers: dict[str, Any] = field(default_factory=dict)
     warnings: list[str] = field(default_factory=list)
+    #: The band of the current: ± 2 standard errors from the fit's covariance of R and the network [A].
+    current_low: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    current_high: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     def columns(self) -> dict[str, np.ndarray]:
-        """The CSV columns ``time_s, current_A, torque_Nm, winding_temperature_C, case_temperature_C``."""
+        """The CSV columns ``time_s, current_A, torque_Nm, winding_temperature_C, case_temperature_C`` (the band,
+        :attr:`current_low` and :attr:`current_high`, is in the answers and the JSON)."""
         return {"time_s": self.time, "current_A": self.current, "torque_Nm": self.torque,
                 "winding_temperature_C": self.winding_temperature, "case_temperature_C": self.case_temperature}
 
@@ -162,6 +202,8 @@ def forecast(model: StallModel, voltage: float, duration: float, *, initial_temp
     else:
         torque = np.full(t.size, np.nan)
     out = Forecast(t, run.current, torque, run.winding_temperature, run.case_temperature)
+    spread = _current_stderr(model, t, float(voltage), t0, contact, run.current)
+    out.current_low, out.current_high = run.current - 2 * spread, run.current + 2 * spread
     out.answers = stall_answers(model, voltage, limit=limit, rise=rise, initial_temperature=t0)
     hottest = float(np.max(run.winding_temperature))
     if hottest > model.hottest + 1:
@@ -169,6 +211,10 @@ def forecast(model: StallModel, voltage: float, duration: float, *, initial_temp
                             f"hottest winding temperature the fit saw ({model.hottest:.0f} °C): extrapolated")
     if model.case_loss_from_prior:
         out.warnings.append(_case_loss_band(model, t, voltage, t0, run.current, contact))
+    if model.network != "fitted to these runs":
+        band = _winding_band(model, t, voltage, t0, run.current, contact)
+        out.warnings.append(f"the thermal network of this forecast is {model.network}, not the fitted run's own "
+                            f"(no single network fits it): {band}")
     if contact and abs(contact["relative"]) >= 0.01 and t[-1] > contact["from_s"]:
         out.warnings.append(
             f"the fitted run's resistance ended {100 * contact['relative']:+.1f} % "
@@ -197,6 +243,31 @@ def _response(model: StallModel, t: np.ndarray, voltage: float, t0: float, conta
                    case_temperature=np.concatenate([first.case_temperature[:k], rest.case_temperature]))
 
 
+def _current_stderr(model: StallModel, t: np.ndarray, voltage: float, t0: float, contact: dict[str, float],
+                    current: np.ndarray) -> np.ndarray:
+    """The standard error of the forecast current at each time [A]: the delta method over the logarithms of R and
+    the network with the fit's covariance (zeros when the fit file has none)."""
+    if not model.log_covariance:
+        return np.zeros(t.size)
+    cov = np.asarray(model.log_covariance, dtype=float)
+    step = 1e-3
+    grads = []
+    for k, name in enumerate(BAND_PARAMETERS):
+        if cov[k, k] <= 0:
+            grads.append(np.zeros(t.size))
+            continue
+        th = model.thermal
+        moved = {"R_wc": "winding_to_case", "R_ca": "case_to_ambient", "C_w": "winding_capacity",
+                 "C_c": "case_capacity"}
+        if name == "R":
+            m = replace(model, resistance=model.resistance * math.exp(step))
+        else:
+            m = replace(model, thermal=replace(th, **{moved[name]: getattr(th, moved[name]) * math.exp(step)}))
+        grads.append((_response(m, t, voltage, t0, contact).current - current) / step)
+    g = np.asarray(grads)
+    return np.sqrt(np.maximum(np.einsum("it,ij,jt->t", g, cov, g), 0.0))
+
+
 #: The spread of the prior on the case's time constant (a factor either way), as the fit uses it (the
 #: population's, :data:`motorlab.analyses._stall_fit.PRIOR_LOG_SIGMA`, rounded).
 CASE_PRIOR_FACTOR = 1.5
@@ -214,6 +285,22 @@ def _case_loss_band(model: StallModel, t: np.ndarray, voltage: float, t0: float,
             f"fitted run, too short for the case to settle (a prior on the case's time constant, or a bound, set it): "
             f"with R_ca {CASE_PRIOR_FACTOR:g} times smaller or larger the current at {float(t[-1]):.0f} s would be "
             f"{min(ends):.4g}–{max(ends):.4g} A instead of {float(current[-1]):.4g} A; fit a longer run to pin it")
+
+
+def _winding_band(model: StallModel, t: np.ndarray, voltage: float, t0: float, current: np.ndarray,
+                  contact: dict[str, float]) -> str:
+    """The forecast's current at its end with the winding's time constant (its heat capacity C_w) a factor
+    :data:`WINDING_BAND_FACTOR` either way: the band of a network not fitted to the run."""
+    ends = []
+    for factor in (1 / WINDING_BAND_FACTOR, WINDING_BAND_FACTOR):
+        th = replace(model.thermal, winding_capacity=model.thermal.winding_capacity * factor)
+        ends.append(float(_response(replace(model, thermal=th), t, float(voltage), t0, contact).current[-1]))
+    return (f"with the winding's heat capacity {WINDING_BAND_FACTOR:g} times smaller or larger the current at "
+            f"{float(t[-1]):.0f} s would be {min(ends):.4g}–{max(ends):.4g} A instead of {float(current[-1]):.4g} A")
+
+
+#: The factor either way on the winding's heat capacity of a forecast whose network is not the run's own.
+WINDING_BAND_FACTOR = 2.0
 
 
 def stall_answers(model: StallModel, voltage: float, *, limit: float = WINDING_LIMIT, rise: float = 100.0,

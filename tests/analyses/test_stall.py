@@ -40,6 +40,9 @@ FAILURES = {
 }
 
 
+#: The NeveRest exports that log the torque only (Amps and Volts 0 in every row): refused alone, left out among others.
+TORQUE_ONLY = {f"NeveRest-locked-rotor-data-{v}v-20171016.csv" for v in (2, 8, 10, 12)}
+
 #: What each failing run shows after its cut, with the time [s] (the supply's limit, the winding opening).
 LATER = {
     "am-9015-locked-rotor-data-12v": ("current limit at 5.2 s", "open winding) at 10.1 s"),
@@ -199,7 +202,7 @@ def test_brush_contact_run_alone_is_flagged_and_not_forecast(tmp_path: Path, unt
 
 @needs_real
 @pytest.mark.parametrize("name", sorted(p.name for p in REAL.glob("*-locked-rotor-data-*.csv")
-                                        if "mini-cim-locked-rotor-data-2v" not in p.name))
+                                        if "mini-cim-locked-rotor-data-2v" not in p.name and p.name not in TORQUE_ONLY))
 def test_every_other_real_run_alone_is_explained_by_heating(name: str) -> None:
     result = stall(read_runs([str(REAL / name)]))
     assert "unexplained" not in result.details, result.details.get("unexplained")

@@ -135,8 +135,13 @@ def parameters_of(heat: HeatFit, torque: TorqueFit | None, extra: dict[str, Esti
     """K and τ₀ (with torque), R₂₅ and the network, then the answers."""
     out: dict[str, Estimate] = {}
     if torque is not None:
-        note = ("torque per amp at 25 °C (the magnets' coefficient applied at the case temperature)" if torque.beta
-                else "torque per amp at the runs' temperatures (see the warnings)")
+        note = (f"torque per amp at 25 °C (the magnets' coefficient applied at the case temperature: "
+                f"{100 * torque.beta:+.3g} %/K, within the magnets' [{100 * torque.magnet:+.2g}, 0] %/K)" if torque.beta
+                else "torque per amp the rows show, at the runs' temperatures (see the warnings)")
+        if len(torque.per_run) > 1:
+            note += (f"; the random-effects mean of {len(torque.per_run)} runs' K (DerSimonian–Laird"
+                     + (f": their spread {torque.between:.2g} N·m/A is in the standard error)" if torque.between
+                        else ": they agree)"))
         if not torque.K > 0:  # never printed silently: a torque against the current is positive
             note = ("not determined: the fit gives a torque per amp that is not positive (the runs' torque and "
                     "current disagree: another shaft, a sensor's sign or offset)")
@@ -147,7 +152,14 @@ def parameters_of(heat: HeatFit, torque: TorqueFit | None, extra: dict[str, Esti
     for k, name in enumerate(SHARED):
         determined = bool(heat.fit.determined[k]) and math.isfinite(heat.stderr[name])
         note = _NOTES[name] if determined else _NOTES[name] + ": the runs are too short to tell it"
-        if name == "R_ca" and heat.prior:
+        if heat.held and name != "R":
+            determined = False
+            note = _NOTES[name] + ": held at the network of the motor's other runs (not fitted to these)"
+        elif heat.winding_from_prior and name in ("R_wc", "C_w"):
+            determined = False
+            note = (_NOTES[name] + ": the run alone needs a winding slower than its case; its time constant R_wc·C_w "
+                    "is held near the population's")
+        elif name == "R_ca" and heat.prior:
             determined = False
             note = (_NOTES[name] + f": the runs are too short to tell it; {heat.values[name]:.3g} K/W comes from a "
                     f"prior on the case's time constant R_ca·C_c ≈ {PRIOR_CASE_TIME_CONSTANT:.0f} s (real motors' "

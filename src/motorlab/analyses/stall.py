@@ -22,6 +22,8 @@ import numpy as np
 from motorlab.analyses._common import reader_warnings, sources_of
 from motorlab.analyses._stall_cuts import NO_CURRENT, Cut, find_cut, first_full_sample, set_point
 from motorlab.analyses._stall_fit import (
+    PRIOR_WINDING_LOG_SIGMA,
+    PRIOR_WINDING_TIME_CONSTANT,
     REFERENCE_SAMPLES,
     SHARED,
     HeatFit,
@@ -34,10 +36,10 @@ from motorlab.analyses._stall_fit import (
 )
 from motorlab.analyses._stall_report import answers, make_panels, parameters_of, run_rows
 from motorlab.decimate import consecutive
-from motorlab.errors import FitError, LogFormatError, OptionError
+from motorlab.errors import FitError, LogFormatError, MotorlabError, OptionError
 from motorlab.recording import Recording
 from motorlab.results import FitResult
-from motorlab.thermal import MAGNET_COEFFICIENTS, WINDING_LIMIT
+from motorlab.thermal import MAGNET_COEFFICIENTS, WINDING_LIMIT, ThermalModel
 
 #: Fewest healthy samples a run needs to enter the fit.
 MIN_SAMPLES = 5
@@ -131,7 +133,8 @@ def _runs_of(recs: list[Recording], voltage: float | None, until: float | None,
     LogFormatError
         A lone file without current, or every file without.
     """
-    runs, kept, refused = [], [], []
+    runs, kept = [], []
+    refused: list[LogFormatError | OptionError] = []
     for rec in recs:
         try:
             runs.append(_run_of(rec, voltage, until))
@@ -141,6 +144,10 @@ def _runs_of(recs: list[Recording], voltage: float | None, until: float | None,
                                 f"medians of {runs[-1].group} consecutive samples (a winding heats over seconds)")
         except LogFormatError as exc:
             if len(recs) == 1 or "current" not in exc.message:
+                raise
+            refused.append(exc)
+        except OptionError as exc:  # no voltage column (a peak-power export among the runs): named, left out
+            if len(recs) == 1:
                 raise
             refused.append(exc)
     if not runs:
@@ -160,6 +167,10 @@ def stall(
     answer_voltage: float = 12.0,
     limit: float = 150.0,
     rise: float = 100.0,
+    back_emf: float | None = None,
+    back_emf_stderr: float | None = None,
+    network: ThermalModel | None = None,
+    network_source: str = "",
 ) -> FitResult:
     """K, R₂₅ and the two-node thermal network from locked-rotor runs.
 
@@ -179,6 +190,14 @@ def stall(
     answer_voltage, limit, rise
         The answers: how long a stall at ``answer_voltage`` [V] takes to bring the winding to ``limit``
         [°C], and the stall current held indefinitely for a ``rise`` [K] of the winding.
+    back_emf, back_emf_stderr
+        The motor's back-EMF constant and its standard error [V·s/rad] (from its curve or a spin-down), when
+        known: no shaft's torque per amp exceeds it, so a form of the torque model that puts K above it by more
+        than their combined uncertainty is refused, and a K above it is said.
+    network, network_source
+        A thermal network to hold (the fit of the motor's other runs, :func:`motorlab.stall_forecast.load_fit`) and
+        where it comes from, in words: only R₂₅ and the initial temperatures are fitted (a run no single network
+        fits, forecast from the motor's other runs).
 
     Returns
     -------
@@ -201,6 +220,9 @@ def stall(
     if not (math.isfinite(ambient) and -40 <= ambient <= 80):
         raise OptionError(f"the ambient temperature must lie between −40 and 80 °C, got {ambient!r}")
     warnings = reader_warnings(recs)
+    recs, from_curve = _curves(recs, warnings)
+    if back_emf is None and from_curve is not None:
+        back_emf, back_emf_stderr = from_curve
     runs, recs = _runs_of(recs, voltage, until, warnings)
     used = [k for k, r in enumerate(runs) if r.end - r.start >= MIN_SAMPLES]
     for k, r in enumerate(runs):
@@ -209,30 +231,29 @@ def stall(
     if not used:
         raise FitError("no run has a healthy stretch of at least 5 samples to fit")
     used = _same_shaft(runs, used, warnings)
-    heat, excluded, unexplained = _fit_with_exclusions([runs[k] for k in used], beta, ambient, warnings)
-    if not unexplained:
+    if network is not None:
+        heat = fit_heating([runs[k].data() for k in used], magnet=beta, ambient=ambient, network=(
+            network.winding_to_case, network.case_to_ambient, network.winding_capacity, network.case_capacity))
+        excluded: list[int] = []
+        unexplained = ""
+        warnings.append(f"the thermal network is held at that of {network_source or 'another fit'} (the motor's other "
+                        f"runs: R_wc·C_w = {network.winding_to_case * network.winding_capacity:.3g} s, R_ca·C_c = "
+                        f"{network.case_to_ambient * network.case_capacity:.3g} s); only R at 25 °C and the runs' "
+                        "initial temperatures are fitted to these runs")
+    else:
+        heat, excluded, unexplained = _fit_with_exclusions([runs[k] for k in used], beta, ambient, warnings)
+    if not unexplained and network is None:
         heat = _drop_implausible_starts([runs[k].data() for k in used], heat, excluded, beta, ambient, warnings)
     data = [runs[k].data() for k in used]
     fitted = [j for j in range(len(used)) if j not in excluded]
     # The torque against the heating model's current, not the measured one: the model's is free of the
     # ammeter's noise, which would bias the slope low (errors in the regressor).
     smooth = [replace(data[j], current=heat.model_current[pos]) for pos, j in enumerate(fitted)]
-    torque = fit_torque(smooth, heat.case, beta)
-    if torque is not None and math.isfinite(torque.tau0_stderr):
-        torque = _offset_uncertainty(torque, smooth, heat)
-        if len(torque.per_run) == 2 and not abs(torque.tau0) > 3 * torque.tau0_stderr:
-            torque = fit_torque(smooth, heat.case, torque.beta, offset=False, check=False) or torque
-    if torque is not None and torque.beta:
-        torque = _with_case_uncertainty(torque, smooth, heat)
-    if torque is not None:
-        if torque.warning:
-            warnings.append(torque.warning)
-        note = current_dependence(torque)
-        if note:
-            warnings.append(note)
+    torque = _torque(smooth, heat, beta, _back_emf(back_emf, back_emf_stderr), warnings)
     result = _result(runs, used, fitted, heat, torque, warnings, recs,
                      {"beta": beta, "ambient": ambient, "answer_voltage": answer_voltage, "limit": limit,
-                      "rise": rise, "until": until, "magnet": magnet if magnet_coefficient is None else "given"})
+                      "rise": rise, "until": until, "magnet": magnet if magnet_coefficient is None else "given",
+                      "network_source": network_source})
     if unexplained:
         _mark_unexplained(result, unexplained)
     return result
@@ -287,6 +308,85 @@ def _same_shaft(runs: list[Run], used: list[int], warnings: list[str]) -> list[i
     return out
 
 
+def _curves(recs: list[Recording], warnings: list[str]) -> tuple[list[Recording], tuple[float, float] | None]:
+    """The recordings that are runs, and the back-EMF constant (value, standard error) [V·s/rad] of a motor curve
+    among them (a file with a speed column, fitted by :func:`motorlab.analyses.curve.curve`), named in
+    ``warnings``. A curve that cannot be fitted is named and left out.
+
+    Raises
+    ------
+    FitError
+        Every file is a curve: no locked-rotor run.
+    """
+    from motorlab.analyses.curve import curve
+
+    runs, bound = [], None
+    for rec in recs:
+        if "speed" not in rec:
+            runs.append(rec)
+            continue
+        name = str(rec.source or "a curve").replace("\\", "/").rsplit("/", 1)[-1]
+        try:
+            ke = curve(rec)["K"]
+        except MotorlabError as exc:
+            warnings.append(f"{name}: a motor curve (it has a speed column) that cannot be fitted ({exc}): left out")
+            continue
+        if not (ke.determined and math.isfinite(ke.value) and ke.value > 0):
+            warnings.append(f"{name}: a motor curve whose back-EMF constant is not determined: left out")
+            continue
+        se = float(ke.stderr) if math.isfinite(ke.stderr) else 0.0
+        if bound is None or ke.value < bound[0]:
+            bound = (float(ke.value), se)
+        warnings.append(f"{name}: a motor curve, not a locked-rotor run: its back-EMF constant K = {ke.value:.4g} ± "
+                        f"{se:.1g} V·s/rad bounds the stall K (no shaft's torque per amp exceeds it)")
+    if not runs:
+        raise FitError("every file is a motor curve: give the locked-rotor runs (time, current, voltage, torque) too")
+    return runs, bound
+
+
+def _back_emf(value: float | None, stderr: float | None) -> tuple[float, float] | None:
+    """The back-EMF bound (value, standard error) [V·s/rad], refused in one line when not a positive number."""
+    if value is None:
+        return None
+    if not (math.isfinite(value) and value > 0):
+        raise OptionError(f"the back-EMF constant must be a positive number of V·s/rad, got {value!r}")
+    se = 0.0 if stderr is None else float(stderr)
+    if not (math.isfinite(se) and se >= 0):
+        raise OptionError(f"the back-EMF constant's standard error must be 0 or more, got {stderr!r}")
+    return float(value), se
+
+
+def _torque(smooth: list[StallData], heat: HeatFit, beta: float, bound: tuple[float, float] | None,
+            warnings: list[str]) -> TorqueFit | None:
+    """K (and τ₀ when the data select it) from the runs' torque against the heating model's current, with the
+    standard errors of the heating model's case temperatures and the between-run scatter; the words that go
+    with it appended to ``warnings``."""
+    torque = fit_torque(smooth, heat.case, beta, back_emf=bound)
+    if torque is None:
+        return None
+    if torque.form == "offset":
+        torque = _offset_uncertainty(torque, smooth, heat)
+        z = abs(torque.tau0) / torque.tau0_stderr
+        if len(torque.per_run) == 2:
+            if not z > 3:
+                torque = fit_torque(smooth, heat.case, beta, offset=False, back_emf=bound) or torque
+            torque.selection = (f"form chosen by the offset's z (two runs; the held-out test needs three): τ₀ = "
+                                f"{torque.tau0 if torque.form == 'offset' else 0.0:.3g}, {z:.1f} standard errors of "
+                                "the torque and the heating model" + ("" if z > 3 else ": under 3, no offset"))
+    if torque.beta:
+        torque = _with_case_uncertainty(torque, smooth, heat)
+    if torque.warning:
+        warnings.append(torque.warning)
+    note = current_dependence(torque)
+    if note:
+        warnings.append(note)
+    if bound is not None and torque.K > bound[0]:
+        warnings.append(f"K = {torque.K:.4g} ± {torque.K_stderr:.2g} N·m/A is {100 * (torque.K / bound[0] - 1):.1f} % "
+                        f"above the motor's back-EMF constant {bound[0]:.4g} V·s/rad, which no shaft's torque per amp "
+                        "exceeds: the torque channel reads high (an offset or its scale)")
+    return torque
+
+
 def _offset_uncertainty(torque: TorqueFit, data: list[StallData], heat: HeatFit) -> TorqueFit:
     """τ₀'s standard error with the uncertainty of the heating model it is fitted against (the model's current
     and case temperature, from the heating fit's whole covariance by the delta method). Two runs determine τ₀
@@ -305,7 +405,7 @@ def _offset_uncertainty(torque: TorqueFit, data: list[StallData], heat: HeatFit)
             initial[j] = float(moved[len(SHARED) + pos])
         sims = simulate_runs(np.exp(moved[: len(SHARED)]), initial, data, torque.beta, ambient)
         runs = [replace(d, current=s[0]) for d, s in zip(data, sims, strict=True)]
-        refit = fit_torque(runs, [s[2] for s in sims], torque.beta, check=False)
+        refit = fit_torque(runs, [s[2] for s in sims], torque.magnet, offset=True, beta=torque.beta)
         grad[k] = ((refit.tau0 if refit is not None else torque.tau0) - torque.tau0) / step
     extra = float(grad @ np.nan_to_num(heat.fit.covariance) @ grad)
     torque.tau0_stderr = math.sqrt(torque.tau0_stderr**2 + max(extra, 0.0))
@@ -321,8 +421,8 @@ def _with_case_uncertainty(torque: TorqueFit, data: list[StallData], heat: HeatF
         shared = list(base)
         shared[k] *= math.exp(1e-3)
         sims = simulate_runs(shared, heat.initial, data, torque.beta, heat.thermal.ambient_temperature)
-        moved = fit_torque(data, [s[2] for s in sims], torque.beta, offset=math.isfinite(torque.tau0_stderr),
-                           check=False)
+        moved = fit_torque(data, [s[2] for s in sims], torque.magnet, offset=torque.form == "offset",
+                           beta=torque.beta)
         grad[k] = ((moved.K if moved is not None else torque.K) - torque.K) / 1e-3
     extra = float(grad @ np.nan_to_num(heat.log_covariance) @ grad)
     torque.K_stderr = math.sqrt(torque.K_stderr**2 + max(extra, 0.0))
@@ -352,8 +452,16 @@ def _fit_with_exclusions(runs: list[Run], beta: float, ambient: float,
         tau_w = heat.values["R_wc"] * heat.values["C_w"]
         failing = [j for j, rms in enumerate(heat.run_rms)
                    if rms > UNEXPLAINED_RMS or (tau_w < MIN_WINDING_TIME_CONSTANT and data[j].time.size >= 30)]
-        if len(data) == 1 and data[0].time.size >= 30 and tau_w > heat.values["R_ca"] * heat.values["C_c"]:
-            failing = [0]  # a winding slower than its case: no motor's network (a lone run: its own network)
+        if (len(data) == 1 and data[0].time.size >= 30 and tau_w > heat.values["R_ca"] * heat.values["C_c"]
+                and heat.run_rms[0] <= UNEXPLAINED_RMS):
+            # a winding slower than its case: no motor's network. The run is forecast from the population's winding
+            # (or, given, the motor's other runs' network) instead; said, with the run's figures.
+            slow = _slow_start(data[0], heat)
+            if slow:
+                heat = fit_heating(data, magnet=beta, ambient=ambient, winding_prior=True)
+                heat.winding_from_prior = True
+                warnings.append(f"{data[0].source}: no single thermal network fits this run: {slow}")
+                return heat, excluded, ""
         if len(failing) == len(data):  # nothing to compare with: say so, and what the run's own heat allows
             text = " ".join(_lone_unexplained(data[j], heat, j) for j in failing)
             warnings.append(text)
@@ -419,7 +527,10 @@ def _slow_start(run: StallData, heat: HeatFit) -> str:
             f"winding slower to reach its case (R_wc·C_w = {tau_w:.0f} s) than the case is to reach the air "
             f"(R_ca·C_c = {tau_c:.0f} s), a network no motor has (VEX's healthy runs: 3–114 s against 49–660 s); "
             "likely cause: brush contact (the brushes' contact resistance falling as they warm and bed in hides "
-            "the copper's rise at first), not heat. No thermal network from it, and no forecast")
+            "the copper's rise at first), not heat. Its network is the population's winding instead (R_wc·C_w held "
+            f"near {PRIOR_WINDING_TIME_CONSTANT:.0f} s, a factor {math.exp(PRIOR_WINDING_LOG_SIGMA):.1f} either way; "
+            "its forecast says so); for a better forecast, fit the motor's other runs and give that fit as the "
+            "network (--network FIT.json): their network with this run's R")
 
 
 def _lone_unexplained(run: StallData, heat: HeatFit, pos: int) -> str:
@@ -502,7 +613,17 @@ def _result(runs: list[Run], used: list[int], fitted: list[int], heat: HeatFit, 
         "until_s": opts["until"],
         "magnet": opts["magnet"],
         "shaft": "the stalled shaft where torque is measured (a bare motor: the motor shaft)",
+        "network": ("held at " + (opts.get("network_source") or "another fit's") if heat.held else
+                    "the population's winding (the run alone needs a winding slower than its case)"
+                    if heat.winding_from_prior else "fitted to these runs"),
     }
+    if torque is not None:
+        details["K_runs"] = [{"file": runs[used[fitted[pos]]].source.replace("\\", "/").rsplit("/", 1)[-1],
+                              "mean current (A)": r[0], "K (N·m/A)": r[1], "stderr (N·m/A)": r[2]}
+                             for pos, r in enumerate(torque.per_run)] if len(torque.per_run) == len(fitted) else []
+        details["K_model"] = {"form": torque.form, "beta_per_K": torque.beta, "magnet_bound_per_K": torque.magnet,
+                              "between_run_sd": torque.between, "pooled_K": torque.pooled[0],
+                              "selection": torque.selection, "refused": list(torque.refused)}
     if len(data) == 1:
         details["brush_contact"] = _contact_at_end(data[0], heat.model_current[0], runs[used[fitted[0]]].set_point)
     current = np.concatenate([d.current for d in data])

@@ -73,11 +73,14 @@ def _forecast(args: argparse.Namespace) -> int:
                                               "fit": args.params.replace(":", "_")})
     if args.json:
         print_json({"output": args.output, "answers": out.answers, "warnings": out.warnings,
-                    "final": {"current_A": float(out.current[-1]),
+                    "final": {"current_A": float(out.current[-1]), "current_low_A": float(out.current_low[-1]),
+                              "current_high_A": float(out.current_high[-1]),
                               "winding_temperature_C": float(out.winding_temperature[-1])}})
         return 0
+    band = 0.5 * float(out.current_high[-1] - out.current_low[-1])
     print(f"stall forecast at {args.voltage:g} V for {args.duration:g} s: wrote {args.output} "
-          f"(current {out.current[0]:.4g} -> {out.current[-1]:.4g} A, winding "
+          f"(current {out.current[0]:.4g} -> {out.current[-1]:.4g} ± {band:.2g} A, 2 standard errors of the fit; "
+          "winding "
           f"{out.winding_temperature[0]:.0f} -> {out.winding_temperature[-1]:.0f} °C)")
     for line in answers_text(out.answers):
         print(f"  {line}")

@@ -11,7 +11,8 @@ from motorlab.thermal import MAGNET_COEFFICIENTS
 
 def read_runs(paths: list[str]) -> list[Any]:
     """One recording per file: a headed CSV (``time_s,voltage_V,current_A,torque_Nm``) or a dynamometer
-    export with worded headers (``Time,Amps,Volts,Torque 6V (N · m)``, :mod:`motorlab.io.headers`)."""
+    export with worded headers (``Time,Amps,Volts,Torque 6V (N · m)``, :mod:`motorlab.io.headers`); a motor
+    curve among them (``Speed (RPM),Torque (N·m),Current (A),…``) bounds K by its back-EMF constant."""
     from motorlab.analyses._common import read_tables
 
     return list(read_tables(paths))
@@ -21,15 +22,32 @@ def run(paths: list[str], v: dict[str, Any]) -> Any:
     """Run ``motorlab analyze stall FILE...``."""
     from motorlab.analyses.stall import stall
 
-    return stall(read_runs(paths), voltage=v["voltage"], magnet=v["magnet"], magnet_coefficient=v["magnet_coefficient"],
-                 ambient=v["ambient"], until=v["until"], answer_voltage=v["answer_voltage"], limit=v["limit"],
-                 rise=v["rise"])
+    network, source = _network(v["network"])
+    return stall(read_runs([*paths, *(v["curve"] or [])]), voltage=v["voltage"], magnet=v["magnet"],
+                 magnet_coefficient=v["magnet_coefficient"], ambient=v["ambient"], until=v["until"],
+                 answer_voltage=v["answer_voltage"], limit=v["limit"], rise=v["rise"], back_emf=v["back_emf"],
+                 network=network, network_source=source)
+
+
+def _network(paths: list[str] | None) -> tuple[Any, str]:
+    """The thermal network of a stall fit (``--network FIT.json``) and where it comes from, in words."""
+    if not paths:
+        return None, ""
+    from motorlab.stall_forecast import load_fit
+
+    if len(paths) > 1:
+        from motorlab.errors import OptionError
+
+        raise OptionError("give one fit as --network (the fit of the motor's other runs)")
+    model = load_fit(paths[0])
+    name = paths[0].replace("\\", "/").rsplit("/", 1)[-1]
+    return model.thermal, f"the fit {name}"
 
 
 def session(ctx: Any) -> FromSession:
     """The session's stall runs (voltage, magnet and ambient from the session's table)."""
     return FromSession({"voltage": ctx.setting("voltage"), "magnet": ctx.setting("magnet"),
-                        "ambient": ctx.setting("ambient")})
+                        "ambient": ctx.setting("ambient"), "back_emf": ctx.setting("back_emf")})
 
 
 EXPERIMENT = Experiment(
@@ -58,6 +76,15 @@ EXPERIMENT = Experiment(
                help="in °C, the temperature of that answer"),
         Option("rise", "K", positive=True, default=100.0, metavar="KELVIN", label="Allowed winding rise",
                help="of the 'current held indefinitely' answer"),
+        Option("curve", kind="files", metavar="CURVE.csv", label="The motor's curve",
+               help="its back-EMF constant bounds K: no shaft's torque per amp exceeds it (a curve given among the "
+                    "runs counts too)"),
+        Option("back-emf", "V*s/rad", dest="back_emf", positive=True, metavar="KE",
+               label="The motor's back-EMF constant", help="instead of a curve (from a spin-down or a datasheet): "
+               "bounds K"),
+        Option("network", kind="files", metavar="FIT.json", label="Thermal network of the motor's other runs",
+               help="a stall fit (as JSON) of the same motor's other runs: its network is held and only R and the "
+                    "start temperatures are fitted (a run no single network fits)"),
         COLUMN,
     ),
     reports=("K", "tau0", "R", "R_wc", "R_ca", "C_w", "C_c", "t_limit", "I_continuous", "R_hot"),
@@ -67,6 +94,7 @@ EXPERIMENT = Experiment(
         Setting("voltage", "V", "the supply's voltage, for files without a voltage column"),
         Setting("magnet", "str", "magnet material: ferrite (default) or ndfeb"),
         Setting("ambient", "float", "ambient temperature [°C] (default 25)"),
+        Setting("back_emf", "V*s/rad", "the motor's back-EMF constant (its curve's K): bounds the stall K"),
     ),
     session=session,
     rig=RigRun("stall", "stall.csv", settings={"voltage": 6.0, "duration": 120.0}, order=35),
