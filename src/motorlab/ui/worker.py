@@ -5,6 +5,8 @@
 ``python -m motorlab.ui.worker panels EXPERIMENT ARG...`` parses ``motorlab analyze EXPERIMENT
 ARG...`` with the CLI's own parser, runs ``motorlab.cli.analyze.from_cli`` and prints the result's
 data-against-model panels (the curves :func:`motorlab.plot.plot_fit` draws);
+``python -m motorlab.ui.worker fit EXPERIMENT ARG...`` does both in one run (the CLI's JSON and the
+panels: the page's click on "Run the fit");
 ``python -m motorlab.ui.worker response ARG...`` runs ``motorlab tune ARG...`` and prints the
 simulated step and profile responses as curves (the interactive plot of the gains step). Errors go
 through the one line on stderr, exit code 2, as the CLI's.
@@ -23,14 +25,67 @@ import numpy as np
 
 from motorlab.proposal import propose
 
-#: Points sent per curve (a 2M-sample log is thinned by a stride for the browser).
-MAX_POINTS = 4000
+#: Points sent per curve: a long log is thinned for the browser (a plot of 2,000 points per trace draws in a
+#: few tens of milliseconds; 20,000 froze the page for seconds with two results shown).
+MAX_POINTS = 2000
+
+
+def _listed(values: Any) -> list[float | None]:
+    return [float(v) if np.isfinite(v) else None for v in np.asarray(values, dtype=float)]
 
 
 def _thin(values: np.ndarray) -> list[float | None]:
+    """Every k-th value, at most :data:`MAX_POINTS` (signals shown as read: the raw view)."""
     arr = np.asarray(values, dtype=float)
     step = max(1, int(np.ceil(arr.size / MAX_POINTS)))
-    return [float(v) if np.isfinite(v) else None for v in arr[::step]]
+    return _listed(arr[::step])
+
+
+def keep_extremes(y: Any, limit: int = MAX_POINTS) -> np.ndarray:
+    """Indices of at most ``limit`` samples of ``y`` that keep its shape: the first, smallest, largest and last
+    sample of each of ``limit // 4`` equal runs (in order), so a spike or a step is never thinned away.
+
+    Samples that are not finite are left to the bucket they fall in (chosen as any other sample when none
+    of the bucket is finite).
+    """
+    arr = np.asarray(y, dtype=float)
+    n = arr.size
+    if n <= limit:
+        return np.arange(n)
+    buckets = max(1, limit // 4)
+    edges = np.linspace(0, n, buckets + 1).astype(int)
+    keep: list[np.ndarray] = []
+    filled = np.where(np.isfinite(arr), arr, np.nan)
+    for a, b in zip(edges[:-1], edges[1:], strict=True):
+        if b <= a:
+            continue
+        part = filled[a:b]
+        picks = [a, b - 1]
+        if np.isfinite(part).any():
+            picks += [a + int(np.nanargmin(part)), a + int(np.nanargmax(part))]
+        keep.append(np.unique(picks))
+    return np.unique(np.concatenate(keep))
+
+
+def gaps(x: Any) -> np.ndarray:
+    """Positions ``k`` where the time ``x[k] → x[k+1]`` jumps by more than ten typical steps (between the tests
+    of a SysId file, a span left out): a line drawn there would cross a stretch with no data."""
+    arr = np.asarray(x, dtype=float)
+    if arr.size < 3:
+        return np.zeros(0, dtype=int)
+    step = np.diff(arr)
+    positive = step[np.isfinite(step) & (step > 0)]
+    if not positive.size:
+        return np.zeros(0, dtype=int)
+    return np.flatnonzero(~(np.abs(step) <= 10 * float(np.median(positive))) & np.isfinite(step))
+
+
+def _broken(values: list[float | None], cuts: np.ndarray) -> list[float | None]:
+    """``values`` with a null after each position of ``cuts`` (Plotly breaks a line at a null)."""
+    out = list(values)
+    for k in sorted((int(c) for c in cuts), reverse=True):
+        out.insert(k + 1, None)
+    return out
 
 
 #: Each format in words (what the page says it recognised).
@@ -112,10 +167,30 @@ def _detect_one(path: str, columns: Sequence[str] = ()) -> dict[str, Any]:
         task=entry["task"] or ("mechanism" if experiment in ("spindown", "identify", "feedforward") else "expert"),
         needs=needs,
         cpr=None if needs else recording.metadata.get("cpr"),
+        own_units=own_units(recording.metadata),
         time=_thin(recording.time),
         signals=[{"name": n, "unit": units.get(n, ""), "y": _thin(recording.signals[n])} for n in names],
     )
     return entry
+
+
+#: A SysId or frc-characterization file's units → the gains' length unit (``tune --units``).
+_TUNE_UNITS = {"Rotations": "rotations", "Radians": "rad", "Degrees": "degrees", "Meters": "m", "Feet": "m",
+               "Inches": "m"}
+
+
+def own_units(metadata: dict[str, Any]) -> dict[str, Any] | None:
+    """The units a file carries (SysId's ``units`` and ``unitsPerRotation``), or None.
+
+    Such a file is fitted in them: no counts per revolution or wheel radius typed for another mechanism
+    applies to it, and its gains default to them (``tune``: rotations for a shooter in rotations).
+    """
+    units = metadata.get("units")
+    if metadata.get("format") not in ("sysid-json", "frc-char-json", "wpilog") or not isinstance(units, str):
+        return None
+    per = metadata.get("unitsPerRotation")
+    return {"units": units, "per_rotation": float(per) if isinstance(per, int | float) else None,
+            "assumed": bool(metadata.get("units_assumed")), "tune_units": _TUNE_UNITS.get(units, "rad")}
 
 
 def detect(args: Sequence[str]) -> list[dict[str, Any]]:
@@ -132,10 +207,64 @@ def detect(args: Sequence[str]) -> list[dict[str, Any]]:
     return [_detect_one(path, columns) for path in args[cut + 1 if "--" in args else 0:]]
 
 
-def _series(series: Any) -> dict[str, Any] | None:
+def _kept_breaks(full_gaps: np.ndarray, keep: np.ndarray) -> np.ndarray:
+    """Positions in ``keep`` after which a gap of the full series lies (both ends of each gap are kept)."""
+    if not full_gaps.size:
+        return np.zeros(0, dtype=int)
+    return np.unique(np.searchsorted(keep, full_gaps, side="right") - 1)
+
+
+def _thinned(x: Any, y: Any) -> tuple[np.ndarray, np.ndarray]:
+    """The samples kept of a curve (its extremes, both ends of each gap of ``x``) and the breaks among them."""
+    cut = gaps(x)
+    if not cut.size:
+        return keep_extremes(y), cut
+    keep = np.union1d(keep_extremes(y, max(4, MAX_POINTS - 2 * cut.size)), np.concatenate([cut, cut + 1]))
+    return keep, _kept_breaks(cut, keep)
+
+
+def _series(series: Any, keep: np.ndarray | None = None, breaks: np.ndarray | None = None) -> dict[str, Any] | None:
+    """A curve for the browser: the samples ``keep`` (else its own extremes), a line broken after ``breaks``."""
     if series is None:
         return None
-    return {"x": _thin(series.x), "y": _thin(series.y), "label": series.label, "kind": series.kind}
+    x, y = np.asarray(series.x, dtype=float), np.asarray(series.y, dtype=float)
+    if keep is None:
+        keep, breaks = _thinned(x, y)
+    xs, ys = _listed(x[keep]), _listed(y[keep])
+    if series.kind != "data" and breaks is not None:  # a simulated line never drawn across the gaps between tests
+        xs, ys = _broken(xs, breaks), _broken(ys, breaks)
+    return {"x": xs, "y": ys, "label": series.label, "kind": series.kind}
+
+
+def panel_curves(result: Any) -> list[dict[str, Any]]:
+    """The data-against-model panels of a fit for the browser, each trace at most about :data:`MAX_POINTS` points.
+
+    The measured points are thinned keeping each stretch's extremes; the model (and each point's time in
+    the log) at the same samples when it is drawn at the data's x, so residuals and a selection's time
+    spans stay point for point; model lines break where the time jumps (``breaks``: after these points,
+    for a model at the data's x; the page breaks its line there).
+    """
+    out = []
+    for p in result.panels:
+        data, model = p.data, p.model
+        same_x = bool(data is not None and model is not None and np.array_equal(data.x, model.x))
+        keep = breaks = None
+        timed = p.time is not None and data is not None and len(p.time) == len(data.x)
+        if data is not None:
+            keep, breaks = _thinned(np.asarray(p.time if timed else data.x, dtype=float), data.y)
+        out.append({
+            "title": p.title,
+            "x_label": p.x_label,
+            "y_label": p.y_label,
+            "data": _series(data, keep),
+            "model": _series(model, keep) if same_x else _series(model),
+            "breaks": [int(k) for k in breaks] if same_x and breaks is not None else [],
+            "extra": [_series(s) for s in p.extra],
+            "same_x": same_x,
+            # each point's time in the log (what a span left out is given in), at the points kept
+            "time": _listed(np.asarray(p.time, dtype=float)[keep]) if timed and keep is not None else None,
+        })
+    return out
 
 
 def panels(argv: Sequence[str]) -> list[dict[str, Any]]:
@@ -144,22 +273,40 @@ def panels(argv: Sequence[str]) -> list[dict[str, Any]]:
     from motorlab.cli.analyze import from_cli
 
     args = build_parser().parse_args(["analyze", *argv])
-    result = from_cli(args.experiment, list(args.files), args)
-    return [
-        {
-            "title": p.title,
-            "x_label": p.x_label,
-            "y_label": p.y_label,
-            "data": _series(p.data),
-            "model": _series(p.model),
-            "extra": [_series(s) for s in p.extra],
-            "same_x": bool(p.data is not None and p.model is not None and np.array_equal(p.data.x, p.model.x)),
-            # each point's time in the log (what a span left out is given in), thinned as the points
-            "time": _thin(p.time) if p.time is not None and p.data is not None and len(p.time) == len(p.data.x)
-            else None,
-        }
-        for p in result.panels
-    ]
+    return panel_curves(from_cli(args.experiment, list(args.files), args))
+
+
+def fit(argv: Sequence[str]) -> int:
+    """``motorlab analyze EXPERIMENT ARG... --json`` and its panels in one run (one analysis, not two).
+
+    The CLI's own ``main`` runs the analysis (its JSON, its one-line errors and exit codes, byte for byte);
+    the result it computes is caught on its way to the printing and its panels added: prints
+    ``{"result": <what analyze --json prints>, "panels": [...]}``.
+    """
+    import contextlib
+    import io
+
+    import motorlab.cli.analyze as cli_analyze
+    from motorlab.cli import main as cli_main
+
+    caught: list[Any] = []
+    analyse = cli_analyze.from_cli
+
+    def catch(*a: Any, **k: Any) -> Any:
+        caught.append(analyse(*a, **k))
+        return caught[-1]
+
+    printed = io.StringIO()
+    cli_analyze.from_cli = catch  # type: ignore[assignment]
+    try:
+        with contextlib.redirect_stdout(printed):
+            code = cli_main(["analyze", *argv, "--json"])
+    finally:
+        cli_analyze.from_cli = analyse  # type: ignore[assignment]
+    if code != 0:
+        return code
+    print(json.dumps({"result": json.loads(printed.getvalue()), "panels": panel_curves(caught[0])}, allow_nan=False))
+    return 0
 
 
 def _curve(resp: Any, per: float) -> dict[str, Any]:
@@ -220,9 +367,11 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     args = list(sys.argv[1:] if argv is None else argv)
     commands = {"detect": detect, "panels": panels, "response": response}
+    if args and args[0] == "fit":
+        return fit(args[1:])
     if not args or args[0] not in commands:
-        print("motorlab: error: worker: use 'detect FILE...', 'panels EXPERIMENT ARG...' or 'response ARG...'",
-              file=sys.stderr)
+        print("motorlab: error: worker: use 'detect FILE...', 'fit EXPERIMENT ARG...', 'panels EXPERIMENT ARG...' "
+              "or 'response ARG...'", file=sys.stderr)
         return 2
     try:
         result: Any = commands[args[0]](args[1:])
