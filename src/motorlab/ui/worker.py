@@ -14,6 +14,7 @@ through the one line on stderr, exit code 2, as the CLI's.
 
 from __future__ import annotations
 
+import itertools
 import json
 import os
 import re
@@ -56,7 +57,7 @@ def keep_extremes(y: Any, limit: int = MAX_POINTS) -> np.ndarray:
     edges = np.linspace(0, n, buckets + 1).astype(int)
     keep: list[np.ndarray] = []
     filled = np.where(np.isfinite(arr), arr, np.nan)
-    for a, b in zip(edges[:-1], edges[1:], strict=True):
+    for a, b in itertools.pairwise(edges):
         if b <= a:
             continue
         part = filled[a:b]

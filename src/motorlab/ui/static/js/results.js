@@ -108,7 +108,7 @@ export function changes(record, fields, now) {
   const byName = Object.fromEntries(fields.map((f) => [f.name, f]));
   const names = [...new Set([...Object.keys(record.settings), ...Object.keys(now)])].filter((n) => (record.fields || []).includes(n));
   return names.filter((n) => (record.settings[n] || "") !== (now[n] || ""))
-    .map((n) => `fitted with ${settingWords(byName[n], record.settings[n])}; you now have ${now[n] ? settingWords(byName[n], now[n]).replace(/^a /, "") : "none"}`);
+    .map((n) => `fitted with ${settingWords(byName[n], record.settings[n])}; you now have ${now[n] || "none"}`);
 }
 
 // "How this result was made": files with their hash, the settings, the file's own units, the command.
@@ -119,8 +119,8 @@ export function recordView(record, fields = []) {
   const own = record.own_units;
   return el("details", { class: "record" }, el("summary", { text: "How this result was made" }),
     el("ul", {},
-      record.files.map((f) => el("li", {}, `${f.name}`, el("span", { class: "small", text: ` ${f.size === null ? "" : `${f.size} bytes, `}SHA-256 ${f.sha256 ? f.sha256.slice(0, 16) + "…" : "not computed"}` }))),
+      record.files.map((f) => el("li", {}, `${f.name}`, el("span", { class: "hash", text: ` ${f.size === null ? "" : `${f.size} bytes, `}SHA-256 ${f.sha256 ? f.sha256.slice(0, 16) + "…" : "not computed"}` }))),
       own ? el("li", { text: `in the file's own units: ${own.units}${own.per_rotation ? ` (${number(own.per_rotation, 6)} per rotation)` : ""}` }) : null,
       settings.length ? el("li", { text: `settings: ${settings.join("; ")}` }) : el("li", { text: "no setting typed: the defaults" }),
-      el("li", { text: `fitted ${new Date(record.made).toLocaleString()}` })));
+      el("li", { text: `fitted ${String(record.made).slice(0, 16).replace("T", " ")} UTC` })));
 }

@@ -31,8 +31,25 @@ export function setActive(key) { active = key || null; }
 export function settings(key = active) { return key ? task(key).settings : {}; }
 
 // What a tab last read or wrote of each record: a save writes only the records this tab changed since.
+// A result's plots (thousands of numbers) are a record of their own ("plots:<result id>"), written once: a
+// keystroke's save never copies them again.
 const written = {};
-const snapshot = (value) => JSON.stringify(value, (k, v) => (v instanceof Blob ? `${v.size}:${v.name || ""}` : v));
+const snapshot = (value) => JSON.stringify(value, (k, v) => (v instanceof Blob ? `${v.size}:${v.name || ""}` : k === "panels" ? undefined : v));
+
+function records() {
+  const out = [["shared", state.shared]];
+  for (const [key, t] of Object.entries(state.tasks)) {
+    const runs = {};
+    for (const [k, r] of Object.entries(t.runs || {})) {
+      if (r.panels && r.id) {
+        runs[k] = { ...r, panels: undefined, plots: r.id };
+        out.push([`plots:${r.id}`, r.panels]);
+      } else runs[k] = r;
+    }
+    out.push([`task:${key}`, { ...t, runs }]);
+  }
+  return out;
+}
 
 function open() {
   return new Promise((resolve, reject) => {
@@ -64,11 +81,16 @@ export async function load() {
       const key = String(k).slice(5);
       state.tasks[key] = t;
       task(key);
-      for (const run of Object.values(t.runs || {})) if (run.status === "running") run.status = run.result ? "done" : "stopped";
+      for (const run of Object.values(t.runs || {})) {
+        if (run.status === "running") run.status = run.result ? "done" : "stopped";
+        if (run.plots && records[`plots:${run.plots}`]) { run.panels = records[`plots:${run.plots}`]; written[`plots:${run.plots}`] = "kept"; }
+      }
       if (t.session && t.session.status === "running") t.session.status = t.session.body ? "done" : "stopped";
       written[k] = snapshot(t);
     }
     written.shared = snapshot(state.shared);
+    const unused = keys.filter((k) => String(k).startsWith("plots:") && !written[k]);  // plots of results replaced since
+    if (unused.length) { const tx = db.transaction(STORE, "readwrite").objectStore(STORE); for (const k of unused) tx.delete(k); }
   } catch (e) { /* private mode or no IndexedDB: the page works, it only forgets on reload */ }
 }
 
@@ -77,12 +99,11 @@ export function save() {
   clearTimeout(timer);
   timer = setTimeout(async () => {
     try {
-      const changed = Object.entries({ shared: state.shared, ...Object.fromEntries(Object.entries(state.tasks).map(([k, t]) => [`task:${k}`, t])) })
-        .filter(([k, v]) => written[k] !== snapshot(v));
+      const changed = records().filter(([k, v]) => (k.startsWith("plots:") ? !written[k] : written[k] !== snapshot(v)));
       if (!changed.length) return;
       const db = await open();
       const store = db.transaction(STORE, "readwrite").objectStore(STORE);
-      for (const [k, v] of changed) { store.put(v, k); written[k] = snapshot(v); }
+      for (const [k, v] of changed) { store.put(v, k); written[k] = k.startsWith("plots:") ? "kept" : snapshot(v); }
     } catch (e) { /* see load() */ }
   }, 200);
 }

@@ -1,6 +1,6 @@
 // Step "Your files and the fit": files recognised on upload (format and proposal beside each file, a reader's
 // refusal too), one analysis per kind of measurement, each with its own options, Run/Cancel, progress and result.
-import { $, commandBox, el, uid } from "../dom.js";
+import { $, commandBox, debounce, el, uid } from "../dom.js";
 import { post, run as runRequest, isAbort } from "../api.js";
 import { save, settings } from "../store.js";
 import { argvOf, appendValues, field, isShared } from "../fields.js";
@@ -134,10 +134,12 @@ function optionsForm(ctx, exp, files) {
   const more = fields.filter((f) => !primary.includes(f));
   const note = (f) => (f.name === "cpr" && needs.has("cpr") ? "needed: this log counts encoder ticks" : "");
   const own = ownUnits(files);
-  const box = el("div", { class: "options" }, primary.map((f) => field(f, values, null, { note: note(f) })),
+  // a setting changed after a fit: its result says so at once (the view drawn again, the field kept as typed)
+  const redraw = debounce(() => { if (Object.values(t.runs).some((r) => r.result)) ctx.rerender(); }, 400);
+  const box = el("div", { class: "options" }, primary.map((f) => field(f, values, redraw, { note: note(f) })),
     own ? el("p", { class: "small own-units", text: `Fitted in the file's own units (${own.units}${own.per_rotation ? `, ${own.per_rotation} per rotation` : ""}): no counts per revolution or wheel radius applies to it.` }) : null);
   return [fields, values, box, more.length ? el("details", { class: "more" }, el("summary", { text: "More options for this fit" }),
-    el("div", { class: "options" }, more.map((f) => field(f, values)))) : null];
+    el("div", { class: "options" }, more.map((f) => field(f, values, redraw)))) : null];
 }
 
 function analyzeCommand(exp, files, fields, values) {

@@ -328,8 +328,10 @@ export function render(host, ctx) {
   const lack = missing(have);
   const out = { status: el("span", { role: "status" }), error: el("p", { class: "error", role: "alert" }), result: el("div", { id: "gains-result" }), plots: el("div", { class: "plots" }) };
   const stale = () => model.map((c) => [c, staleness(ctx, c.run)]).filter(([, w]) => w.length);
+  const late = stale();
   const recompute = debounce(() => {
-    if (stale().length) { ctx.rerender(); return; }  // a setting typed here that the fit used: say so at once
+    // a setting typed here that the fit used: say so at once; typed back as it was: the gains again
+    if (stale().length || late.length) { ctx.rerender(); return; }
     if (!missing(known(sources(ctx, model))).length) compute(ctx, out, sources(ctx, model), model);
   }, 350);
   const rerenderCommand = () => { const box = host.querySelector("details.command"); if (box) box.replaceWith(command()); };
@@ -365,7 +367,6 @@ export function render(host, ctx) {
     el("details", { class: "more" }, el("summary", { text: "More settings (design method, tolerances, loop period, delay)" }),
       el("div", { class: "options" }, more.map((f) => field(f, g.options, changed)))),
     command()));
-  const late = stale();
   if (late.length) { g.last = null; host.append(staleCard(ctx, late)); return; }
   if (clash) { g.last = null; return; }
   if (lack.length) { host.append(needsBlock(ctx, lack)); return; }
