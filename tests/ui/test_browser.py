@@ -12,10 +12,7 @@ Controls are found by their visible words only (tests/ui/browser.py).
 from __future__ import annotations
 
 import json
-import math
 import re
-import subprocess
-import sys
 from pathlib import Path
 from typing import Any
 
@@ -23,16 +20,6 @@ import pytest
 import ui_browser as browser  # tests/ui/browser.py, loaded by conftest.py
 
 pytestmark = browser.needs_browser
-
-
-@pytest.fixture(scope="module")
-def ramp(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, float]:
-    """A simulated forward ramp (8192-count dead wheels) and its true kV per tick."""
-    folder = tmp_path_factory.mktemp("ramp")
-    subprocess.run([sys.executable, "-m", "motorlab", "simulate", "roadrunner-ramp", "-o", str(folder / "ramp.json")],
-                   check=True, capture_output=True)
-    truth = json.loads((folder / "truth.json").read_text())["runs"]["ramp.json"]["expected"]
-    return folder / "ramp.json", truth["kV"] * 2 * math.pi / truth["cpr"]
 
 
 def _kv_per_tick(page: Any) -> float:

@@ -4,13 +4,14 @@
   the FTC PIDF code is copied (K against the virtual dynamometer's truth);
 - a session as a zip and as loose files → its results and report → gains (the session's catalogue motor gives the
   counts per revolution: never asked); a wrong file dropped on the finished session keeps its results;
-- a WPILib SysId file → WPILib gains (kV against the truth), on a phone;
+- a WPILib SysId file → WPILib gains in the file's own unit (kV per rotation against the truth), on a phone;
 - a dynamometer CSV with worded headers and one column it cannot name, answered in the column picker.
 """
 
 from __future__ import annotations
 
 import json
+import math
 import re
 import shutil
 import subprocess
@@ -127,9 +128,10 @@ def test_sysid_to_wpilib_on_a_phone(page: Any, tmp_path: Path) -> None:
     page.click("Gains")
     page.click("WPILib")
     page.wait_text("Gains for WPILib")
-    found = re.search(r"kV\s+" + _NUMBER + r" V·s/rad", page.text())
+    found = re.search(r"kV\s+" + _NUMBER + r" V·s/rot", page.text())  # in the file's own unit (Rotations)
     assert found, page.text()
-    assert abs(float(found.group(1)) - expected["kV"]) / expected["kV"] < 0.03
+    per_rotation = expected["kV"] * 2 * math.pi  # the truth is per radian
+    assert abs(float(found.group(1)) - per_rotation) / per_rotation < 0.03
     page.check()
 
 

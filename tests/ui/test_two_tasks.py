@@ -17,6 +17,7 @@ import math
 import re
 import subprocess
 import sys
+import time
 from pathlib import Path
 from typing import Any
 
@@ -35,16 +36,6 @@ try {
   new PerformanceObserver(seen).observe({ type: "longtask", buffered: true });
 } catch (e) { window.__long = null; }
 """
-
-
-@pytest.fixture(scope="module")
-def ramp(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, float]:
-    """A simulated forward ramp (8192-count dead wheels) and its true kV per tick."""
-    folder = tmp_path_factory.mktemp("two-tasks")
-    subprocess.run([sys.executable, "-m", "motorlab", "simulate", "roadrunner-ramp", "-o", str(folder / "ramp.json")],
-                   check=True, capture_output=True)
-    truth = json.loads((folder / "truth.json").read_text())["runs"]["ramp.json"]["expected"]
-    return folder / "ramp.json", truth["kV"] * 2 * math.pi / truth["cpr"]
 
 
 #: The shared real data, read in place: ``../shared/data/real`` beside the clone, or two levels up for a worktree.
@@ -163,17 +154,24 @@ def test_ramp_then_shooter_then_the_first_gains_again(page: Any, ramp: tuple[Pat
     assert abs(again - true_kv) / true_kv < 0.03, (again, true_kv)
     assert page.field("counts per revolution").get_attribute("value") == "8192"  # the drive's own, not the shooter's
 
-    # While results are shown, no task of the main thread took 200 ms or more (plots thinned, drawn one by one).
-    shown = page.d.execute_script("return performance.now()")
+    # While results are shown, no task of the page's main thread takes 200 ms or more (plots thinned, drawn one
+    # figure a task, a redraw moving the figures drawn): measured with nothing of the test running in the page
+    # (reading the page's text runs WebDriver's own script there, seconds long on a page of plots).
     page.click("Your files and the fit")
     page.wait_text("Result from ramp.json")
     page.wait(lambda: len(page.d.find_elements("css selector", ".plots .main-svg")) >= 2, "the fit's plots")
-    page.type("counts per revolution", "8192")  # a redraw of the view with its results
+    box = page.field("counts per revolution")
+    time.sleep(1.0)
+    shown = page.d.execute_script("return performance.now()")
+    box.clear()
+    box.send_keys("8192")  # the view drawn again with its result and plots
     page.d.execute_script("window.scrollTo(0, document.body.scrollHeight)")
+    time.sleep(2.5)
+    page.d.execute_script("window.scrollTo(0, 0)")
+    time.sleep(0.5)
     long_tasks = page.d.execute_script("return window.__long")
     if long_tasks is not None:  # Chromium gives the long-task timing
         late = [d for start, d in long_tasks if start >= shown]
-        print("long tasks while results are shown (ms):", late, "before:", [d for s, d in long_tasks if s < shown])
         assert not late or max(late) < 200, late
 
     # A counts per revolution changed after the fit: the result says so, and nothing is offered to copy.
@@ -238,7 +236,8 @@ def test_two_models_are_never_merged_silently(page: Any, shooter: Path, tmp_path
     page.click("Use sysid.json only")
     page.wait_text("Gains for WPILib")
     value, unit = _gain_row(page, "kV")
-    assert "rad" in unit, unit  # the simulated file logs radians
-    assert abs(value - expected["kV"]) / expected["kV"] < 0.03
+    assert "rot" in unit, unit  # the simulated file logs rotations: its gains are per rotation
+    per_rotation = expected["kV"] * 2 * math.pi  # the truth is per radian
+    assert abs(value - per_rotation) / per_rotation < 0.03
     assert f"{shooter.name} (" in page.text()  # still listed, unticked
     page.check()

@@ -14,12 +14,14 @@ through the one line on stderr, exit code 2, as the CLI's.
 
 from __future__ import annotations
 
+import contextlib
+import io
 import itertools
 import json
 import os
 import re
 import sys
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from typing import Any
 
 import numpy as np
@@ -215,54 +217,63 @@ def _kept_breaks(full_gaps: np.ndarray, keep: np.ndarray) -> np.ndarray:
     return np.unique(np.searchsorted(keep, full_gaps, side="right") - 1)
 
 
-def _thinned(x: Any, y: Any) -> tuple[np.ndarray, np.ndarray]:
+def _thinned(x: Any, y: Any, limit: int = MAX_POINTS) -> tuple[np.ndarray, np.ndarray]:
     """The samples kept of a curve (its extremes, both ends of each gap of ``x``) and the breaks among them."""
     cut = gaps(x)
     if not cut.size:
-        return keep_extremes(y), cut
-    keep = np.union1d(keep_extremes(y, max(4, MAX_POINTS - 2 * cut.size)), np.concatenate([cut, cut + 1]))
+        return keep_extremes(y, limit), cut
+    keep = np.union1d(keep_extremes(y, max(4, limit - 2 * cut.size)), np.concatenate([cut, cut + 1]))
     return keep, _kept_breaks(cut, keep)
 
 
-def _series(series: Any, keep: np.ndarray | None = None, breaks: np.ndarray | None = None) -> dict[str, Any] | None:
-    """A curve for the browser: the samples ``keep`` (else its own extremes), a line broken after ``breaks``."""
+def _series(series: Any, keep: np.ndarray | None = None, *, clock: Any = None,
+            limit: int = MAX_POINTS) -> dict[str, Any] | None:
+    """A curve for the browser: the samples ``keep`` (else its own extremes, at most ``limit``); a line is
+    broken (a null) wherever its time (``clock``, else its x) jumps: never drawn across the gaps between tests."""
     if series is None:
         return None
     x, y = np.asarray(series.x, dtype=float), np.asarray(series.y, dtype=float)
+    breaks = np.zeros(0, dtype=int)
     if keep is None:
-        keep, breaks = _thinned(x, y)
+        keep, breaks = _thinned(np.asarray(clock, dtype=float) if clock is not None else x, y, limit)
     xs, ys = _listed(x[keep]), _listed(y[keep])
-    if series.kind != "data" and breaks is not None:  # a simulated line never drawn across the gaps between tests
+    if series.kind != "data":
         xs, ys = _broken(xs, breaks), _broken(ys, breaks)
     return {"x": xs, "y": ys, "label": series.label, "kind": series.kind}
 
 
-def panel_curves(result: Any) -> list[dict[str, Any]]:
-    """The data-against-model panels of a fit for the browser, each trace at most about :data:`MAX_POINTS` points.
+#: Measured points drawn per panel (and as many residuals): each is an element of the page's drawing, so
+#: fewer than a line's points, keeping each stretch's extremes (a figure then draws in tens of milliseconds).
+MAX_MARKERS = 600
 
-    The measured points are thinned keeping each stretch's extremes; the model (and each point's time in
-    the log) at the same samples when it is drawn at the data's x, so residuals and a selection's time
-    spans stay point for point; model lines break where the time jumps (``breaks``: after these points,
-    for a model at the data's x; the page breaks its line there).
+
+def panel_curves(result: Any) -> list[dict[str, Any]]:
+    """The data-against-model panels of a fit for the browser: at most :data:`MAX_MARKERS` measured points
+    (each stretch's extremes kept) with their residuals and their time in the log, a model line of at most
+    :data:`MAX_POINTS` points broken where the time jumps (between the tests of a SysId file).
     """
     out = []
     for p in result.panels:
         data, model = p.data, p.model
         same_x = bool(data is not None and model is not None and np.array_equal(data.x, model.x))
-        keep = breaks = None
         timed = p.time is not None and data is not None and len(p.time) == len(data.x)
-        if data is not None:
-            keep, breaks = _thinned(np.asarray(p.time if timed else data.x, dtype=float), data.y)
+        clock = np.asarray(p.time if timed else data.x, dtype=float) if data is not None else None
+        keep = _thinned(clock, data.y, MAX_MARKERS)[0] if data is not None and clock is not None else None
+        residual = None
+        if same_x and keep is not None:
+            dx = np.asarray(data.x, dtype=float)[keep]
+            dy = np.asarray(data.y, dtype=float)[keep] - np.asarray(model.y, dtype=float)[keep]
+            residual = {"x": _listed(dx), "y": _listed(dy)}
         out.append({
             "title": p.title,
             "x_label": p.x_label,
             "y_label": p.y_label,
             "data": _series(data, keep),
-            "model": _series(model, keep) if same_x else _series(model),
-            "breaks": [int(k) for k in breaks] if same_x and breaks is not None else [],
+            "model": _series(model, clock=clock if same_x else None),
+            "residual": residual,  # measured − model at the measured points drawn
             "extra": [_series(s) for s in p.extra],
             "same_x": same_x,
-            # each point's time in the log (what a span left out is given in), at the points kept
+            # each point's time in the log (what a span left out is given in), at the points drawn
             "time": _listed(np.asarray(p.time, dtype=float)[keep]) if timed and keep is not None else None,
         })
     return out
@@ -277,6 +288,29 @@ def panels(argv: Sequence[str]) -> list[dict[str, Any]]:
     return panel_curves(from_cli(args.experiment, list(args.files), args))
 
 
+@contextlib.contextmanager
+def _caught(module: Any, name: str) -> Iterator[tuple[list[Any], io.StringIO]]:
+    """While inside: what ``module.name`` returns (the CLI computes it) collected, and what is printed kept.
+
+    The CLI runs as the user would run it (its options, its JSON, its errors); the objects it computes on
+    the way to its printing (a fit's result, a designed loop) give the page's plots.
+    """
+    caught: list[Any] = []
+    real = getattr(module, name)
+
+    def catch(*a: Any, **k: Any) -> Any:
+        caught.append(real(*a, **k))
+        return caught[-1]
+
+    printed = io.StringIO()
+    setattr(module, name, catch)
+    try:
+        with contextlib.redirect_stdout(printed):
+            yield caught, printed
+    finally:
+        setattr(module, name, real)
+
+
 def fit(argv: Sequence[str]) -> int:
     """``motorlab analyze EXPERIMENT ARG... --json`` and its panels in one run (one analysis, not two).
 
@@ -284,26 +318,11 @@ def fit(argv: Sequence[str]) -> int:
     the result it computes is caught on its way to the printing and its panels added: prints
     ``{"result": <what analyze --json prints>, "panels": [...]}``.
     """
-    import contextlib
-    import io
-
     import motorlab.cli.analyze as cli_analyze
     from motorlab.cli import main as cli_main
 
-    caught: list[Any] = []
-    analyse = cli_analyze.from_cli
-
-    def catch(*a: Any, **k: Any) -> Any:
-        caught.append(analyse(*a, **k))
-        return caught[-1]
-
-    printed = io.StringIO()
-    cli_analyze.from_cli = catch  # type: ignore[assignment]
-    try:
-        with contextlib.redirect_stdout(printed):
-            code = cli_main(["analyze", *argv, "--json"])
-    finally:
-        cli_analyze.from_cli = analyse  # type: ignore[assignment]
+    with _caught(cli_analyze, "from_cli") as (caught, printed):
+        code = cli_main(["analyze", *argv, "--json"])
     if code != 0:
         return code
     print(json.dumps({"result": json.loads(printed.getvalue()), "panels": panel_curves(caught[0])}, allow_nan=False))
@@ -328,28 +347,13 @@ def response(argv: Sequence[str]) -> dict[str, Any]:
     prints its JSON (returned under ``"tune"``: the page needs one run for the gains and the plot);
     the :class:`~motorlab.control.tune.TuneResult` it computes is caught on its way to the printing.
     """
-    import contextlib
-    import io
-
     import motorlab.cli.tune as cli_tune
     from motorlab.cli import build_parser
 
     args = build_parser().parse_args(["tune", *argv])
     args.json, args.plot = True, None
-    caught: list[Any] = []
-    design = cli_tune.tune
-
-    def catch(*a: Any, **k: Any) -> Any:
-        caught.append(design(*a, **k))
-        return caught[-1]
-
-    printed = io.StringIO()
-    cli_tune.tune = catch  # type: ignore[assignment]
-    try:
-        with contextlib.redirect_stdout(printed):
-            cli_tune.run(args)
-    finally:
-        cli_tune.tune = design  # type: ignore[assignment]
+    with _caught(cli_tune, "tune") as (caught, printed):
+        cli_tune.run(args)
     result = caught[-1]
     per = result._display_per_radian()
     quantity = "velocity" if result.gains.loop == "velocity" else "position"

@@ -60,14 +60,6 @@ export function raw(host, item) {
 const againstLogTime = (p) => p.data && p.time && p.time.length === p.data.x.length
   && p.data.x.every((x, k) => x === null || p.time[k] === null || Math.abs(x - p.time[k]) < 1e-9);
 
-// A line with a gap after each index of `breaks` (between two SysId tests): never drawn straight across it.
-function broken(series, breaks) {
-  if (!breaks || !breaks.length) return { x: series.x, y: series.y };
-  const x = [...series.x], y = [...series.y];
-  for (const k of [...breaks].sort((a, b) => b - a)) { x.splice(k + 1, 0, null); y.splice(k + 1, 0, null); }
-  return { x, y };
-}
-
 // Data against the fitted model, residuals below. onSelect(points) gets the points picked with the box/lasso tool;
 // `leftOut` (spans [start, end] of the log's time) are shaded on plots against that time.
 export function panels(host, list, { onSelect, leftOut = [] } = {}) {
@@ -75,12 +67,13 @@ export function panels(host, list, { onSelect, leftOut = [] } = {}) {
   for (const p of list || []) {
     const traces = [];
     if (p.data) traces.push({ x: p.data.x, y: p.data.y, name: p.data.label || "measured", mode: "markers", marker: { size: 4 } });
-    if (p.model) traces.push({ ...broken(p.model, p.breaks), name: p.model.label || "model", mode: "lines" });
+    if (p.model) traces.push({ x: p.model.x, y: p.model.y, name: p.model.label || "model", mode: "lines" });
     for (const s of p.extra || []) if (s) traces.push({ x: s.x, y: s.y, name: s.label, mode: s.kind === "data" ? "markers" : "lines" });
     const layout = { ...base(narrow() ? 360 : 420), xaxis: { title: { text: p.x_label } }, yaxis: { title: { text: p.y_label } }, dragmode: "zoom" };
     if (p.same_x && p.data && p.model) {
-      const res = p.data.y.map((y, k) => (y === null || p.model.y[k] === null || p.model.y[k] === undefined ? null : y - p.model.y[k]));
-      traces.push({ x: p.data.x, y: res, name: "residual", mode: "markers", marker: { size: 3 }, xaxis: "x2", yaxis: "y2" });
+      // measured − model at the measured points drawn (the worker's; a result kept from before, computed here)
+      const res = p.residual || { x: p.data.x, y: p.data.y.map((y, k) => (y === null || p.model.y[k] === null ? null : y - p.model.y[k])) };
+      traces.push({ x: res.x, y: res.y, name: "residual", mode: "markers", marker: { size: 3 }, xaxis: "x2", yaxis: "y2" });
       layout.height += 120;
       layout.xaxis = { anchor: "y", showticklabels: false };
       layout.yaxis.domain = [0.34, 1];
