@@ -42,9 +42,10 @@ function breadcrumb(task, step) {
 let current = null;
 // A redraw of the same view (a result arriving, an option changed) keeps the focused field, its caret and
 // what is typed in it; a new view (a link, back, forward) starts afresh.
-const rerender = () => keepFocus($("#view"), render);
+const rerender = () => keepFocus($("#view"), () => render({ fresh: false }));
 
-export function render() {
+// fresh: a view opened (a link, back, forward, the address typed), not a redraw of the one shown.
+export function render({ fresh = true } = {}) {
   const { task, step, which } = parseHash();
   setActive(task && task.key);
   if (current && current.leave) current.leave();
@@ -52,7 +53,7 @@ export function render() {
   const host = $("#view");
   host.replaceChildren();
   current = STEPS[step];
-  const ctx = { app, task, which, state: task ? taskState(task.key) : null, go: (s) => go(task && task.key, s), rerender, goTask: go };
+  const ctx = { app, task, which, fresh, state: task ? taskState(task.key) : null, go: (s) => go(task && task.key, s), rerender, goTask: go };
   document.title = task ? `motorlab · ${task.short}` : "motorlab";
   current.render(host, ctx);
   document.body.dataset.view = task ? `${task.key}/${step}` : "choose";

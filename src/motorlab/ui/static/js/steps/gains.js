@@ -36,11 +36,11 @@ function candidates(ctx) {
   return out;
 }
 
-// The results chosen: those the address names, else those ticked.
+// The results chosen: those ticked; a view opened by an address that names results ticks those.
 function chosen(ctx, all) {
   const named = (ctx.which || "").split("+").filter(Boolean);
   const byUrl = all.filter((c) => named.includes(c.key));
-  if (byUrl.length) return byUrl;
+  if (ctx.fresh && byUrl.length) for (const c of all) ctx.state.gains.use[c.key] = byUrl.includes(c);
   return all.filter((c) => ctx.state.gains.use[c.key] !== false);
 }
 
@@ -231,7 +231,8 @@ async function compute(ctx, out, list, model) {
     // one run gives the gains (the CLI's tune JSON) and the simulated responses to plot
     const curves = await post("api/tune/response", tuneForm(ctx, list, model, { emit: g.language }), { signal });
     const d = curves.tune || await runRequest("api/tune", tuneForm(ctx, list, model, { emit: g.language }), { signal });
-    g.last = d; save();
+    const used = tuneValues(ctx, model);  // the settings these gains were made with, for a step that sends them on
+    g.last = d; g.lastSettings = { cpr: used.cpr || "", "wheel-radius": used["wheel-radius"] || "" }; save();
     out.result.replaceChildren(gainsTable(d),
       el("ul", { class: "notes" }, [...d.conversion, ...d.notes].map((n) => el("li", { text: plain(n) }))),
       d.warnings.length ? el("ul", { class: "warnings" }, d.warnings.map((w) => el("li", { text: plain(w) }))) : "",
@@ -294,7 +295,6 @@ export function render(host, ctx) {
   const bench = ctx.task.key === "bench";
   const all = bench ? [] : candidates(ctx);
   const model = bench ? [] : chosen(ctx, all);
-  if (!bench && ctx.which) for (const c of all) g.use[c.key] = model.includes(c);  // the address names the model
   if (!bench && model.length) {  // the address names the results the gains come from: it opens them again
     const want = `#/${ctx.task.key}/gains/${model.map((c) => encodeURIComponent(c.key)).join("+")}`;
     if (location.hash !== want) history.replaceState(null, "", want);

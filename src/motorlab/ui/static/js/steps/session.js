@@ -144,7 +144,7 @@ export function render(host, ctx) {
       el("span", { class: "run-status", role: "status", text: s && s.status === "stopped" ? "cancelled" : "" })),
     s && s.error ? el("p", { class: "error", role: "alert", text: s.error }) : null));
   if (running && sessionStep) { const last = sessionStep; requestAnimationFrame(() => progress(last)); }  // kept across a re-render
-  if (s && !s.body) checkFiles(s, check);
+  if (s && s.status !== "running" && (!s.body || (s.ran && s.files.map((f) => f.path).join("\n") !== s.ran.join("\n")))) checkFiles(s, check);
   if (s && s.body) {
     const r = s.body.results;
     const other = s.ran && s.files.map((f) => f.path).join("\n") !== s.ran.join("\n");
