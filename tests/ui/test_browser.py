@@ -22,14 +22,6 @@ import ui_browser as browser  # tests/ui/browser.py, loaded by conftest.py
 pytestmark = browser.needs_browser
 
 
-def _kv_per_tick(page: Any) -> float:
-    code = page.wait(lambda: [e.text for e in page.d.find_elements("css selector", "pre code") if "kV =" in e.text],
-                     "the code to paste")[0]
-    found = re.search(r"kV = ([0-9.eE+-]+);\s*// V\*s/tick", code)
-    assert found, code
-    return float(found.group(1))
-
-
 @pytest.mark.parametrize("size", [browser.LAPTOP, browser.PHONE], ids=["laptop", "phone"])
 def test_road_runner_ramp_to_gains(page: Any, ramp: tuple[Path, float], size: tuple[int, int]) -> None:
     path, true_kv = ramp
@@ -59,7 +51,7 @@ def test_road_runner_ramp_to_gains(page: Any, ramp: tuple[Path, float], size: tu
         page.shot("ui-fit.png")
     page.click("Gains")
     page.click("Road Runner")
-    kv = _kv_per_tick(page)
+    kv = browser.kv_per_tick(page)
     assert abs(kv - true_kv) / true_kv < 0.03, (kv, true_kv)
     page.wait(lambda: len(page.d.find_elements("css selector", ".plots .main-svg")) >= 2, "the step and profile plots")
     page.check()
@@ -79,7 +71,7 @@ def test_reload_back_and_offline(page: Any, ramp: tuple[Path, float]) -> None:
     """After the journey above: a reload keeps the results, back/forward walk the steps, no foreign host."""
     page.d.refresh()
     page.wait(lambda: page.d.find_element("tag name", "body").get_attribute("data-ready") == "true", "the page")
-    assert abs(_kv_per_tick(page) - ramp[1]) / ramp[1] < 0.03  # the gains view came back with its result
+    assert abs(browser.kv_per_tick(page) - ramp[1]) / ramp[1] < 0.03  # the gains view came back with its result
     page.d.back()
     page.wait_text("Result from ramp.json")  # the fit step, with its result
     page.d.forward()

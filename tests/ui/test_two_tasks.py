@@ -61,14 +61,6 @@ def _number(text: str) -> float:
     return float(found.group(1)) * 10.0**power
 
 
-def _code_kv_per_tick(page: Any) -> float:
-    code = page.wait(lambda: [e.text for e in page.d.find_elements("css selector", "pre code") if "kV =" in e.text],
-                     "the code to paste")[0]
-    found = re.search(r"kV = ([0-9.eE+-]+);\s*// V\*s/tick", code)
-    assert found, code
-    return float(found.group(1))
-
-
 def _gain_row(page: Any, symbol: str) -> tuple[float, str]:
     """The value and unit of a gain in the gains table ("kV  0.106721 V·s/rot")."""
     row = page.wait(lambda: [r.text for r in page.d.find_elements("css selector", "#gains-table tr")
@@ -115,7 +107,7 @@ def test_ramp_then_shooter_then_the_first_gains_again(page: Any, ramp: tuple[Pat
     page.type("Wheel radius", "17.5 mm")
     page.wait(lambda: "17.5 mm" in page.d.find_element("css selector", "details.command code").get_attribute(
         "textContent"), "the wheel radius in the gains' command")
-    kv = _code_kv_per_tick(page)
+    kv = browser.kv_per_tick(page)
     assert abs(kv - true_kv) / true_kv < 0.03, (kv, true_kv)
     first = page.d.current_url
     assert re.search(r"#/drive/gains/.+", first), first  # the address names the result the gains come from
@@ -150,7 +142,7 @@ def test_ramp_then_shooter_then_the_first_gains_again(page: Any, ramp: tuple[Pat
     # The first result's gains page again, by its address: the same per-tick kV.
     page.d.get(first)
     page.wait(lambda: page.d.find_element("tag name", "body").get_attribute("data-ready") == "true", "the page")
-    again = _code_kv_per_tick(page)
+    again = browser.kv_per_tick(page)
     assert abs(again - true_kv) / true_kv < 0.03, (again, true_kv)
     assert page.field("counts per revolution").get_attribute("value") == "8192"  # the drive's own, not the shooter's
 
@@ -189,7 +181,7 @@ def test_ramp_then_shooter_then_the_first_gains_again(page: Any, ramp: tuple[Pat
     page.shot("two-tasks-4-stale-phone.png")
     page.d.set_window_size(*browser.LAPTOP)
     page.type("counts per revolution", "8192")  # typed back as it was: the gains again
-    assert abs(_code_kv_per_tick(page) - true_kv) / true_kv < 0.03
+    assert abs(browser.kv_per_tick(page) - true_kv) / true_kv < 0.03
 
 
 def test_a_second_tab_on_another_mechanism_changes_nothing(page: Any, ramp: tuple[Path, float]) -> None:
@@ -209,7 +201,7 @@ def test_a_second_tab_on_another_mechanism_changes_nothing(page: Any, ramp: tupl
     page.d.switch_to.window(original)
     page.d.refresh()
     page.wait(lambda: page.d.find_element("tag name", "body").get_attribute("data-ready") == "true", "the page")
-    assert abs(_code_kv_per_tick(page) - true_kv) / true_kv < 0.03
+    assert abs(browser.kv_per_tick(page) - true_kv) / true_kv < 0.03
 
 
 def test_two_models_are_never_merged_silently(page: Any, shooter: Path, tmp_path: Path) -> None:
