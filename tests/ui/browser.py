@@ -192,3 +192,12 @@ def shots_folder(tmp: Path) -> Path:
     folder = Path(os.environ.get("MOTORLAB_UI_SCREENSHOTS") or tmp)
     folder.mkdir(parents=True, exist_ok=True)
     return folder
+
+
+def kv_per_tick(page: Page) -> float:
+    """kV per encoder tick as the Road Runner code to paste says it (``kV = 9.6e-05;  // V*s/tick``)."""
+    code = page.wait(lambda: [e.text for e in page.d.find_elements("css selector", "pre code") if "kV =" in e.text],
+                     "the code to paste")[0]
+    found = re.search(r"kV = ([0-9.eE+-]+);\s*// V\*s/tick", code)
+    assert found, code
+    return float(found.group(1))

@@ -100,6 +100,19 @@ def truth(sim_session: Path) -> dict[str, Any]:
     return dict(json.loads((sim_session / "A" / "truth.json").read_text()))
 
 
+@pytest.fixture(scope="session")
+def ramp(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, float]:
+    """A simulated Road Runner forward ramp (8192-count dead wheels) and its true kV per tick [V·s/tick]."""
+    import math
+    import subprocess
+
+    folder = tmp_path_factory.mktemp("ramp")
+    subprocess.run([sys.executable, "-m", "motorlab", "simulate", "roadrunner-ramp", "-o", str(folder / "ramp.json")],
+                   check=True, capture_output=True)
+    expected = json.loads((folder / "truth.json").read_text())["runs"]["ramp.json"]["expected"]
+    return folder / "ramp.json", expected["kV"] * 2 * math.pi / expected["cpr"]
+
+
 @pytest.fixture(scope="module")
 def page(server: Served, tmp_path_factory: pytest.TempPathFactory, request: pytest.FixtureRequest) -> Iterator[Any]:
     """A headless Chromium on the test server for one test module, driven by visible words (``browser.Page``)."""

@@ -12,10 +12,7 @@ Controls are found by their visible words only (tests/ui/browser.py).
 from __future__ import annotations
 
 import json
-import math
 import re
-import subprocess
-import sys
 from pathlib import Path
 from typing import Any
 
@@ -23,24 +20,6 @@ import pytest
 import ui_browser as browser  # tests/ui/browser.py, loaded by conftest.py
 
 pytestmark = browser.needs_browser
-
-
-@pytest.fixture(scope="module")
-def ramp(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, float]:
-    """A simulated forward ramp (8192-count dead wheels) and its true kV per tick."""
-    folder = tmp_path_factory.mktemp("ramp")
-    subprocess.run([sys.executable, "-m", "motorlab", "simulate", "roadrunner-ramp", "-o", str(folder / "ramp.json")],
-                   check=True, capture_output=True)
-    truth = json.loads((folder / "truth.json").read_text())["runs"]["ramp.json"]["expected"]
-    return folder / "ramp.json", truth["kV"] * 2 * math.pi / truth["cpr"]
-
-
-def _kv_per_tick(page: Any) -> float:
-    code = page.wait(lambda: [e.text for e in page.d.find_elements("css selector", "pre code") if "kV =" in e.text],
-                     "the code to paste")[0]
-    found = re.search(r"kV = ([0-9.eE+-]+);\s*// V\*s/tick", code)
-    assert found, code
-    return float(found.group(1))
 
 
 @pytest.mark.parametrize("size", [browser.LAPTOP, browser.PHONE], ids=["laptop", "phone"])
@@ -72,7 +51,7 @@ def test_road_runner_ramp_to_gains(page: Any, ramp: tuple[Path, float], size: tu
         page.shot("ui-fit.png")
     page.click("Gains")
     page.click("Road Runner")
-    kv = _kv_per_tick(page)
+    kv = browser.kv_per_tick(page)
     assert abs(kv - true_kv) / true_kv < 0.03, (kv, true_kv)
     page.wait(lambda: len(page.d.find_elements("css selector", ".plots .main-svg")) >= 2, "the step and profile plots")
     page.check()
@@ -92,7 +71,7 @@ def test_reload_back_and_offline(page: Any, ramp: tuple[Path, float]) -> None:
     """After the journey above: a reload keeps the results, back/forward walk the steps, no foreign host."""
     page.d.refresh()
     page.wait(lambda: page.d.find_element("tag name", "body").get_attribute("data-ready") == "true", "the page")
-    assert abs(_kv_per_tick(page) - ramp[1]) / ramp[1] < 0.03  # the gains view came back with its result
+    assert abs(browser.kv_per_tick(page) - ramp[1]) / ramp[1] < 0.03  # the gains view came back with its result
     page.d.back()
     page.wait_text("Result from ramp.json")  # the fit step, with its result
     page.d.forward()

@@ -2,14 +2,16 @@
 
 - an FTC spin-down, then the gains ask for the winding resistance, the LCR table is added there, and
   the FTC PIDF code is copied (K against the virtual dynamometer's truth);
-- a session as a zip and as loose files → its results and report → gains;
-- a WPILib SysId file → WPILib gains (kV against the truth), on a phone;
+- a session as a zip and as loose files → its results and report → gains (the session's catalogue motor gives the
+  counts per revolution: never asked); a wrong file dropped on the finished session keeps its results;
+- a WPILib SysId file → WPILib gains in the file's own unit (kV per rotation against the truth), on a phone;
 - a dynamometer CSV with worded headers and one column it cannot name, answered in the column picker.
 """
 
 from __future__ import annotations
 
 import json
+import math
 import re
 import shutil
 import subprocess
@@ -82,13 +84,22 @@ def test_session_zip_and_loose_files(page: Any, sim_session: Path, truth: dict[s
     page.type("Type the moment of inertia", f"{truth['runs']['spindown.txt']['params']['J']:.6g}")
     page.click("Use this value")
     page.click("PIDF")
-    page.type("counts per revolution", "1120")  # FTC's velocity PIDF counts encoder ticks
+    # FTC's velocity PIDF counts encoder ticks: the session names its catalogue motor, whose encoder gives them
+    page.wait_text("Encoder counts per revolution: 1120, of the session's motor")
+    assert not page._visible("//label[contains(., 'counts per revolution')]")  # never asked
     page.wait(lambda: any("setVelocityPIDFCoefficients" in e.text for e in page.d.find_elements("css selector", "pre")),
               "the FTC PIDF code from the session")
     page.check()
 
     page.d.back()  # the session step, with its result kept; now the same session as loose files, on a phone
     page.wait_text("Each unit's parameters")
+    # a wrong file dropped on the finished session: refused in words, the results kept
+    page.upload("Choose the session file", sim_session / "A" / "lcr.csv")
+    page.click("Run the session")
+    page.wait_text("no session here")
+    assert "the results below are from the session run before, kept as they were" in page.text()
+    assert "Each unit's parameters" in page.text()
+    assert "'session' field" not in page.text()  # no field that does not exist
     page.d.set_window_size(*browser.PHONE)
     page.check()
     loose = [sim_session / "session.toml", *sorted((sim_session / "A").iterdir())]
@@ -117,9 +128,10 @@ def test_sysid_to_wpilib_on_a_phone(page: Any, tmp_path: Path) -> None:
     page.click("Gains")
     page.click("WPILib")
     page.wait_text("Gains for WPILib")
-    found = re.search(r"kV\s+" + _NUMBER + r" V·s/rad", page.text())
+    found = re.search(r"kV\s+" + _NUMBER + r" V·s/rot", page.text())  # in the file's own unit (Rotations)
     assert found, page.text()
-    assert abs(float(found.group(1)) - expected["kV"]) / expected["kV"] < 0.03
+    per_rotation = expected["kV"] * 2 * math.pi  # the truth is per radian
+    assert abs(float(found.group(1)) - per_rotation) / per_rotation < 0.03
     page.check()
 
 
@@ -183,6 +195,24 @@ def test_a_running_session_shows_its_units_then_its_table_before_its_report(page
     page.wait_text("The printable report", 180)
     assert "being drawn" not in page.text()
     page.check()
+    # at 1366 px every column of the units' table (R, L, η …) is within its box, none cut off
+    right, box, columns = page.d.execute_script(
+        "const t = document.querySelector('#session-table'); const b = t.closest('.scroll').getBoundingClientRect();"
+        "const heads = [...t.querySelectorAll('thead th')].map(h => h.getBoundingClientRect().right);"
+        "return [Math.max(...heads), b.right, heads.length]")
+    assert columns >= 6
+    assert right <= box + 1, (right, box)
+    page.shot("ui-session-wide.png")
+    # on a phone the embedded report is fitted to the width: nothing scrolls sideways, in the page or the report
+    page.d.set_window_size(*browser.PHONE)
+    page.click("The printable report")
+    page.d.switch_to.frame(page.d.find_element("css selector", "details.report iframe"))
+    inside = page.d.execute_script("return [document.documentElement.scrollWidth, window.innerWidth]")
+    page.d.switch_to.default_content()
+    assert inside[0] <= inside[1] + 1, inside
+    page.check()
+    page.shot("ui-report-phone.png")
+    page.d.set_window_size(*browser.LAPTOP)
 
 
 def test_typing_goes_on_while_a_result_arrives(page: Any, sim_session: Path) -> None:

@@ -150,7 +150,7 @@ Peek = Callable[[], dict[str, Any] | None]
 
 
 async def _ndjson(stack: contextlib.ExitStack, argv: list[str], cwd: str, slot: str,
-                  finish: Finish, peek: Peek | None = None) -> AsyncIterator[bytes]:
+                  finish: Finish, peek: Peek | None = None, module: str = "motorlab") -> AsyncIterator[bytes]:
     """``{"progress": {...}}`` lines while the command runs, then ``{"result": ...}`` or ``{"error", "status"}``.
 
     With ``peek``, it is asked four times a second until it gives something, which is sent as a
@@ -159,7 +159,7 @@ async def _ndjson(stack: contextlib.ExitStack, argv: list[str], cwd: str, slot: 
     process is ended then, and the request's folder removed.
     """
     reports: asyncio.Queue[dict[str, Any]] = asyncio.Queue()
-    task = asyncio.ensure_future(runner.run_cli(argv, cwd=cwd, slot=slot, on_progress=reports.put_nowait))
+    task = asyncio.ensure_future(runner.run_module(module, argv, cwd=cwd, slot=slot, on_progress=reports.put_nowait))
     try:
         while not task.done():
             get = asyncio.ensure_future(reports.get())
@@ -183,7 +183,8 @@ async def _ndjson(stack: contextlib.ExitStack, argv: list[str], cwd: str, slot: 
 
 
 async def _execute(request: Request, stack: contextlib.ExitStack, argv: list[str], folder: Path, *,
-                   slot: str = "short", finish: Finish | None = None, peek: Peek | None = None) -> Response:
+                   slot: str = "short", finish: Finish | None = None, peek: Peek | None = None,
+                   module: str = "motorlab") -> Response:
     """Run ``motorlab argv`` in ``folder`` and answer: the CLI's JSON, or a stream of it with progress.
 
     ``stack`` holds the request's folder: closed here, or by the stream when it ends.
@@ -191,9 +192,9 @@ async def _execute(request: Request, stack: contextlib.ExitStack, argv: list[str
     done = finish or _outcome_response
     if NDJSON in request.headers.get("accept", ""):
         moved = stack.pop_all()
-        return StreamingResponse(_ndjson(moved, argv, str(folder), slot, done, peek), media_type=NDJSON,
+        return StreamingResponse(_ndjson(moved, argv, str(folder), slot, done, peek, module), media_type=NDJSON,
                                  headers={"cache-control": "no-store", "x-accel-buffering": "no"})
-    outcome = await _until_disconnect(request, runner.run_cli(argv, cwd=str(folder), slot=slot))
+    outcome = await _until_disconnect(request, runner.run_module(module, argv, cwd=str(folder), slot=slot))
     if outcome is None:
         return _error("the client went away; the command was stopped", 499)
     return done(outcome)
@@ -220,6 +221,19 @@ async def analyze(request: Request) -> Response:
     if isinstance(fields, Response):
         return fields
     return await _run_command(request, ["analyze", request.path_params["experiment"]], fields, ["--json"])
+
+
+async def analyze_with_plots(request: Request) -> Response:
+    """``analyze`` and its panels in one run: ``{"result": <analyze --json>, "panels": [...]}`` (the page's fit)."""
+    fields = _experiment_fields(request)
+    if isinstance(fields, Response):
+        return fields
+    with contextlib.ExitStack() as stack:
+        folder = stack.enter_context(uploads.private_folder())
+        argv = await _argv(request, folder, [request.path_params["experiment"]], fields)
+        if isinstance(argv, Response):
+            return argv
+        return await _execute(request, stack, ["fit", *argv], folder, module="motorlab.ui.worker")
 
 
 async def tune(request: Request) -> Response:
@@ -297,7 +311,7 @@ async def characterize(request: Request) -> Response:
         all_files = [p for key in files for p in files[key]]
         session = _session_file(all_files, values)
         if session is None:
-            return _error("upload the session description (one .toml file, or name it in the 'session' field)")
+            return _error("choose the session's .toml file with its logs, or one .zip of the session's folder")
         try:
             uploads.place_session_files(folder, session, all_files)  # loose files go where the TOML names them
         except uploads.UploadError as exc:
@@ -507,6 +521,7 @@ def create_app(*, host: str = "127.0.0.1", port: int = 8765, token: str | None =
         Route("/api/detect", detect, methods=["POST"]),
         Route("/api/analyze/{experiment}", analyze, methods=["POST"]),
         Route("/api/panels/{experiment}", panels, methods=["POST"]),
+        Route("/api/analyze/{experiment}/plots", analyze_with_plots, methods=["POST"]),
         Route("/api/tune", tune, methods=["POST"]),
         Route("/api/tune/figure", tune_figure, methods=["POST"]),
         Route("/api/tune/response", tune_response, methods=["POST"]),

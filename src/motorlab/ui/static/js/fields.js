@@ -1,9 +1,9 @@
-// Form fields from /api/schema, labelled in words. Shared fields (counts per revolution, wheel radius…)
-// read and write the one shared state, so what the student typed once is what every step uses.
+// Form fields from /api/schema, labelled in words. The mechanism's settings (counts per revolution, wheel radius…)
+// read and write the settings of the task shown (store.settings()), so what the student typed once is what its steps use.
 import { el, uid } from "./dom.js";
 import { prettyUnit } from "./format.js";
 import { choiceLabel, fieldLabel, helpWords } from "./words.js";
-import { SHARED_FIELDS, save, state } from "./store.js";
+import { SHARED_FIELDS, save, settings } from "./store.js";
 
 export const isShared = (name) => SHARED_FIELDS.includes(name);
 
@@ -11,9 +11,9 @@ export const isShared = (name) => SHARED_FIELDS.includes(name);
 export function field(f, values, onChange, { note = "" } = {}) {
   const id = uid(`field-${f.name}`);
   const shared = isShared(f.name);
-  const current = shared ? (state.shared[f.name] ?? "") : (values[f.name] ?? "");
+  const current = shared ? (settings()[f.name] ?? "") : (values[f.name] ?? "");
   const set = (v) => {
-    if (shared) state.shared[f.name] = v; else values[f.name] = v;
+    if (shared) settings()[f.name] = v; else values[f.name] = v;
     save(); onChange && onChange(f.name, v);
   };
   let input;
@@ -31,7 +31,7 @@ export function field(f, values, onChange, { note = "" } = {}) {
   const unit = f.unit && !["1", "count", "unit"].includes(f.unit) ? el("span", { class: "unit", text: ` in ${prettyUnit(f.unit)}` }) : null;
   const label = el("label", { for: id }, fieldLabel(f), unit, f.required ? el("span", { class: "unit", text: " (needed)" }) : null);
   const help = helpWords(f);
-  const extra = [note, shared ? "used in every step" : ""].filter(Boolean).join(" · ");
+  const extra = [note, shared ? "used in both steps of this task" : ""].filter(Boolean).join(" · ");
   return el("div", { class: `field${f.kind === "flag" ? " flag" : ""}`, "data-field": f.name }, label, input,
     help || extra ? el("small", { text: [help, extra].filter(Boolean).join(" · ") }) : null);
 }
@@ -41,7 +41,7 @@ export function typedValues(fields, values) {
   const out = [];
   for (const f of fields) {
     if (f.positional || f.kind === "file") continue;
-    const v = isShared(f.name) ? state.shared[f.name] : values[f.name];
+    const v = isShared(f.name) ? settings()[f.name] : values[f.name];
     if (v === undefined || v === null || String(v).trim() === "") continue;
     // a repeatable option typed as a list ("12.5:14, 20:21"): one value each, as the command line repeats it
     const items = f.type === "spans" ? String(v).split(/[,;]/).map((x) => x.trim()).filter(Boolean) : [String(v).trim()];

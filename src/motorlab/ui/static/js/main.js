@@ -1,7 +1,7 @@
 // motorlab ui: the page. Hash routes "#/<task>/<step>", one shared state (store.js), steps in steps/*.js.
 import { $, el, keepFocus } from "./dom.js";
 import { getJson } from "./api.js";
-import { load, state, task as taskState } from "./store.js";
+import { load, setActive, state, task as taskState } from "./store.js";
 import { STEPS, TASKS, findTask, registerStep } from "./tasks.js";
 import { setSchema } from "./words.js";
 import * as choose from "./steps/choose.js";
@@ -18,11 +18,12 @@ registerStep("gains", gains);
 export const app = { schema: null, motors: [] };
 
 function parseHash() {
-  const [taskKey, stepKey] = location.hash.replace(/^#\/?/, "").split("/");
+  const [taskKey, stepKey, ...rest] = location.hash.replace(/^#\/?/, "").split("/");
   const task = findTask(taskKey);
-  if (!task) return { task: null, step: "choose" };
+  if (!task) return { task: null, step: "choose", which: "" };
   const steps = task.steps.map(([k]) => k);
-  return { task, step: steps.includes(stepKey) ? stepKey : steps[0] };
+  // a third part names what the step shows: the results the gains come from (#/drive/gains/<result>)
+  return { task, step: steps.includes(stepKey) ? stepKey : steps[0], which: decodeURIComponent(rest.join("/")) };
 }
 
 export const go = (taskKey, stepKey) => { location.hash = taskKey ? `#/${taskKey}/${stepKey}` : "#/"; };
@@ -41,16 +42,18 @@ function breadcrumb(task, step) {
 let current = null;
 // A redraw of the same view (a result arriving, an option changed) keeps the focused field, its caret and
 // what is typed in it; a new view (a link, back, forward) starts afresh.
-const rerender = () => keepFocus($("#view"), render);
+const rerender = () => keepFocus($("#view"), () => render({ fresh: false }));
 
-export function render() {
-  const { task, step } = parseHash();
+// fresh: a view opened (a link, back, forward, the address typed), not a redraw of the one shown.
+export function render({ fresh = true } = {}) {
+  const { task, step, which } = parseHash();
+  setActive(task && task.key);
   if (current && current.leave) current.leave();
   breadcrumb(task, step);
   const host = $("#view");
   host.replaceChildren();
   current = STEPS[step];
-  const ctx = { app, task, state: task ? taskState(task.key) : null, go: (s) => go(task && task.key, s), rerender, goTask: go };
+  const ctx = { app, task, which, fresh, state: task ? taskState(task.key) : null, go: (s) => go(task && task.key, s), rerender, goTask: go };
   document.title = task ? `motorlab · ${task.short}` : "motorlab";
   current.render(host, ctx);
   document.body.dataset.view = task ? `${task.key}/${step}` : "choose";

@@ -12,10 +12,33 @@ function base(height) {
     paper_bgcolor: "#fff", plot_bgcolor: "#fff" };
 }
 
-function figure(host, title, traces, layout) {
+// Figures are drawn one per task of the page's main thread (each under 200 ms), so a view with several
+// results never freezes: the page answers clicks and keys between two figures. A figure whose place is not
+// in the page yet (the view being built) waits for it; one whose view was left is dropped.
+const queue = [];
+let pumping = false;
+
+function pump() {
+  const job = queue.shift();
+  if (job) {
+    if (job.div.isConnected) job.draw();
+    else if (job.tries++ < 40) { queue.push(job); setTimeout(pump, 25); return; }
+  }
+  if (queue.length) setTimeout(pump, 0); else pumping = false;
+}
+
+function later(div, draw) {
+  queue.push({ div, draw, tries: 0 });
+  if (!pumping) { pumping = true; setTimeout(pump, 0); }
+}
+
+// Resolves once every figure asked for so far is drawn (tests, and a view that waits for its plots).
+export const settled = () => new Promise((resolve) => { const wait = () => (pumping ? setTimeout(wait, 30) : resolve()); wait(); });
+
+function figure(host, title, traces, layout, then) {
   const div = el("div", { class: "plot-area" });
   host.append(el("figure", { class: "plot" }, el("figcaption", { text: title }), div));
-  if (window.Plotly) window.Plotly.react(div, traces, layout, CONFIG);
+  later(div, () => { if (window.Plotly) { window.Plotly.react(div, traces, layout, CONFIG); if (then) then(div); } });
   return div;
 }
 
@@ -48,8 +71,9 @@ export function panels(host, list, { onSelect, leftOut = [] } = {}) {
     for (const s of p.extra || []) if (s) traces.push({ x: s.x, y: s.y, name: s.label, mode: s.kind === "data" ? "markers" : "lines" });
     const layout = { ...base(narrow() ? 360 : 420), xaxis: { title: { text: p.x_label } }, yaxis: { title: { text: p.y_label } }, dragmode: "zoom" };
     if (p.same_x && p.data && p.model) {
-      const res = p.data.y.map((y, k) => (y === null || p.model.y[k] === null ? null : y - p.model.y[k]));
-      traces.push({ x: p.data.x, y: res, name: "residual", mode: "markers", marker: { size: 3 }, xaxis: "x2", yaxis: "y2" });
+      // measured − model at the measured points drawn (the worker's; a result kept from before, computed here)
+      const res = p.residual || { x: p.data.x, y: p.data.y.map((y, k) => (y === null || p.model.y[k] === null ? null : y - p.model.y[k])) };
+      traces.push({ x: res.x, y: res.y, name: "residual", mode: "markers", marker: { size: 3 }, xaxis: "x2", yaxis: "y2" });
       layout.height += 120;
       layout.xaxis = { anchor: "y", showticklabels: false };
       layout.yaxis.domain = [0.34, 1];
@@ -62,10 +86,11 @@ export function panels(host, list, { onSelect, leftOut = [] } = {}) {
       layout.annotations = leftOut.map(([x0, x1]) => ({ xref: "x", yref: "paper", x: (x0 + x1) / 2, y: 1, yanchor: "bottom",
         text: "left out", showarrow: false, font: { ...FONT, color: "#a33" } }));
     }
-    const div = figure(host, p.title, traces, layout);
     // the measured points and their residuals share indices: a selection on either names the same rows
     const selectable = new Set([0, p.same_x && p.data && p.model ? traces.length - 1 : 0]);
-    if (onSelect && div.on) div.on("plotly_selected", (ev) => onSelect(p, ev ? [...new Set(ev.points.filter((pt) => selectable.has(pt.curveNumber)).map((pt) => pt.pointIndex))] : []));
+    figure(host, p.title, traces, layout, (div) => {
+      if (onSelect && div.on) div.on("plotly_selected", (ev) => onSelect(p, ev ? [...new Set(ev.points.filter((pt) => selectable.has(pt.curveNumber)).map((pt) => pt.pointIndex))] : []));
+    });
   }
 }
 

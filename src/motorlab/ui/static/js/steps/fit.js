@@ -1,12 +1,12 @@
 // Step "Your files and the fit": files recognised on upload (format and proposal beside each file, a reader's
 // refusal too), one analysis per kind of measurement, each with its own options, Run/Cancel, progress and result.
-import { $, commandBox, el, uid } from "../dom.js";
+import { $, commandBox, debounce, el, uid } from "../dom.js";
 import { post, run as runRequest, isAbort } from "../api.js";
-import { save, state } from "../store.js";
+import { save, settings } from "../store.js";
 import { argvOf, appendValues, field, isShared } from "../fields.js";
 import { EXPERIMENT_WORDS, plain } from "../words.js";
 import * as plots from "../plots.js";
-import { leftOut, result as resultView } from "../results.js";
+import { changes, leftOut, makeRecord, recordView, result as resultView, settingsUsed } from "../results.js";
 import { eachRunTable, fitEachAlone, fitsEachAlone } from "../runs.js";
 import { findTask } from "../tasks.js";
 
@@ -111,46 +111,74 @@ export function groups(t) {
   return out;
 }
 
+// The units a group's files carry (SysId's units and unitsPerRotation), when every file carries them.
+export const ownUnits = (files) => (files.length && files.every((f) => f.info && f.info.own_units) ? files[0].info.own_units : null);
+
+// The options of a fit of these files: a file that carries its own units is fitted in them, so the
+// mechanism's counts per revolution, wheel radius and gear ratio (typed for something else) never apply to it.
+export function fitFields(ctx, exp, files) {
+  const all = ctx.app.schema.analyze[exp].fields;
+  return ownUnits(files) ? all.filter((f) => !isShared(f.name)) : all;
+}
+
+// What a result was made with that differs from what is in force now ([] when it agrees): one sentence each.
+export function staleness(ctx, run) {
+  const record = run && run.record;
+  if (!record || !ctx.app.schema.analyze[record.experiment]) return [];
+  const fields = ctx.app.schema.analyze[record.experiment].fields.filter((f) => (record.fields || []).includes(f.name));
+  return changes(record, fields, settingsUsed(fields, ctx.state.options[record.experiment] || {}, settings(), isShared));
+}
+
 function optionsForm(ctx, exp, files) {
   const t = ctx.state;
   const values = (t.options[exp] = t.options[exp] || {});
-  const fields = ctx.app.schema.analyze[exp].fields.filter((f) => !f.positional && f.kind !== "file");
+  const fields = fitFields(ctx, exp, files).filter((f) => !f.positional && f.kind !== "file");
   const needs = new Set(files.flatMap((f) => (f.info && f.info.needs) || []));
   const primary = fields.filter((f) => f.required || isShared(f.name) || needs.has(f.name) || (PRIMARY[exp] || []).includes(f.name));
   const more = fields.filter((f) => !primary.includes(f));
   const note = (f) => (f.name === "cpr" && needs.has("cpr") ? "needed: this log counts encoder ticks" : "");
-  const box = el("div", { class: "options" }, primary.map((f) => field(f, values, null, { note: note(f) })));
+  const own = ownUnits(files);
+  // a setting changed after a fit: its result says so at once (the view drawn again, the field kept as typed)
+  const redraw = debounce(() => { if (Object.values(t.runs).some((r) => r.result)) ctx.rerender(); }, 400);
+  const box = el("div", { class: "options" }, primary.map((f) => field(f, values, redraw, { note: note(f) })),
+    own ? el("p", { class: "small own-units", text: `Fitted in the file's own units (${own.units}${own.per_rotation ? `, ${own.per_rotation} per rotation` : ""}): no counts per revolution or wheel radius applies to it.` }) : null);
   return [fields, values, box, more.length ? el("details", { class: "more" }, el("summary", { text: "More options for this fit" }),
-    el("div", { class: "options" }, more.map((f) => field(f, values)))) : null];
+    el("div", { class: "options" }, more.map((f) => field(f, values, redraw)))) : null];
+}
+
+function analyzeCommand(exp, files, fields, values) {
+  return ["analyze", exp, ...files.map((f) => f.name), ...columnRules(files).map((r) => `--column=${r}`), ...argvOf(fields, values)];
 }
 
 async function runGroup(ctx, key, files) {
   const t = ctx.state, exp = files[0].experiment;
-  const [fields, values] = [ctx.app.schema.analyze[exp].fields, t.options[exp] || {}];
+  const [fields, values] = [fitFields(ctx, exp, files), t.options[exp] || {}];
   const names = files.map((f) => f.name);
-  const make = () => {
-    const d = new FormData();
-    for (const f of files) d.append("file", f.excluded && f.excluded.length ? f.trimmed || f.file : f.file, f.name);
-    for (const rule of columnRules(files)) d.append("column", rule);
-    return appendValues(d, fields, values);
-  };
-  const run = (t.runs[key] = { experiment: exp, files: names, status: "running", started: Date.now() });
+  const form = new FormData();
+  for (const f of files) form.append("file", f.excluded && f.excluded.length ? f.trimmed || f.file : f.file, f.name);
+  for (const rule of columnRules(files)) form.append("column", rule);
+  appendValues(form, fields, values);
+  // the record of how the result is made, taken at the click (a setting typed while it runs is not in it)
+  const recording = makeRecord({ experiment: exp, files, fields, settings: settingsUsed(fields, values, settings(), isShared),
+    ownUnits: ownUnits(files), columns: columnRules(files), command: analyzeCommand(exp, files, fields, values) });
+  const previous = t.runs[key] && t.runs[key].result ? t.runs[key] : null;  // a finished result is kept until a new one replaces it
+  const run = (t.runs[key] = { ...(previous || {}), experiment: exp, files: previous ? previous.files : names, status: "running", started: Date.now(), error: "" });
   const controller = new AbortController();
   controllers.set(key, controller);
   ctx.rerender();
   try {
-    const [answer, panels] = await Promise.all([
-      runRequest(`api/analyze/${encodeURIComponent(exp)}`, make(), { signal: controller.signal, onProgress: (p) => progress(key, p) }),
-      post(`api/panels/${encodeURIComponent(exp)}`, make(), { signal: controller.signal }).catch((e) => (isAbort(e) ? Promise.reject(e) : [])),
-    ]);
-    Object.assign(run, { status: "done", result: answer, panels, finished: Date.now(), excluded: files.reduce((n, f) => n + (f.excluded || []).length, 0) });
-    t.gains.use[key] = true;
+    const answer = await runRequest(`api/analyze/${encodeURIComponent(exp)}/plots`, form, { signal: controller.signal, onProgress: (p) => progress(key, p) });
+    Object.assign(run, { status: "done", result: answer.result, panels: answer.panels, record: await recording, files: names, finished: Date.now(),
+      excluded: files.reduce((n, f) => n + (f.excluded || []).length, 0), id: `${key}@${Date.now().toString(36)}` });
+    if (t.gains.use[key] === undefined) t.gains.use[key] = true;
     if (fitsEachAlone(files)) {  // each run's own answer beside the joint one (runs.js)
       run.each = []; ctx.rerender();
       run.each = await fitEachAlone(exp, files, fields, values, columnRules(files), { signal: controller.signal }).catch(() => null);
     }
   } catch (e) {
-    Object.assign(run, isAbort(e) ? { status: "stopped" } : { status: "failed", error: e.message });
+    // a mistake (a wrong option, a cancel) never erases the result before it: it stays, with the error above it
+    Object.assign(run, { status: isAbort(e) ? "stopped" : "failed", error: isAbort(e) ? "" : e.message });
+    if (!previous) { delete run.result; delete run.panels; }
   } finally {
     controllers.delete(key);
     save();
@@ -164,6 +192,11 @@ function progress(key, p) {
   if (text) text.textContent = plain(`${p.what || "working"}${p.total ? `: ${p.done || 0} of ${p.total} ${p.unit || ""}` : ""}${p.detail ? ` (${p.detail})` : ""}`);
 }
 
+// The plots of each result, drawn once: a redraw of the view (a result arriving, a field typed in) moves the same
+// figures into the new view instead of drawing them again (two SysId results drawn again at each keystroke froze
+// the page for seconds).
+const drawn = new Map();  // run id -> { host, exclude }
+
 function groupCard(ctx, key, files) {
   const t = ctx.state, run = t.runs[key], exp = files[0].experiment;
   const [fields, values, box, more] = optionsForm(ctx, exp, files);
@@ -174,10 +207,12 @@ function groupCard(ctx, key, files) {
   const card = el("section", { class: "card group", "data-group": key },
     el("h3", { text: /^roadrunner/.test((files[0].info || {}).format || "") ? "Road Runner feedforward fit (kS, kV, kA)" : experimentWords(ctx, exp) }),
     el("p", { class: "small", text: `From ${files.map((f) => f.name).join(", ")}` }),
-    box, more, commandBox(["analyze", exp, ...files.map((f) => f.name), ...columnRules(files).map((r) => `--column=${r}`), ...argvOf(fields, values)]),
+    box, more, commandBox(analyzeCommand(exp, files, fields, values)),
     el("div", { class: "actions" }, runButton, cancel, running ? el("progress", { "aria-label": "Progress of the fit" }) : null,
       el("span", { class: "run-status", role: "status", text: running ? "fitting…" : run && run.status === "stopped" ? "cancelled" : "" })));
-  if (run && run.status === "failed") card.append(el("p", { class: "error", role: "alert", text: `${run.error}` }));
+  if (run && run.status === "failed") {
+    card.append(el("p", { class: "error", role: "alert", text: run.result ? `This fit failed: ${run.error} The result below is the one before, kept as it was.` : `${run.error}` }));
+  }
   if (run && run.result) {
     const same = run.files.join("\n") === files.map((f) => f.name).join("\n");
     const left = files.reduce((n, f) => n + (f.excluded || []).length, 0);
@@ -186,26 +221,36 @@ function groupCard(ctx, key, files) {
     const leftWords = run.excluded ? ` (${run.excluded} point${run.excluded > 1 ? "s" : ""} left out)`
       : spanCount ? ` (${spanCount} time span${spanCount > 1 ? "s" : ""} left out)` : "";
     card.append(el("h4", { text: `Result from ${run.files.join(", ")}${leftWords}` }));
+    const stale = staleness(ctx, run);
+    if (stale.length) {
+      card.append(el("div", { class: "stale", role: "alert" },
+        el("p", { text: `${stale.map(sentence).join(" ").replace(/\.$/, "")}: fit again. Until then this result and its gains stay as they were made.` }),
+        el("button", { type: "button", class: "primary", text: "Fit again with what you have now", onclick: () => runGroup(ctx, key, files) })));
+    }
     if (left) card.append(el("p", { class: "small" }, `${left} point${left > 1 ? "s are" : " is"} left out of the fit. `,
       el("button", { type: "button", class: "link", text: "Put them back", onclick: () => { for (const f of files) f.excluded = []; save(); runGroup(ctx, key, files); } })));
     if (spans) card.append(el("p", { class: "small left-out" }, `${sentence(spans.text)} `,
       el("button", { type: "button", class: "link", text: "Put them back", onclick: () => { values.exclude = ""; save(); runGroup(ctx, key, files); } })));
     if (!same) card.append(el("p", { class: "small", text: "The files have changed since this result: run the fit again to update it." }));
-    card.append(...resultView(run.result), eachRunTable(exp, run.result, run.each) || "");
-    const host = el("div", { class: "plots" });
-    const exclude = el("div", { class: "actions exclude" });
+    card.append(...resultView(run.result), eachRunTable(exp, run.result, run.each) || "", recordView(run.record, fields));
     const table = files.length === 1 && (files[0].info || {}).format === "csv";
     const timed = takesSpans(fields) && (run.panels || []).some((p) => (p.time || []).some((v) => v !== null));
     const how = timed ? "To leave a stretch of the log out (the wheels slipping, a glitch): pick the box or lasso tool above a plot, select its points, then fit again."
       : "To leave points out: pick the box or lasso tool above a plot, select the points, then fit again.";
-    card.append(table || timed ? el("p", { class: "small", text: how }) : "", exclude, host);
-    const command = (more) => commandBox(["analyze", exp, ...files.map((f) => f.name), ...columnRules(files).map((r) => `--column=${r}`),
-      ...argvOf(fields, { ...values, exclude: [values.exclude, more].filter(Boolean).join(", ") })]);
-    requestAnimationFrame(() => plots.panels(host, run.panels, { leftOut: spans ? spans.spans : [], onSelect: (panel, indices) => {
-      if (timed && panel.time) offerSpans(ctx, key, files, spanChoice(panel, indices), exclude, command);
-      else if (timed) exclude.replaceChildren(el("p", { class: "small", text: "This plot's points are not samples of the log: select the stretch to leave out on a plot against time." }));
-      else offerExclusion(ctx, key, files, panel, indices, exclude);
-    } }));
+    const id = run.id || `${key}@${run.finished}`;
+    let kept = drawn.get(id);
+    if (!kept) {
+      kept = { host: el("div", { class: "plots" }), exclude: el("div", { class: "actions exclude" }) };
+      drawn.set(id, kept);
+      const { host, exclude } = kept;
+      const command = (extra) => commandBox(analyzeCommand(exp, files, fields, { ...values, exclude: [values.exclude, extra].filter(Boolean).join(", ") }));
+      plots.panels(host, run.panels, { leftOut: spans ? spans.spans : [], onSelect: (panel, indices) => {
+        if (timed && panel.time) offerSpans(ctx, key, files, spanChoice(panel, indices), exclude, command);
+        else if (timed) exclude.replaceChildren(el("p", { class: "small", text: "This plot's points are not samples of the log: select the stretch to leave out on a plot against time." }));
+        else offerExclusion(ctx, key, files, panel, indices, exclude);
+      } });
+    }
+    card.append(table || timed ? el("p", { class: "small", text: how }) : "", kept.exclude, kept.host);
   }
   return card;
 }
@@ -290,15 +335,16 @@ async function offerExclusion(ctx, key, files, panel, indices, host) {
 
 function motorPicker(ctx) {
   const id = uid("motor");
+  const mine = settings();  // this task's mechanism: its motor, encoder and ratio are its own
   const select = el("select", { id, onchange: (e) => {
     const m = ctx.app.motors.find((x) => x.key === e.target.value);
-    state.shared.motor = e.target.value;
-    if (m) { state.shared.cpr = String(m.cpr); state.shared["gear-ratio"] = String(m.gear_ratio); }
+    mine.motor = e.target.value;
+    if (m) { mine.cpr = String(m.cpr); mine["gear-ratio"] = String(m.gear_ratio); }
     save(); ctx.rerender();
   } }, el("option", { value: "", text: "not in the list / dead wheels" }));
-  for (const m of ctx.app.motors) select.append(el("option", { value: m.key, text: `${m.name} (${m.cpr} counts per revolution)`, selected: m.key === state.shared.motor }));
+  for (const m of ctx.app.motors) select.append(el("option", { value: m.key, text: `${m.name} (${m.cpr} counts per revolution)`, selected: m.key === mine.motor }));
   return el("div", { class: "field" }, el("label", { for: id, text: "Motor" }), select,
-    el("small", { text: "fills in the counts per revolution of its built-in encoder; type them instead for another encoder" }));
+    el("small", { text: "fills in the counts per revolution of its built-in encoder; type them instead for another encoder. Kept for this task only" }));
 }
 
 export function render(host, ctx) {

@@ -148,7 +148,8 @@ registerStep("robot-record", {
     const status = el("p", { class: "status", role: "status" });
     const select = el("select", { id: "robot-opmode" });
     const seconds = el("input", { id: "robot-seconds", value: "20", inputmode: "decimal" });
-    const cpr = el("input", { id: "robot-cpr", value: state.shared.cpr || "", inputmode: "decimal", onchange: (e) => { state.shared.cpr = e.target.value.trim(); save(); } });
+    // the robot's encoder is the robot task's setting, never another task's (store.js: settings per task)
+    const cpr = el("input", { id: "robot-cpr", value: taskState("robot").settings.cpr || "", inputmode: "decimal", onchange: (e) => { taskState("robot").settings.cpr = e.target.value.trim(); save(); } });
     const live = el("pre", { class: "live", "aria-live": "polite", style: "white-space:pre-wrap;overflow-wrap:anywhere" });
     const bar = stopBar();
     const after = el("div", {});
@@ -225,8 +226,8 @@ registerStep("robot-push", {
     const kept = state.shared.robotFit;
     const fit = el("input", { type: "file", id: "robot-fit", accept: ".json" });
     const target = el("select", { id: "robot-target" }, ...["roadrunner", "pedro", "ftc-pidf"].map((t) => el("option", { value: t, text: t })));
-    const cpr = el("input", { id: "robot-push-cpr", value: state.shared.cpr || "", inputmode: "decimal" });
-    const radius = el("input", { id: "robot-radius", value: state.shared["wheel-radius"] || "" });
+    const cpr = el("input", { id: "robot-push-cpr", value: (kept && kept.cpr) || taskState("robot").settings.cpr || "", inputmode: "decimal" });
+    const radius = el("input", { id: "robot-radius", value: taskState("robot").settings["wheel-radius"] || "" });
     const out = el("div", {});
     const fields = () => {
       const f = form({ target: target.value, cpr: cpr.value, "wheel-radius": radius.value });

@@ -8,11 +8,16 @@ import { parameterWords, plain } from "../words.js";
 
 let controller = null;
 
+// New files chosen for the session: its finished results stay (a wrong file dropped on a finished session
+// never erases them) until a run of the new files gives new ones.
 export function addSessionFiles(t, files) {
   const list = [...files].map((f) => ({ name: f.name, path: f.webkitRelativePath || f.name, file: f }));
-  t.session = { files: list, body: null, status: "", error: "" };
+  const before = t.session || {};
+  t.session = { files: list, body: before.body || null, ran: before.ran || null, status: "", error: "" };
   save();
 }
+
+const isSession = (files) => files.some((f) => /\.(toml|zip)$/i.test(f.name));
 
 // The files the session description names (a quick look; the CLI reads it for real).
 async function namedFiles(entry) {
@@ -41,21 +46,31 @@ async function checkFiles(s, host) {
 
 async function runSession(ctx) {
   const t = ctx.state, s = t.session;
+  if (!isSession(s.files)) {  // said at once, in words; the results before stay
+    s.status = "failed";
+    s.error = `${s.files.map((f) => f.name).join(", ")}: no session here. Choose the session's .toml file with its logs, or one .zip of its folder${s.body ? "; the results below are from the session run before, kept as they were" : ""}.`;
+    save(); ctx.rerender();
+    return;
+  }
   const form = new FormData();
   for (const f of s.files) form.append("file", f.file, f.path);
-  s.status = "running"; s.error = ""; s.started = Date.now(); s.body = null; sessionStep = null;
+  const previous = s.body ? { body: s.body, ran: s.ran } : null;
+  s.status = "running"; s.error = ""; s.started = Date.now(); sessionStep = null;
   controller = new AbortController();
   ctx.rerender();
   const clock = setInterval(() => { const el2 = $(".session .run-status"); if (el2 && !el2.dataset.progress) el2.textContent = `running the analyses… ${Math.round((Date.now() - s.started) / 1000)} s`; }, 500);
   try {
     // The table comes first (onPartial), the report with its figures follows in the answer.
-    const onPartial = (part) => { s.body = { ...part, report_html: null }; save(); ctx.rerender(); };
+    const ran = s.files.map((f) => f.path);
+    const onPartial = (part) => { s.body = { ...part, report_html: null }; s.ran = ran; save(); ctx.rerender(); };
     s.body = await runRequest("api/characterize", form, { signal: controller.signal, onProgress: progress, onPartial });
+    s.ran = ran;
     s.status = "done";
     t.gains.unit = "";
   } catch (e) {
     s.status = isAbort(e) ? "stopped" : "failed";
-    s.error = isAbort(e) ? "" : e.message;
+    if (previous) Object.assign(s, previous);  // the finished results before are kept
+    s.error = isAbort(e) ? "" : `${e.message}${previous ? ". The results below are from the session run before, kept as they were." : ""}`;
   } finally {
     clearInterval(clock); controller = null; save(); ctx.rerender();
   }
@@ -72,6 +87,17 @@ function progress(p) {
   if (bar && p.total) { bar.max = p.total; bar.value = p.done || 0; }
   const counted = p.total ? `${p.done || 0} of ${p.total} ${p.unit}${p.total === 1 ? "" : "s"} done` : "";
   if (text) { text.dataset.progress = "1"; text.textContent = plain(`${p.what || "working"}: ${counted}${p.detail ? ` (${p.detail})` : ""}`); }
+}
+
+// The report as embedded: its own page, fitted to the frame's width (a phone's 390 px): figures scaled
+// down, wide tables scrolled within themselves, long words wrapped; the downloaded file is the report as written.
+const FIT = `<meta name="viewport" content="width=device-width, initial-scale=1"><style>
+html, body { max-width: 100%; overflow-x: hidden; } body { overflow-wrap: anywhere; margin: 8px; }
+img, svg, figure, video, canvas { max-width: 100% !important; height: auto !important; }
+table { display: block; max-width: 100%; overflow-x: auto; } pre { white-space: pre-wrap; }</style>`;
+
+export function readable(html) {
+  return /<head[^>]*>/i.test(html) ? html.replace(/<head[^>]*>/i, (m) => `${m}${FIT}`) : `${FIT}${html}`;
 }
 
 function resultsTable(r) {
@@ -118,11 +144,13 @@ export function render(host, ctx) {
       el("span", { class: "run-status", role: "status", text: s && s.status === "stopped" ? "cancelled" : "" })),
     s && s.error ? el("p", { class: "error", role: "alert", text: s.error }) : null));
   if (running && sessionStep) { const last = sessionStep; requestAnimationFrame(() => progress(last)); }  // kept across a re-render
-  if (s && !s.body) checkFiles(s, check);
+  if (s && s.status !== "running" && (!s.body || (s.ran && s.files.map((f) => f.path).join("\n") !== s.ran.join("\n")))) checkFiles(s, check);
   if (s && s.body) {
     const r = s.body.results;
+    const other = s.ran && s.files.map((f) => f.path).join("\n") !== s.ran.join("\n");
     const out = el("section", { class: "card", id: "session-result" },
       el("h3", { text: r.session && r.session.title ? r.session.title : "Results" }),
+      other ? el("p", { class: "small", text: `These results are from ${s.ran.join(", ")}; run the session to replace them with the files chosen now.` }) : null,
       s.body.message ? el("p", { class: "error", text: `Some analyses failed: ${plain(s.body.message)}` }) : null,
       el("div", { class: "scroll" }, resultsTable(r)), el("div", { class: "scroll" }, fleetTable(r)),
       el("div", { class: "actions" },
@@ -130,7 +158,7 @@ export function render(host, ctx) {
         el("button", { type: "button", text: "Download results.csv", onclick: () => download("results.csv", s.body.csv, "text/csv") }),
         s.body.report_html ? el("button", { type: "button", text: "Download the report", onclick: () => download("report.html", s.body.report_html, "text/html") }) : null),
       s.body.report_html
-        ? el("details", { class: "report" }, el("summary", { text: "The printable report" }), el("iframe", { title: "The report", sandbox: "", srcdoc: s.body.report_html }))
+        ? el("details", { class: "report" }, el("summary", { text: "The printable report" }), el("iframe", { title: "The report", sandbox: "", srcdoc: readable(s.body.report_html) }))
         : el("p", { class: "small", role: "status", id: "report-status", text: running ? "The report with its figures is being drawn; it follows here." : "The report was not finished." }));
     host.append(out);
   }
