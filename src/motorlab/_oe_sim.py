@@ -424,10 +424,8 @@ def _event_step(reg: _Regimes, x: np.ndarray, mode: int, vk: float, f0: float,
     if nxt == mode:  # interpolation put the event at the very end: finish the step in the old regime
         nxt = 0 if mode != 0 else nxt
     x_end, dth_end = _flow(reg.modal(nxt).discrete((1.0 - frac) * dt), x_mid, vk) if frac < 1 else (x_mid, 0.0)
-    if nxt != 0 and nxt * x_end[w] < 0:  # numerically impossible reversal: hold at rest
-        x_end = x_mid
-        dth_end = 0.0
-        nxt = 0
+    if nxt != 0 and nxt * x_end[w] < 0:  # broke away and stopped again within the step
+        x_end, dth_end, nxt = _stuck_rest(reg, x_mid, vk, (1.0 - frac) * dt)
     return np.asarray(x_end, dtype=float).copy(), dth_mid + dth_end, nxt
 
 
@@ -462,6 +460,23 @@ def _advance(reg: _Regimes, x: np.ndarray, mode: int, v: float, tau: float) -> t
     else:
         nxt = 1 if float(reg.drive(x_mid, v)) > 0 else -1
     x_end, d_end = _flow(reg.modal(nxt).discrete((1.0 - frac) * tau), x_mid, v) if frac < 1 else (x_mid, 0.0)
-    if nxt != 0 and nxt * x_end[w] < 0:  # numerically impossible reversal: hold at rest
-        return x_mid, d_mid, 0
+    if nxt != 0 and nxt * x_end[w] < 0:  # broke away and stopped again within the part
+        x_end, d_end, nxt = _stuck_rest(reg, x_mid, v, (1.0 - frac) * tau)
     return np.asarray(x_end, dtype=float), d_mid + d_end, nxt
+
+
+def _stuck_rest(reg: _Regimes, x: np.ndarray, v: float, tau: float) -> tuple[np.ndarray, float, int]:
+    """The rest (length τ) of a step in which the shaft broke away and stopped again: stuck, the current moving.
+
+    At a break-away whose drive falls back below the friction level within the step (a ripple peak:
+    the current, driven by the next held voltage, reverses in a fraction of the step) the moving
+    regime ends the step with the speed's sign reversed. The excursion in between is a fraction of
+    a step long and moves the angle by a second-order amount; the shaft is taken as at rest for the
+    rest of the step, the winding's current still following the voltage. (Holding the whole state
+    instead froze the current too, for as long as the drive stayed near the friction level: on a log
+    with supply ripple a change of 1e-6 in R then moved the cost from 2,485 to 3e8.)
+    """
+    x = np.array(x, dtype=float)
+    x[reg.w] = 0.0
+    x_end, _ = _flow(reg.modal(0).discrete(tau), x, v)
+    return x_end, 0.0, 0
