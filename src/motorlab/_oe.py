@@ -216,6 +216,10 @@ class Fit:
     success: bool
     message: str
     jacobian: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))  # of the weighted residuals (SI)
+    #: Why the cost is not smooth around the end point ("" when it is: the Jacobian, and every
+    #: standard error from it, can be trusted); see :func:`smoothness`.
+    not_minimum: str = ""
+    cost: float = math.nan  # Σ of the squared weighted residuals at the end point (before any bias removal)
 
 
 class OEModel:
@@ -524,8 +528,7 @@ def fit_output_error(
     """
     problem = _Problem(model, logs, p0, lower=lower, upper=upper, scale=scale, sigma=sigma)
     x_scale = problem.x_scale
-    sol = levenberg_marquardt(problem.fun, problem.jac, problem.z0, problem.lower_z, problem.upper_z,
-                              max_iterations=max_nfev)
+    sol, not_minimum = _converged(problem, max_nfev)
     p, offsets, speeds = problem.unpack(sol.x)
     res, sims = problem.residual_parts(p, offsets, speeds)
     jx = sol.jac / x_scale  # d residual / d parameter (SI)
@@ -561,9 +564,15 @@ def fit_output_error(
     else:
         cov_full = cov_hac
         noise_model = f"Newey–West (residuals {math.sqrt(ratio):.3g}× larger than the measured noise explains)"
+    if not_minimum:  # a Jacobian taken across a cliff: no standard error, and no claim of "not determined"
+        cov_full = np.full_like(cov_full, np.nan)
+        null = np.zeros_like(null)
+        noise_model = f"none: {not_minimum}"
     return Fit(
         values=values,
         names=problem.names,
+        not_minimum=not_minimum,
+        cost=float(sol.fun @ sol.fun),
         covariance=cov_full,
         covariance_white=cov_white,
         covariance_residuals=cov_hac,
@@ -578,6 +587,101 @@ def fit_output_error(
         success=bool(sol.success),
         message=str(sol.message),
     )
+
+
+#: A probe's secant may differ from the Jacobian's column by this fraction of the column's norm at a
+#: smooth end point (curvature over one standard error and the kinks of located stiction events
+#: stay far below it; a cliff or a Jacobian taken across one is far above).
+SECANT_TOLERANCE = 0.5
+#: Restarts from the probe points when the end point is not a smooth minimum.
+RESTARTS = 2
+
+
+def smoothness(problem: _Problem, sol: _Solution) -> tuple[str, np.ndarray | None]:
+    """Whether the cost is smooth around the end point, and a better start when a probe found one.
+
+    The Jacobian of a simulation with friction events is by forward differences of 1e-6: across a
+    stiction decision that flips (a break-away at a ripple peak, a clipped input) it is meaningless,
+    and so is every standard error computed from it. Each global model parameter (one that acts on
+    the whole run, not a held level or switch instant) is probed one standard error (white, in the
+    scaled unknowns; between 1e-3 and 0.1 of its scale) to either side: the change of the residuals
+    there must agree with the Jacobian's prediction, ‖r(z ± δ) − r(z) ∓ J·δ‖ ≤ tol·‖J·δ‖
+    (:data:`SECANT_TOLERANCE`), and neither probe may lower the cost.
+
+    Returns
+    -------
+    reason, restart
+        "" for a smooth minimum, else the words for why not; where to restart: the probe point with
+        the lowest cost when it is below the end point's, else the first probe across a break (the
+        other side of a cliff), else None.
+    """
+    z, r, j = sol.x, sol.fun, sol.jac
+    cost = float(r @ r)
+    n_model = problem.n_model
+    glob = [k for k in range(n_model) if problem.model.local_start(k) is None]
+    if not glob:
+        return "", None
+    h = j.T @ j
+    try:
+        white = np.sqrt(np.clip(np.diag(np.linalg.pinv(h, hermitian=True)), 0.0, None))
+    except np.linalg.LinAlgError:
+        white = np.full(z.size, np.inf)
+    problems: list[str] = []
+    best, best_cost, across = None, cost, None
+    for k in glob:
+        step = float(np.clip(np.nan_to_num(white[k], nan=0.1, posinf=0.1), 1e-3, 0.1)) * max(abs(z[k]), 1.0)
+        for sign in (1.0, -1.0):
+            zk = z.copy()
+            zk[k] = np.clip(z[k] + sign * step, problem.lower_z[k], problem.upper_z[k])
+            delta = zk[k] - z[k]
+            if delta == 0.0:
+                continue
+            rk = problem.fun(zk)
+            ck = float(rk @ rk) if np.all(np.isfinite(rk)) else math.inf
+            predicted = j[:, k] * delta
+            err = float(np.linalg.norm(rk - r - predicted)) if math.isfinite(ck) else math.inf
+            if err > SECANT_TOLERANCE * float(np.linalg.norm(predicted)):
+                name = problem.names[k]
+                problems.append(f"{name} {'+' if sign > 0 else '−'}{abs(delta * problem.x_scale[k]):.2g}: "
+                                f"cost {ck:.4g} against {cost:.4g}")
+                across = zk if across is None else across
+            if ck < best_cost * (1.0 - 1e-9):
+                best, best_cost = zk, ck
+    problem.fun(z)  # leave the problem's cache at the end point
+    reason = ""
+    if problems:
+        reason = ("the cost is not smooth around the end point (a stiction decision or a clipped input flips "
+                  "within one standard error: " + "; ".join(problems[:3]) + ")")
+    elif best is not None:
+        reason = f"a probe one standard error away lowers the cost ({best_cost:.6g} against {cost:.6g})"
+    return reason, best if best is not None else across
+
+
+def _converged(problem: _Problem, max_iterations: int) -> tuple[_Solution, str]:
+    """Levenberg–Marquardt from the problem's start, restarted where the end point is not a smooth minimum.
+
+    After each run :func:`smoothness` probes the end point; where a probe lowers the cost, or the cost
+    is not smooth there (the Jacobian taken across a stiction decision that flips), the fit restarts
+    from that probe point, the other side of the break (up to :data:`RESTARTS` times), and the run
+    with the lowest cost is kept. Returns that run and the reason its end point is still not a smooth
+    minimum ("" when it is).
+    """
+    sol = levenberg_marquardt(problem.fun, problem.jac, problem.z0, problem.lower_z, problem.upper_z,
+                              max_iterations=max_iterations)
+    if max_iterations == 0:  # the Jacobian at a given point (a Cramér–Rao bound), no fit
+        return sol, ""
+    reason, restart = smoothness(problem, sol)
+    for _ in range(RESTARTS):
+        if not reason or restart is None:
+            break
+        other = levenberg_marquardt(problem.fun, problem.jac, restart, problem.lower_z, problem.upper_z,
+                                    max_iterations=max_iterations)
+        if not float(other.fun @ other.fun) < float(sol.fun @ sol.fun):
+            break
+        sol = other
+        reason, restart = smoothness(problem, sol)
+    problem.fun(sol.x)
+    return sol, reason
 
 
 def integrated_autocorrelation(x: np.ndarray) -> float:
@@ -595,7 +699,11 @@ def integrated_autocorrelation(x: np.ndarray) -> float:
 
 
 def noise_warning(fit: Fit, *, rms_text: str) -> list[str]:
-    """The warning to give when the uncertainties had to come from the residuals (empty otherwise)."""
+    """The warning to give when the uncertainties had to come from the residuals or could not be given
+    (empty otherwise)."""
+    if fit.not_minimum:
+        return [f"no standard errors: {fit.not_minimum}; the values are the lowest cost found from "
+                f"{RESTARTS + 1} starts, not a verified minimum"]
     if not fit.noise_model.startswith("Newey"):
         return []
     return [

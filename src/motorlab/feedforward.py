@@ -398,8 +398,10 @@ def _gain_estimates(fit: _oe.Fit, model: FeedforwardModel, logs: list[_oe.Log], 
         determined = not fit.null[min(k, fit.null.size - 1)] and stderr[k] <= MAX_RELATIVE_STDERR * abs(values[k])
         if name in ("kG", "offset") and not fit.null[k]:
             determined = bool(np.isfinite(stderr[k]))
-        params[name] = Estimate(name, float(values[k]), float(stderr[k]), units[name], determined,
-                                "" if determined else "the data carry (almost) no information on it")
+        note = "" if determined else "the data carry (almost) no information on it"
+        if fit.not_minimum:  # the Jacobian cannot be trusted: say so, print no standard error
+            determined, note = True, f"no standard error: {fit.not_minimum}"
+        params[name] = Estimate(name, float(values[k]), float(stderr[k]), units[name], determined, note)
     with np.errstate(invalid="ignore", divide="ignore"):
         corr = cov / np.outer(stderr, stderr)
     np.fill_diagonal(corr, 1.0)
@@ -511,7 +513,7 @@ def _gain_rows(gains: np.ndarray, out: dict[str, Any], physics: dict[str, Any], 
 def _noise_warning(recs: list[Recording], logs: list[_oe.Log], fit: _oe.Fit, *, length: str) -> list[str]:
     """The motor-model fit's noise warning (if any), saying what the residuals look like."""
     noise = _oe.noise_warning(fit, rms_text=f"{fit.residual_rms['position']:.3g} {length}")
-    if noise:
+    if noise and fit.noise_model.startswith("Newey"):
         look = _residual_look(recs, logs, fit) or "no single effect (lag, asymmetry, drift) stands out"
         noise[0] += f"; the residuals look like: {look}"
     return noise

@@ -272,6 +272,7 @@ def _details(fit: _oe.Fit, values: np.ndarray, p0: np.ndarray, sigma: dict[str, 
         "stderr_newey_west": dict(zip(MOTOR_NAMES, np.sqrt(np.diag(fit.covariance_residuals)[:6]).tolist(),
                                       strict=True)),
         "function_evaluations": fit.nfev,
+        "cost": fit.cost,
         "input_model": input_details,
     }
 
@@ -282,6 +283,9 @@ def _motor_estimates(fit: _oe.Fit, values: np.ndarray, stderr: np.ndarray, *, l_
     relative-error bound, or (L) within 3σ of zero or at its lower bound ``l_floor`` [H]."""
     params: dict[str, Estimate] = {}
     for k, name in enumerate(MOTOR_NAMES):
+        if fit.not_minimum:  # the Jacobian cannot be trusted: say so, print no standard error
+            params[name] = _estimate(name, values[k], math.nan, note=f"no standard error: {fit.not_minimum}")
+            continue
         determined = not fit.null[k] and stderr[k] <= MAX_RELATIVE_STDERR * abs(values[k])
         note = ""
         if name == "L" and (values[k] <= 1.01 * l_floor or values[k] < 3.0 * stderr[k]):
