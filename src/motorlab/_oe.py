@@ -3,7 +3,7 @@
 Logs prepared for fitting (:class:`Log`), the model interface (:class:`OEModel`), the fit
 (:func:`fit_output_error`: bounded Levenberg–Marquardt, covariance with correlated residuals and the
 propagation of the measured noises, the errors-in-variables bias). The simulator they run is
-:mod:`motorlab._oe_sim` (its names are re-exported here).
+:mod:`motorlab._oe_sim`, the noise model :mod:`motorlab._oe_noise`.
 """
 
 from __future__ import annotations
@@ -14,29 +14,11 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy import fft
 
 from motorlab import progress
-from motorlab._oe_noise import (  # noqa: F401 - re-exported
-    COUNTING_HARMONICS,
-    INFO_TOLERANCE,
-    input_noise_bias,
-    input_noise_gain,
-    noise_propagation_covariance,
-    scaled_gram_inverse,
-    voltage_noise,
-)
-from motorlab._oe_sim import (  # noqa: F401 - the simulator's names, re-exported
-    StatePlant,
-    _Discrete,
-    _discretise_expm,
-    _Modal,
-    _propagate,
-    _regime,
-    feedforward_plant,
-    motor_plant,
-    simulate,
-)
+from motorlab._oe_noise import input_noise_bias, noise_propagation_covariance
+from motorlab._oe_sim import StatePlant, simulate
+from motorlab.fitting import hac_meat, scaled_gram_inverse
 
 # --------------------------------------------------------------------------------------------------
 # Output-error fitting engine shared by identify and feedforward
@@ -209,7 +191,7 @@ class Fit:
     null: np.ndarray  # bool per model parameter: loads on a direction without information
     residual_rms: dict[str, float]
     simulations: list[dict[str, np.ndarray]]
-    bandwidth: int
+    bandwidth: float  # of the Newey–West covariance [samples]
     noise_model: str
     bias_correction: np.ndarray  # subtracted from the model parameters (errors in the input variable)
     nfev: int
@@ -557,7 +539,7 @@ def fit_output_error(
             res, sims = problem.residual_parts(*problem.unpack(values / x_scale))
         else:
             bias = np.zeros(values.size)
-    cov_hac, cov_white, null, bandwidth = hac_covariance(jx, res, blocks, len(problem.signals), values)
+    cov_hac, cov_white, null, bandwidth = hac_covariance(jx, res, blocks, len(problem.signals))
     if ratio <= 2.0:  # the measured noises explain the residuals
         cov_full = cov_prop * max(1.0, ratio)  # never below what the residuals themselves show
         noise_model = "measured noise propagated (voltage, counting" + (", current)" if model.uses_current else ")")
@@ -684,20 +666,6 @@ def _converged(problem: _Problem, max_iterations: int) -> tuple[_Solution, str]:
     return sol, reason
 
 
-def integrated_autocorrelation(x: np.ndarray) -> float:
-    """τ = 1 + 2·Σρ_l summed until ρ first drops below zero [samples]."""
-    x = np.asarray(x, dtype=float) - float(np.mean(x))
-    n = x.size
-    if n < 4 or not np.any(x):
-        return 1.0
-    f = np.fft.rfft(x, 2 * n)
-    acf = np.fft.irfft(f * np.conj(f))[:n]
-    acf = acf / acf[0]
-    neg = np.flatnonzero(acf[1:] <= 0.0)
-    stop = int(neg[0]) + 1 if neg.size else n
-    return float(1.0 + 2.0 * np.sum(acf[1:stop]))
-
-
 def noise_warning(fit: Fit, *, rms_text: str) -> list[str]:
     """The warning to give when the uncertainties had to come from the residuals or could not be given
     (empty otherwise)."""
@@ -713,58 +681,41 @@ def noise_warning(fit: Fit, *, rms_text: str) -> list[str]:
 
 
 def hac_covariance(
-    jac: np.ndarray, res: np.ndarray, blocks: list[tuple[int, int]], n_signals: int, values: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+    jac: np.ndarray, res: np.ndarray, blocks: list[tuple[int, int]], n_signals: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
     """Covariance of the parameters that allows for correlated residuals (Newey–West).
 
-    cov = H⁻¹·S·H⁻¹ with H = JᵀJ and S the long-run covariance of the score g_t = Σ_signals J_tᵀ·r_t,
-    S = Σ_{|l|≤M} (1 − |l|/(M+1))·Γ_l (Bartlett weights), summed over runs. For white residuals it is
-    the usual s²·(JᵀJ)⁻¹. The bandwidth M is three times the largest integrated autocorrelation time
-    of the residuals (quantised angles at rest, stale samples and voltage noise integrated twice
-    make position residuals strongly correlated), at most half of each run.
+    cov = H⁻¹·S·H⁻¹·n/(n − p) with H = JᵀJ and S the long-run covariance of the score
+    g_t = Σ_signals J_tᵀ·r_t of each instant t, by the one rule of every fit
+    (:func:`motorlab.fitting.hac_meat`: VAR(1) prewhitening, Andrews' bandwidth, Bartlett weights),
+    no lag crossing from one run to the next. Residuals after the runs' (logged voltage samples
+    against held levels) are white: each is a run of its own. For white residuals it is the usual
+    s²·(JᵀJ)⁻¹.
 
     Returns
     -------
     cov, cov_white, null, bandwidth
-        Newey–West covariance, the plain one, the parameters on a null direction, M [samples].
-
-    References
-    ----------
-    W. K. Newey and K. D. West, "A simple, positive semi-definite, heteroskedasticity and
-    autocorrelation consistent covariance matrix", Econometrica 55 (1987) 703–708.
+        Newey–West covariance, the plain one, the parameters on a null direction, the bandwidth [samples].
     """
     n, p = jac.shape
     h_inv, null = scaled_gram_inverse(jac)
     cov_white = h_inv * float(res @ res) / max(n - p, 1)
-    # One bandwidth per run: three integrated autocorrelation times of its residuals, at most half
-    # the run (quasistatic ramps have far longer correlation than short dynamic steps).
-    s_mat = np.zeros((p, p))
-    bandwidth = 0
-    for start, m in blocks:
-        tau = max(
-            integrated_autocorrelation(res[start + sgl * m : start + (sgl + 1) * m]) for sgl in range(n_signals)
-        )
-        band = int(min(max(3.0 * tau, 1.0), max(m // 2, 1)))
-        bandwidth = max(bandwidth, band)
-        weights = 1.0 - np.abs(np.arange(-band, band + 1)) / (band + 1.0)
+    scores, groups = [], []
+    end = 0
+    for k, (start, m) in enumerate(blocks):
         g = np.zeros((m, p))
         for sgl in range(n_signals):
             sl = slice(start + sgl * m, start + (sgl + 1) * m)
             g += jac[sl] * res[sl, None]
-        kg = _smoothed(g, weights) if band > 0 else g
-        s_mat += g.T @ kg
-    s_mat = 0.5 * (s_mat + s_mat.T) * n / max(n - p, 1)
-    cov = h_inv @ s_mat @ h_inv
+        scores.append(g)
+        groups.append(np.full(m, k))
+        end = start + n_signals * m
+    extra = n - end
+    scores.append(jac[end:] * res[end:, None])
+    groups.append(len(blocks) + np.arange(extra))
+    meat, bandwidth = hac_meat(np.concatenate(scores), groups=np.concatenate(groups))
+    cov = h_inv @ meat @ h_inv * (n / max(n - p, 1))
     return cov, cov_white, null, bandwidth
-
-
-def _smoothed(g: np.ndarray, weights: np.ndarray) -> np.ndarray:
-    """Each column of ``g`` convolved with the (odd-length, centred) ``weights``, as long as ``g``:
-    ``scipy.signal.fftconvolve(g, weights[:, None], mode="same", axes=0)``, by scipy.fft (what it does)."""
-    m, half = g.shape[0], weights.size // 2
-    size = fft.next_fast_len(m + weights.size - 1, real=True)
-    full = fft.irfft(fft.rfft(g, size, axis=0) * fft.rfft(weights, size)[:, None], size, axis=0)
-    return full[half : half + m]
 
 
 @dataclass

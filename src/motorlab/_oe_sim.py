@@ -85,7 +85,7 @@ class StatePlant:
 
 
 @dataclass(frozen=True)
-class _Discrete:
+class Discrete:
     """ZOH discretisation of one regime over one step: x⁺ = Ad·x + bv·V + c, θ⁺ = θ + hx·x + hv·V + hc."""
 
     ad: np.ndarray
@@ -145,7 +145,7 @@ class _Modal:
             self.inv = inv
             self.row = vec[plant.w]
 
-    def discrete(self, tau: float) -> _Discrete:
+    def discrete(self, tau: float) -> Discrete:
         if not self.ok:
             return _discretise_expm(self.plant, self.s, tau)
         z = self.lam * tau
@@ -162,10 +162,15 @@ class _Modal:
         hx = moving * ((self.row * (tau * phi1)) @ inv).real
         hv = moving * float((self.row @ (tau * tau * phi2 * self.pb)).real)
         hc = moving * float((self.row @ (tau * tau * phi2 * self.pc)).real)
-        return _Discrete(ad, bv, c, hx, hv, hc)
+        return Discrete(ad, bv, c, hx, hv, hc)
 
 
-def _discretise_expm(plant: StatePlant, s: int, tau: float) -> _Discrete:
+def moving_step(plant: StatePlant, tau: float) -> Discrete:
+    """ZOH matrices of the moving regime (s = +1) over a step τ [s] (the noise model's linearisation)."""
+    return _Modal(plant, 1).discrete(tau)
+
+
+def _discretise_expm(plant: StatePlant, s: int, tau: float) -> Discrete:
     n = plant.n
     a, bv, c = _regime(plant, s)
     m = np.zeros((n + 3, n + 3))
@@ -175,12 +180,12 @@ def _discretise_expm(plant: StatePlant, s: int, tau: float) -> _Discrete:
     if s != 0:  # θ' = ω (in the stuck regime ω = 0 and θ stays)
         m[n, plant.w] = 1.0
     phi = linalg.expm(m * tau)
-    return _Discrete(
+    return Discrete(
         phi[:n, :n], phi[:n, n + 1], phi[:n, n + 2], phi[n, :n], float(phi[n, n + 1]), float(phi[n, n + 2])
     )
 
 
-def _propagate(d: _Discrete, x0: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _propagate(d: Discrete, x0: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """States x_0..x_M and θ increments for held inputs v_0..v_{M-1}, starting from x0.
 
     The recursion x⁺ = Ad·x + e with e = bv·v + c is run as a rational filter in z⁻¹ (one or two
@@ -214,7 +219,7 @@ def _propagate(d: _Discrete, x0: np.ndarray, v: np.ndarray) -> tuple[np.ndarray,
     return x, dtheta
 
 
-def _flow(d: _Discrete, x: np.ndarray, v: float) -> tuple[np.ndarray, float]:
+def _flow(d: Discrete, x: np.ndarray, v: float) -> tuple[np.ndarray, float]:
     """One (fractional) step."""
     return d.ad @ x + d.bv * v + d.c, float(d.hx @ x + d.hv * v + d.hc)
 
@@ -265,7 +270,7 @@ class _Regimes:
         self.w = plant.w
         self.f_level = plant.friction
         self._modal: dict[int, _Modal] = {}
-        self._discrete: dict[int, _Discrete] = {}
+        self._discrete: dict[int, Discrete] = {}
 
     def modal(self, s: int) -> _Modal:
         """Eigen-decomposition of regime s (built on first use)."""
@@ -273,7 +278,7 @@ class _Regimes:
             self._modal[s] = _Modal(self.plant, s)
         return self._modal[s]
 
-    def discrete(self, s: int) -> _Discrete:
+    def discrete(self, s: int) -> Discrete:
         """ZOH matrices of regime s over one grid step (built on first use)."""
         if s not in self._discrete:
             self._discrete[s] = self.modal(s).discrete(self.dt)

@@ -13,8 +13,8 @@ Small on purpose; every analysis module may use it.
 - :func:`read_tables`, :func:`finite_rows`, :func:`concatenate`, :func:`metadata_quantity`,
   :func:`sources_of`, :func:`fit_straight_line`: headed-CSV tables of the bench analyses (``lcr``,
   ``torque``, ``pulse``, ``gains``).
-- :func:`reader_warnings`: what the readers noted (e.g. a truncated last line dropped), for every
-  analysis to pass on in :attr:`FitResult.warnings <motorlab.results.FitResult.warnings>`.
+- :func:`reader_warnings` (from :mod:`motorlab.oe_runs`): what the readers noted (e.g. a truncated last
+  line dropped), for every analysis to pass on in :attr:`FitResult.warnings <motorlab.results.FitResult.warnings>`.
 - :func:`check_range`, :func:`check_cpr`, :func:`check_flat`, :func:`in_file`: refuse values outside a
   physically possible range (before they overflow), responses that carry no information, and
   name the file in a :class:`~motorlab.errors.FitError`.
@@ -33,6 +33,7 @@ from scipy import optimize
 from motorlab.errors import FitError, LogFormatError, OptionError
 from motorlab.fitting import LeastSquares, fit_least_squares, fit_linear, r_squared
 from motorlab.io import _text as _io_text
+from motorlab.oe_runs import reader_warnings
 from motorlab.plan import MATERIALS
 from motorlab.recording import Recording
 
@@ -156,22 +157,6 @@ def in_file(exc: FitError, source: str) -> FitError:
     if not source or text.startswith(source):
         return exc
     return FitError(f"{source}: {text}")
-
-
-def reader_warnings(recordings: Recording | Iterable[Recording]) -> list[str]:
-    """The readers' warnings (``Recording.metadata["warnings"]``) of every recording, in order, once each.
-
-    Readers note what they repaired or dropped (a truncated last line, placeholder rows, a test of
-    a SysId file that is empty) with the file and line; every analysis passes these on first in
-    its :class:`~motorlab.results.FitResult` warnings, so that nothing dropped goes unsaid.
-    """
-    recs = [recordings] if isinstance(recordings, Recording) else list(recordings)
-    out: list[str] = []
-    for rec in recs:
-        for text in rec.metadata.get("warnings", []) or []:
-            if str(text) not in out:
-                out.append(str(text))
-    return out
 
 
 def check_finite_signals(recording: Recording, names: Iterable[str]) -> None:

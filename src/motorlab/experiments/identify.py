@@ -24,7 +24,8 @@ def run(paths: list[str], v: dict[str, Any]) -> Any:
     """Run ``motorlab analyze identify FILE...``; a JSON file's cpr counts per logged rotation."""
     from motorlab.analyses._common import check_cpr
     from motorlab.feedforward import apply_cpr
-    from motorlab.identify import identify, read_runs
+    from motorlab.identify import identify
+    from motorlab.oe_runs import read_runs
 
     cpr = v["cpr"]
     check_cpr(cpr)  # any positive number of counts (537.7), within physical bounds
@@ -55,7 +56,7 @@ def run(paths: list[str], v: dict[str, Any]) -> Any:
 
 def characterize(ctx: Any) -> Any:
     """The session's logs; without current, R and K come from what the unit has measured."""
-    from motorlab.identify import read_runs
+    from motorlab.oe_runs import read_runs
 
     cpr = ctx.cpr
     runs, left = without_spans(read_runs(ctx.files, cpr=cpr), {"exclude": ctx.setting("exclude")}, split=True)
