@@ -13,8 +13,9 @@ from typing import Protocol
 import numpy as np
 from scipy import linalg
 
-from motorlab._oe_sim import Discrete, StatePlant, first_order, moving_step
+from motorlab._oe_sim import StatePlant, moving_step
 from motorlab.fitting import scaled_gram_inverse
+from motorlab.model import HeldStep, first_order
 
 
 class FittedRun(Protocol):
@@ -53,7 +54,7 @@ def voltage_noise(log: FittedRun) -> float:
     return float(1.4826 * np.median(np.abs(d2 - np.median(d2))) / np.sqrt(6.0))
 
 
-def _filters(d: Discrete) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _filters(d: HeldStep) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Rational filters (in z⁻¹) from a held voltage perturbation δV_k to the states and angle increments.
 
     Returns (numerators of each state (n × 3), numerator of the angle increment hx·x_k + hv·δV_k (3,),

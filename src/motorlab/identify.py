@@ -35,7 +35,8 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from motorlab import _oe, held_input, identify_thermal
-from motorlab._oe_noise import input_noise_gain, voltage_noise
+from motorlab._oe_noise import input_noise_gain
+from motorlab._oe_noise import voltage_noise as run_voltage_noise
 from motorlab.decimate import driven_log
 from motorlab.errors import FitError, OptionError
 from motorlab.fitting import MAX_RELATIVE_STDERR
@@ -219,7 +220,7 @@ def _noise_weights(logs: list[_oe.Log], start: np.ndarray, dt: float) -> tuple[d
     sigma = noise_levels(logs, with_current=True)
     current_noise = sigma["current"]
     gain = float(input_noise_gain(MotorModel().plant(start), dt)[0, 0])
-    voltage_noise = max(voltage_noise(log) for log in logs)
+    voltage_noise = max(run_voltage_noise(log) for log in logs)
     sigma["current"] = math.sqrt(current_noise**2 + voltage_noise**2 * gain)
     return sigma, current_noise, voltage_noise
 

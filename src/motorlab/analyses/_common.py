@@ -33,6 +33,7 @@ from scipy import optimize
 from motorlab.errors import FitError, LogFormatError, OptionError
 from motorlab.fitting import LeastSquares, fit_least_squares, fit_linear, r_squared
 from motorlab.io import _text as _io_text
+from motorlab.model import phi_functions
 from motorlab.oe_runs import reader_warnings
 from motorlab.plan import MATERIALS
 from motorlab.recording import Recording
@@ -237,21 +238,13 @@ def is_tick_log(recording: Recording) -> bool:
 
 # ---- motion under constant torque and viscous drag ---------------------------------------------
 def _phi1(x: np.ndarray) -> np.ndarray:
-    """(1 − e^(−x))/x, equal to 1 at x = 0 (no division by zero)."""
-    x = np.asarray(x, dtype=float)
-    small = np.abs(x) < 1e-8
-    safe = np.where(small, 1.0, x)
-    return np.where(small, 1.0 - x / 2.0, -np.expm1(-safe) / safe)
+    """(1 − e^(−x))/x = φ₁(−x), equal to 1 at x = 0 (:func:`motorlab.model.phi_functions`)."""
+    return np.real(phi_functions(-np.asarray(x, dtype=float))[1])
 
 
 def _phi2(x: np.ndarray) -> np.ndarray:
-    """(x − 1 + e^(−x))/x², equal to ½ at x = 0; a series where the direct form cancels."""
-    x = np.asarray(x, dtype=float)
-    small = np.abs(x) < 1e-2
-    safe = np.where(small, 1.0, x)
-    direct = (safe + np.expm1(-safe)) / safe**2
-    series = 0.5 - x / 6.0 + x**2 / 24.0 - x**3 / 120.0 + x**4 / 720.0
-    return np.where(small, series, direct)
+    """(x − 1 + e^(−x))/x² = φ₂(−x), equal to ½ at x = 0 (:func:`motorlab.model.phi_functions`)."""
+    return np.real(phi_functions(-np.asarray(x, dtype=float))[2])
 
 
 def ramp_speed(tau: np.ndarray, omega0: float, gamma: float, accel: float) -> np.ndarray:
