@@ -644,8 +644,9 @@ def _converged(problem: _Problem, max_iterations: int) -> tuple[_Solution, str]:
 
     After each run :func:`smoothness` probes the end point; where a probe lowers the cost, or the cost
     is not smooth there (the Jacobian taken across a stiction decision that flips), the fit restarts
-    from that probe point, the other side of the break (up to :data:`RESTARTS` times), and the run
-    with the lowest cost is kept. Returns that run and the reason its end point is still not a smooth
+    from that probe point, the other side of the break, and failing that from 5 % to either side of
+    the end point in every global parameter (up to :data:`RESTARTS` rounds), and the run with the
+    lowest cost is kept. Returns that run and the reason its end point is still not a smooth
     minimum ("" when it is).
     """
     sol = levenberg_marquardt(problem.fun, problem.jac, problem.z0, problem.lower_z, problem.upper_z,
@@ -654,16 +655,32 @@ def _converged(problem: _Problem, max_iterations: int) -> tuple[_Solution, str]:
         return sol, ""
     reason, restart = smoothness(problem, sol)
     for _ in range(RESTARTS):
-        if not reason or restart is None:
+        if not reason:
             break
-        other = levenberg_marquardt(problem.fun, problem.jac, restart, problem.lower_z, problem.upper_z,
-                                    max_iterations=max_iterations)
-        if not float(other.fun @ other.fun) < float(sol.fun @ sol.fun):
+        better = None
+        for start in ([restart] if restart is not None else []) + _both_sides(problem, sol):
+            other = levenberg_marquardt(problem.fun, problem.jac, start, problem.lower_z, problem.upper_z,
+                                        max_iterations=max_iterations)
+            if float(other.fun @ other.fun) < float(sol.fun @ sol.fun):
+                better = other
+                break
+        if better is None:
             break
-        sol = other
+        sol = better
         reason, restart = smoothness(problem, sol)
     problem.fun(sol.x)
     return sol, reason
+
+
+def _both_sides(problem: _Problem, sol: _Solution) -> list[np.ndarray]:
+    """Starts 5 % to either side of the end point in every global model parameter (within the bounds)."""
+    glob = np.array([k for k in range(problem.n_model) if problem.model.local_start(k) is None], dtype=int)
+    starts = []
+    for sign in (1.0, -1.0):
+        z = sol.x.copy()
+        z[glob] = np.clip(z[glob] * (1.0 + sign * 0.05), problem.lower_z[glob], problem.upper_z[glob])
+        starts.append(z)
+    return starts
 
 
 def noise_warning(fit: Fit, *, rms_text: str) -> list[str]:
