@@ -68,7 +68,7 @@ def rig_files(n_seeds: int = 20) -> None:
     import tempfile
     from pathlib import Path
 
-    from motorlab.identify import read_runs
+    from motorlab.oe_runs import read_runs
     from motorlab.rig import VirtualRig
     from motorlab.rig.flywheel import Flywheel
 

@@ -197,7 +197,7 @@ TARGETS = {"kS": 0.02, "kV": 0.005, "kA": 0.02}
 
 
 def _rig_sysid(tmp_path, motor: str, seed: int, **settings):
-    from motorlab.identify import read_runs
+    from motorlab.oe_runs import read_runs
     from motorlab.rig import VirtualRig
     from motorlab.rig.flywheel import Flywheel
 
@@ -446,9 +446,9 @@ def test_initial_speed_columns_simulate_their_own_run_only():
         FeedforwardModel,
         _bounds,
         _checked_recordings,
-        _prepare,
         _stale_frames,
         noise_levels,
+        prepare_runs,
         regression_start,
     )
 
@@ -458,7 +458,7 @@ def test_initial_speed_columns_simulate_their_own_run_only():
         recs.append(Recording(rec.time[keep], {k: rec[k][keep] for k in ("voltage", "position", "counts")},
                               metadata=rec.metadata, source=rec.source))
     recs = _checked_recordings(recs, mechanism="simple", cpr=None)
-    logs, _ = _prepare(recs, cpr=None, with_current=False)
+    logs, _ = prepare_runs(recs, cpr=None, with_current=False)
     period = _stale_frames(logs, "simple")
     p0 = regression_start(logs, "simple", lag=0.5 * period)
     lower, upper, scale = _bounds(p0, logs)

@@ -3,7 +3,7 @@
 Logs prepared for fitting (:class:`Log`), the model interface (:class:`OEModel`), the fit
 (:func:`fit_output_error`: bounded Levenberg–Marquardt, covariance with correlated residuals and the
 propagation of the measured noises, the errors-in-variables bias). The simulator they run is
-:mod:`motorlab._oe_sim` (its names are re-exported here).
+:mod:`motorlab._oe_sim`, the noise model :mod:`motorlab._oe_noise`.
 """
 
 from __future__ import annotations
@@ -14,29 +14,11 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy import fft
 
 from motorlab import progress
-from motorlab._oe_noise import (  # noqa: F401 - re-exported
-    COUNTING_HARMONICS,
-    INFO_TOLERANCE,
-    input_noise_bias,
-    input_noise_gain,
-    noise_propagation_covariance,
-    scaled_gram_inverse,
-    voltage_noise,
-)
-from motorlab._oe_sim import (  # noqa: F401 - the simulator's names, re-exported
-    StatePlant,
-    _Discrete,
-    _discretise_expm,
-    _Modal,
-    _propagate,
-    _regime,
-    feedforward_plant,
-    motor_plant,
-    simulate,
-)
+from motorlab._oe_noise import input_noise_bias, noise_propagation_covariance
+from motorlab._oe_sim import StatePlant, simulate
+from motorlab.fitting import hac_meat, scaled_gram_inverse
 
 # --------------------------------------------------------------------------------------------------
 # Output-error fitting engine shared by identify and feedforward
@@ -209,13 +191,17 @@ class Fit:
     null: np.ndarray  # bool per model parameter: loads on a direction without information
     residual_rms: dict[str, float]
     simulations: list[dict[str, np.ndarray]]
-    bandwidth: int
+    bandwidth: float  # of the Newey–West covariance [samples]
     noise_model: str
     bias_correction: np.ndarray  # subtracted from the model parameters (errors in the input variable)
     nfev: int
     success: bool
     message: str
     jacobian: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))  # of the weighted residuals (SI)
+    #: Why the cost is not smooth around the end point ("" when it is: the Jacobian, and every
+    #: standard error from it, can be trusted); see :func:`smoothness`.
+    not_minimum: str = ""
+    cost: float = math.nan  # Σ of the squared weighted residuals at the end point (before any bias removal)
 
 
 class OEModel:
@@ -524,8 +510,7 @@ def fit_output_error(
     """
     problem = _Problem(model, logs, p0, lower=lower, upper=upper, scale=scale, sigma=sigma)
     x_scale = problem.x_scale
-    sol = levenberg_marquardt(problem.fun, problem.jac, problem.z0, problem.lower_z, problem.upper_z,
-                              max_iterations=max_nfev)
+    sol, not_minimum = _converged(problem, max_nfev)
     p, offsets, speeds = problem.unpack(sol.x)
     res, sims = problem.residual_parts(p, offsets, speeds)
     jx = sol.jac / x_scale  # d residual / d parameter (SI)
@@ -554,16 +539,22 @@ def fit_output_error(
             res, sims = problem.residual_parts(*problem.unpack(values / x_scale))
         else:
             bias = np.zeros(values.size)
-    cov_hac, cov_white, null, bandwidth = hac_covariance(jx, res, blocks, len(problem.signals), values)
+    cov_hac, cov_white, null, bandwidth = hac_covariance(jx, res, blocks, len(problem.signals))
     if ratio <= 2.0:  # the measured noises explain the residuals
         cov_full = cov_prop * max(1.0, ratio)  # never below what the residuals themselves show
         noise_model = "measured noise propagated (voltage, counting" + (", current)" if model.uses_current else ")")
     else:
         cov_full = cov_hac
         noise_model = f"Newey–West (residuals {math.sqrt(ratio):.3g}× larger than the measured noise explains)"
+    if not_minimum:  # a Jacobian taken across a cliff: no standard error, and no claim of "not determined"
+        cov_full = np.full_like(cov_full, np.nan)
+        null = np.zeros_like(null)
+        noise_model = f"none: {not_minimum}"
     return Fit(
         values=values,
         names=problem.names,
+        not_minimum=not_minimum,
+        cost=float(sol.fun @ sol.fun),
         covariance=cov_full,
         covariance_white=cov_white,
         covariance_residuals=cov_hac,
@@ -580,22 +571,124 @@ def fit_output_error(
     )
 
 
-def integrated_autocorrelation(x: np.ndarray) -> float:
-    """τ = 1 + 2·Σρ_l summed until ρ first drops below zero [samples]."""
-    x = np.asarray(x, dtype=float) - float(np.mean(x))
-    n = x.size
-    if n < 4 or not np.any(x):
-        return 1.0
-    f = np.fft.rfft(x, 2 * n)
-    acf = np.fft.irfft(f * np.conj(f))[:n]
-    acf = acf / acf[0]
-    neg = np.flatnonzero(acf[1:] <= 0.0)
-    stop = int(neg[0]) + 1 if neg.size else n
-    return float(1.0 + 2.0 * np.sum(acf[1:stop]))
+#: A probe's secant may differ from the Jacobian's column by this fraction of the column's norm at a
+#: smooth end point (curvature over one standard error and the kinks of located stiction events
+#: stay far below it; a cliff or a Jacobian taken across one is far above).
+SECANT_TOLERANCE = 0.5
+#: Restarts from the probe points when the end point is not a smooth minimum.
+RESTARTS = 2
+
+
+def smoothness(problem: _Problem, sol: _Solution) -> tuple[str, np.ndarray | None]:
+    """Whether the cost is smooth around the end point, and a better start when a probe found one.
+
+    The Jacobian of a simulation with friction events is by forward differences of 1e-6: across a
+    stiction decision that flips (a break-away at a ripple peak, a clipped input) it is meaningless,
+    and so is every standard error computed from it. Each global model parameter (one that acts on
+    the whole run, not a held level or switch instant) is probed one standard error (white, in the
+    scaled unknowns; between 1e-3 and 0.1 of its scale) to either side: the change of the residuals
+    there must agree with the Jacobian's prediction, ‖r(z ± δ) − r(z) ∓ J·δ‖ ≤ tol·‖J·δ‖
+    (:data:`SECANT_TOLERANCE`), and neither probe may lower the cost.
+
+    Returns
+    -------
+    reason, restart
+        "" for a smooth minimum, else the words for why not; where to restart: the probe point with
+        the lowest cost when it is below the end point's, else the first probe across a break (the
+        other side of a cliff), else None.
+    """
+    z, r, j = sol.x, sol.fun, sol.jac
+    cost = float(r @ r)
+    n_model = problem.n_model
+    glob = [k for k in range(n_model) if problem.model.local_start(k) is None]
+    if not glob:
+        return "", None
+    h = j.T @ j
+    try:
+        white = np.sqrt(np.clip(np.diag(np.linalg.pinv(h, hermitian=True)), 0.0, None))
+    except np.linalg.LinAlgError:
+        white = np.full(z.size, np.inf)
+    problems: list[str] = []
+    best, best_cost, across = None, cost, None
+    for k in glob:
+        step = float(np.clip(np.nan_to_num(white[k], nan=0.1, posinf=0.1), 1e-3, 0.1)) * max(abs(z[k]), 1.0)
+        for sign in (1.0, -1.0):
+            zk = z.copy()
+            zk[k] = np.clip(z[k] + sign * step, problem.lower_z[k], problem.upper_z[k])
+            delta = zk[k] - z[k]
+            if delta == 0.0:
+                continue
+            rk = problem.fun(zk)
+            ck = float(rk @ rk) if np.all(np.isfinite(rk)) else math.inf
+            predicted = j[:, k] * delta
+            err = float(np.linalg.norm(rk - r - predicted)) if math.isfinite(ck) else math.inf
+            if err > SECANT_TOLERANCE * float(np.linalg.norm(predicted)):
+                name = problem.names[k]
+                problems.append(f"{name} {'+' if sign > 0 else '−'}{abs(delta * problem.x_scale[k]):.2g}: "
+                                f"cost {ck:.4g} against {cost:.4g}")
+                across = zk if across is None else across
+            if ck < best_cost * (1.0 - 1e-9):
+                best, best_cost = zk, ck
+    problem.fun(z)  # leave the problem's cache at the end point
+    reason = ""
+    if problems:
+        reason = ("the cost is not smooth around the end point (a stiction decision or a clipped input flips "
+                  "within one standard error: " + "; ".join(problems[:3]) + ")")
+    elif best is not None:
+        reason = f"a probe one standard error away lowers the cost ({best_cost:.6g} against {cost:.6g})"
+    return reason, best if best is not None else across
+
+
+def _converged(problem: _Problem, max_iterations: int) -> tuple[_Solution, str]:
+    """Levenberg–Marquardt from the problem's start, restarted where the end point is not a smooth minimum.
+
+    After each run :func:`smoothness` probes the end point; where a probe lowers the cost, or the cost
+    is not smooth there (the Jacobian taken across a stiction decision that flips), the fit restarts
+    from that probe point, the other side of the break, and failing that from 5 % to either side of
+    the end point in every global parameter (up to :data:`RESTARTS` rounds), and the run with the
+    lowest cost is kept. Returns that run and the reason its end point is still not a smooth
+    minimum ("" when it is).
+    """
+    sol = levenberg_marquardt(problem.fun, problem.jac, problem.z0, problem.lower_z, problem.upper_z,
+                              max_iterations=max_iterations)
+    if max_iterations == 0:  # the Jacobian at a given point (a Cramér–Rao bound), no fit
+        return sol, ""
+    reason, restart = smoothness(problem, sol)
+    for _ in range(RESTARTS):
+        if not reason:
+            break
+        better = None
+        for start in ([restart] if restart is not None else []) + _both_sides(problem, sol):
+            other = levenberg_marquardt(problem.fun, problem.jac, start, problem.lower_z, problem.upper_z,
+                                        max_iterations=max_iterations)
+            if float(other.fun @ other.fun) < float(sol.fun @ sol.fun):
+                better = other
+                break
+        if better is None:
+            break
+        sol = better
+        reason, restart = smoothness(problem, sol)
+    problem.fun(sol.x)
+    return sol, reason
+
+
+def _both_sides(problem: _Problem, sol: _Solution) -> list[np.ndarray]:
+    """Starts 5 % to either side of the end point in every global model parameter (within the bounds)."""
+    glob = np.array([k for k in range(problem.n_model) if problem.model.local_start(k) is None], dtype=int)
+    starts = []
+    for sign in (1.0, -1.0):
+        z = sol.x.copy()
+        z[glob] = np.clip(z[glob] * (1.0 + sign * 0.05), problem.lower_z[glob], problem.upper_z[glob])
+        starts.append(z)
+    return starts
 
 
 def noise_warning(fit: Fit, *, rms_text: str) -> list[str]:
-    """The warning to give when the uncertainties had to come from the residuals (empty otherwise)."""
+    """The warning to give when the uncertainties had to come from the residuals or could not be given
+    (empty otherwise)."""
+    if fit.not_minimum:
+        return [f"no standard errors: {fit.not_minimum}; the values are the lowest cost found from "
+                f"{RESTARTS + 1} starts, not a verified minimum"]
     if not fit.noise_model.startswith("Newey"):
         return []
     return [
@@ -605,58 +698,41 @@ def noise_warning(fit: Fit, *, rms_text: str) -> list[str]:
 
 
 def hac_covariance(
-    jac: np.ndarray, res: np.ndarray, blocks: list[tuple[int, int]], n_signals: int, values: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+    jac: np.ndarray, res: np.ndarray, blocks: list[tuple[int, int]], n_signals: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
     """Covariance of the parameters that allows for correlated residuals (Newey–West).
 
-    cov = H⁻¹·S·H⁻¹ with H = JᵀJ and S the long-run covariance of the score g_t = Σ_signals J_tᵀ·r_t,
-    S = Σ_{|l|≤M} (1 − |l|/(M+1))·Γ_l (Bartlett weights), summed over runs. For white residuals it is
-    the usual s²·(JᵀJ)⁻¹. The bandwidth M is three times the largest integrated autocorrelation time
-    of the residuals (quantised angles at rest, stale samples and voltage noise integrated twice
-    make position residuals strongly correlated), at most half of each run.
+    cov = H⁻¹·S·H⁻¹·n/(n − p) with H = JᵀJ and S the long-run covariance of the score
+    g_t = Σ_signals J_tᵀ·r_t of each instant t, by the one rule of every fit
+    (:func:`motorlab.fitting.hac_meat`: VAR(1) prewhitening, Andrews' bandwidth, Bartlett weights),
+    no lag crossing from one run to the next. Residuals after the runs' (logged voltage samples
+    against held levels) are white: each is a run of its own. For white residuals it is the usual
+    s²·(JᵀJ)⁻¹.
 
     Returns
     -------
     cov, cov_white, null, bandwidth
-        Newey–West covariance, the plain one, the parameters on a null direction, M [samples].
-
-    References
-    ----------
-    W. K. Newey and K. D. West, "A simple, positive semi-definite, heteroskedasticity and
-    autocorrelation consistent covariance matrix", Econometrica 55 (1987) 703–708.
+        Newey–West covariance, the plain one, the parameters on a null direction, the bandwidth [samples].
     """
     n, p = jac.shape
     h_inv, null = scaled_gram_inverse(jac)
     cov_white = h_inv * float(res @ res) / max(n - p, 1)
-    # One bandwidth per run: three integrated autocorrelation times of its residuals, at most half
-    # the run (quasistatic ramps have far longer correlation than short dynamic steps).
-    s_mat = np.zeros((p, p))
-    bandwidth = 0
-    for start, m in blocks:
-        tau = max(
-            integrated_autocorrelation(res[start + sgl * m : start + (sgl + 1) * m]) for sgl in range(n_signals)
-        )
-        band = int(min(max(3.0 * tau, 1.0), max(m // 2, 1)))
-        bandwidth = max(bandwidth, band)
-        weights = 1.0 - np.abs(np.arange(-band, band + 1)) / (band + 1.0)
+    scores, groups = [], []
+    end = 0
+    for k, (start, m) in enumerate(blocks):
         g = np.zeros((m, p))
         for sgl in range(n_signals):
             sl = slice(start + sgl * m, start + (sgl + 1) * m)
             g += jac[sl] * res[sl, None]
-        kg = _smoothed(g, weights) if band > 0 else g
-        s_mat += g.T @ kg
-    s_mat = 0.5 * (s_mat + s_mat.T) * n / max(n - p, 1)
-    cov = h_inv @ s_mat @ h_inv
+        scores.append(g)
+        groups.append(np.full(m, k))
+        end = start + n_signals * m
+    extra = n - end
+    scores.append(jac[end:] * res[end:, None])
+    groups.append(len(blocks) + np.arange(extra))
+    meat, bandwidth = hac_meat(np.concatenate(scores), groups=np.concatenate(groups))
+    cov = h_inv @ meat @ h_inv * (n / max(n - p, 1))
     return cov, cov_white, null, bandwidth
-
-
-def _smoothed(g: np.ndarray, weights: np.ndarray) -> np.ndarray:
-    """Each column of ``g`` convolved with the (odd-length, centred) ``weights``, as long as ``g``:
-    ``scipy.signal.fftconvolve(g, weights[:, None], mode="same", axes=0)``, by scipy.fft (what it does)."""
-    m, half = g.shape[0], weights.size // 2
-    size = fft.next_fast_len(m + weights.size - 1, real=True)
-    full = fft.irfft(fft.rfft(g, size, axis=0) * fft.rfft(weights, size)[:, None], size, axis=0)
-    return full[half : half + m]
 
 
 @dataclass

@@ -7,44 +7,46 @@ first-order bias the logged voltage's noise puts on L and R (:func:`input_noise_
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from collections.abc import Sequence
+from typing import Protocol
 
 import numpy as np
 from scipy import linalg
 
-from motorlab._oe_sim import StatePlant, _Discrete, _Modal, first_order
-
-if TYPE_CHECKING:  # annotations only: _oe imports this module
-    from motorlab._oe import Log, OEModel
-
-
-#: Eigenvalues of the column-scaled Gram matrix JᵀJ below this fraction of the largest carry no
-#: information (a scaled condition number of J above ~1e5): finite-difference Jacobians of a
-#: simulation with events are not more accurate than that, and a parameter on such a direction has
-#: a relative standard error far above 100 % anyway.
-INFO_TOLERANCE = 1e-10
+from motorlab._oe_sim import StatePlant, moving_step
+from motorlab.fitting import scaled_gram_inverse
+from motorlab.model import HeldStep, first_order
 
 
-def scaled_gram_inverse(jac: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(JᵀJ)⁻¹ through the eigen-decomposition of the column-scaled Gram matrix, and the null mask.
+class FittedRun(Protocol):
+    """What the noise model reads of a run prepared for fitting (:class:`motorlab._oe.Log`)."""
 
-    Directions with (almost) no information are dropped (pseudo-inverse) and every parameter that
-    loads on one is returned as ``null`` (not determined), so no variance is silently set to zero.
-    """
-    p = jac.shape[1]
-    col = np.linalg.norm(jac, axis=0)
-    col = np.where(col > 0, col, 1.0)
-    js = jac / col
-    eig, vec = np.linalg.eigh(js.T @ js)
-    eig = np.clip(eig, 0.0, None)
-    keep = eig > INFO_TOLERANCE * float(eig.max() if eig.size else 1.0)
-    null_dirs = vec[:, ~keep].T
-    null = (np.abs(null_dirs) > 1e-3).any(axis=0) if null_dirs.size else np.zeros(p, dtype=bool)
-    inv_eig = np.where(keep, 1.0 / np.where(keep, eig, 1.0), 0.0)
-    return ((vec * inv_eig) @ vec.T) / np.outer(col, col), null
+    time: np.ndarray
+    dt: float
+    grid_voltage: np.ndarray
+    uniform: bool
+    resolution: float
+    reading: np.ndarray
+    stale_variance: np.ndarray | None
+
+    @property
+    def n_grid(self) -> int: ...
+
+    def at_samples(self, grid_values: np.ndarray) -> np.ndarray: ...
+
+    def position_factor(self, sigma_position: float) -> np.ndarray: ...
 
 
-def voltage_noise(log: Log) -> float:
+class PlantFamily(Protocol):
+    """What the noise model needs of a plant family (:class:`motorlab._oe.OEModel`)."""
+
+    uses_current: bool
+    input_noise: bool
+
+    def plant(self, p: np.ndarray) -> StatePlant: ...
+
+
+def voltage_noise(log: FittedRun) -> float:
     """Sample-to-sample noise of the logged voltage, 1.4826·MAD(Δ²V)/√6 [V] (robust to steps and ramps)."""
     d2 = np.diff(log.grid_voltage, 2)
     if d2.size < 3:
@@ -52,7 +54,7 @@ def voltage_noise(log: Log) -> float:
     return float(1.4826 * np.median(np.abs(d2 - np.median(d2))) / np.sqrt(6.0))
 
 
-def _filters(d: _Discrete) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _filters(d: HeldStep) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Rational filters (in z⁻¹) from a held voltage perturbation δV_k to the states and angle increments.
 
     Returns (numerators of each state (n × 3), numerator of the angle increment hx·x_k + hv·δV_k (3,),
@@ -84,7 +86,7 @@ def _adjoint(num: np.ndarray, den: np.ndarray, u: np.ndarray) -> np.ndarray:
     return signal.lfilter(num, den, u[::-1], axis=0)[::-1]
 
 
-def _sample_to_grid(log: Log, values: np.ndarray) -> np.ndarray:
+def _sample_to_grid(log: FittedRun, values: np.ndarray) -> np.ndarray:
     """Spread per-sample rows onto the N_grid + 1 grid points (the transpose of nearest-point sampling)."""
     if log.uniform:
         return values
@@ -98,7 +100,7 @@ def _sample_to_grid(log: Log, values: np.ndarray) -> np.ndarray:
 COUNTING_HARMONICS = 32
 
 
-def _counting_score(g: np.ndarray, log: Log, angle: np.ndarray, sigma_position: float) -> np.ndarray:
+def _counting_score(g: np.ndarray, log: FittedRun, angle: np.ndarray, sigma_position: float) -> np.ndarray:
     """Covariance of Σ_t g_t·e_t for the counting errors e_t of one run (g in 1/rad) [score units].
 
     A quantised angle θ reads ⌊(θ + φ)/q⌋·q with an unknown phase φ, so two errors are not
@@ -130,9 +132,9 @@ def _counting_score(g: np.ndarray, log: Log, angle: np.ndarray, sigma_position: 
 
 def noise_propagation_covariance(
     jac: np.ndarray,
-    model: OEModel,
+    model: PlantFamily,
     p: np.ndarray,
-    logs: list[Log],
+    logs: Sequence[FittedRun],
     sims: list[dict[str, np.ndarray]],
     blocks: list[tuple[int, int]],
     sigma: dict[str, float],
@@ -189,7 +191,7 @@ def noise_propagation_covariance(
         sig_v = voltage_noise(log) if model.input_noise else 0.0
         if sig_v <= 0:
             continue
-        d = _Modal(plant, 1).discrete(log.dt)
+        d = moving_step(plant, log.dt)
         states, increment, den = _filters(d)
         mask = _grid_mask(log, np.abs(sim["speed"]) > 0)
         # angle: Σ_t c_t·θ_t = Σ_j mask_j·inc_j·C_j with C_j = Σ_{t>j} c_t, c_t = J_t·w_t/σ
@@ -220,12 +222,12 @@ def input_noise_gain(plant: StatePlant, dt: float) -> np.ndarray:
     P = Ad·P·Adᵀ + bv·bvᵀ (discrete Lyapunov equation of the moving regime): the current the model
     simulates from a logged voltage with noise σ_V carries σ_V²·P[i, i] of it, sample by sample.
     """
-    d = _Modal(plant, 1).discrete(dt)
+    d = moving_step(plant, dt)
     return np.asarray(linalg.solve_discrete_lyapunov(d.ad, np.outer(d.bv, d.bv)))
 
 
 def input_noise_bias(
-    jac: np.ndarray, model: OEModel, p: np.ndarray, logs: list[Log], sigma_current: float
+    jac: np.ndarray, model: PlantFamily, p: np.ndarray, logs: Sequence[FittedRun], sigma_current: float
 ) -> np.ndarray:
     """First-order bias of the output-error estimate from white noise on the logged voltage (current channel).
 
@@ -263,7 +265,7 @@ def input_noise_bias(
     return -0.5 * scaled_gram_inverse(jac)[0] @ grad
 
 
-def _grid_mask(log: Log, moving_at_samples: np.ndarray) -> np.ndarray:
+def _grid_mask(log: FittedRun, moving_at_samples: np.ndarray) -> np.ndarray:
     """Per grid step: True where the simulated shaft moves (from the samples' flags)."""
     if log.uniform:
         return np.asarray(moving_at_samples[: log.n_grid], dtype=float)

@@ -32,16 +32,17 @@ from typing import Any
 import numpy as np
 
 from motorlab import _oe
+from motorlab._oe_sim import feedforward_plant
 from motorlab.decimate import block_mean
 from motorlab.errors import FitError, OptionError
 from motorlab.fitting import MAX_RELATIVE_STDERR
 from motorlab.model import MotorParams, params_from_feedforward
 from motorlab.oe_runs import (
-    _prepare,
-    _result,
     excitation_warnings,
+    fit_result,
     measured_speed,
     noise_levels,
+    prepare_runs,
     read_runs,
     window_integrals,
 )
@@ -95,7 +96,7 @@ class FeedforwardModel(_oe.OEModel):
         self.lag = lag
 
     def plant(self, p: np.ndarray) -> _oe.StatePlant:
-        return _oe.feedforward_plant(float(p[0]), float(p[1]), float(p[2]))
+        return feedforward_plant(float(p[0]), float(p[1]), float(p[2]))
 
     def drive(self, p: np.ndarray, log: _oe.Log) -> np.ndarray:
         if self.mechanism == "elevator":
@@ -266,14 +267,14 @@ def feedforward(
     Notes
     -----
     Standard errors: the measured noises (logged voltage, counting, stale status frames) propagated
-    through the linearised fit (:func:`motorlab._oe.noise_propagation_covariance`); the Newey–West
+    through the linearised fit (:func:`motorlab._oe_noise.noise_propagation_covariance`); the Newey–West
     covariance of the residuals when these do not explain the residuals (docs/feedforward.md).
     For the arm, gravity over each step acts at the measured angle at the step's middle
     (:func:`motorlab._oe.grid_angle`), and φ's variance includes q²/12 for the encoder's quantiser
     phase (q = 2π/cpr), which no fit can resolve.
     """
     recs = _checked_recordings(recordings, mechanism=mechanism, cpr=cpr)
-    logs, warnings = _prepare(recs, cpr=cpr, with_current=False)
+    logs, warnings = prepare_runs(recs, cpr=cpr, with_current=False)
     period = _stale_frames(logs, mechanism)
     try:
         p0 = regression_start(logs, mechanism, lag=0.5 * period)
@@ -307,7 +308,8 @@ def feedforward(
         details["sysid_ols"] = sysid_ols(recs, mechanism=mechanism)
     except (FitError, np.linalg.LinAlgError, ZeroDivisionError):
         details["sysid_ols"] = None
-    result = _result("feedforward", params, corr, names, logs, fit, warnings, details, length="m" if linear else "rad")
+    result = fit_result("feedforward", params, corr, names, logs, fit, warnings, details,
+                        length="m" if linear else "rad")
     if mechanism == "simple" and fit.noise_model.startswith("Newey") and all("velocity" in rec for rec in recs):
         _report_open_loop(result, recs, length=result.rmse_unit)  # real logs: docs/real-logs.md
     return result
@@ -398,8 +400,10 @@ def _gain_estimates(fit: _oe.Fit, model: FeedforwardModel, logs: list[_oe.Log], 
         determined = not fit.null[min(k, fit.null.size - 1)] and stderr[k] <= MAX_RELATIVE_STDERR * abs(values[k])
         if name in ("kG", "offset") and not fit.null[k]:
             determined = bool(np.isfinite(stderr[k]))
-        params[name] = Estimate(name, float(values[k]), float(stderr[k]), units[name], determined,
-                                "" if determined else "the data carry (almost) no information on it")
+        note = "" if determined else "the data carry (almost) no information on it"
+        if fit.not_minimum:  # the Jacobian cannot be trusted: say so, print no standard error
+            determined, note = True, f"no standard error: {fit.not_minimum}"
+        params[name] = Estimate(name, float(values[k]), float(stderr[k]), units[name], determined, note)
     with np.errstate(invalid="ignore", divide="ignore"):
         corr = cov / np.outer(stderr, stderr)
     np.fill_diagonal(corr, 1.0)
@@ -511,7 +515,7 @@ def _gain_rows(gains: np.ndarray, out: dict[str, Any], physics: dict[str, Any], 
 def _noise_warning(recs: list[Recording], logs: list[_oe.Log], fit: _oe.Fit, *, length: str) -> list[str]:
     """The motor-model fit's noise warning (if any), saying what the residuals look like."""
     noise = _oe.noise_warning(fit, rms_text=f"{fit.residual_rms['position']:.3g} {length}")
-    if noise:
+    if noise and fit.noise_model.startswith("Newey"):
         look = _residual_look(recs, logs, fit) or "no single effect (lag, asymmetry, drift) stands out"
         noise[0] += f"; the residuals look like: {look}"
     return noise

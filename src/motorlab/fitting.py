@@ -28,8 +28,14 @@ from motorlab.results import Estimate
 
 #: A parameter whose relative standard error exceeds this is reported as not determined.
 MAX_RELATIVE_STDERR = 1.0
-#: Singular values of the scaled Jacobian below this fraction of the largest mark no information.
-SINGULAR_TOLERANCE = 1e-9
+#: The one "not determined" rule of every fit: a singular value of the column-scaled Jacobian below
+#: this fraction of the largest marks a direction without information (eigenvalues of the scaled
+#: Gram matrix JᵀJ: the square, 1e-10). A Jacobian by forward differences of a step 1e-6 (scipy's
+#: and the output-error engine's) is not more accurate than that, and a parameter on such a direction
+#: has a standard error 1e5 times that of the best-determined combination (see :func:`scaled_gram_inverse`).
+NULL_TOLERANCE = 1e-5
+#: A parameter whose weight in a direction without information exceeds this is not determined.
+NULL_LOADING = 1e-3
 
 
 @dataclass
@@ -141,14 +147,47 @@ def hac_covariance(
 
     Notes
     -----
-    With scores g_t = J_tᵀ·r_t, the sandwich is B·S·B, B = (JᵀJ)⁻¹ and
-    S = Γ₀ + Σ_{l=1}^{⌊L⌋} (1 − l/(L+1))·(Γ_l + Γ_lᵀ), Γ_l = Σ_t g_t·g_{t−l}ᵀ (sums within runs),
-    times n/(n − p) for the degrees of freedom. Bartlett weights keep S positive semi-definite
-    (Newey and West 1987). The scores are first prewhitened with a VAR(1), g_t = A·g_{t−1} + e_t,
-    S is estimated from e_t and recoloured, S = (I − A)⁻¹·S_e·(I − A)⁻ᵀ (Andrews and Monahan 1992).
-    The bandwidth is chosen on the prewhitened scores; with independent residuals A ≈ 0 and the
-    result is close to the usual s²·(JᵀJ)⁻¹. Under AR(1) errors with φ = 0.8 and n = 400 the 95 %
-    intervals cover about 93 % (the plain ones about 45 %): tests/test_fitting.py.
+    With scores g_t = J_tᵀ·r_t, the sandwich is B·S·B, B = (JᵀJ)⁻¹, S the long-run covariance of
+    the scores (:func:`hac_meat`), times n/(n − p) for the degrees of freedom. With independent
+    residuals the result is close to the usual s²·(JᵀJ)⁻¹. Under AR(1) errors with φ = 0.8 and
+    n = 400 the 95 % intervals cover about 93 % (the plain ones about 45 %): tests/test_fitting.py.
+    """
+    jac = np.asarray(jac, dtype=float)
+    r = np.asarray(residuals, dtype=float)
+    n, p = jac.shape
+    meat, bandwidth = hac_meat(jac * r[:, None], groups=groups, bandwidth=bandwidth)
+    return bread @ meat @ bread * (n / max(n - p, 1)), bandwidth
+
+
+def hac_meat(
+    scores: np.ndarray, *, groups: np.ndarray | None = None, bandwidth: float | None = None
+) -> tuple[np.ndarray, float]:
+    """Long-run covariance S of a series of scores (Newey–West), the one rule of every fit in motorlab.
+
+    Parameters
+    ----------
+    scores
+        g_t, shape (n, p), in sample order (for least squares g_t = J_tᵀ·r_t; several residuals at
+        one instant, angle and current of an output-error fit, summed into one score).
+    groups
+        A label per score; lags never cross a change of label (independent runs).
+    bandwidth
+        Bartlett bandwidth L [samples]; default: Andrews' (1991) AR(1) plug-in rule.
+
+    Returns
+    -------
+    meat, bandwidth
+        S (p, p) and the bandwidth used.
+
+    Notes
+    -----
+    S = Γ₀ + Σ_{l=1}^{⌊L⌋} (1 − l/(L+1))·(Γ_l + Γ_lᵀ), Γ_l = Σ_t g_t·g_{t−l}ᵀ (sums within runs).
+    Bartlett weights keep S positive semi-definite (Newey and West 1987). The scores are first
+    prewhitened with a VAR(1), g_t = A·g_{t−1} + e_t, S is estimated from e_t and recoloured,
+    S = (I − A)⁻¹·S_e·(I − A)⁻ᵀ (Andrews and Monahan 1992). The bandwidth is chosen on the
+    prewhitened scores. (The output-error fits used a second rule until issue 33: 3× the residuals'
+    integrated autocorrelation time, no prewhitening; docs/identify.md records how their standard
+    errors moved.)
 
     References
     ----------
@@ -159,10 +198,8 @@ def hac_covariance(
     D. W. K. Andrews and J. C. Monahan, "An improved heteroskedasticity and autocorrelation
     consistent covariance matrix estimator", Econometrica 60 (1992) 953–966.
     """
-    jac = np.asarray(jac, dtype=float)
-    r = np.asarray(residuals, dtype=float)
-    n, p = jac.shape
-    scores = jac * r[:, None]
+    scores = np.asarray(scores, dtype=float)
+    n, p = scores.shape
     segments = _segments(n, groups)
     # Prewhitening (Andrews and Monahan 1992): fit a VAR(1) g_t = A·g_{t−1} + e_t within runs, take
     # the kernel estimate of the (nearly white) e_t and recolour it with (I − A)⁻¹. The kernel then
@@ -181,13 +218,11 @@ def hac_covariance(
         white[seg[1:]] = scores[seg[1:]] - scores[seg[:-1]] @ a_mat.T
     if bandwidth is None:
         bandwidth = _andrews_bandwidth(white, segments)
-    longest = max(seg.size for seg in segments)
+    longest = max((seg.size for seg in segments), default=1)
     bandwidth = float(min(max(bandwidth, 0.0), longest - 1))
     meat = _bartlett_meat(white, segments, bandwidth)
     recolour = np.linalg.pinv(np.eye(p) - a_mat)
-    meat = recolour @ meat @ recolour.T
-    cov = bread @ meat @ bread * (n / max(n - p, 1))
-    return cov, bandwidth
+    return recolour @ meat @ recolour.T, bandwidth
 
 
 def _bartlett_meat(white: np.ndarray, segments: list[np.ndarray], bandwidth: float) -> np.ndarray:
@@ -277,15 +312,7 @@ def _covariance(
     n, p = jac.shape
     dof = max(n - p, 1)
     scale = np.where(np.abs(values) > 0, np.abs(values), 1.0)
-    col_norm = np.linalg.norm(jac, axis=0)
-    col_norm = np.where(col_norm > 0, col_norm, 1.0)
-    js = jac / col_norm
-    _, s, vt = np.linalg.svd(js, full_matrices=False)
-    tol = SINGULAR_TOLERANCE * (s[0] if s.size and s[0] > 0 else 1.0)
-    keep = s > tol
-    inv_s2 = np.where(keep, 1.0 / np.where(keep, s, 1.0) ** 2, 0.0)
-    cov_scaled = (vt.T * inv_s2) @ vt
-    cov = cov_scaled / np.outer(col_norm, col_norm)
+    cov, in_null = scaled_gram_inverse(jac)
     bandwidth = None
     if covariance == "hac":
         cov, bandwidth = hac_covariance(jac, residuals, cov, groups=groups)
@@ -294,9 +321,6 @@ def _covariance(
         cov = cov * s2
     else:
         raise ValueError(f"unknown covariance {covariance!r}; choose one of {COVARIANCES}")
-    # Parameters that load on a null direction are not determined.
-    null_dirs = vt[~keep]
-    in_null = (np.abs(null_dirs) > 1e-3).any(axis=0) if null_dirs.size else np.zeros(p, dtype=bool)
     stderr = np.sqrt(np.clip(np.diag(cov), 0.0, None))
     stderr = np.where(in_null, np.inf, stderr)
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -307,6 +331,36 @@ def _covariance(
     np.fill_diagonal(corr, 1.0)
     determined = ~in_null & (stderr <= MAX_RELATIVE_STDERR * scale)
     return cov, stderr, corr, determined, bandwidth
+
+
+def scaled_gram_inverse(jac: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(JᵀJ)⁻¹ with the directions that carry no information dropped, and which parameters are not determined.
+
+    The one "not determined" rule of every fit (:data:`NULL_TOLERANCE`): the columns of J are
+    scaled to unit norm (so the rule does not depend on the parameters' units), the singular values
+    of the scaled J below NULL_TOLERANCE of the largest are dropped (a pseudo-inverse), and every
+    parameter that loads on a dropped direction (by more than :data:`NULL_LOADING`) is returned
+    as not determined, so no variance is silently set to zero.
+
+    Returns
+    -------
+    inverse, null
+        The pseudo-inverse (p, p) in the parameters' own units, and a bool per parameter.
+    """
+    jac = np.asarray(jac, dtype=float)
+    p = jac.shape[1]
+    col = np.linalg.norm(jac, axis=0)
+    col = np.where(col > 0, col, 1.0)
+    js = jac / col
+    # The eigenvalues of the scaled Gram matrix are the squared singular values (and resolve them to
+    # 1e-8 of the largest, below the rule's 1e-5); forming it costs one product, an SVD of a tall J more.
+    eig, vec = np.linalg.eigh(js.T @ js)
+    eig = np.clip(eig, 0.0, None)
+    keep = eig > NULL_TOLERANCE**2 * float(eig.max() if eig.size and eig.max() > 0 else 1.0)
+    null_dirs = vec[:, ~keep].T
+    null = (np.abs(null_dirs) > NULL_LOADING).any(axis=0) if null_dirs.size else np.zeros(p, dtype=bool)
+    inv_eig = np.where(keep, 1.0 / np.where(keep, eig, 1.0), 0.0)
+    return ((vec * inv_eig) @ vec.T) / np.outer(col, col), null
 
 
 def fit_least_squares(

@@ -30,6 +30,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from motorlab import _oe
+from motorlab._oe_sim import motor_plant
+from motorlab.fitting import scaled_gram_inverse
 
 #: A jump between two samples larger than this many standard deviations of the sample-to-sample
 #: difference starts a new held level.
@@ -163,7 +165,7 @@ class HeldMotorModel(_oe.OEModel):
         return None
 
     def plant(self, p: np.ndarray) -> _oe.StatePlant:
-        return _oe.motor_plant(*(float(v) for v in p[:6]))
+        return motor_plant(*(float(v) for v in p[:6]))
 
     def initial(self, p: np.ndarray, log: _oe.Log, speed: float) -> np.ndarray:
         assert log.current is not None
@@ -257,5 +259,5 @@ def cramer_rao(fit: _oe.Fit, logs: list[_oe.Log], n_model: int, *, current_facto
         m = log.time.size
         jac[start + m : start + 2 * m] *= current_factor
         start += 2 * m
-    h_inv, _ = _oe.scaled_gram_inverse(jac)
+    h_inv, _ = scaled_gram_inverse(jac)
     return np.sqrt(np.clip(np.diag(h_inv)[:n_model], 0.0, None))

@@ -35,27 +35,21 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from motorlab import _oe, held_input, identify_thermal
+from motorlab._oe_noise import input_noise_gain
+from motorlab._oe_noise import voltage_noise as run_voltage_noise
 from motorlab.decimate import driven_log
 from motorlab.errors import FitError, OptionError
 from motorlab.fitting import MAX_RELATIVE_STDERR
 from motorlab.model import MotorParams, feedforward_from_params
-from motorlab.oe_runs import (  # noqa: F401 - public names re-exported (they were identify's)
-    MIN_SAMPLES,
+from motorlab.oe_runs import (
     MOTOR_NAMES,
     MotorModel,
-    _estimate,
-    _prepare,
-    _result,
-    check_recording,
-    data_warnings,
+    estimate,
     excitation_warnings,
-    fit_panels,
-    measured_speed,
+    fit_result,
     noise_levels,
-    position_resolution,
-    read_runs,
+    prepare_runs,
     regression_start,
-    window_integrals,
 )
 from motorlab.recording import Recording
 from motorlab.results import Estimate, FitResult
@@ -127,9 +121,9 @@ def identify(
 
     Otherwise the logged voltage's noise reaches the simulated current (errors in the input variable): the current
     is weighted by its measured noise plus that, and the first-order bias it causes (mostly in L and R) is removed
-    (:func:`motorlab._oe.input_noise_bias`). Standard errors propagate the measured noises — voltage through the
+    (:func:`motorlab._oe_noise.input_noise_bias`). Standard errors propagate the measured noises — voltage through the
     plant, current, and counting errors correlated as a quantiser of unknown phase makes them — through the
-    linearised fit (:func:`motorlab._oe.noise_propagation_covariance`); the Newey–West covariance of the
+    linearised fit (:func:`motorlab._oe_noise.noise_propagation_covariance`); the Newey–West covariance of the
     residuals is used when these noises do not explain the residuals.
     """
     recs = _checked_recordings(recordings, resistance=resistance, torque_constant=torque_constant, cpr=cpr)
@@ -138,7 +132,7 @@ def identify(
     if not with_current:
         return _identify_without_current(recs, resistance=resistance, torque_constant=torque_constant, cpr=cpr,
                                          note_missing=use_current and any("current" in r for r in recs))
-    logs, warnings = _prepare(recs, cpr=cpr, with_current=True)
+    logs, warnings = prepare_runs(recs, cpr=cpr, with_current=True)
     p0, lower, upper, scale = _start_and_bounds(logs)
     dt = min(log.dt for log in logs)
     sigma, current_noise, voltage_noise = _noise_weights(logs, np.clip(p0, lower, upper), dt)
@@ -164,7 +158,7 @@ def identify(
     details = _details(fit, values, p0, sigma, input_details, current_noise=current_noise, voltage_noise=voltage_noise)
     _bound_details(fit, logs, params, details, weight_current=sigma["current"], current_noise=current_noise)
     identify_thermal.annotate(heat, params, details, warnings)
-    return _result("identify", params, corr, list(MOTOR_NAMES), logs, fit, warnings, details)
+    return fit_result("identify", params, corr, list(MOTOR_NAMES), logs, fit, warnings, details)
 
 
 def _correlation(cov: np.ndarray, stderr: np.ndarray) -> np.ndarray:
@@ -225,8 +219,8 @@ def _noise_weights(logs: list[_oe.Log], start: np.ndarray, dt: float) -> tuple[d
     """
     sigma = noise_levels(logs, with_current=True)
     current_noise = sigma["current"]
-    gain = float(_oe.input_noise_gain(MotorModel().plant(start), dt)[0, 0])
-    voltage_noise = max(_oe.voltage_noise(log) for log in logs)
+    gain = float(input_noise_gain(MotorModel().plant(start), dt)[0, 0])
+    voltage_noise = max(run_voltage_noise(log) for log in logs)
     sigma["current"] = math.sqrt(current_noise**2 + voltage_noise**2 * gain)
     return sigma, current_noise, voltage_noise
 
@@ -272,6 +266,7 @@ def _details(fit: _oe.Fit, values: np.ndarray, p0: np.ndarray, sigma: dict[str, 
         "stderr_newey_west": dict(zip(MOTOR_NAMES, np.sqrt(np.diag(fit.covariance_residuals)[:6]).tolist(),
                                       strict=True)),
         "function_evaluations": fit.nfev,
+        "cost": fit.cost,
         "input_model": input_details,
     }
 
@@ -282,6 +277,9 @@ def _motor_estimates(fit: _oe.Fit, values: np.ndarray, stderr: np.ndarray, *, l_
     relative-error bound, or (L) within 3σ of zero or at its lower bound ``l_floor`` [H]."""
     params: dict[str, Estimate] = {}
     for k, name in enumerate(MOTOR_NAMES):
+        if fit.not_minimum:  # the Jacobian cannot be trusted: say so, print no standard error
+            params[name] = estimate(name, values[k], math.nan, note=f"no standard error: {fit.not_minimum}")
+            continue
         determined = not fit.null[k] and stderr[k] <= MAX_RELATIVE_STDERR * abs(values[k])
         note = ""
         if name == "L" and (values[k] <= 1.01 * l_floor or values[k] < 3.0 * stderr[k]):
@@ -295,7 +293,7 @@ def _motor_estimates(fit: _oe.Fit, values: np.ndarray, stderr: np.ndarray, *, l_
                     f"τe = L/R is too short for samples every {1e3 * dt:.3g} ms to see the current rise "
                     f"(L < {values[k] + 2 * stderr[k]:.2g} H)"
                 )
-        params[name] = _estimate(name, values[k], stderr[k], determined=determined, note=note)
+        params[name] = estimate(name, values[k], stderr[k], determined=determined, note=note)
     return params
 
 
@@ -369,7 +367,7 @@ def _bound_details(fit: _oe.Fit, logs: list[_oe.Log], params: dict[str, Estimate
         if est.determined and math.isfinite(ratio) and not est.note:
             text = (f"within {max(ratio, 1.0):.2g}× of the best any method could do on this log" if ratio >= 0.95 else
                     f"at the best any method could do on this log (stderr {ratio:.2g}× the Gaussian bound)")
-            params[name] = _estimate(name, est.value, est.stderr, note=text)
+            params[name] = estimate(name, est.value, est.stderr, note=text)
 
 
 def _identify_without_current(

@@ -7,7 +7,11 @@ Equations (all quantities at the shaft whose encoder is counted, SI units)::
     τ = K·i,  e = K·ω                              (1), (2): Kt = Ke = K in SI
 
 with stiction: at rest the shaft stays at rest while |K·i| ≤ Tf (static = Coulomb level).
-Simulation lives in :mod:`motorlab.simulate`; this module holds the parameters and closed forms.
+Simulation lives in :mod:`motorlab.simulate` (every drive, events located exactly) and
+:mod:`motorlab._oe_sim` (the fits' fast one); this module holds the parameters, the closed forms and
+the one exact step of the linear equation both simulators take between events: the φ functions of
+the zero-order hold (:func:`phi_functions`), a held step (:class:`HeldStep`) and its propagation
+over many steps (:func:`propagate`).
 """
 
 from __future__ import annotations
@@ -17,6 +21,7 @@ from dataclasses import asdict, dataclass, field, replace
 from typing import Any
 
 import numpy as np
+from scipy.linalg import lapack
 
 from motorlab.errors import OptionError
 from motorlab.thermal import ThermalModel
@@ -276,3 +281,93 @@ def params_from_feedforward(
     """
     k = kV if K is None else K
     return MotorParams(K=k, R=R, L=L, J=kA * k / R, b=max((kV - k) * k / R, 0.0), Tf=max(kS * k / R, 0.0))
+
+
+# --------------------------------------------------------------------------------------------------
+# The exact zero-order-hold step of the linear equation x' = A·x + b·u (between friction events)
+# --------------------------------------------------------------------------------------------------
+
+
+def phi_functions(z: np.ndarray | complex | float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """e^z, φ₁(z) = (e^z − 1)/z and φ₂(z) = (e^z − 1 − z)/z², element by element (real or complex).
+
+    With the eigenvalues λ of A and z = λ·τ: e^{Aτ} = P·e^{z}·P⁻¹, ∫₀^τ e^{As} ds = P·τφ₁(z)·P⁻¹ and
+    ∫₀^τ∫₀^s e^{Ar} dr ds = P·τ²φ₂(z)·P⁻¹ (the held input's effect on the state and on the angle).
+    Near z = 0 (a free integrator, a very slow mode) the series 1 + z/2 + z²/6 + z³/24 and
+    1/2 + z/6 + z²/24 + z³/120 replace the forms that cancel (their error there is below 1e-15; the
+    direct forms' just beyond |z| = 1e-3, below 1e-12).
+    """
+    z = np.asarray(z)
+    small = np.abs(z) < 1e-3
+    zs = np.where(small, 1.0, z)
+    em1 = np.expm1(zs)
+    phi1 = np.where(small, 1.0 + z / 2.0 + z * z / 6.0 + z**3 / 24.0, em1 / zs)
+    phi2 = np.where(small, 0.5 + z / 6.0 + z * z / 24.0 + z**3 / 120.0, (em1 - zs) / (zs * zs))
+    return np.exp(z), phi1, phi2
+
+
+@dataclass(frozen=True)
+class HeldStep:
+    """One step with a held input: x⁺ = Ad·x + bv·v + c, θ⁺ = θ + hx·x + hv·v + hc (one or two states)."""
+
+    ad: np.ndarray
+    bv: np.ndarray
+    c: np.ndarray
+    hx: np.ndarray
+    hv: float
+    hc: float
+
+
+def first_order(a: float, u: np.ndarray) -> np.ndarray:
+    """y with y_k = a·y_(k−1) + u_k along axis 0 (y_(−1) = 0): ``scipy.signal.lfilter([1], [1, −a], u, axis=0)``.
+
+    Solved as the unit lower bidiagonal system it is (LAPACK ``dtbtrs``: the same forward
+    substitution). The feedforward model has one state, so its fits never import ``scipy.signal``
+    (which imports ``scipy.stats``: 0.7 s of every ``analyze feedforward``); the motor model's
+    two-state recursion stays with lfilter.
+    """
+    y = np.array(u, dtype=float, order="F")  # a copy: the solve overwrites it
+    if y.shape[0] == 0:
+        return y
+    rows = y.reshape(y.shape[0], -1, order="F")
+    band = np.empty((2, rows.shape[0]))
+    band[0], band[1] = 1.0, -a  # band[k, j] = A[j + k, j]
+    x, info = lapack.dtbtrs(band, rows, uplo="L", diag="U", overwrite_b=1)
+    if info != 0:
+        raise ValueError(f"dtbtrs failed (info {info})")
+    return x.reshape(y.shape, order="F")
+
+
+def propagate(step: HeldStep, x0: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """States x_0..x_M and angle increments for held inputs v_0..v_{M-1}, starting from x0: the one
+    propagator of the motor equation (both simulators).
+
+    The recursion x⁺ = Ad·x + e with e = bv·v + c is run as a rational filter in z⁻¹ (one or two
+    poles); the initial state enters as an input at step −1, so every call starts exactly at x0.
+    """
+    n = x0.size
+    m = v.size
+    e = np.empty((n, m + 2))
+    e[:, 0] = x0
+    e[:, 1 : m + 1] = step.bv[:, None] * v[None, :] + step.c[:, None]
+    e[:, m + 1] = 0.0
+    if n == 1:
+        x = first_order(float(step.ad[0, 0]), e[0, :-1])[:, None]  # lfilter([0, 1], [1, −a], e[0])[1:]
+    else:
+        from scipy import signal
+
+        (a11, a12), (a21, a22) = step.ad
+        den = [1.0, -(a11 + a22), a11 * a22 - a12 * a21]
+        e0, e1 = e
+        u0 = np.zeros(m + 2)
+        u1 = np.zeros(m + 2)
+        # X0 = z⁻¹[(1 − a22 z⁻¹)E0 + a12 z⁻¹ E1]/det,  X1 = z⁻¹[a21 z⁻¹ E0 + (1 − a11 z⁻¹)E1]/det
+        u0[1:] = e0[:-1]
+        u0[2:] += -a22 * e0[:-2] + a12 * e1[:-2]
+        u1[1:] = e1[:-1]
+        u1[2:] += -a11 * e1[:-2] + a21 * e0[:-2]
+        x = np.empty((m + 1, 2))
+        x[:, 0] = signal.lfilter([1.0], den, u0)[1:]
+        x[:, 1] = signal.lfilter([1.0], den, u1)[1:]
+    dtheta = x[:-1] @ step.hx + step.hv * v + step.hc
+    return x, dtheta

@@ -9,13 +9,13 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from typing import Any
 
 import numpy as np
 
 from motorlab import _oe
-from motorlab.analyses._common import reader_warnings
+from motorlab._oe_sim import motor_plant
 from motorlab.errors import FitError, LogFormatError
 from motorlab.model import PARAMETER_NAMES
 from motorlab.recording import Recording
@@ -25,6 +25,23 @@ from motorlab.units import SI_UNITS
 MOTOR_NAMES = PARAMETER_NAMES  # ("K", "R", "L", "J", "b", "Tf")
 #: Fewest samples a log must have to be fitted.
 MIN_SAMPLES = 20
+
+
+def reader_warnings(recordings: Recording | Iterable[Recording]) -> list[str]:
+    """The readers' warnings (``Recording.metadata["warnings"]``) of every recording, in order, once each.
+
+    Readers note what they repaired or dropped (a truncated last line, placeholder rows, a test of
+    a SysId file that is empty) with the file and line; every analysis passes these on first in
+    its :class:`~motorlab.results.FitResult` warnings, so that nothing dropped goes unsaid.
+    """
+    recs = [recordings] if isinstance(recordings, Recording) else list(recordings)
+    out: list[str] = []
+    for rec in recs:
+        for text in rec.metadata.get("warnings", []) or []:
+            if str(text) not in out:
+                out.append(str(text))
+    return out
+
 
 
 # --------------------------------------------------------------------------------------------------
@@ -253,14 +270,14 @@ class MotorModel(_oe.OEModel):
     uses_current = True
 
     def plant(self, p: np.ndarray) -> _oe.StatePlant:
-        return _oe.motor_plant(*(float(v) for v in p))
+        return motor_plant(*(float(v) for v in p))
 
     def initial(self, p: np.ndarray, log: _oe.Log, speed: float) -> np.ndarray:
         assert log.current is not None
         return np.array([float(log.current[0]), speed])
 
 
-def _prepare(
+def prepare_runs(
     recordings: Sequence[Recording], *, cpr: float | None, with_current: bool
 ) -> tuple[list[_oe.Log], list[str]]:
     logs = []
@@ -281,7 +298,7 @@ def _prepare(
     return logs, warnings
 
 
-def _estimate(name: str, value: float, stderr: float, *, determined: bool = True, note: str = "") -> Estimate:
+def estimate(name: str, value: float, stderr: float, *, determined: bool = True, note: str = "") -> Estimate:
     return Estimate(name, float(value), float(stderr), SI_UNITS[name], determined, note)
 
 
@@ -332,7 +349,7 @@ def fit_panels(logs: list[_oe.Log], fit: _oe.Fit, *, title: str, length: str = "
     return panels
 
 
-def _result(
+def fit_result(
     experiment: str,
     params: dict[str, Estimate],
     corr: np.ndarray,

@@ -13,8 +13,9 @@ Method
 ------
 Between events the model is linear time-invariant with a held (zero-order-hold) input, so each step is
 propagated *exactly* with the matrix exponential of the augmented system (no stiffness problem however
-small L/R is). Long stretches are computed at once as modal first-order recursions
-(``scipy.signal.lfilter``), which is what makes a 300 000-step run take milliseconds. Events — the
+small L/R is). Long stretches are computed at once as a rational filter
+(:func:`motorlab.model.propagate`, the fits' simulator's too), which is what makes a 300 000-step run
+take milliseconds. Events — the
 speed reaching zero (stop or reversal), break-away from rest, the supply crossing over between
 constant voltage and constant current, the supply ceasing to source current — are detected on the
 grid and then located exactly inside their step by root finding on the continuous solution; the step
@@ -32,12 +33,12 @@ from functools import lru_cache
 from typing import Any
 
 import numpy as np
-from scipy import linalg, optimize, signal
+from scipy import linalg, optimize
 
 from motorlab._sim_grid import _drive_values, _Grid, _schedule
 from motorlab.errors import OptionError
 from motorlab.gearbox import Drivetrain
-from motorlab.model import MotorParams
+from motorlab.model import HeldStep, MotorParams, phi_functions, propagate
 from motorlab.sim_drives import (  # noqa: F401 - the drives are part of this module's API
     MODE_CURRENT,
     MODE_OPEN,
@@ -159,15 +160,9 @@ def _continuous(p: MotorParams, reg: _Regime) -> tuple[tuple[str, ...], np.ndarr
 
 
 def _phi(lam: np.ndarray, tau: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """e^(λτ), φ1 = ∫₀^τ e^(λs) ds and φ2 = ∫₀^τ φ1(s) ds, accurate for small |λτ| and λ = 0."""
-    lam = np.asarray(lam)
-    x = lam * tau
-    e = np.exp(x)
-    small = np.abs(x) < 1e-3
-    safe = np.where(small, 1.0, lam)
-    phi1 = np.where(small, tau * (1 + x / 2 + x * x / 6 + x**3 / 24), np.expm1(x) / safe)
-    phi2 = np.where(small, tau * tau * (0.5 + x / 6 + x * x / 24 + x**3 / 120), (np.expm1(x) - x) / (safe * safe))
-    return e, phi1, phi2
+    """e^(λτ), ∫₀^τ e^(λs) ds = τ·φ₁(λτ) and ∫₀^τ of that = τ²·φ₂(λτ) (:func:`motorlab.model.phi_functions`)."""
+    e, phi1, phi2 = phi_functions(np.asarray(lam) * tau)
+    return e, tau * phi1, tau * tau * phi2
 
 
 def _modal_maps(
@@ -210,29 +205,14 @@ def _discretise(p: MotorParams, reg: _Regime, dt: float) -> _Linear:
 
 
 def _propagate_chunk(lin: _Linear, x0: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Grid states x_1..x_m (shape (m, n)) and θ increments for inputs u (shape (m, 2))."""
+    """Grid states x_1..x_m (shape (m, n)) and θ increments for inputs u = (d, 1) (shape (m, 2)), by
+    :func:`motorlab.model.propagate` (the one propagator of both simulators)."""
     m, n = u.shape[0], len(lin.names)
     if n == 0:
         return np.zeros((m, 0)), np.zeros(m)
-    g = u @ lin.bd.T  # (m, n)
-    if lin.modal is not None:
-        ev, w, winv = lin.modal
-        gz = g @ winv.T
-        z0 = winv @ x0
-        z = np.empty((m, n), dtype=complex if np.iscomplexobj(gz) or np.iscomplexobj(ev) else float)
-        for j in range(n):
-            zj, _ = signal.lfilter([1.0], [1.0, -ev[j]], gz[:, j], zi=[ev[j] * z0[j]])
-            z[:, j] = zj
-        x = np.real(z @ w.T)
-    else:  # defective (repeated eigenvalue): plain recursion
-        x = np.empty((m, n))
-        xk = x0.copy()
-        for k in range(m):
-            xk = lin.ad @ xk + g[k]
-            x[k] = xk
-    prev = np.vstack([x0[None, :], x[:-1]])
-    dtheta = prev @ lin.theta_x + u @ lin.theta_u
-    return x, dtheta
+    step = HeldStep(lin.ad, lin.bd[:, 0], lin.bd[:, 1], lin.theta_x, float(lin.theta_u[0]), float(lin.theta_u[1]))
+    x, dtheta = propagate(step, np.asarray(x0, dtype=float), np.ascontiguousarray(u[:, 0]))
+    return x[1:], dtheta
 
 
 def _flow(lin: _Linear, x0: np.ndarray, u: np.ndarray, tau: float) -> tuple[np.ndarray, float]:

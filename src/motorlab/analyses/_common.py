@@ -13,8 +13,8 @@ Small on purpose; every analysis module may use it.
 - :func:`read_tables`, :func:`finite_rows`, :func:`concatenate`, :func:`metadata_quantity`,
   :func:`sources_of`, :func:`fit_straight_line`: headed-CSV tables of the bench analyses (``lcr``,
   ``torque``, ``pulse``, ``gains``).
-- :func:`reader_warnings`: what the readers noted (e.g. a truncated last line dropped), for every
-  analysis to pass on in :attr:`FitResult.warnings <motorlab.results.FitResult.warnings>`.
+- :func:`reader_warnings` (from :mod:`motorlab.oe_runs`): what the readers noted (e.g. a truncated last
+  line dropped), for every analysis to pass on in :attr:`FitResult.warnings <motorlab.results.FitResult.warnings>`.
 - :func:`check_range`, :func:`check_cpr`, :func:`check_flat`, :func:`in_file`: refuse values outside a
   physically possible range (before they overflow), responses that carry no information, and
   name the file in a :class:`~motorlab.errors.FitError`.
@@ -33,6 +33,8 @@ from scipy import optimize
 from motorlab.errors import FitError, LogFormatError, OptionError
 from motorlab.fitting import LeastSquares, fit_least_squares, fit_linear, r_squared
 from motorlab.io import _text as _io_text
+from motorlab.model import phi_functions
+from motorlab.oe_runs import reader_warnings
 from motorlab.plan import MATERIALS
 from motorlab.recording import Recording
 
@@ -158,22 +160,6 @@ def in_file(exc: FitError, source: str) -> FitError:
     return FitError(f"{source}: {text}")
 
 
-def reader_warnings(recordings: Recording | Iterable[Recording]) -> list[str]:
-    """The readers' warnings (``Recording.metadata["warnings"]``) of every recording, in order, once each.
-
-    Readers note what they repaired or dropped (a truncated last line, placeholder rows, a test of
-    a SysId file that is empty) with the file and line; every analysis passes these on first in
-    its :class:`~motorlab.results.FitResult` warnings, so that nothing dropped goes unsaid.
-    """
-    recs = [recordings] if isinstance(recordings, Recording) else list(recordings)
-    out: list[str] = []
-    for rec in recs:
-        for text in rec.metadata.get("warnings", []) or []:
-            if str(text) not in out:
-                out.append(str(text))
-    return out
-
-
 def check_finite_signals(recording: Recording, names: Iterable[str]) -> None:
     """Raise :class:`LogFormatError` (file and line) at the first NaN/inf of time or a named signal."""
     arrays = [("time", recording.time)] + [(n, recording.signals[n]) for n in names if n in recording.signals]
@@ -252,21 +238,13 @@ def is_tick_log(recording: Recording) -> bool:
 
 # ---- motion under constant torque and viscous drag ---------------------------------------------
 def _phi1(x: np.ndarray) -> np.ndarray:
-    """(1 − e^(−x))/x, equal to 1 at x = 0 (no division by zero)."""
-    x = np.asarray(x, dtype=float)
-    small = np.abs(x) < 1e-8
-    safe = np.where(small, 1.0, x)
-    return np.where(small, 1.0 - x / 2.0, -np.expm1(-safe) / safe)
+    """(1 − e^(−x))/x = φ₁(−x), equal to 1 at x = 0 (:func:`motorlab.model.phi_functions`)."""
+    return np.real(phi_functions(-np.asarray(x, dtype=float))[1])
 
 
 def _phi2(x: np.ndarray) -> np.ndarray:
-    """(x − 1 + e^(−x))/x², equal to ½ at x = 0; a series where the direct form cancels."""
-    x = np.asarray(x, dtype=float)
-    small = np.abs(x) < 1e-2
-    safe = np.where(small, 1.0, x)
-    direct = (safe + np.expm1(-safe)) / safe**2
-    series = 0.5 - x / 6.0 + x**2 / 24.0 - x**3 / 120.0 + x**4 / 720.0
-    return np.where(small, series, direct)
+    """(x − 1 + e^(−x))/x² = φ₂(−x), equal to ½ at x = 0 (:func:`motorlab.model.phi_functions`)."""
+    return np.real(phi_functions(-np.asarray(x, dtype=float))[2])
 
 
 def ramp_speed(tau: np.ndarray, omega0: float, gamma: float, accel: float) -> np.ndarray:

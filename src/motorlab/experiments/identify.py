@@ -24,7 +24,8 @@ def run(paths: list[str], v: dict[str, Any]) -> Any:
     """Run ``motorlab analyze identify FILE...``; a JSON file's cpr counts per logged rotation."""
     from motorlab.analyses._common import check_cpr
     from motorlab.feedforward import apply_cpr
-    from motorlab.identify import identify, read_runs
+    from motorlab.identify import identify
+    from motorlab.oe_runs import read_runs
 
     cpr = v["cpr"]
     check_cpr(cpr)  # any positive number of counts (537.7), within physical bounds
