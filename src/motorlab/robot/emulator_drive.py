@@ -25,12 +25,30 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterator
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 from motorlab.robot.config import leaves
 
-if TYPE_CHECKING:
-    from motorlab.robot.emulator import EmulatedRobot, Plant
+
+class Plant(Protocol):
+    """The emulated drive motor (:class:`motorlab.robot.emulator.Plant`, not imported: the emulator runs this
+    module): its gains per tick and the OpMode's loop period."""
+
+    kS: float
+    kV: float
+    kA: float
+    period: float
+
+
+class EmulatedRobot(Protocol):
+    """What this drive reads of the emulated robot (:class:`motorlab.robot.emulator.EmulatedRobot`)."""
+
+    config: dict[str, Any]
+    battery: float
+    lifetime: float
+
+    @property
+    def plant(self) -> Plant: ...
 
 #: The OpMode's name as the quickstart registers it (``metaForClass``: the class's simple name).
 NAME = "ManualFeedforwardTuner"
