@@ -14,6 +14,7 @@ from motorlab.cli.analyze import add_arguments, from_cli
 from motorlab.errors import LogFormatError, OptionError
 from motorlab.identify import identify
 from motorlab.model import MotorParams, feedforward_from_params
+from motorlab.oe_runs import noise_warning
 from motorlab.recording import Recording
 from motorlab.simulate import VoltageDrive, simulate
 
@@ -181,7 +182,7 @@ def test_a_fit_beside_a_cliff_says_so_instead_of_giving_standard_errors():
     assert "R" in cliff.not_minimum
     assert np.all(np.isnan(np.diag(cliff.covariance)))
     assert not cliff.null.any()
-    assert "no standard errors" in _oe.noise_warning(cliff, rms_text="")[0]
+    assert "no standard errors" in noise_warning(cliff, rms_text="")[0]
     assert cliff.cost <= fits["smooth"].cost * 1.5  # it still ends as low as it can on its side
 
 

@@ -683,20 +683,6 @@ def _both_sides(problem: _Problem, sol: _Solution) -> list[np.ndarray]:
     return starts
 
 
-def noise_warning(fit: Fit, *, rms_text: str) -> list[str]:
-    """The warning to give when the uncertainties had to come from the residuals or could not be given
-    (empty otherwise)."""
-    if fit.not_minimum:
-        return [f"no standard errors: {fit.not_minimum}; the values are the lowest cost found from "
-                f"{RESTARTS + 1} starts, not a verified minimum"]
-    if not fit.noise_model.startswith("Newey"):
-        return []
-    return [
-        f"the measured noise does not explain the residuals (residual RMS {rms_text}; {fit.noise_model}): "
-        "uncertainties come from the residuals"
-    ]
-
-
 def hac_covariance(
     jac: np.ndarray, res: np.ndarray, blocks: list[tuple[int, int]], n_signals: int
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:

@@ -42,6 +42,7 @@ from motorlab.oe_runs import (
     fit_result,
     measured_speed,
     noise_levels,
+    noise_warning,
     prepare_runs,
     read_runs,
     window_integrals,
@@ -514,7 +515,7 @@ def _gain_rows(gains: np.ndarray, out: dict[str, Any], physics: dict[str, Any], 
 
 def _noise_warning(recs: list[Recording], logs: list[_oe.Log], fit: _oe.Fit, *, length: str) -> list[str]:
     """The motor-model fit's noise warning (if any), saying what the residuals look like."""
-    noise = _oe.noise_warning(fit, rms_text=f"{fit.residual_rms['position']:.3g} {length}")
+    noise = noise_warning(fit, rms_text=f"{fit.residual_rms['position']:.3g} {length}")
     if noise and fit.noise_model.startswith("Newey"):
         look = _residual_look(recs, logs, fit) or "no single effect (lag, asymmetry, drift) stands out"
         noise[0] += f"; the residuals look like: {look}"

@@ -48,6 +48,7 @@ from motorlab.oe_runs import (
     excitation_warnings,
     fit_result,
     noise_levels,
+    noise_warning,
     prepare_runs,
     regression_start,
 )
@@ -231,7 +232,7 @@ def _fit_warnings(fit: _oe.Fit, logs: list[_oe.Log], values: np.ndarray, *, resi
     warnings = []
     if not fit.success:
         warnings.append(f"the optimiser stopped early: {fit.message}")
-    warnings.extend(_oe.noise_warning(fit, rms_text=f"{fit.residual_rms['position']:.3g} rad"))
+    warnings.extend(noise_warning(fit, rms_text=f"{fit.residual_rms['position']:.3g} rad"))
     warnings.extend(excitation_warnings(logs, [s["speed"] for s in fit.simulations]))
     for symbol, given, index in (("R", resistance, 1), ("K", torque_constant, 0)):
         if given is not None:  # the current log determines it: say so, and how far the given value is

@@ -402,3 +402,17 @@ def read_runs(paths: list[str], *, cpr: float | None) -> list[Recording]:
         rec = mio.read_any(path, cpr=cpr if takes_cpr else None)
         runs.extend(rec.split())
     return runs
+
+
+def noise_warning(fit: _oe.Fit, *, rms_text: str) -> list[str]:
+    """The warning to give when the uncertainties had to come from the residuals or could not be given
+    (empty otherwise)."""
+    if fit.not_minimum:
+        return [f"no standard errors: {fit.not_minimum}; the values are the lowest cost found from "
+                f"{_oe.RESTARTS + 1} starts, not a verified minimum"]
+    if not fit.noise_model.startswith("Newey"):
+        return []
+    return [
+        f"the measured noise does not explain the residuals (residual RMS {rms_text}; {fit.noise_model}): "
+        "uncertainties come from the residuals"
+    ]

@@ -61,7 +61,7 @@ from motorlab.io._text import (
     read_bytes,
 )
 from motorlab.plan import MATERIALS, disc_inertia
-from motorlab.timespans import Span, parse_spans
+from motorlab.timespans import setting_spans
 from motorlab.units import format_unit, parse_quantity
 
 #: Densities of flywheel materials [kg/m³]: the one table of :mod:`motorlab.plan`.
@@ -689,7 +689,9 @@ def _read_experiment(unit: _Table, name: str, folder: Path, rig: RigSpec) -> Exp
         settings["columns"] = columns
     if table.has("exclude"):  # time spans to leave out of the log (motorlab.timespans)
         try:
-            settings["exclude"] = setting_spans(table.raw("exclude"), experiment=name)
+            exp = all_experiments().get(name)
+            takes = exp is not None and any(o.kind == "spans" for o in exp.options)
+            settings["exclude"] = setting_spans(table.raw("exclude"), takes_spans=takes, hint=exclude_hint())
         except OptionError as exc:
             raise table.error("exclude", exc.message) from None
     for key, (kind, _description) in EXPERIMENT_SETTINGS[name].items():
@@ -793,24 +795,3 @@ def read_truth(path: str | Path) -> dict[str, float]:
     if not set(out) - {"efficiency", "loss_torque"}:
         raise SessionError("no motor parameters (K, R, L, J, b, Tf) in the truth file", path=path)
     return out
-
-
-def setting_spans(value: Any, *, experiment: str) -> list[Span]:
-    """A session table's ``exclude`` (``"12.5:14.0"`` or a list of them) for ``experiment``.
-
-    Raises
-    ------
-    OptionError
-        An experiment whose analysis takes no spans (saying what to do), or a value that is no span.
-    """
-    if value is None:
-        return []
-    exp = all_experiments().get(experiment)
-    if exp is None or not any(o.kind == "spans" for o in exp.options):
-        raise OptionError(exclude_hint())
-    if not (isinstance(value, str) or (isinstance(value, list) and all(isinstance(v, str) for v in value))):
-        raise OptionError(f'expected "START:END" in seconds or a list of them, got {type(value).__name__}')
-    try:
-        return parse_spans(value)
-    except OptionError as exc:
-        raise OptionError(exc.message.removeprefix("exclude: ")) from None

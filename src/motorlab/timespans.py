@@ -69,6 +69,29 @@ def parse_spans(value: Any, *, name: str = "exclude") -> list[Span]:
     return spans
 
 
+def setting_spans(value: Any, *, takes_spans: bool, hint: str) -> list[Span]:
+    """A session table's ``exclude`` (``"12.5:14.0"`` or a list of them) for an experiment.
+
+    ``takes_spans``: whether the experiment's analysis takes time spans; ``hint``: what to do when it does not
+    (:func:`motorlab.experiments.exclude_hint`; the caller asks the registry, which reads this module).
+
+    Raises
+    ------
+    OptionError
+        An experiment whose analysis takes no spans (saying what to do), or a value that is no span.
+    """
+    if value is None:
+        return []
+    if not takes_spans:
+        raise OptionError(hint)
+    if not (isinstance(value, str) or (isinstance(value, list) and all(isinstance(v, str) for v in value))):
+        raise OptionError(f'expected "START:END" in seconds or a list of them, got {type(value).__name__}')
+    try:
+        return parse_spans(value)
+    except OptionError as exc:
+        raise OptionError(exc.message.removeprefix("exclude: ")) from None
+
+
 def _is_pair(value: Any) -> bool:
     return (isinstance(value, tuple | list) and len(value) == 2
             and all(isinstance(v, int | float) and not isinstance(v, bool) for v in value))

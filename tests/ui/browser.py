@@ -70,7 +70,7 @@ class Page:
         self.d, self.url, self.shots = driver, url, shots
 
     # -- looking -------------------------------------------------------------------------------------
-    def wait(self, condition: Any, what: str, seconds: float = 90) -> Any:
+    def wait(self, condition: Any, what: str, seconds: float = 240) -> Any:
         deadline = time.monotonic() + seconds
         while True:
             try:
@@ -89,7 +89,7 @@ class Page:
     def text(self) -> str:
         return str(self.d.find_element("tag name", "main").text)
 
-    def wait_text(self, words: str, seconds: float = 90) -> None:
+    def wait_text(self, words: str, seconds: float = 240) -> None:
         self.wait(lambda: words in self.text(), f"the words {words!r}", seconds)
 
     def _visible(self, xpath: str) -> list[Any]:

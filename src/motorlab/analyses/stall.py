@@ -191,9 +191,8 @@ def stall(
         The answers: how long a stall at ``answer_voltage`` [V] takes to bring the winding to ``limit``
         [°C], and the stall current held indefinitely for a ``rise`` [K] of the winding.
     back_emf, back_emf_stderr
-        The motor's back-EMF constant and its standard error [V·s/rad] (from its curve or a spin-down), when
-        known: no shaft's torque per amp exceeds it, so a form of the torque model that puts K above it by more
-        than their combined uncertainty is refused, and a K above it is said.
+        The motor's back-EMF constant and its standard error [V·s/rad] (its curve's or a spin-down's): no shaft's
+        torque per amp exceeds it, so a torque model putting K above it beyond their uncertainty is refused.
     network, network_source
         A thermal network to hold (the fit of the motor's other runs, :func:`motorlab.stall_forecast.load_fit`) and
         where it comes from, in words: only R₂₅ and the initial temperatures are fitted (a run no single network

@@ -368,18 +368,14 @@ def simulate_closed_loop(
         or :class:`Feedforward` (the L = 0 model with Coulomb-like kS and stiction).
     reference
         ``r(t) -> (position [rad], velocity [rad/s], acceleration [rad/s²])``.
-    duration
-        Length of the run [s].
+    duration, substeps
+        Length of the run [s]; plant samples per controller period (for plots and metrics).
     voltage
         Supply voltage: the output is clamped to ±voltage [V]; ``inf`` for no saturation.
     cpr
         Encoder counts per revolution of this shaft; None for an ideal (unquantised) encoder.
-    period
-        Controller period [s] (default: ``gains.period``).
-    delay
-        Measurement delay [s] (default: ``gains.delay``).
-    substeps
-        Plant samples per controller period (for plots and metrics).
+    period, delay
+        Controller period and measurement delay [s] (default: ``gains.period``, ``gains.delay``).
     kind
         ``"step"`` or ``"profile"`` (which figures are meaningful).
     target

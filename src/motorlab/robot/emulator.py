@@ -637,134 +637,139 @@ class EmulatedRobot:
         return "".join(parts)
 
 
-def _handler_class(robot: EmulatedRobot) -> type[BaseHTTPRequestHandler]:
-    class Handler(BaseHTTPRequestHandler):
-        protocol_version = "HTTP/1.1"
-        server_version = "NanoHTTPD-emulated"
+class _Handler(BaseHTTPRequestHandler):
+    """Road Runner's and motorlab's HTTP routes of the emulated robot (its robot set by :func:`_handler_class`)."""
 
-        def log_message(self, format: str, *args: Any) -> None:
+    robot: EmulatedRobot
+    protocol_version = "HTTP/1.1"
+    server_version = "NanoHTTPD-emulated"
+
+    def log_message(self, format: str, *args: Any) -> None:
+        return
+
+    def do_GET(self) -> None:
+        if not self.robot.count():
+            self.close_connection = True
             return
-
-        def do_GET(self) -> None:
-            if not robot.count():
-                self.close_connection = True
+        # NanoHTTPD reads the request line with the platform's charset (new InputStreamReader without
+        # one: NanoHTTPD.java:917), UTF-8 on Android; http.server decodes it as Latin-1.
+        raw = self.path.encode("iso-8859-1").decode("utf-8", "replace")
+        self.robot.http_requests.append((self.client_address[0], raw))
+        path, _, query = raw.partition("?")  # the query after the first "?" (NanoHTTPD.java:681-684)
+        path = urllib.parse.unquote(path)  # decodePercent(uri) (NanoHTTPD.java:684)
+        if self.robot.road_runner and path.startswith("/tuning/"):
+            self._tuning(path)
+        elif self.robot.road_runner and path == "/logs":
+            if not self.robot.log_folder:
+                self._handler_threw()  # LOG_ROOT.listFiles()!! on a self.robot without the folder (FileServing.kt:153)
                 return
-            # NanoHTTPD reads the request line with the platform's charset (new InputStreamReader without
-            # one: NanoHTTPD.java:917), UTF-8 on Android; http.server decodes it as Latin-1.
-            raw = self.path.encode("iso-8859-1").decode("utf-8", "replace")
-            robot.http_requests.append((self.client_address[0], raw))
-            path, _, query = raw.partition("?")  # the query after the first "?" (NanoHTTPD.java:681-684)
-            path = urllib.parse.unquote(path)  # decodePercent(uri) (NanoHTTPD.java:684)
-            if robot.road_runner and path.startswith("/tuning/"):
-                self._tuning(path)
-            elif robot.road_runner and path == "/logs":
-                if not robot.log_folder:
-                    self._handler_threw()  # LOG_ROOT.listFiles()!! on a robot without the folder (FileServing.kt:153)
-                    return
-                page = robot.listing_html()
-                ascii_only = page.isascii()  # NanoHTTPD switches to UTF-8 when ASCII cannot encode it (:2199-2203)
-                self._fixed(200, "text/html" if ascii_only else "text/html; charset=UTF-8", page.encode())
-            elif robot.road_runner and path == "/logs/download":
-                self._rr_download(query)
-            elif robot.motorlab_handler and path == "/motorlab/logs":
-                files = [{"name": f.name, "bytes": f.stat().st_size, "modified_ms": int(f.stat().st_mtime * 1000)}
-                         for f in sorted(robot.files.motorlab, key=lambda p: p.stat().st_mtime, reverse=True)]
-                body = json.dumps({"folder": "/sdcard/FIRST/motorlab", "files": files}).encode()
-                self._fixed(200, "application/json", body)
-            elif robot.motorlab_handler and path == "/motorlab/logs/download":
-                name = urllib.parse.parse_qs(query).get("file", [""])[0]  # getParameters(): decoded (:839-850)
-                match = [f for f in robot.files.motorlab if f.name == name]
-                if not match:
-                    self._fixed(404, "text/plain", f"no log named {name}".encode())
-                else:
-                    self._fixed(200, "text/plain", match[0].read_bytes(), drop=True)
-            else:
-                self._fixed(404, "text/plain", b"")
-
-        def _handler_threw(self) -> None:
-            """A handler that throws: NanoHTTPD catches no RuntimeException in ``HTTPSession.execute``
-            (NanoHTTPD.java:953-985); ``ClientHandler.run`` logs it and closes the socket (:184-200), so the
-            client gets no answer. ``logs_failure="500"`` plays a server that answers 500 instead."""
-            if robot.logs_failure == "500":
-                self._fixed(500, "text/plain", b"SERVER INTERNAL ERROR: java.lang.NullPointerException")
-                return
-            self.close_connection = True
-            with contextlib.suppress(OSError):
-                self.connection.shutdown(2)
-
-        def _tuning(self, path: str) -> None:
-            parts = path.split("/")
-            if len(parts) != 4 or parts[2] not in TUNING_TYPES:
-                self._fixed(404, "text/plain", b"")
-                return
-            files = robot.files.tuning.get(parts[2], [])
-            if parts[3] == "latest.json":
-                if not files:
-                    self._fixed(404, "text/plain", b"")
-                    return
-                newest = max(files, key=lambda p: p.stat().st_mtime)
-                self._chunked("application/json", newest.read_bytes(), {"X-Filename": newest.name})
-                return
-            match = [f for f in files if f.name == parts[3]]
-            if match:
-                self._chunked("application/json", match[0].read_bytes(), {})
-            else:
-                self._fixed(404, "text/plain", b"")
-
-        def _rr_download(self, query: str) -> None:
-            """Road Runner's download route (FileServing.kt:171-189): the raw query (``queryParameterString``,
-            not URL-decoded: NanoHTTPD.java:839) split on "&" then "=" (Kotlin's split, trailing empty parts
-            dropped), ``File(LOG_ROOT, parts[1])``."""
-            pairs = query.split("&")
-            while pairs and not pairs[-1]:
-                pairs.pop()
-            if len(pairs) != 1:
-                self._fixed(400, "text/plain", f"expected one query parameter, got {len(pairs)}".encode())
-                return
-            parts = pairs[0].split("=")
-            while parts and not parts[-1]:
-                parts.pop()
-            if not parts or parts[0] != "file":
-                got = parts[0] if parts else ""
-                self._fixed(400, "text/plain", f"expected file query parameter, got {got}".encode())
-                return
-            if len(parts) < 2:
-                self._handler_threw()  # parts[1]: ArrayIndexOutOfBoundsException
-                return
-            match = [f for f in robot.files.logs if f.name == parts[1]]
+            page = self.robot.listing_html()
+            ascii_only = page.isascii()  # NanoHTTPD switches to UTF-8 when ASCII cannot encode it (:2199-2203)
+            self._fixed(200, "text/html" if ascii_only else "text/html; charset=UTF-8", page.encode())
+        elif self.robot.road_runner and path == "/logs/download":
+            self._rr_download(query)
+        elif self.robot.motorlab_handler and path == "/motorlab/logs":
+            files = [{"name": f.name, "bytes": f.stat().st_size, "modified_ms": int(f.stat().st_mtime * 1000)}
+                     for f in sorted(self.robot.files.motorlab, key=lambda p: p.stat().st_mtime, reverse=True)]
+            body = json.dumps({"folder": "/sdcard/FIRST/motorlab", "files": files}).encode()
+            self._fixed(200, "application/json", body)
+        elif self.robot.motorlab_handler and path == "/motorlab/logs/download":
+            name = urllib.parse.parse_qs(query).get("file", [""])[0]  # getParameters(): decoded (:839-850)
+            match = [f for f in self.robot.files.motorlab if f.name == name]
             if not match:
-                self._fixed(404, "text/plain", f"file /sdcard/RoadRunner/logs/{parts[1]} doesn't exist".encode())
+                self._fixed(404, "text/plain", f"no log named {name}".encode())
+            else:
+                self._fixed(200, "text/plain", match[0].read_bytes(), drop=True)
+        else:
+            self._fixed(404, "text/plain", b"")
+
+    def _handler_threw(self) -> None:
+        """A handler that throws: NanoHTTPD catches no RuntimeException in ``HTTPSession.execute``
+        (NanoHTTPD.java:953-985); ``ClientHandler.run`` logs it and closes the socket (:184-200), so the
+        client gets no answer. ``logs_failure="500"`` plays a server that answers 500 instead."""
+        if self.robot.logs_failure == "500":
+            self._fixed(500, "text/plain", b"SERVER INTERNAL ERROR: java.lang.NullPointerException")
+            return
+        self.close_connection = True
+        with contextlib.suppress(OSError):
+            self.connection.shutdown(2)
+
+    def _tuning(self, path: str) -> None:
+        parts = path.split("/")
+        if len(parts) != 4 or parts[2] not in TUNING_TYPES:
+            self._fixed(404, "text/plain", b"")
+            return
+        files = self.robot.files.tuning.get(parts[2], [])
+        if parts[3] == "latest.json":
+            if not files:
+                self._fixed(404, "text/plain", b"")
                 return
+            newest = max(files, key=lambda p: p.stat().st_mtime)
+            self._chunked("application/json", newest.read_bytes(), {"X-Filename": newest.name})
+            return
+        match = [f for f in files if f.name == parts[3]]
+        if match:
             self._chunked("application/json", match[0].read_bytes(), {})
+        else:
+            self._fixed(404, "text/plain", b"")
 
-        def _fixed(self, status: int, mime: str, body: bytes, *, drop: bool = False) -> None:
-            self.send_response(status)
-            self.send_header("Content-Type", mime)
-            self.send_header("Content-Length", str(len(body)))
-            self.send_header("Connection", "close")
-            self.end_headers()
-            cut = robot.drop_after if drop and robot.drop_after is not None else None
-            self.wfile.write(body if cut is None else body[:cut])
-            self.close_connection = True
+    def _rr_download(self, query: str) -> None:
+        """Road Runner's download route (FileServing.kt:171-189): the raw query (``queryParameterString``,
+        not URL-decoded: NanoHTTPD.java:839) split on "&" then "=" (Kotlin's split, trailing empty parts
+        dropped), ``File(LOG_ROOT, parts[1])``."""
+        pairs = query.split("&")
+        while pairs and not pairs[-1]:
+            pairs.pop()
+        if len(pairs) != 1:
+            self._fixed(400, "text/plain", f"expected one query parameter, got {len(pairs)}".encode())
+            return
+        parts = pairs[0].split("=")
+        while parts and not parts[-1]:
+            parts.pop()
+        if not parts or parts[0] != "file":
+            got = parts[0] if parts else ""
+            self._fixed(400, "text/plain", f"expected file query parameter, got {got}".encode())
+            return
+        if len(parts) < 2:
+            self._handler_threw()  # parts[1]: ArrayIndexOutOfBoundsException
+            return
+        match = [f for f in self.robot.files.logs if f.name == parts[1]]
+        if not match:
+            self._fixed(404, "text/plain", f"file /sdcard/RoadRunner/logs/{parts[1]} doesn't exist".encode())
+            return
+        self._chunked("application/json", match[0].read_bytes(), {})
 
-        def _chunked(self, mime: str, body: bytes, headers: dict[str, str]) -> None:
-            self.send_response(200)
-            self.send_header("Content-Type", mime)
-            self.send_header("Transfer-Encoding", "chunked")
-            self.send_header("Connection", "close")
-            for k, v in headers.items():
-                self.send_header(k, v)
-            self.end_headers()
-            cut = robot.drop_after
-            for start in range(0, len(body), 16384):
-                chunk = body[start:start + 16384]
-                if cut is not None and start + len(chunk) > cut:
-                    self.wfile.write(f"{len(chunk):x}\r\n".encode() + chunk[: max(0, cut - start)])
-                    self.wfile.flush()
-                    self.close_connection = True
-                    return  # connection closed mid-chunk
-                self.wfile.write(f"{len(chunk):x}\r\n".encode() + chunk + b"\r\n")
-            self.wfile.write(b"0\r\n\r\n")
-            self.close_connection = True
+    def _fixed(self, status: int, mime: str, body: bytes, *, drop: bool = False) -> None:
+        self.send_response(status)
+        self.send_header("Content-Type", mime)
+        self.send_header("Content-Length", str(len(body)))
+        self.send_header("Connection", "close")
+        self.end_headers()
+        cut = self.robot.drop_after if drop and self.robot.drop_after is not None else None
+        self.wfile.write(body if cut is None else body[:cut])
+        self.close_connection = True
 
-    return Handler
+    def _chunked(self, mime: str, body: bytes, headers: dict[str, str]) -> None:
+        self.send_response(200)
+        self.send_header("Content-Type", mime)
+        self.send_header("Transfer-Encoding", "chunked")
+        self.send_header("Connection", "close")
+        for k, v in headers.items():
+            self.send_header(k, v)
+        self.end_headers()
+        cut = self.robot.drop_after
+        for start in range(0, len(body), 16384):
+            chunk = body[start:start + 16384]
+            if cut is not None and start + len(chunk) > cut:
+                self.wfile.write(f"{len(chunk):x}\r\n".encode() + chunk[: max(0, cut - start)])
+                self.wfile.flush()
+                self.close_connection = True
+                return  # connection closed mid-chunk
+            self.wfile.write(f"{len(chunk):x}\r\n".encode() + chunk + b"\r\n")
+        self.wfile.write(b"0\r\n\r\n")
+        self.close_connection = True
+
+
+
+def _handler_class(robot: EmulatedRobot) -> type[BaseHTTPRequestHandler]:
+    return type("Handler", (_Handler,), {"robot": robot})

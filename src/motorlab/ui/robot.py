@@ -147,6 +147,15 @@ def routes(link: _Link | None = None) -> list[Route]:
     ]
 
 
+def _send_stop(host: str, port: int) -> None:
+    """``STOP_OP_MODE`` to the robot, confirmed by the status answer that follows it (the robot has read it)."""
+    from motorlab.robot.dashboard import Dashboard
+
+    with Dashboard(host, port) as dash:
+        dash.stop_op_mode()
+        dash.status()
+
+
 def _record_routes(link: _Link) -> list[Route]:
     from motorlab.robot.record import Recorder, write_log
 
@@ -224,16 +233,8 @@ def _record_routes(link: _Link) -> list[Route]:
         form = await request.form()
         if not form.get("host"):
             return JSONResponse({"stopped": True})
-
-        def send_stop(host: str, port: int) -> None:
-            from motorlab.robot.dashboard import Dashboard
-
-            with Dashboard(host, port) as dash:
-                dash.stop_op_mode()
-                dash.status()  # its answer comes after the STOP: the robot has read it
-
         try:
-            await run_in_threadpool(send_stop, _host(form.get("host")),
+            await run_in_threadpool(_send_stop, _host(form.get("host")),
                                     _port(form.get("dashboard-port"), DEFAULT_DASHBOARD_PORT))
         except MotorlabError as exc:
             return _error(f"{exc}: press STOP on the Driver Station")

@@ -361,7 +361,7 @@ export function render(host, ctx) {
   };
   host.append(el("section", { class: "card" }, targetPicker(ctx, changed), loopPicker(ctx, changed),
     el("div", { class: "options" }, primary.map((f) => field(f, g.options, changed, { note: note(f) })),
-      motor ? el("p", { class: "small", text: `Encoder counts per revolution: ${motor.counts_per_revolution}, of the session's motor (${motor.name}).` }) : null,
+      motor ? el("p", { class: "small", text: `${fieldWords("cpr")}: ${motor.counts_per_revolution}, of the session's motor (${motor.name}).` }) : null,
       el("div", { class: "field" }, el("label", { for: language, text: "Code language" }),
         el("select", { id: language, onchange: (e) => { g.language = e.target.value; save(); changed(); } }, languages.map(([k, w]) => el("option", { value: k, text: w, selected: k === g.language }))))),
     el("details", { class: "more" }, el("summary", { text: "More settings (design method, tolerances, loop period, delay)" }),
