@@ -183,10 +183,14 @@ def test_ramp_then_shooter_then_the_first_gains_again(page: Any, ramp: tuple[Pat
     page.type("counts per revolution", "8192")  # typed back as it was: the gains again
     assert abs(browser.kv_per_tick(page) - true_kv) / true_kv < 0.03
 
+    # The same sitting goes on (one test: the steps share the browser's state, so no scheduler may split them):
+    # another tab on another mechanism, then two models ticked at once.
+    _a_second_tab_on_another_mechanism_changes_nothing(page, true_kv)
+    _two_models_are_never_merged_silently(page, shooter, tmp_path)
 
-def test_a_second_tab_on_another_mechanism_changes_nothing(page: Any, ramp: tuple[Path, float]) -> None:
+
+def _a_second_tab_on_another_mechanism_changes_nothing(page: Any, true_kv: float) -> None:
     """After the journey above: another tab types 1120 for the mechanism; the drive's gains stay as fitted."""
-    _path, true_kv = ramp
     first = page.d.current_url
     assert "#/drive/gains/" in first
     original = page.d.current_window_handle
@@ -204,7 +208,7 @@ def test_a_second_tab_on_another_mechanism_changes_nothing(page: Any, ramp: tupl
     assert abs(browser.kv_per_tick(page) - true_kv) / true_kv < 0.03
 
 
-def test_two_models_are_never_merged_silently(page: Any, shooter: Path, tmp_path: Path) -> None:
+def _two_models_are_never_merged_silently(page: Any, shooter: Path, tmp_path: Path) -> None:
     """A shooter and a simulated drivetrain mechanism, both fitted: the gains wait for the student's choice."""
     subprocess.run([sys.executable, "-m", "motorlab", "simulate", "sysid", "--motor", "neverest40", "-o",
                     str(tmp_path / "sysid.json")], check=True, capture_output=True)
