@@ -4,7 +4,7 @@
 simulator of the tests, for drives switching between samples (0.02 V voltage noise) and on sample
 instants (exact voltage), four seeds each, with the time per log (issue 18: < 10 s).
 
-Random voltage steps in ±12 V drive a simulated motor (:func:`motorlab.simulate.simulate`); the
+Random voltage steps in ±12 V drive a simulated motor (:func:`motorlab.model.simulate.simulate`); the
 encoder is counted at 2240 counts/rev and the current carries 20 mA of noise.
 """
 
@@ -15,10 +15,10 @@ import time
 
 import numpy as np
 
-from motorlab.identify import identify
+from motorlab.analyses.identify import identify
 from motorlab.model import MotorParams
+from motorlab.model.simulate import VoltageDrive, simulate
 from motorlab.recording import Recording
-from motorlab.simulate import VoltageDrive, simulate
 
 MOTOR = MotorParams(K=0.35, R=2.5, L=7e-4, J=8e-4, b=2e-3, Tf=0.03)
 

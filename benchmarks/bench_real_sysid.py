@@ -1,6 +1,6 @@
 """Real SysId logs: motorlab's kS, kV, kA against the teams' own gains and SysId's OLS, on the fair score.
 
-The score (``motorlab.sysid_score``, shared/data/real/sysid/README.md): every test, both drivetrain
+The score (``motorlab.analyses.sysid_score``, shared/data/real/sysid/README.md): every test, both drivetrain
 sides, simulated open loop from the logged voltage; RMSE against the logged speed and position, in
 the file's own units. Ratios are RMSE / the team's RMSE (below 1: better than the team).
 
@@ -22,9 +22,9 @@ from pathlib import Path
 
 import numpy as np
 
-from motorlab.feedforward import feedforward, sysid_ols
+from motorlab.analyses.feedforward import feedforward, sysid_ols
+from motorlab.analyses.sysid_score import Score, file_tests, fit_gains, score, simulate_gains
 from motorlab.io import read_any
-from motorlab.sysid_score import Score, file_tests, fit_gains, score, simulate_gains
 
 HERE = Path(__file__).resolve().parent
 DEFAULT_DIR = HERE.parent / "tests" / "data" / "real" / "sysid"

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from motorlab.feedforward import feedforward
+from motorlab.analyses.feedforward import feedforward
 from motorlab.io import read_any
 from motorlab.io.roadrunner import drive_voltage
 from motorlab.model import MotorParams

@@ -73,7 +73,7 @@ print(f"{elapsed:.3f} {peak:.1f} {code} {cpu:.3f}", file=sys.stderr)
 def _ftc(path: Path, n: int, *, coast: bool, rng: np.random.Generator) -> None:
     from motorlab.io import write_ftc_log
     from motorlab.model import MotorParams
-    from motorlab.simulate import BenchSupply, CurrentDrive, OpenCircuit, simulate
+    from motorlab.model.simulate import BenchSupply, CurrentDrive, OpenCircuit, simulate
 
     motor = MotorParams(K=0.35, R=2.0, L=0.6e-3, J=2e-4, b=1e-4, Tf=0.02).with_load(1.5e-3, ratio=25)
     duration = n * 1e-3

@@ -11,7 +11,7 @@ import time
 import numpy as np
 
 from motorlab.model import MotorParams
-from motorlab.simulate import BenchSupply, OpenCircuit, VoltageDrive, simulate
+from motorlab.model.simulate import BenchSupply, OpenCircuit, VoltageDrive, simulate
 
 MOTOR = MotorParams(K=0.35, R=2.0, L=0.6e-3, J=2e-4, b=1e-4, Tf=0.02)
 

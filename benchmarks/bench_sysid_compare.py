@@ -13,10 +13,10 @@ import time
 
 import numpy as np
 
-from motorlab.feedforward import feedforward, sysid_ols
+from motorlab.analyses.feedforward import feedforward, sysid_ols
 from motorlab.model import MotorParams, feedforward_from_params
+from motorlab.model.simulate import VoltageDrive, simulate
 from motorlab.recording import Recording
-from motorlab.simulate import VoltageDrive, simulate
 
 MOTOR = MotorParams(K=0.35, R=2.5, L=7e-4, J=5e-3, b=2e-3, Tf=0.03)
 CPR = 560
@@ -68,7 +68,7 @@ def rig_files(n_seeds: int = 20) -> None:
     import tempfile
     from pathlib import Path
 
-    from motorlab.oe_runs import read_runs
+    from motorlab.estimation.runs import read_runs
     from motorlab.rig import VirtualRig
     from motorlab.rig.flywheel import Flywheel
 

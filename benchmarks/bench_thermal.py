@@ -18,7 +18,7 @@ from pathlib import Path
 from motorlab.analyses.stall import stall
 from motorlab.experiments.stall import read_runs
 from motorlab.rig import VirtualRig
-from motorlab.stall_forecast import forecast, load_fit
+from motorlab.thermal.forecast import forecast, load_fit
 
 HERE = Path(__file__).resolve().parents[1]
 REAL = [HERE.parent / "shared/data/real/dyno", HERE.parent.parent / "shared/data/real/dyno"]

@@ -94,7 +94,7 @@ def _session_zip(units: int, folder: Path) -> bytes:
     import io
     import zipfile
 
-    from motorlab.simulated_session import write_simulated_session
+    from motorlab.session.simulated import write_simulated_session
 
     write_simulated_session("neverest40", out_dir=folder, units=units, seed=3)
     buffer = io.BytesIO()

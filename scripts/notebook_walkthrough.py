@@ -14,7 +14,7 @@ from pathlib import Path
 
 import motorlab as ml
 from motorlab.plot import save_figure
-from motorlab.simulated_session import write_simulated_session
+from motorlab.session.simulated import write_simulated_session
 
 #: The session's flywheel (0.019527634 kg·m², ratio 25) at the encoder shaft: J·N² [kg·m²].
 INERTIA = 0.019527634 * 25**2

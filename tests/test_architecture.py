@@ -41,3 +41,11 @@ def test_no_import_circles(measures: tuple) -> None:
 
 def test_no_module_over_800_lines(measures: tuple) -> None:
     assert measures.long_modules == []
+
+
+def test_at_most_twenty_modules_at_the_root(measures: tuple) -> None:
+    assert len(measures.root_modules) <= 20, measures.root_modules  # the rest live in the package of their job
+
+
+def test_few_imports_of_another_modules_private_names(measures: tuple) -> None:
+    assert len(measures.private_imports) <= 5, measures.private_imports

@@ -20,8 +20,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from motorlab.analyses.feedforward import feedforward
 from motorlab.analyses.spindown import spindown
-from motorlab.feedforward import feedforward
 from motorlab.io import read_csv, read_ftc_log
 from motorlab.robot.emulator import EmulatedRobot, OpModeSpec
 from motorlab.robot.emulator_jvm import JvmOpMode

@@ -20,7 +20,7 @@ from motorlab.gearbox import (
     speed_at_output,
 )
 from motorlab.model import MotorParams
-from motorlab.simulate import BenchSupply, OpenCircuit, simulate
+from motorlab.model.simulate import BenchSupply, OpenCircuit, simulate
 
 MOTOR = MotorParams(K=0.69, R=1.04, L=0.7e-3, J=0.015, b=0.004, Tf=0.07)  # output shaft, ideal gearbox
 

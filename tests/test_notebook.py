@@ -12,7 +12,7 @@ from matplotlib.figure import Figure
 import motorlab as ml
 from motorlab.cli import main
 from motorlab.errors import OptionError
-from motorlab.simulated_session import write_simulated_session
+from motorlab.session.simulated import write_simulated_session
 
 FLYWHEEL = 0.019527634 * 25**2  # kg·m², the simulated session's flywheel J·N² at the encoder shaft
 
@@ -78,12 +78,12 @@ def test_options_are_checked(unit: Path) -> None:
 
 
 def test_identify_and_feedforward_stay_callable_after_their_modules_load() -> None:
-    import motorlab.feedforward
-    import motorlab.identify
+    import motorlab.analyses.feedforward
+    import motorlab.analyses.identify
 
     assert callable(ml.identify)
     assert callable(ml.feedforward)
-    assert callable(motorlab.identify.identify)  # the library function is untouched
+    assert callable(motorlab.analyses.identify.identify)  # the library function is untouched
 
 
 def test_read_gives_a_short_repr(unit: Path) -> None:
@@ -93,14 +93,22 @@ def test_read_gives_a_short_repr(unit: Path) -> None:
     assert len(repr(rec)) < 300
 
 
-def test_from_motorlab_import_gives_the_submodule() -> None:
+def test_no_name_is_both_a_module_and_a_function() -> None:
+    """``from motorlab import identify`` is the experiment's function (its module is motorlab.analyses.identify);
+    no module of the package is patched to be callable."""
+    import importlib.util
     import subprocess
     import sys
 
-    code = ("from motorlab import feedforward, identify; import motorlab as ml; "
-            "print(type(feedforward).__name__, hasattr(feedforward, 'motor_estimates'), callable(ml.identify))")
+    from motorlab.experiments import all_experiments
+
+    for name in all_experiments():
+        assert importlib.util.find_spec(f"motorlab.{name.replace('-', '_')}") is None, name
+    code = ("import sys, types; from motorlab import feedforward, identify; import motorlab.analyses.identify; "
+            "print(type(feedforward).__name__, type(identify).__name__, "
+            "any(type(m) is not types.ModuleType for n, m in list(sys.modules.items()) if n.startswith('motorlab')))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
-    assert out == ["CallableModule", "True", "True"]
+    assert out == ["function", "function", "False"]
 
 
 def test_the_public_face_is_the_registry() -> None:

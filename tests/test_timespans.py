@@ -169,10 +169,10 @@ def test_cli_takes_the_spans_and_an_analysis_without_time_refuses_them(tmp_path:
 
 
 def test_a_session_leaves_spans_out_and_refuses_them_where_no_analysis_takes_them(tmp_path: Path) -> None:
-    from motorlab.characterize import characterize
     from motorlab.errors import SessionError
-    from motorlab.session import load_session
-    from motorlab.simulated_session import write_simulated_session
+    from motorlab.session.characterize import characterize
+    from motorlab.session.simulated import write_simulated_session
+    from motorlab.session.spec import load_session
 
     write_simulated_session("neverest40", out_dir=tmp_path, units=1, seed=5, experiments=("lcr", "spindown"))
     toml = tmp_path / "session.toml"

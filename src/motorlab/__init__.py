@@ -9,7 +9,7 @@ The notebook API (:mod:`motorlab.notebook`, docs/notebook.md)::
 The library underneath, for scripts::
 
     from motorlab.model import MotorParams
-    from motorlab.simulate import simulate, VoltageDrive
+    from motorlab.model.simulate import simulate, VoltageDrive
     from motorlab.catalog import Motor
     from motorlab import io, analyses
 
@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import importlib
 import importlib.util
-import types
 from typing import Any
 
 __version__ = "0.1.0"
@@ -54,8 +53,7 @@ def __getattr__(name: str) -> Any:
     if name in _TYPES:
         return getattr(importlib.import_module(_TYPES[name]), name)
     if not name.startswith("_") and importlib.util.find_spec(f"{__name__}.{name}") is not None:
-        # A submodule (``from motorlab import progress``); identify and feedforward are CallableModules, so
-        # ml.identify(...) still runs the experiment.
+        # A subpackage or root module (``from motorlab import progress``); no experiment's name is one.
         return importlib.import_module(f"{__name__}.{name}")
     if name in _FUNCTIONS or name in _experiment_functions():
         return getattr(importlib.import_module("motorlab.notebook"), name)
@@ -65,15 +63,3 @@ def __getattr__(name: str) -> Any:
 def __dir__() -> list[str]:
     """What a notebook user reaches for: the experiments, the notebook's functions and the public types."""
     return _public()
-
-
-class CallableModule(types.ModuleType):
-    """A submodule that is also its experiment's notebook function.
-
-    ``motorlab.identify`` and ``motorlab.feedforward`` are modules; once imported, Python binds them
-    as attributes of the package, where ``ml.identify(...)`` must still run the experiment.
-    """
-
-    def __call__(self, *args: Any, **kwargs: Any) -> Any:
-        notebook = importlib.import_module("motorlab.notebook")
-        return getattr(notebook, self.__name__.rsplit(".", 1)[-1])(*args, **kwargs)

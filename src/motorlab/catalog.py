@@ -24,7 +24,7 @@ from typing import Any
 from motorlab.errors import InputError, OptionError
 from motorlab.gearbox import Gearbox
 from motorlab.model import MotorParams
-from motorlab.thermal import MAGNET_COEFFICIENTS, ThermalModel
+from motorlab.thermal.network import MAGNET_COEFFICIENTS, ThermalModel
 from motorlab.units import parse_quantity
 
 #: Default bare-motor mechanical time constant τm = J·R/(K² + R·b) [s] used to guess J (see

@@ -183,7 +183,7 @@ def save_figure(fig: Figure, path: str | os.PathLike[str], *, dpi: int = 120) ->
     folder = os.path.dirname(os.path.abspath(target))
     if not os.path.isdir(folder):
         raise OptionError(f"{target}: the directory {folder} does not exist")
-    from motorlab.io._output import atomic_path
+    from motorlab.io.output import atomic_path
 
     with atomic_path(target) as temporary:
         fig.savefig(temporary, dpi=dpi)

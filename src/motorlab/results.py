@@ -297,7 +297,7 @@ class FitResult:
             writer.writerow({k: ("" if isinstance(v, float) and not math.isfinite(v) else v) for k, v in row.items()})
         text = buffer.getvalue()
         if path is not None:
-            from motorlab.io._output import check_writable_target
+            from motorlab.io.output import check_writable_target
 
             check_writable_target(path)
             with open(path, "w", encoding="utf-8", newline="") as handle:

@@ -15,7 +15,7 @@ import numpy as np
 from motorlab.analyses.stall import stall
 from motorlab.errors import MotorlabError
 from motorlab.experiments.stall import read_runs
-from motorlab.stall_forecast import forecast, load_fit
+from motorlab.thermal.forecast import forecast, load_fit
 
 
 def other_runs(path: str | Path) -> list[str]:

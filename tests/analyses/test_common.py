@@ -8,7 +8,7 @@ import warnings
 import numpy as np
 import pytest
 
-from motorlab.analyses import _common as common
+from motorlab.analyses import common
 from motorlab.analyses.gains import amplifier, tachometer
 from motorlab.analyses.lcr import lcr
 from motorlab.analyses.torque import torque

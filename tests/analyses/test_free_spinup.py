@@ -12,8 +12,8 @@ from motorlab.analyses.free_spinup import free_spinup
 from motorlab.cli.analyze import add_arguments, from_cli
 from motorlab.errors import FitError, OptionError
 from motorlab.model import MotorParams
+from motorlab.model.simulate import CurrentDrive, State, simulate
 from motorlab.recording import Recording
-from motorlab.simulate import CurrentDrive, State, simulate
 
 CPR = 28.0  # at the motor shaft: one channel gives 7 rising edges per turn
 BARE = MotorParams(K=0.0185, R=2.0, L=7e-4, J=9e-6, b=1e-5, Tf=2e-3)

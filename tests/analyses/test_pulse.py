@@ -11,8 +11,8 @@ from motorlab.analyses.pulse import pulse
 from motorlab.errors import FitError, LogFormatError, OptionError
 from motorlab.io import read_csv, write_csv
 from motorlab.model import MotorParams
+from motorlab.model.simulate import CurrentDrive, simulate
 from motorlab.recording import Recording
-from motorlab.simulate import CurrentDrive, simulate
 
 KA, KM = 2.0, 0.1  # amplifier [A/V], torque constant [N·m/A]
 J_TRUE = 7.0e-4  # the seed's 76 mm aluminium wheel plus the shaft [kg·m²]

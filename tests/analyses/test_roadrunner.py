@@ -6,8 +6,8 @@ import json
 
 import pytest
 
+from motorlab.analyses.feedforward import feedforward
 from motorlab.cli import main
-from motorlab.feedforward import feedforward
 from motorlab.io import read_any
 from motorlab.rig.ftc import BulkReadLoop, HubEncoder, MecanumDrive, RampSettings, simulate_ramp
 

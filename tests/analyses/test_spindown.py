@@ -8,14 +8,14 @@ import math
 import numpy as np
 import pytest
 
-from motorlab.analyses import _common as common
+from motorlab.analyses import common
 from motorlab.analyses.spindown import spindown
 from motorlab.cli.analyze import add_arguments, from_cli
 from motorlab.errors import FitError, LogFormatError, OptionError
 from motorlab.model import MotorParams
-from motorlab.plan import disc_inertia
+from motorlab.model.simulate import BenchSupply, OpenCircuit, simulate
 from motorlab.recording import Recording
-from motorlab.simulate import BenchSupply, OpenCircuit, simulate
+from motorlab.rig.plan import disc_inertia
 
 CPR = 560.0
 #: A NeveRest 20 driving the seed's steel disc (0.0124 kg·m²) through the 25:1 step-up.

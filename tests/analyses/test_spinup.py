@@ -13,8 +13,8 @@ from motorlab.analyses.spinup import spinup
 from motorlab.cli.analyze import add_arguments, from_cli
 from motorlab.errors import FitError, OptionError
 from motorlab.model import MotorParams
+from motorlab.model.simulate import BenchSupply, OpenCircuit, simulate
 from motorlab.recording import Recording
-from motorlab.simulate import BenchSupply, OpenCircuit, simulate
 
 CPR = 560.0
 FLYWHEEL = MotorParams(K=0.37, R=2.0, L=7e-4, J=7.75, b=0.12, Tf=0.25)

@@ -15,7 +15,7 @@ from motorlab.errors import InputError, LogFormatError
 from motorlab.experiments.stall import read_runs
 from motorlab.io.csv_table import read_csv, write_csv
 from motorlab.rig import VirtualRig
-from motorlab.stall_forecast import forecast, load_fit
+from motorlab.thermal.forecast import forecast, load_fit
 
 REAL = find_dyno_dir() or Path("../shared/data/real/dyno")
 needs_real = pytest.mark.skipif(

@@ -19,7 +19,7 @@ from motorlab.io.csv_table import read_csv
 from motorlab.model import MotorParams
 from motorlab.recording import Recording
 from motorlab.rig import VirtualRig
-from motorlab.thermal import ThermalModel
+from motorlab.thermal.network import ThermalModel
 
 DYNO = Path(__file__).resolve().parents[1] / "data" / "dyno"
 
@@ -246,7 +246,7 @@ def test_a_run_no_single_network_fits_is_forecast_from_the_motors_other_runs(tmp
     from tests.analyses._forecast import forecast_rms, other_runs
 
     from motorlab.experiments.stall import run as run_stall
-    from motorlab.stall_forecast import forecast, load_fit
+    from motorlab.thermal.forecast import forecast, load_fit
 
     path = _dyno("cim-locked-rotor-data-4v-20151104.csv")
     fit = stall(read_runs([path])[0], until=120.0)
@@ -286,8 +286,8 @@ def test_a_forecast_carries_on_the_brushes_contact_the_run_ended_with(tmp_path: 
     run's voltage holds it on from there (forecast 1.8 % RMS, 5.5 % without), and not at another voltage."""
     import json
 
-    from motorlab.stall_forecast import forecast, load_fit
-    from motorlab.thermal import stall_response
+    from motorlab.thermal.forecast import forecast, load_fit
+    from motorlab.thermal.network import stall_response
 
     rec = read_runs([_dyno("cim-locked-rotor-data-8v-20151104.csv")])[0]
     fit = stall(rec, until=120.0)

@@ -89,7 +89,7 @@ def params_json(rig_files: dict[str, list[Path]], tmp_path_factory: pytest.TempP
 @pytest.fixture(scope="module")
 def session_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A small simulated session (two units, three quick experiments) and its ``session.toml``."""
-    from motorlab.simulated_session import write_simulated_session
+    from motorlab.session.simulated import write_simulated_session
 
     folder = tmp_path_factory.mktemp("session")
     write_simulated_session(

@@ -31,11 +31,11 @@ def test_demo_writes_report_and_prints_table(tmp_path: Path, capsys: pytest.Capt
 def test_demo_table_shows_every_analysis_against_the_truth(tmp_path: Path) -> None:
     import re
 
-    from motorlab.characterize import characterize
     from motorlab.cli.demo import experiment_rows
     from motorlab.experiments import all_experiments
-    from motorlab.session import load_session
-    from motorlab.simulated_session import write_simulated_session
+    from motorlab.session.characterize import characterize
+    from motorlab.session.simulated import write_simulated_session
+    from motorlab.session.spec import load_session
 
     toml = write_simulated_session("neverest40", out_dir=tmp_path / "s", units=1, seed=3)
     rows = experiment_rows(characterize(load_session(toml), control=False, figures=False))
@@ -48,7 +48,7 @@ def test_demo_table_shows_every_analysis_against_the_truth(tmp_path: Path) -> No
 
 
 def test_characterize_cli(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    from motorlab.simulated_session import write_simulated_session
+    from motorlab.session.simulated import write_simulated_session
 
     toml = write_simulated_session("neverest40", out_dir=tmp_path / "s", units=1, experiments=("lcr",))
     assert main(["characterize", str(toml), "-o", str(tmp_path / "r"), "--no-report"]) == 0

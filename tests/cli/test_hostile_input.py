@@ -280,7 +280,7 @@ def test_65535_in_a_terminal_table_is_flagged(rig, tmp_path: Path, capsys) -> No
 
 
 def test_characterize_refuses_to_overwrite_an_input_called_results_csv(tmp_path: Path, capsys) -> None:
-    from motorlab.simulated_session import write_simulated_session
+    from motorlab.session.simulated import write_simulated_session
 
     write_simulated_session("neverest40", out_dir=tmp_path, units=1, seed=3, experiments=("lcr",))
     toml = tmp_path / "session.toml"
@@ -294,7 +294,7 @@ def test_characterize_refuses_to_overwrite_an_input_called_results_csv(tmp_path:
 
 
 def test_characterize_refuses_an_unknown_unit_in_a_header_before_any_analysis(tmp_path: Path, capsys) -> None:
-    from motorlab.simulated_session import write_simulated_session
+    from motorlab.session.simulated import write_simulated_session
 
     write_simulated_session("neverest40", out_dir=tmp_path, units=1, seed=3, experiments=("lcr",))
     lcr = next(tmp_path.glob("A/lcr*.csv"))
@@ -305,7 +305,7 @@ def test_characterize_refuses_an_unknown_unit_in_a_header_before_any_analysis(tm
 
 
 def test_interrupted_simulate_leaves_no_partial_file(tmp_path: Path, monkeypatch, capsys) -> None:
-    import motorlab.io._output as output
+    import motorlab.io.output as output
 
     def interrupted(src, dst):
         raise KeyboardInterrupt

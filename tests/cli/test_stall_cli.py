@@ -53,10 +53,10 @@ def test_refusals_are_one_line(tmp_path: Path, capsys) -> None:
 
 
 def test_report_has_a_thermal_section(tmp_path: Path) -> None:
-    from motorlab.characterize import characterize
-    from motorlab.report import render_report
-    from motorlab.session import load_session
-    from motorlab.simulated_session import write_simulated_session
+    from motorlab.report.document import render_report
+    from motorlab.session.characterize import characterize
+    from motorlab.session.simulated import write_simulated_session
+    from motorlab.session.spec import load_session
 
     toml = write_simulated_session("neverest40", out_dir=tmp_path / "s", units=1, seed=1,
                                    experiments=("lcr", "stall"))

@@ -128,10 +128,10 @@ def test_results_json_of_characterize_uses_one_units_motor_parameters(tmp_path, 
     design for a plant hundreds of times heavier than the motor simulated.
     """
 
-    from motorlab.characterize import characterize
-    from motorlab.report import write_outputs
-    from motorlab.session import load_session
-    from motorlab.simulated_session import write_simulated_session
+    from motorlab.report.document import write_outputs
+    from motorlab.session.characterize import characterize
+    from motorlab.session.simulated import write_simulated_session
+    from motorlab.session.spec import load_session
 
     toml = write_simulated_session(
         "neverest40", out_dir=tmp_path / "s", units=2, experiments=("lcr", "spindown", "identify", "feedforward")

@@ -42,7 +42,7 @@ def test_feedforward_plant_sticks_and_stops_exactly():
 
 
 def test_motor_plant_agrees_with_feedforward_plant_for_small_inductance():
-    # Two independent integrators: motorlab.simulate (with L) and the exact L = 0 step here.
+    # Two independent integrators: motorlab.model.simulate (with L) and the exact L = 0 step here.
     p = MotorParams(K=0.35, R=1.1, L=2e-5, J=4e-4, b=1e-4, Tf=0.02)
     ff_d = feedforward_from_params(p)
     ff = Feedforward(ff_d["kS"], ff_d["kV"], ff_d["kA"])

@@ -13,12 +13,12 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from motorlab.analyses.feedforward import feedforward
 from motorlab.errors import LogFormatError, MotorlabError, OptionError
-from motorlab.feedforward import feedforward
 from motorlab.io import detect_format, read_any, read_datalogger
 from motorlab.model import MotorParams, feedforward_from_params
+from motorlab.model.simulate import VoltageDrive, simulate
 from motorlab.proposal import propose
-from motorlab.simulate import VoltageDrive, simulate
 
 #: hawkbsilleee/FTC-Data-logging's logs (README there), read in place beside the clone or the worktree.
 _ROOT = Path(__file__).resolve().parents[2]

@@ -6,9 +6,9 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from motorlab.decimate import block_mean
-from motorlab.io import _text
-from motorlab.io._text import fast_table, text_file
+from motorlab.estimation.decimate import block_mean
+from motorlab.io import text as _text
+from motorlab.io.text import fast_table, text_file
 from motorlab.recording import Recording
 
 VALUE = st.one_of(st.integers(-(10**9), 10**9).map(str),

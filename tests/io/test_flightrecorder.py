@@ -7,8 +7,8 @@ import struct
 import numpy as np
 import pytest
 
+from motorlab.analyses.feedforward import feedforward
 from motorlab.errors import LogFormatError
-from motorlab.feedforward import feedforward
 from motorlab.io import detect_format, read_any, read_flight_log_channels, write_flight_log
 from motorlab.rig.ftc import simulate_flight_log
 

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from motorlab.errors import LogFormatError, OptionError
-from motorlab.io._text import unit_factor
 from motorlab.io.frc_json import SI_PER_UNIT, TESTS, UNITS, read_frc_char_json, read_sysid_json
+from motorlab.io.text import unit_factor
 
 FRC_CHAR = "frc-characterization-drivetrain-linear.json"
 SYSID = "sysid-flywheel.json"

@@ -199,7 +199,7 @@ def test_cli_column_option(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -
 
 
 def test_session_columns(tmp_path: Path) -> None:
-    from motorlab.session import load_session
+    from motorlab.session.spec import load_session
 
     shutil.copy(Path(__file__).parent.parent / "data" / "csv" / "lcr.csv", tmp_path / "lcr.csv")
     (tmp_path / "s.toml").write_text(

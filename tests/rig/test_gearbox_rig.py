@@ -7,7 +7,7 @@ import json
 import pytest
 
 from motorlab import cli
-from motorlab.analyses import _common as common
+from motorlab.analyses import common
 from motorlab.analyses.spindown import spindown
 from motorlab.catalog import Motor
 from motorlab.gearbox import Gearbox

@@ -88,7 +88,7 @@ def server(start_server: Any) -> Served:
 @pytest.fixture(scope="session")
 def sim_session(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """One simulated unit (spin-down and LCR logs, truth.json) and its session.toml."""
-    from motorlab.simulated_session import write_simulated_session
+    from motorlab.session.simulated import write_simulated_session
 
     folder = tmp_path_factory.mktemp("ui-session")
     write_simulated_session("neverest40", out_dir=folder, units=1, seed=5, experiments=("lcr", "spindown"))

@@ -171,7 +171,7 @@ def test_dynamometer_csv_with_worded_headers(page: Any, tmp_path: Path) -> None:
 
 
 def test_a_running_session_shows_its_units_then_its_table_before_its_report(page: Any, tmp_path: Path) -> None:
-    from motorlab.simulated_session import write_simulated_session
+    from motorlab.session.simulated import write_simulated_session
 
     folder = tmp_path / "bench"
     write_simulated_session("neverest40", out_dir=folder, units=2, seed=6, experiments=("lcr", "spindown", "identify"))

@@ -165,7 +165,7 @@ def _group(pgid: int) -> list[int]:
 
 @pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="reads the process table from /proc")
 def test_ending_a_session_ends_the_processes_analysing_its_units(tmp_path: Path) -> None:
-    from motorlab.simulated_session import write_simulated_session
+    from motorlab.session.simulated import write_simulated_session
 
     toml = write_simulated_session("neverest40", out_dir=tmp_path, units=2, seed=4,
                                    experiments=("identify", "feedforward"))

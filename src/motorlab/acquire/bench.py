@@ -37,8 +37,8 @@ import numpy as np
 from motorlab.acquire.errors import InstrumentError
 from motorlab.acquire.scpi import RigolDS1000Z, Supply
 from motorlab.errors import OptionError, RigError
-from motorlab.io._output import check_writable_target
 from motorlab.io.csv_table import write_csv
+from motorlab.io.output import check_writable_target
 from motorlab.io.scope import find_rising_edges
 from motorlab.rig.base import MAX_READINGS, PathArg, RigRun, check_size
 from motorlab.rig.instruments import INA219

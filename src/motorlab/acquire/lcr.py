@@ -27,7 +27,7 @@ from typing import IO, Any
 from motorlab.acquire.errors import InstrumentError
 from motorlab.acquire.es51919 import BAUD_RATE, Packet, PacketReader
 from motorlab.errors import OptionError
-from motorlab.io._output import check_writable_target
+from motorlab.io.output import check_writable_target
 
 #: What one run of readings may hold (seed 1 takes ten positions).
 MAX_LCR_READINGS = 10_000

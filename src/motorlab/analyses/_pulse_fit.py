@@ -12,8 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from motorlab.analyses._common import ramp_speed
-from motorlab.fitting import LeastSquares, fit_least_squares, fit_linear
+from motorlab.analyses.common import ramp_speed
+from motorlab.estimation.least_squares import LeastSquares, fit_least_squares, fit_linear
 
 
 @dataclass

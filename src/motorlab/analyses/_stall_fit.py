@@ -1,6 +1,6 @@
 """The heating fit of locked-rotor runs (:mod:`motorlab.analyses.stall`): R₂₅, the thermal network, K.
 
-Model (:mod:`motorlab.thermal`): each run holds its measured terminal voltage V(t) on the stalled
+Model (:mod:`motorlab.thermal.network`): each run holds its measured terminal voltage V(t) on the stalled
 winding, i = V/R(T_w), the heat V·i flows through winding → case → ambient. Shared by all runs:
 R₂₅, R_wc, R_ca, C_w, C_c; each run has its own initial temperature T₀ (winding and case alike: a
 motor that rested), except the reference run (the coolest: lowest V/I at its first full sample), which
@@ -18,8 +18,8 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from motorlab.errors import FitError
-from motorlab.fitting import LeastSquares, fit_least_squares, fit_linear
-from motorlab.thermal import COPPER_COEFFICIENT, ThermalModel, stall_response
+from motorlab.estimation.least_squares import LeastSquares, fit_least_squares, fit_linear
+from motorlab.thermal.network import COPPER_COEFFICIENT, ThermalModel, stall_response
 
 #: Names of the shared parameters, in the fit's order (fitted as logarithms).
 SHARED = ("R", "R_wc", "R_ca", "C_w", "C_c")

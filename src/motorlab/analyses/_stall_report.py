@@ -17,7 +17,7 @@ from motorlab.analyses._stall_fit import (
     simulate_runs,
 )
 from motorlab.results import Estimate, Panel, Series
-from motorlab.thermal import ThermalModel, continuous_current, steady_stall_temperature, time_to_temperature
+from motorlab.thermal.network import ThermalModel, continuous_current, steady_stall_temperature, time_to_temperature
 
 #: Most current-vs-time panels drawn (one per run).
 MAX_PANELS = 8

@@ -27,10 +27,10 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from motorlab.analyses._common import reader_warnings, sources_of
-from motorlab.decimate import consecutive
+from motorlab.analyses.common import reader_warnings, sources_of
 from motorlab.errors import FitError, LogFormatError, OptionError
-from motorlab.fitting import LeastSquares, fit_linear, r_squared
+from motorlab.estimation.decimate import consecutive
+from motorlab.estimation.least_squares import LeastSquares, fit_linear, r_squared
 from motorlab.recording import Recording
 from motorlab.results import Estimate, FitResult, Panel, Series
 from motorlab.units import SI_UNITS

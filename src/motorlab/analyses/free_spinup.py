@@ -12,10 +12,10 @@ from typing import Any
 
 import numpy as np
 
-from motorlab.analyses import _common as common
-from motorlab.decimate import block_mean
+from motorlab.analyses import common
 from motorlab.errors import FitError, OptionError
-from motorlab.fitting import LeastSquares, r_squared
+from motorlab.estimation.decimate import block_mean
+from motorlab.estimation.least_squares import LeastSquares, r_squared
 from motorlab.recording import Recording
 from motorlab.results import Estimate, FitResult, Panel, Series
 from motorlab.units import SI_UNITS
@@ -153,7 +153,7 @@ def free_spinup(
     ------
     OptionError
         Missing or impossible K, I, cpr, friction; K, I, cpr or the edges per revolution outside
-        generous physical limits (:data:`~motorlab.analyses._common.TORQUE_CONSTANT_RANGE` ...).
+        generous physical limits (:data:`~motorlab.analyses.common.TORQUE_CONSTANT_RANGE` ...).
     FitError
         Too few edges, or a motor that does not accelerate.
 

@@ -6,7 +6,7 @@ intercept*, so that an offset (amplifier input offset, tachometer ripple rectifi
 zero error) does not bias the slope and is reported instead of hidden.
 
 The small table helpers the bench analyses share (reading several files, refusing non-finite
-rows, the straight-line fit) live in :mod:`motorlab.analyses._common`; they are re-exported here
+rows, the straight-line fit) live in :mod:`motorlab.analyses.common`; they are re-exported here
 for callers that imported them from this module.
 """
 
@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from motorlab.analyses._common import (
+from motorlab.analyses.common import (
     EXACT_LINE_WARNING,
     StraightLine,
     concatenate,

@@ -15,8 +15,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from motorlab.analyses import _common as common
-from motorlab.analyses._common import finite_rows, metadata_quantity, reader_warnings, sources_of
+from motorlab.analyses import common
+from motorlab.analyses.common import finite_rows, metadata_quantity, reader_warnings, sources_of
 from motorlab.errors import FitError, LogFormatError, OptionError
 from motorlab.recording import Recording
 from motorlab.results import Estimate, FitResult, Panel, Series

@@ -17,14 +17,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from motorlab import progress
-from motorlab.analyses._common import (
-    LIMITS,
-    check_range,
-    check_stderr_limit,
-    check_torque_constant,
-    reader_warnings,
-    sources_of,
-)
 from motorlab.analyses._pulse_fit import (
     CoastFit,
     Region,
@@ -33,9 +25,17 @@ from motorlab.analyses._pulse_fit import (
     model_sentence,
     propagate_inputs,
 )
-from motorlab.decimate import block_mean
+from motorlab.analyses.common import (
+    LIMITS,
+    check_range,
+    check_stderr_limit,
+    check_torque_constant,
+    reader_warnings,
+    sources_of,
+)
 from motorlab.errors import FitError, LogFormatError, OptionError
-from motorlab.fitting import LeastSquares, fit_linear, r_squared
+from motorlab.estimation.decimate import block_mean
+from motorlab.estimation.least_squares import LeastSquares, fit_linear, r_squared
 from motorlab.recording import Recording
 from motorlab.results import Estimate, FitResult, Panel, Series
 from motorlab.units import SI_UNITS
@@ -238,7 +238,7 @@ def pulse(
     BIC = n·ln(SSR/n) + k·ln(n) (k counts the start speeds too). Both assume independent residuals;
     tachometer ripple correlates them and makes the criteria over-eager for the richer model.
     The standard errors of the final fit do not make that assumption: they come from the
-    Newey–West (HAC) sandwich of :func:`motorlab.fitting.hac_covariance`, with lags kept within
+    Newey–West (HAC) sandwich of :func:`motorlab.estimation.least_squares.hac_covariance`, with lags kept within
     each region, because the tachometer's commutator ripple correlates neighbouring residuals.
 
     References

@@ -1,7 +1,7 @@
 """What Road Runner's tuning page gets from the lateral and angular ramps, with uncertainties.
 
 ``motorlab analyze feedforward forward.json lateral.json angular.json --cpr N`` fits kS, kV, kA to the
-forward ramp (:func:`motorlab.feedforward.feedforward`, output error on the encoder angle) and then,
+forward ramp (:func:`motorlab.analyses.feedforward.feedforward`, output error on the encoder angle) and then,
 from the other ramps:
 
 * lateral ramp: the ratio s = (perpendicular dead-wheel speed) / (forward speed the feedforward
@@ -35,7 +35,7 @@ from typing import Any
 import numpy as np
 
 from motorlab.errors import FitError, OptionError
-from motorlab.fitting import fit_linear
+from motorlab.estimation.least_squares import fit_linear
 from motorlab.io.roadrunner import RampData, held_voltage
 from motorlab.recording import Recording
 from motorlab.results import Estimate, FitResult, Panel, Series
@@ -213,7 +213,7 @@ def track_width(data: RampData, gains: np.ndarray | None, cov: np.ndarray | None
 
 def from_runs(runs: Sequence[Recording], *, cpr: float | None, mechanism: str = "simple") -> FitResult:
     """Fit the forward ramp(s) and derive the lateral and angular quantities (see the module)."""
-    from motorlab.feedforward import feedforward
+    from motorlab.analyses.feedforward import feedforward
 
     if cpr is None:
         raise OptionError("Road Runner ramps count ticks: give --cpr")

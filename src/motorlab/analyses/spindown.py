@@ -23,10 +23,10 @@ from typing import Any
 import numpy as np
 from scipy import stats
 
-from motorlab.analyses import _common as common
-from motorlab.decimate import block_mean
+from motorlab.analyses import common
 from motorlab.errors import FitError, OptionError
-from motorlab.fitting import LeastSquares, fit_least_squares, fit_linear, r_squared
+from motorlab.estimation.decimate import block_mean
+from motorlab.estimation.least_squares import LeastSquares, fit_least_squares, fit_linear, r_squared
 from motorlab.recording import Recording
 from motorlab.results import Estimate, FitResult, Panel, Series
 from motorlab.units import SI_UNITS

@@ -19,10 +19,10 @@ from typing import Any
 
 import numpy as np
 
-from motorlab.analyses import _common as common
-from motorlab.decimate import block_mean
+from motorlab.analyses import common
 from motorlab.errors import FitError, OptionError
-from motorlab.fitting import LeastSquares, r_squared
+from motorlab.estimation.decimate import block_mean
+from motorlab.estimation.least_squares import LeastSquares, r_squared
 from motorlab.recording import Recording
 from motorlab.results import Estimate, FitResult, Panel, Series
 from motorlab.units import SI_UNITS, format_percent

@@ -19,7 +19,6 @@ from typing import Any
 
 import numpy as np
 
-from motorlab.analyses._common import reader_warnings, sources_of
 from motorlab.analyses._stall_cuts import NO_CURRENT, Cut, find_cut, first_full_sample, set_point
 from motorlab.analyses._stall_fit import (
     PRIOR_WINDING_LOG_SIGMA,
@@ -35,11 +34,12 @@ from motorlab.analyses._stall_fit import (
     simulate_runs,
 )
 from motorlab.analyses._stall_report import answers, make_panels, parameters_of, run_rows
-from motorlab.decimate import consecutive
+from motorlab.analyses.common import reader_warnings, sources_of
 from motorlab.errors import FitError, LogFormatError, MotorlabError, OptionError
+from motorlab.estimation.decimate import consecutive
 from motorlab.recording import Recording
 from motorlab.results import FitResult
-from motorlab.thermal import MAGNET_COEFFICIENTS, WINDING_LIMIT, ThermalModel
+from motorlab.thermal.network import MAGNET_COEFFICIENTS, WINDING_LIMIT, ThermalModel
 
 #: Fewest healthy samples a run needs to enter the fit.
 MIN_SAMPLES = 5
@@ -194,7 +194,7 @@ def stall(
         The motor's back-EMF constant and its standard error [V·s/rad] (its curve's or a spin-down's): no shaft's
         torque per amp exceeds it, so a torque model putting K above it beyond their uncertainty is refused.
     network, network_source
-        A thermal network to hold (the fit of the motor's other runs, :func:`motorlab.stall_forecast.load_fit`) and
+        A thermal network to hold (the fit of the motor's other runs, :func:`motorlab.thermal.forecast.load_fit`) and
         where it comes from, in words: only R₂₅ and the initial temperatures are fitted (a run no single network
         fits, forecast from the motor's other runs).
 

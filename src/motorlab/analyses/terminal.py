@@ -14,9 +14,9 @@ from typing import Any
 
 import numpy as np
 
-from motorlab.analyses import _common as common
+from motorlab.analyses import common
 from motorlab.errors import FitError, LogFormatError, OptionError
-from motorlab.fitting import fit_linear, r_squared
+from motorlab.estimation.least_squares import fit_linear, r_squared
 from motorlab.recording import Recording
 from motorlab.results import Estimate, FitResult, Panel, Series
 from motorlab.units import SI_UNITS

@@ -18,7 +18,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from motorlab.analyses._common import (
+from motorlab.analyses.common import (
     EXACT_LINE_WARNING,
     StraightLine,
     check_limits,
@@ -31,7 +31,7 @@ from motorlab.analyses._common import (
     sources_of,
 )
 from motorlab.errors import LogFormatError, OptionError
-from motorlab.fitting import LeastSquares, fit_linear, r_squared
+from motorlab.estimation.least_squares import LeastSquares, fit_linear, r_squared
 from motorlab.gearbox import efficiency_estimate
 from motorlab.recording import Recording
 from motorlab.results import Estimate, FitResult, Panel, Series

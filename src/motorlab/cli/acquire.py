@@ -15,7 +15,7 @@ import sys
 from typing import Any
 
 from motorlab.cli.common import positive_int, quantity
-from motorlab.cli.simulate import _list_of
+from motorlab.cli.simulate import list_of
 from motorlab.errors import OptionError
 
 
@@ -113,7 +113,7 @@ def _register_bench(sub: Any) -> None:
         parsers[name].add_argument("--voltage", type=quantity("V", positive=True), default=18.0,
                                    help="supply voltage [V] (default 18, the seed's)")
     p = parsers["terminal"]
-    p.add_argument("--currents", type=_list_of("A"), required=True, help="current settings [A], comma-separated")
+    p.add_argument("--currents", type=list_of("A"), required=True, help="current settings [A], comma-separated")
     p.add_argument("--settle", type=quantity("s", positive=True), default=3.0, help="wait per setting [s] (3)")
     p.add_argument("--samples", type=positive_int, default=5, help="readings averaged per setting (5)")
     p = parsers["free-spinup"]

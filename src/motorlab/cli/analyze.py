@@ -127,7 +127,7 @@ def run(args: argparse.Namespace) -> int:
     plot_path = args.plot
     if plot_path is not None:
         check_figure_path(plot_path)
-        from motorlab.io._output import check_not_inputs
+        from motorlab.io.output import check_not_inputs
 
         check_not_inputs([plot_path], args.files, option="--plot")
     groups = [[path] for path in args.files] if args.each else [list(args.files)]

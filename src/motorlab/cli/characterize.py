@@ -54,11 +54,11 @@ def add_processes_option(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Load, characterise, write, print the table."""
-    from motorlab.characterize import output_paths, session_inputs
-    from motorlab.io._output import check_not_inputs
     from motorlab.io.csv_table import check_header
-    from motorlab.report import write_outputs
-    from motorlab.session import load_session
+    from motorlab.io.output import check_not_inputs
+    from motorlab.report.document import write_outputs
+    from motorlab.session.characterize import output_paths, session_inputs
+    from motorlab.session.spec import load_session
 
     session = load_session(args.session)  # every validation error happens here, before any analysis
     if args.output is not None:
@@ -120,7 +120,7 @@ def report_failures(result: Any, paths: dict[str, Any]) -> int:
 
 
 def run_with_progress(session: Any, *, quiet: bool = False, figures: bool = False, processes: int = 1) -> Any:
-    """:func:`motorlab.characterize.characterize`; it reports its progress through :mod:`motorlab.progress`.
+    """:func:`motorlab.session.characterize.characterize`; it reports its progress through :mod:`motorlab.progress`.
 
     The CLI's reporter shows a bar on a terminal (after 2 s), or JSON lines for the app
     (``MOTORLAB_PROGRESS=json``, which ``--quiet`` leaves on: the app runs the command quiet). No
@@ -129,7 +129,7 @@ def run_with_progress(session: Any, *, quiet: bool = False, figures: bool = Fals
     import os
 
     from motorlab import progress
-    from motorlab.characterize import characterize
+    from motorlab.session.characterize import characterize
 
     if quiet and os.environ.get("MOTORLAB_PROGRESS") != "json":
         with progress.reporting(None):
@@ -146,8 +146,8 @@ def print_table(result: Any, *, truth: bool = True) -> None:
     from rich.console import Console
     from rich.table import Table
 
-    from motorlab.characterize import table_parameters
-    from motorlab.report import DISPLAY_UNITS, format_value
+    from motorlab.report.document import DISPLAY_UNITS, format_value
+    from motorlab.session.characterize import table_parameters
 
     console = Console()
     table = Table(title=result.session.title)

@@ -164,7 +164,7 @@ def check_figure_path(path: str, *, option: str = "--plot") -> None:
     folder = os.path.dirname(os.path.abspath(path))
     if not os.path.isdir(folder):
         raise OptionError(f"{option} {path}: the directory {folder} does not exist")
-    from motorlab.io._output import check_writable_target
+    from motorlab.io.output import check_writable_target
 
     try:
         check_writable_target(path)

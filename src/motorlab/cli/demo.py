@@ -101,7 +101,7 @@ def print_experiment_table(result: Any) -> None:
     from rich.console import Console
     from rich.table import Table
 
-    from motorlab.characterize import SHAFTS
+    from motorlab.session.characterize import SHAFTS
 
     table = Table(title="Every analysis against the simulated truth (estimate ± stderr, distance in σ); under each "
                   "experiment, the shaft and load its figures refer to")
@@ -125,7 +125,7 @@ def print_gearbox_table(result: Any) -> None:
 
     from motorlab.catalog import Motor
     from motorlab.gearbox import OutputCurves
-    from motorlab.report import _unit_params
+    from motorlab.report.document import unit_params
 
     motor = Motor.from_catalog(result.session.motor.catalog) if result.session.motor.catalog else None
     voltage = motor.nominal_voltage if motor is not None else 12.0
@@ -145,7 +145,7 @@ def print_gearbox_table(result: Any) -> None:
             if t is not None and e.stderr > 0:
                 text += f" (truth {t:.4g}, {(e.value - t) / e.stderr:+.1f}σ)"
             cells.append(text)
-        model = _unit_params(unit)
+        model = unit_params(unit)
         stall = "—"
         if model is not None and eta is not None and eta.estimate.determined:
             torque = OutputCurves(model, eta.estimate.value).stall_torque(voltage)
@@ -162,9 +162,9 @@ def run(args: argparse.Namespace) -> int:
     from rich.console import Console
 
     from motorlab.cli.characterize import print_table, report_failures, run_with_progress
-    from motorlab.report import gains_figure, write_outputs
-    from motorlab.session import load_session
-    from motorlab.simulated_session import write_simulated_session
+    from motorlab.report.document import gains_figure, write_outputs
+    from motorlab.session.simulated import write_simulated_session
+    from motorlab.session.spec import load_session
 
     check_option(args.units <= 26, f"--units must be at most 26, got {args.units}")
     check_output_dir(args.output)

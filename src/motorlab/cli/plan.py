@@ -8,7 +8,7 @@ from typing import Any
 
 from motorlab.catalog import Motor
 from motorlab.cli.common import print_json, quantity
-from motorlab.plan import MATERIALS, plan_rig
+from motorlab.rig.plan import MATERIALS, plan_rig
 from motorlab.units import format_unit
 
 SECTION_TITLES = {
@@ -86,7 +86,7 @@ def run(args: argparse.Namespace) -> int:
     )
     ident = None
     if getattr(args, "identification_log", False):
-        from motorlab.plan import plan_identification_log
+        from motorlab.rig.plan import plan_identification_log
 
         ident = plan_identification_log(motor.nominal_params(), voltage=args.voltage or motor.nominal_voltage,
                                         cpr=motor.cpr)

@@ -33,7 +33,7 @@ _HELP = {
 }
 
 
-def _list_of(unit: str) -> Callable[[str], list[float]]:
+def list_of(unit: str) -> Callable[[str], list[float]]:
     """argparse type: comma-separated quantities in ``unit`` (``"0.25,0.3,0.35"`` or ``"250 mA, 0.3 A"``)."""
     single = quantity(unit)
 
@@ -139,18 +139,18 @@ def register(subparsers: Any) -> None:
     p.add_argument("--waveform", metavar="FILE", default=None, help="also write the Rigol waveform CSV")
 
     p = a["terminal"]
-    p.add_argument("--currents", type=_list_of("A"), default=None, help="current settings [A], comma-separated")
+    p.add_argument("--currents", type=list_of("A"), default=None, help="current settings [A], comma-separated")
     p.add_argument("--voltage", type=quantity("V", positive=True), default=18.0, help="supply voltage [V] (18)")
 
     a["lcr"].add_argument("--positions", type=positive_int, default=10, help="shaft positions (10)")
 
     p = a["torque"]
-    p.add_argument("--currents", type=_list_of("A"), default=None, help="currents [A], comma-separated")
+    p.add_argument("--currents", type=list_of("A"), default=None, help="currents [A], comma-separated")
     p.add_argument("--arm", type=quantity("m", positive=True), default=0.15, help="lever arm [m] (0.15)")
     p.add_argument("--no-dither", action="store_true", help="no dither: stiction biases the readings")
 
-    a["amplifier"].add_argument("--commands", type=_list_of("V"), default=None, help="commands [V], comma-separated")
-    a["tachometer"].add_argument("--commands", type=_list_of("V"), default=None,
+    a["amplifier"].add_argument("--commands", type=list_of("V"), default=None, help="commands [V], comma-separated")
+    a["tachometer"].add_argument("--commands", type=list_of("V"), default=None,
                                  help="amplifier commands [V], comma-separated")
 
     p = a["pulse"]
@@ -344,8 +344,8 @@ def run_roadrunner_ramp(args: argparse.Namespace) -> int:
 
 
 def run_session(args: argparse.Namespace) -> int:
-    """Write a simulated session with :func:`motorlab.session.write_simulated_session`."""
-    from motorlab.simulated_session import write_simulated_session
+    """Write a simulated session with :func:`motorlab.session.spec.write_simulated_session`."""
+    from motorlab.session.simulated import write_simulated_session
 
     degrade = {args.worn: {"b": args.wear, "efficiency": args.worn_efficiency}} if args.worn else None
     result = write_simulated_session(args.motor, units=args.units, out_dir=args.output, seed=args.seed,

@@ -49,7 +49,7 @@ def add_stall(sub: Any) -> None:
 
 def run_stall(args: argparse.Namespace) -> int:
     """Write the run or the forecast, print the answers."""
-    from motorlab.io._output import check_not_inputs
+    from motorlab.io.output import check_not_inputs
 
     if (args.params is None) == (args.motor is None):
         raise OptionError("give either --params FIT.json (forecast a fitted model) or --motor NAME (simulate a run)")
@@ -61,7 +61,7 @@ def run_stall(args: argparse.Namespace) -> int:
 
 def _forecast(args: argparse.Namespace) -> int:
     from motorlab.io.csv_table import write_csv
-    from motorlab.stall_forecast import answers_text, forecast, load_fit
+    from motorlab.thermal.forecast import answers_text, forecast, load_fit
 
     model = load_fit(args.params)
     out = forecast(model, args.voltage, args.duration, initial_temperature=args.initial_temperature,

@@ -26,7 +26,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 import scipy.linalg
 
-from motorlab.control.loop import _KA_NEGLIGIBLE, LOOPS, Feedforward, Gains
+from motorlab.control.loop import KA_NEGLIGIBLE, LOOPS, Feedforward, Gains
 from motorlab.errors import OptionError
 
 
@@ -201,7 +201,7 @@ def design_velocity_lqr(
     Feedforward(0.0, kv, ka).check_plant()
     _check_design(period, delay, qv=qv, r=r)
     settings = {"qv": qv, "r": r}
-    if ka < _KA_NEGLIGIBLE:
+    if ka < KA_NEGLIGIBLE:
         return Gains("velocity", 0.0, method="lqr", period=period, delay=delay, settings=settings)
     k = lqr_gain(np.array([[-kv / ka]]), np.array([[1.0 / ka]]), (qv,), r, period=period, delay=delay)
     return Gains("velocity", float(k[0, 0]), method="lqr", period=period, delay=delay, settings=settings)
@@ -255,7 +255,7 @@ def design_position_lqr(
         raise OptionError(f"kV must be positive, got {kv}")
     _check_design(period, delay, qp=qp, qv=qv, r=r)
     settings = {"qp": qp, "qv": qv, "r": r}
-    if ka <= _KA_NEGLIGIBLE:
+    if ka <= KA_NEGLIGIBLE:
         k = lqr_gain(np.array([[0.0]]), np.array([[1.0]]), (qp,), r, period=period, delay=delay)
         return Gains("position", kv * float(k[0, 0]), method="lqr", period=period, delay=delay, settings=settings)
     a = np.array([[0.0, 1.0], [0.0, -kv / ka]])

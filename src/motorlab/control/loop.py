@@ -19,7 +19,7 @@ LOOPS = ("velocity", "position")
 
 #: SysId's thresholds: below this kA [V·s²/unit] acceleration "costs no effort" and the LQR is
 #: numerically meaningless (FeedbackAnalysis.cpp special-cases it the same way).
-_KA_NEGLIGIBLE = 1e-7
+KA_NEGLIGIBLE = 1e-7
 
 
 @dataclass(frozen=True)

@@ -13,7 +13,7 @@ from typing import Any
 
 from motorlab.control.design import Feedforward
 from motorlab.errors import InputError, LogFormatError, OptionError
-from motorlab.io._text import load_json, read_bytes
+from motorlab.io.text import load_json, read_bytes
 from motorlab.model import PARAMETER_NAMES, MotorParams, feedforward_from_params
 
 UNIT_NAMES = ("rad", "rotations", "degrees", "ticks", "m")

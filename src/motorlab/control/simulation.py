@@ -5,7 +5,7 @@ encoder, computes feedforward + PID (WPILib ``PIDController`` semantics), clamps
 supply voltage and holds it until the next period. The plant between two controller runs is either
 
 * the motor model (:class:`~motorlab.model.MotorParams`, with L, Coulomb friction and stiction),
-  propagated exactly by :func:`motorlab.simulate.simulate`; or
+  propagated exactly by :func:`motorlab.model.simulate.simulate`; or
 * the feedforward-equivalent plant kA·dv/dt = V − kS·sgn(v) − kV·v with stiction (at rest the shaft
   stays at rest while |V| ≤ kS), propagated exactly here. This is the motor model with L = 0
   (kS = R·Tf/K, kV = K + R·b/K, kA = R·J/K), used when only kS, kV, kA are known.
@@ -93,7 +93,7 @@ class _MotorPlant:
         self.params = params
 
     def run(self, state: tuple[float, float, float], volts: float, period: float, substeps: int) -> np.ndarray:
-        from motorlab.simulate import State, VoltageDrive, simulate
+        from motorlab.model.simulate import State, VoltageDrive, simulate
 
         x, v, i = state
         sim = simulate(

@@ -6,9 +6,9 @@ amplifier and the tachometer); adding an experiment is adding one module. From t
 
 * the ``motorlab analyze`` sub-commands and their options (:mod:`motorlab.cli.analyze`),
 * the notebook functions ``ml.<name>(files, **options)`` (:mod:`motorlab.notebook`),
-* the session file's experiment tables and their settings (:mod:`motorlab.session`),
+* the session file's experiment tables and their settings (:mod:`motorlab.session.spec`),
 * ``characterize``'s run order, adapters and what each experiment contributes to the final table
-  (:mod:`motorlab.characterize`), and the experiments a simulated session runs on the virtual rig,
+  (:mod:`motorlab.session.characterize`), and the experiments a simulated session runs on the virtual rig,
 * the option tables of docs/analyze.md (checked by ``tests/test_experiments.py``).
 
 :meth:`Experiment.schema` is the JSON-able form (for the browser app's forms, issue 19).
@@ -285,7 +285,7 @@ class Experiment:
         Run with the flywheel attached (its J, b, Tf include the flywheel and gearbox).
     session
         ``session(ctx) -> FromSession``: the option values a session's table and what the unit has
-        measured so far give :attr:`run` (:mod:`motorlab.characterize`). A session runs the very
+        measured so far give :attr:`run` (:mod:`motorlab.session.characterize`). A session runs the very
         ``run`` the CLI and the notebook call (:meth:`in_session`): one analysis path per experiment.
     rig
         How the virtual rig produces the experiment's file, or None.
@@ -339,8 +339,8 @@ class Experiment:
 
         The same file given twice (also under two names) is refused: its rows would count twice.
         """
-        from motorlab.io._text import check_distinct
         from motorlab.io.headers import column_mapping
+        from motorlab.io.text import check_distinct
 
         check_distinct(paths)
         names = ", ".join(os.path.basename(str(p)) for p in paths)

@@ -7,7 +7,7 @@ from typing import Any
 
 from motorlab.errors import OptionError
 from motorlab.experiments import Option
-from motorlab.plan import MATERIALS, disc_inertia
+from motorlab.rig.plan import MATERIALS, disc_inertia
 
 CPR = Option(
     "cpr", "count", positive=True, label="Encoder counts per revolution",
@@ -82,7 +82,7 @@ def inertia_of(values: Mapping[str, Any]) -> tuple[float | None, float | None]:
     if values.get("inertia") is not None and disc:
         raise OptionError("give either --inertia or the flywheel disc (--disc-radius, --disc-thickness), not both")
     if values.get("ratio") is not None:
-        from motorlab.analyses._common import check_range
+        from motorlab.analyses.common import check_range
 
         check_range(values["ratio"], "the flywheel to encoder speed ratio (--ratio)", *RATIO_RANGE, "",
                     why="a gear train steps speed up or down by at most a few thousand")
@@ -96,7 +96,7 @@ def inertia_of(values: Mapping[str, Any]) -> tuple[float | None, float | None]:
 
 
 def read_tables(paths: list[str]) -> list[Any]:
-    """Headed CSV files, one recording each (:func:`motorlab.analyses._common.read_tables`)."""
-    from motorlab.analyses._common import read_tables as read
+    """Headed CSV files, one recording each (:func:`motorlab.analyses.common.read_tables`)."""
+    from motorlab.analyses.common import read_tables as read
 
     return read(paths)

@@ -8,14 +8,14 @@ from motorlab.errors import OptionError
 from motorlab.experiments import Experiment, FromSession, Option, RigRun, stderr_or_none
 from motorlab.experiments._shared import COLUMN, EXCLUDE, noted, spans, without_spans
 
-MECHANISMS = ("simple", "elevator", "arm")  # as motorlab.feedforward.MECHANISMS (tests/test_experiments.py)
+MECHANISMS = ("simple", "elevator", "arm")  # as motorlab.analyses.feedforward.MECHANISMS (tests/test_experiments.py)
 #: frc-characterization units (motorlab.io.frc_json.UNITS), as its --units choices.
 UNIT_CHOICES = ("Meters", "Feet", "Inches", "Radians", "Rotations", "Degrees")
 
 
 def run(paths: list[str], v: dict[str, Any]) -> Any:
     """Run ``motorlab analyze feedforward FILE...`` (Road Runner's lateral/angular ramps too)."""
-    from motorlab.feedforward import feedforward, motor_estimates, read_tests
+    from motorlab.analyses.feedforward import feedforward, motor_estimates, read_tests
 
     cpr = v["cpr"]
     if v["torque_constant"] is not None and v["resistance"] is None:
@@ -47,7 +47,7 @@ def run(paths: list[str], v: dict[str, Any]) -> Any:
             result, resistance=v["resistance"], resistance_stderr=v["resistance_stderr"] or 0.0,
             torque_constant=v["torque_constant"], torque_constant_stderr=v["torque_constant_stderr"] or 0.0,
         ))
-    from motorlab.analyses._heat import add_heat_warning
+    from motorlab.thermal.warning import add_heat_warning
 
     return noted(add_heat_warning(result, runs, resistance=v["resistance"]), left)
 
@@ -70,7 +70,7 @@ EXPERIMENT = Experiment(
     name="feedforward",
     title="Feedforward gains kS, kV, kA (SysId, Road Runner)",
     summary="SysId-style feedforward gains by simulation: ``V = kS·sgn(ω) + kV·ω + kA·α`` (+ gravity)",
-    analysis="motorlab.feedforward:feedforward",
+    analysis="motorlab.analyses.feedforward:feedforward",
     inputs="WPILib SysId JSON or .wpilog, frc-characterization JSON, Road Runner ramps, FTC logs, CSV",
     run=run,
     options=(

@@ -22,10 +22,10 @@ def thermal_motors() -> list[str]:
 
 def run(paths: list[str], v: dict[str, Any]) -> Any:
     """Run ``motorlab analyze identify FILE...``; a JSON file's cpr counts per logged rotation."""
-    from motorlab.analyses._common import check_cpr
-    from motorlab.feedforward import apply_cpr
-    from motorlab.identify import identify
-    from motorlab.oe_runs import read_runs
+    from motorlab.analyses.common import check_cpr
+    from motorlab.analyses.feedforward import apply_cpr
+    from motorlab.analyses.identify import identify
+    from motorlab.estimation.runs import read_runs
 
     cpr = v["cpr"]
     check_cpr(cpr)  # any positive number of counts (537.7), within physical bounds
@@ -39,11 +39,11 @@ def run(paths: list[str], v: dict[str, Any]) -> Any:
     if json_runs and cpr is not None:  # a JSON file logs its own units: cpr counts per logged rotation
         apply_cpr(json_runs, cpr)
         cpr = None  # the readers of counts logs keep theirs in metadata["cpr"]
-    from motorlab.analyses._heat import add_heat_warning
+    from motorlab.thermal.warning import add_heat_warning
 
     network = None
     if v["thermal_fit"]:  # the network a stall run measured (analyze stall --json)
-        from motorlab.stall_forecast import load_fit
+        from motorlab.thermal.forecast import load_fit
 
         network = load_fit(v["thermal_fit"][0]).thermal
     resistance, torque_constant = v["resistance"], v["torque_constant"]
@@ -77,7 +77,7 @@ EXPERIMENT = Experiment(
     name="identify",
     title="Whole motor model from one log",
     summary="Whole-model identification from ordinary logs: applied voltage, encoder angle, maybe current",
-    analysis="motorlab.identify:identify",
+    analysis="motorlab.analyses.identify:identify",
     inputs="logs of applied voltage and encoder angle, maybe current: FTC log, CSV, SysId JSON, .wpilog",
     run=run,
     options=(

@@ -15,7 +15,7 @@ FRICTION_MODELS = ("viscous", "coulomb", "both")  # as motorlab.analyses.pulse.F
 
 def run(paths: list[str], v: dict[str, Any]) -> Any:
     """Run ``motorlab analyze pulse FILE...``: Ka from the option or the file's ``# Ka_A_per_V:`` line."""
-    from motorlab.analyses._common import LIMITS, check_range, metadata_quantity, read_tables
+    from motorlab.analyses.common import LIMITS, check_range, metadata_quantity, read_tables
     from motorlab.analyses.pulse import pulse
 
     recs = read_tables(paths)

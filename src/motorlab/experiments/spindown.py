@@ -10,7 +10,7 @@ from motorlab.experiments._shared import COLUMN, CPR, CURRENT_UNIT, EXCLUDE, INE
 
 def run(paths: list[str], v: dict[str, Any]) -> Any:
     """Read the log(s) (one run, possibly split over several files) and fit the spin-down."""
-    from motorlab.analyses import _common as common
+    from motorlab.analyses import common
     from motorlab.analyses.spindown import spindown
 
     recording = common.read_position_log(paths, cpr=v["cpr"], current_unit=v["current_unit"])

@@ -11,7 +11,7 @@ from motorlab.experiments._shared import COLUMN, CPR, CURRENT_UNIT, EXCLUDE, INE
 
 def run(paths: list[str], v: dict[str, Any]) -> Any:
     """Read the spin-up log (and the spin-down log, if given) and fit K."""
-    from motorlab.analyses import _common as common
+    from motorlab.analyses import common
     from motorlab.analyses.spinup import spinup
 
     inertia, inertia_se = inertia_of(v)
@@ -28,7 +28,7 @@ def run(paths: list[str], v: dict[str, Any]) -> Any:
 
         coast = common.read_position_log(v["spindown"], cpr=v["cpr"], current_unit=v["current_unit"])
         spindown_result = spindown(coast, cpr=v["cpr"])
-    from motorlab.analyses._heat import add_heat_warning
+    from motorlab.thermal.warning import add_heat_warning
 
     result = spinup(
         recording, inertia=inertia, inertia_stderr=inertia_se, cpr=v["cpr"],

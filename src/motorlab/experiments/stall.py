@@ -6,14 +6,14 @@ from typing import Any
 
 from motorlab.experiments import Experiment, FromSession, Option, RigRun, Setting
 from motorlab.experiments._shared import COLUMN
-from motorlab.thermal import MAGNET_COEFFICIENTS
+from motorlab.thermal.network import MAGNET_COEFFICIENTS
 
 
 def read_runs(paths: list[str]) -> list[Any]:
     """One recording per file: a headed CSV (``time_s,voltage_V,current_A,torque_Nm``) or a dynamometer
     export with worded headers (``Time,Amps,Volts,Torque 6V (N · m)``, :mod:`motorlab.io.headers`); a motor
     curve among them (``Speed (RPM),Torque (N·m),Current (A),…``) bounds K by its back-EMF constant."""
-    from motorlab.analyses._common import read_tables
+    from motorlab.analyses.common import read_tables
 
     return list(read_tables(paths))
 
@@ -33,7 +33,7 @@ def _network(paths: list[str] | None) -> tuple[Any, str]:
     """The thermal network of a stall fit (``--network FIT.json``) and where it comes from, in words."""
     if not paths:
         return None, ""
-    from motorlab.stall_forecast import load_fit
+    from motorlab.thermal.forecast import load_fit
 
     if len(paths) > 1:
         from motorlab.errors import OptionError

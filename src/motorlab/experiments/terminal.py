@@ -10,7 +10,7 @@ from motorlab.experiments._shared import COLUMN, CPR
 
 
 def _read(paths: list[str], cpr: float | None) -> Any:
-    from motorlab.analyses._common import concatenate
+    from motorlab.analyses.common import concatenate
     from motorlab.io.csv_table import read_csv
 
     recordings = [read_csv(p, cpr=cpr) for p in paths]
@@ -23,7 +23,7 @@ def run(paths: list[str], v: dict[str, Any]) -> Any:
 
     if not paths:
         raise OptionError("give the CSV file(s) of steady currents and frequencies")
-    from motorlab.analyses._heat import add_heat_warning
+    from motorlab.thermal.warning import add_heat_warning
 
     rows = _read(paths, v["cpr"])
     result = terminal(

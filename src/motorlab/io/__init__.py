@@ -31,7 +31,6 @@ from collections.abc import Callable, Sequence
 from typing import Any
 
 from motorlab.errors import LogFormatError, OptionError
-from motorlab.io._text import PathArg, check_distinct, check_input_file, decode_text, is_binary, is_number, read_bytes
 from motorlab.io.csv_table import COLUMNS, guess_delimiter, is_known_header, read_csv, split_fields, write_csv
 from motorlab.io.datalogger import is_datalogger_header, read_datalogger
 from motorlab.io.flightrecorder import read_flight_log_channels, read_flight_recorder, write_flight_log
@@ -39,6 +38,7 @@ from motorlab.io.frc_json import read_frc_char_json, read_sysid_json
 from motorlab.io.ftc import read_ftc_log, write_ftc_log
 from motorlab.io.roadrunner import read_roadrunner_ramp, write_roadrunner_ramp
 from motorlab.io.scope import find_rising_edges, read_scope_times, read_scope_waveform
+from motorlab.io.text import PathArg, check_distinct, check_input_file, decode_text, is_binary, is_number, read_bytes
 from motorlab.io.wpilog import (
     WpilogEntry,
     read_wpilog,

@@ -18,7 +18,7 @@ import numpy as np
 
 from motorlab import progress
 from motorlab.errors import LogFormatError
-from motorlab.io._text import max_input_size
+from motorlab.io.text import max_input_size
 
 #: Bytes read at a time (whole lines; a chunk's parse makes arrays of a few times this size).
 CHUNK = 1 << 23
@@ -52,7 +52,7 @@ def line_chunks(name: str, offset: int, first_line: int, *, what: str) -> Iterat
     Parameters
     ----------
     name
-        A regular file, already checked (:func:`motorlab.io._text.check_input_file`).
+        A regular file, already checked (:func:`motorlab.io.text.check_input_file`).
     offset
         Byte offset of the first line to read; ``first_line`` is its 1-based number.
     what

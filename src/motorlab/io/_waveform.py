@@ -21,8 +21,8 @@ import numpy as np
 
 from motorlab.errors import LogFormatError, OptionError
 from motorlab.io._chunks import Chunk, Column, line_chunks
-from motorlab.io._text import check_input_file, decode_text, is_binary, parse_number
 from motorlab.io.csv_table import split_fields
+from motorlab.io.text import check_input_file, decode_text, is_binary, parse_number
 
 TIME_HEADERS = {"time_ms": 1e-3, "time_s": 1.0}
 

@@ -14,18 +14,6 @@ from typing import Any
 import numpy as np
 
 from motorlab.errors import LogFormatError, OptionError
-from motorlab.io._output import write_text_atomic
-from motorlab.io._text import (
-    PathArg,
-    TextFile,
-    check_cpr,
-    check_input_file,
-    fast_table,
-    is_number,
-    parse_number,
-    read_text,
-    text_file,
-)
 from motorlab.io.glitches import screen_glitches
 from motorlab.io.headers import (
     COLUMNS,
@@ -37,6 +25,18 @@ from motorlab.io.headers import (
     resolve_column,
     to_si,
     unknown_column_message,
+)
+from motorlab.io.output import write_text_atomic
+from motorlab.io.text import (
+    PathArg,
+    TextFile,
+    check_cpr,
+    check_input_file,
+    fast_table,
+    is_number,
+    parse_number,
+    read_text,
+    text_file,
 )
 from motorlab.recording import SIGNALS, Recording
 

@@ -40,7 +40,6 @@ from typing import Any
 import numpy as np
 
 from motorlab.errors import LogFormatError, OptionError
-from motorlab.io._text import PathArg, TextFile, check_cpr, parse_number, read_text
 from motorlab.io.glitches import screen_glitches
 from motorlab.io.headers import (
     QUANTITIES,
@@ -52,6 +51,7 @@ from motorlab.io.headers import (
     unknown_column_message,
     worded_column,
 )
+from motorlab.io.text import PathArg, TextFile, check_cpr, parse_number, read_text
 from motorlab.recording import SIGNALS, Recording
 
 #: The fields the SDK's Datalogger and its sample write whatever the team logs (lower case).

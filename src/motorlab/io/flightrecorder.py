@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 
 from motorlab.errors import LogFormatError, OptionError
-from motorlab.io._text import PathArg, check_cpr, read_bytes
+from motorlab.io.text import PathArg, check_cpr, read_bytes
 from motorlab.recording import Recording
 
 MAGIC = b"RR"

@@ -21,7 +21,7 @@ import numpy as np
 
 from motorlab import progress
 from motorlab.errors import LogFormatError, OptionError
-from motorlab.io._text import PathArg, load_json, read_bytes
+from motorlab.io.text import PathArg, load_json, read_bytes
 from motorlab.recording import Recording
 
 #: The four tests, in the order the tools run them (segments keep this order).

@@ -26,8 +26,10 @@ from typing import Any
 import numpy as np
 
 from motorlab.errors import LogFormatError, OptionError
-from motorlab.io._output import write_text_atomic
-from motorlab.io._text import (
+from motorlab.io.csv_table import parse_comments
+from motorlab.io.glitches import screen_glitches
+from motorlab.io.output import write_text_atomic
+from motorlab.io.text import (
     PathArg,
     TextFile,
     check_cpr,
@@ -38,8 +40,6 @@ from motorlab.io._text import (
     read_text,
     unit_factor,
 )
-from motorlab.io.csv_table import parse_comments
-from motorlab.io.glitches import screen_glitches
 from motorlab.recording import Recording
 
 #: Column names of the four-column and two-column variants, in file order.

@@ -388,7 +388,7 @@ def is_worded_header(fields: Sequence[str], rules: Sequence[ColumnRule] = ()) ->
 
 def to_si(values: np.ndarray, unit: str, si: str) -> np.ndarray:
     """``values`` in ``unit`` converted to ``si`` (pint; offset units such as °C included)."""
-    from motorlab.io._text import unit_factor
+    from motorlab.io.text import unit_factor
     from motorlab.units import registry
 
     if si == "K":  # temperatures: °C and °F have an offset, not a factor

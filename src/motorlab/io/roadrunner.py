@@ -33,8 +33,8 @@ from typing import Any
 import numpy as np
 
 from motorlab.errors import LogFormatError, OptionError
-from motorlab.io._output import check_writable_target
-from motorlab.io._text import PathArg, check_cpr, load_json, read_bytes
+from motorlab.io.output import check_writable_target
+from motorlab.io.text import PathArg, check_cpr, load_json, read_bytes
 from motorlab.recording import Recording
 
 #: Ramp kinds and a key only that kind's file has.

@@ -17,7 +17,6 @@ import numpy as np
 
 from motorlab import progress
 from motorlab.errors import LogFormatError, OptionError
-from motorlab.io._text import PathArg, TextFile, fast_table, is_number, parse_number, read_text
 from motorlab.io._waveform import (
     TIME_HEADERS,
     Samples,
@@ -27,6 +26,7 @@ from motorlab.io._waveform import (
     waveform_rows,
 )
 from motorlab.io.csv_table import guess_delimiter, line_at, parse_comments, split_fields
+from motorlab.io.text import PathArg, TextFile, fast_table, is_number, parse_number, read_text
 from motorlab.recording import Recording
 
 _TIME_HEADERS = TIME_HEADERS

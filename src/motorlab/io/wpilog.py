@@ -26,9 +26,9 @@ from typing import Any
 import numpy as np
 
 from motorlab.errors import LogFormatError, OptionError
-from motorlab.io._output import write_bytes_atomic
-from motorlab.io._text import PathArg, read_bytes
 from motorlab.io.frc_json import test_kind
+from motorlab.io.output import write_bytes_atomic
+from motorlab.io.text import PathArg, read_bytes
 from motorlab.recording import Recording
 from motorlab.units import registry
 

@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import Any, Protocol, runtime_checkable
 
 from motorlab.errors import InputError, OptionError, RigError
-from motorlab.io._output import check_writable_target
+from motorlab.io.output import check_writable_target
 from motorlab.results import jsonable
 
 #: Most simulator steps or logged samples one run may produce. Ten million steps take ~80 MB per

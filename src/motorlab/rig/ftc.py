@@ -29,7 +29,7 @@ from scipy import signal as sps
 
 from motorlab.errors import OptionError
 from motorlab.model import MotorParams, feedforward_from_params
-from motorlab.simulate import VoltageDrive, simulate
+from motorlab.model.simulate import VoltageDrive, simulate
 
 #: The hub's velocity register: signed 16-bit.
 INT16 = 2**16

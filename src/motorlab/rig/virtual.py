@@ -2,7 +2,7 @@
 
 :class:`VirtualRig` holds one unit of a catalogue motor (true parameters drawn by
 :func:`~motorlab.rig.units.draw_unit`), the flywheel and the instruments. Each experiment method
-simulates the procedure of the seed with :func:`motorlab.simulate.simulate` (or, where the seed
+simulates the procedure of the seed with :func:`motorlab.model.simulate.simulate` (or, where the seed
 waits for a steady state, the closed forms of :mod:`motorlab.model`), reads the result through the
 instruments, writes exactly the files a real rig gives, records the truth in ``truth.json`` beside
 them and returns a :class:`~motorlab.rig.base.RigRun`.
@@ -34,32 +34,32 @@ import numpy as np
 from motorlab.analyses.torque import approach_direction
 from motorlab.errors import OptionError, RigError
 from motorlab.gearbox import Drivetrain
-from motorlab.io._output import write_text_atomic
 from motorlab.io.csv_table import write_csv
 from motorlab.io.ftc import write_ftc_log
+from motorlab.io.output import write_text_atomic
 from motorlab.model import MotorParams
-from motorlab.rig.base import MAX_READINGS, PathArg, RigRun, check_size
-from motorlab.rig.instruments import quantize
-from motorlab.rig.virtual_core import (  # noqa: F401 - re-exported: the rig's names before the split
-    _PRE_TRIGGER_DIVISIONS,
-    EXPERIMENTS,
-    FLYWHEEL_DT,
-    _currents,
-    _positive,
-    _stop_time,
-    _strictly_increasing,
-    _timebase_at_least,
-    steady_state,
-)
-from motorlab.rig.virtual_logs import LogExperiments
-from motorlab.rig.virtual_seed2 import Seed2Experiments
-from motorlab.rig.virtual_thermal import ThermalExperiments
-from motorlab.simulate import (
+from motorlab.model.simulate import (
     BenchSupply,
     Drive,
     OpenCircuit,
     Simulation,
 )
+from motorlab.rig.base import MAX_READINGS, PathArg, RigRun, check_size
+from motorlab.rig.instruments import quantize
+from motorlab.rig.virtual_core import (  # noqa: F401 - re-exported: the rig's names before the split
+    EXPERIMENTS,
+    FLYWHEEL_DT,
+    PRE_TRIGGER_DIVISIONS,
+    check_positive,
+    steady_state,
+    stepped_currents,
+    strictly_increasing,
+    time_at_rest,
+    timebase_at_least,
+)
+from motorlab.rig.virtual_logs import LogExperiments
+from motorlab.rig.virtual_seed2 import Seed2Experiments
+from motorlab.rig.virtual_thermal import ThermalExperiments
 
 
 class VirtualRig(Seed2Experiments, LogExperiments, ThermalExperiments):
@@ -167,7 +167,7 @@ class VirtualRig(Seed2Experiments, LogExperiments, ThermalExperiments):
         ins.ina219.check_supply(voltage)
         ins.supply.check(voltage, current_limit)
         for value, name in ((on_time, "on time"), (coast_time, "coast time")):
-            _positive(value, name, "s")
+            check_positive(value, name, "s")
         if relay_delay < 0:
             raise OptionError("relay delay must not be negative")
         rng = self._rng("spindown")
@@ -217,7 +217,7 @@ class VirtualRig(Seed2Experiments, LogExperiments, ThermalExperiments):
             "speed_at_coast_start": speed_off,
             "supply_current_limited": bool(np.any(sim.mode[on] == 1)),
             "current_clipped": bool(np.max(np.abs(sim.current)) > self.instruments.ina219.current_range),
-            "stop_time": _stop_time(sim, t_open),
+            "stop_time": time_at_rest(sim, t_open),
         }
 
     def _log_ftc(
@@ -283,10 +283,10 @@ class VirtualRig(Seed2Experiments, LogExperiments, ThermalExperiments):
             Settings out of range (negative current …).
         """
         ins = self.instruments
-        _currents([current])
+        stepped_currents([current])
         ins.ina219.check_supply(voltage)
         ins.supply.check(voltage, current)
-        _positive(duration, "duration", "s")
+        check_positive(duration, "duration", "s")
         if coast_time < 0 or relay_delay < 0:
             raise OptionError("coast time and relay delay must not be negative")
         rng = self._rng("spinup")
@@ -382,12 +382,12 @@ class VirtualRig(Seed2Experiments, LogExperiments, ThermalExperiments):
         recorded edges are the next ``edges`` ones.
         """
         ins = self.instruments
-        _currents([current])
+        stepped_currents([current])
         ins.supply.check(voltage, current)
         if edges < 2:
             raise OptionError(f"need at least 2 edges, got {edges}")
         check_size(edges, "rising edges (--edges)", limit=MAX_READINGS, hint="the seed records 20")
-        _positive(dt, "dt", "s")
+        check_positive(dt, "dt", "s")
         rng = self._rng("free-spinup")
         p = self._loaded(False)
         w0 = self._hand_start_speed(hand_speed)
@@ -402,10 +402,10 @@ class VirtualRig(Seed2Experiments, LogExperiments, ThermalExperiments):
         if timebase is None:
             # The finest setting whose screen holds the last edge; the seed sets "the horizontal
             # position to the left", leaving a fifth of a division before the trigger.
-            timebase = _timebase_at_least(1.01 * float(relative[-1]) / (scope.divisions - _PRE_TRIGGER_DIVISIONS))
-        _positive(timebase, "timebase", "s/div")
+            timebase = timebase_at_least(1.01 * float(relative[-1]) / (scope.divisions - PRE_TRIGGER_DIVISIONS))
+        check_positive(timebase, "timebase", "s/div")
         scope = replace(scope, timebase=timebase)
-        readings = _strictly_increasing(scope.cursor_times(relative, rng), scope.cursor_step)
+        readings = strictly_increasing(scope.cursor_times(relative, rng), scope.cursor_step)
         path = Path(path)
         metadata = {"experiment": "free-spinup", "motor": self.motor.key, "cpr": self.motor.cpr,
                     "channel": "B", "counts_per_edge": 4, "current_A": current}
@@ -470,7 +470,7 @@ class VirtualRig(Seed2Experiments, LogExperiments, ThermalExperiments):
         """Rigol DS1000Z CSV export of channel B: a fifth of a division before the trigger, the rest after."""
         span = scope.timebase * scope.divisions
         increment = span / scope.points
-        start = -_PRE_TRIGGER_DIVISIONS * scope.timebase
+        start = -PRE_TRIGGER_DIVISIONS * scope.timebase
         t = t_trigger + start + increment * np.arange(scope.points)
         t = t[t <= sim.time[-1]]
         volts = self.encoder.channel_b_level(sim.sample(t)["position"])
@@ -512,7 +512,7 @@ class VirtualRig(Seed2Experiments, LogExperiments, ThermalExperiments):
         ... by 4 ... dividing this number by counts per revolution ... multiply by 2π").
         """
         ins = self.instruments
-        amps = _currents(currents)
+        amps = stepped_currents(currents)
         if amps is None:
             amps = self._default_terminal_currents(voltage)
             # The experimenter raises a setting that leaves the shaft at rest (K·I ≤ Tf).
@@ -643,8 +643,8 @@ class VirtualRig(Seed2Experiments, LogExperiments, ThermalExperiments):
         up and back down therefore reads a hysteresis loop of half-width ≈ r·Tf/2 about K·I.
         """
         ins = self.instruments
-        _positive(arm, "lever arm", "m")
-        amps = _currents(currents)
+        check_positive(arm, "lever arm", "m")
+        amps = stepped_currents(currents)
         p = self.params
         if amps is None:
             nominal = self.motor.nominal_params()

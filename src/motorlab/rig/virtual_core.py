@@ -21,17 +21,17 @@ from motorlab.catalog import Motor
 from motorlab.errors import OptionError
 from motorlab.gearbox import Drivetrain, Gearbox
 from motorlab.model import MotorParams
-from motorlab.results import jsonable
-from motorlab.rig.base import MAX_READINGS, PathArg, RigRun, check_size, write_truth
-from motorlab.rig.flywheel import Flywheel
-from motorlab.rig.instruments import Encoder, Instruments
-from motorlab.rig.units import Commutator, UnitSpread, draw_unit, unit_name
-from motorlab.simulate import (
+from motorlab.model.simulate import (
     Drive,
     Simulation,
     State,
     simulate,
 )
+from motorlab.results import jsonable
+from motorlab.rig.base import MAX_READINGS, PathArg, RigRun, check_size, write_truth
+from motorlab.rig.flywheel import Flywheel
+from motorlab.rig.instruments import Encoder, Instruments
+from motorlab.rig.units import Commutator, UnitSpread, draw_unit, unit_name
 
 #: Experiment names (CLI spelling) -> method names.
 EXPERIMENTS: dict[str, str] = {
@@ -52,16 +52,16 @@ EXPERIMENTS: dict[str, str] = {
 #: Internal step of the simulator for flywheel runs [s] (mechanical time constant ≈ 10 s).
 FLYWHEEL_DT = 1e-3
 #: Screen divisions before the trigger with the horizontal position "to the left" (seed 1).
-_PRE_TRIGGER_DIVISIONS = 0.2
+PRE_TRIGGER_DIVISIONS = 0.2
 
 
-def _positive(value: float, name: str, unit: str) -> float:
+def check_positive(value: float, name: str, unit: str) -> float:
     if not (math.isfinite(value) and value > 0):
         raise OptionError(f"{name} must be positive, got {value:g} {unit}")
     return float(value)
 
 
-def _currents(values: Sequence[float] | None, name: str = "current") -> np.ndarray | None:
+def stepped_currents(values: Sequence[float] | None, name: str = "current") -> np.ndarray | None:
     if values is None:
         return None
     arr = np.asarray(list(values), dtype=float)
@@ -232,13 +232,13 @@ class RigCore:
     # ---- seed 1: flywheel experiments -----------------------------------------------------------
 
 
-def _stop_time(sim: Simulation, after: float) -> float | None:
+def time_at_rest(sim: Simulation, after: float) -> float | None:
     """First time ≥ ``after`` at which the shaft is at rest (None if it still turns at the end)."""
     idx = np.flatnonzero((sim.time >= after) & (sim.speed == 0.0))
     return float(sim.time[idx[0]]) if idx.size else None
 
 
-def _timebase_at_least(limit: float) -> float:
+def timebase_at_least(limit: float) -> float:
     """The smallest 1-2-5 timebase [s/div] not below ``limit``."""
     exponent = math.floor(math.log10(limit))
     for mantissa in (1.0, 2.0, 5.0, 10.0):
@@ -248,7 +248,7 @@ def _timebase_at_least(limit: float) -> float:
     return 10.0 ** (exponent + 1)
 
 
-def _strictly_increasing(times: np.ndarray, step: float) -> np.ndarray:
+def strictly_increasing(times: np.ndarray, step: float) -> np.ndarray:
     """Cursor readings never repeat: a person would move the cursor one step on."""
     out = np.array(times, dtype=float)
     for k in range(1, out.size):

@@ -11,19 +11,19 @@ from typing import Any
 import numpy as np
 
 from motorlab.errors import OptionError
-from motorlab.io._output import write_text_atomic
 from motorlab.io.csv_table import write_csv
+from motorlab.io.output import write_text_atomic
 from motorlab.model import MotorParams, feedforward_from_params
+from motorlab.model.simulate import (
+    VoltageDrive,
+)
 from motorlab.rig.base import PathArg, RigRun
 from motorlab.rig.instruments import quantize
 from motorlab.rig.profiles import voltage_profile
 from motorlab.rig.virtual_core import (
     FLYWHEEL_DT,
     RigCore,
-    _positive,
-)
-from motorlab.simulate import (
-    VoltageDrive,
+    check_positive,
 )
 
 
@@ -75,7 +75,7 @@ class LogExperiments(RigCore):
         """
         for value, name, unit in ((rate, "rate", "Hz"), (duration, "duration", "s"),
                                   (max_voltage, "maximum voltage", "V")):
-            _positive(value, name, unit)
+            check_positive(value, name, unit)
         if voltage_noise < 0 or current_noise < 0:
             raise OptionError("noise levels must not be negative")
         rng = self._rng("transient")
@@ -162,7 +162,7 @@ class LogExperiments(RigCore):
         for value, name, unit in ((ramp_rate, "ramp rate", "V/s"), (step_voltage, "step voltage", "V"),
                                   (quasistatic_duration, "quasistatic duration", "s"),
                                   (dynamic_duration, "dynamic duration", "s")):
-            _positive(value, name, unit)
+            check_positive(value, name, unit)
         if gap < 0:
             raise OptionError("gap must not be negative")
         rng = self._rng("sysid")

@@ -10,17 +10,17 @@ import numpy as np
 
 from motorlab.errors import OptionError
 from motorlab.io.csv_table import write_csv
+from motorlab.model.simulate import (
+    BenchSupply,
+    CurrentDrive,
+    Drive,
+)
 from motorlab.rig.base import PathArg, RigRun, check_size
 from motorlab.rig.instruments import quantize
 from motorlab.rig.virtual_core import (
     RigCore,
-    _positive,
+    check_positive,
     steady_state,
-)
-from motorlab.simulate import (
-    BenchSupply,
-    CurrentDrive,
-    Drive,
 )
 
 
@@ -164,7 +164,7 @@ class Seed2Experiments(RigCore):
         amp = ins.amplifier
         for value, name, unit in ((amplitude, "amplitude", "V"), (period, "period", "s"),
                                   (sample_interval, "sample interval", "s"), (dt, "dt", "s")):
-            _positive(value, name, unit)
+            check_positive(value, name, unit)
         if not 0 < duty < 1:
             raise OptionError(f"duty cycle must lie in (0, 1), got {duty:g}")
         if periods < 1:

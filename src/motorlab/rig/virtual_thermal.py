@@ -2,8 +2,8 @@
 
 The shaft is held (a brake or a lever on a load cell), a bench supply holds a voltage, and the rig logs
 time, terminal voltage, current and the held torque every ~0.35 s (VEX's rate) while the winding heats
-through the unit's thermal network (:class:`motorlab.thermal.ThermalModel`, the catalogue's figures
-unless given). The simulation is :func:`motorlab.simulate.simulate` with the thermal model (inductance,
+through the unit's thermal network (:class:`motorlab.thermal.network.ThermalModel`, the catalogue's figures
+unless given). The simulation is :func:`motorlab.model.simulate.simulate` with the thermal model (inductance,
 supply limit, stiction holding the rotor); ``truth.json`` records the temperatures at every sample.
 """
 
@@ -17,11 +17,11 @@ import numpy as np
 
 from motorlab.errors import OptionError
 from motorlab.io.csv_table import write_csv
+from motorlab.model.simulate import BenchSupply, State, simulate
 from motorlab.rig.base import PathArg, RigRun, check_size
 from motorlab.rig.instruments import quantize
-from motorlab.rig.virtual_core import RigCore, _positive
-from motorlab.simulate import BenchSupply, State, simulate
-from motorlab.thermal import ThermalModel
+from motorlab.rig.virtual_core import RigCore, check_positive
+from motorlab.thermal.network import ThermalModel
 
 #: Simulator step of a stall run [s] (the winding's L/R ≈ 1 ms; the rotor does not move).
 STALL_DT = 5e-3
@@ -81,7 +81,7 @@ class ThermalExperiments(RigCore):
         """
         for value, name, unit in ((voltage, "voltage", "V"), (duration, "duration", "s"),
                                   (current_limit, "current limit", "A"), (sample_interval, "sample interval", "s")):
-            _positive(value, name, unit)
+            check_positive(value, name, unit)
         check_size(duration / STALL_DT, f"simulator steps ({duration:.3g} s in steps of {STALL_DT:g} s)",
                    hint="a stall run lasts minutes at most")
         thermal = self.unit_thermal()

@@ -101,7 +101,7 @@ class PullResult:
                 "missing": list(self.missing), "failed": list(self.failed)}
 
 
-def _check_name(name: str, where: str) -> str:
+def check_name(name: str, where: str) -> str:
     if not _SAFE_NAME.match(name) or name in (".", "..") or name.startswith("."):
         raise RobotLinkError(f"{where}: the robot named a file {name!r}, which is not a plain file name; not pulled")
     return name
@@ -150,7 +150,7 @@ def _tuning(robot: RobotHttp, result: PullResult, out: Path) -> None:
             if not name:
                 raise RobotLinkError(f"{path} from {robot.address}: no X-Filename header (not Road Runner's "
                                      "FileServing.kt?)")
-            _check_name(name, path)
+            check_name(name, path)
             _keep(result, out / "tuning" / kind, name, reply.body, path)
     if not found + len(result.failed):
         result.missing.append(f"no Road Runner tuning files ({', '.join(TUNING_TYPES)}: 404): run a ramp logger "
@@ -211,7 +211,7 @@ def _flight_logs(robot: RobotHttp, result: PullResult, out: Path) -> None:
             for name, size in entries:
                 path = f"/logs/download?file={name}"
                 with _each(result, path):
-                    _check_name(name, "/logs")
+                    check_name(name, "/logs")
                     if _UNASKABLE.search(name):
                         raise RobotLinkError(f"/logs lists {name!r}, which Road Runner's /logs/download cannot be "
                                              "asked for (it cuts the query at white space, & and =, and does not "
@@ -252,7 +252,7 @@ def _motorlab_logs(robot: RobotHttp, result: PullResult, out: Path) -> None:
             for name, size in entries:
                 path = f"{MOTORLAB_DOWNLOAD}?file={urllib.parse.quote(name)}"  # getParameters() decodes it
                 with _each(result, path):
-                    _check_name(name, MOTORLAB_LIST)
+                    check_name(name, MOTORLAB_LIST)
                     got = robot.get(path)
                     if got.status != 200:
                         raise RobotLinkError(f"{path} from {robot.address}: HTTP {got.status}")

@@ -355,7 +355,7 @@ def _is_number(text: str) -> bool:
 
 def write_log(data: Recording, path: str | Path, *, host: str = "", cpr: float | None = None) -> dict[str, Any]:
     """Write the recording as a CSV motorlab reads (temporary file + rename); a summary of what was written."""
-    from motorlab.io._output import write_text_atomic
+    from motorlab.io.output import write_text_atomic
 
     # Dashboard sends a packet's keys sorted (a SortedMap: TelemetryPacket.java): the signals motorlab reads
     # come first, in its own column order, then the other keys as they came.
@@ -419,7 +419,7 @@ def _own_time_and_battery(keys: list[str]) -> tuple[str | None, str | None, floa
     """The keys an OpMode sends its own sample time and battery voltage under (``time_s`` or ``time_ms``,
     ``battery_V``: motorlab's OpModes do), and the time key's seconds per unit. The OpMode's clock times a
     sample where it was read (µs); a packet's timestamp is when it was queued, in whole ms."""
-    from motorlab.io._text import unit_factor
+    from motorlab.io.text import unit_factor
 
     clock = next((k for k in keys if (c := column_name(k)) and COLUMNS[c][0] == "time"), None)
     battery = next((k for k in keys if column_name(k) == "battery_V"), None)
@@ -455,7 +455,7 @@ def fetch_ramp_file(host: str, http_port: int, kind: str, before: str | None, fo
     byte for byte into ``folder`` under the robot's name; :class:`RobotLinkError` when none came within
     ``timeout`` s (``TuningFiles.save`` runs after the OpMode's loop ends)."""
     from motorlab.robot.http import RobotHttp
-    from motorlab.robot.pull import _check_name, write_atomic
+    from motorlab.robot.pull import check_name, write_atomic
 
     robot = RobotHttp(host, http_port, timeout=timeout)
     path = f"/tuning/{kind}/latest.json"
@@ -464,7 +464,7 @@ def fetch_ramp_file(host: str, http_port: int, kind: str, before: str | None, fo
         reply = robot.get(path)
         name = reply.headers.get("x-filename") if reply.status == 200 else None
         if name and name != before:
-            _check_name(name, path)
+            check_name(name, path)
             write_atomic(folder, name, reply.body)
             return folder / name
         if time.monotonic() > deadline:

@@ -32,15 +32,15 @@ def preload() -> None:
     import scipy.signal
     import scipy.stats  # noqa: F401
 
-    import motorlab.characterize
+    import motorlab.analyses.feedforward
+    import motorlab.analyses.identify
     import motorlab.cli
     import motorlab.control
-    import motorlab.feedforward
-    import motorlab.identify
     import motorlab.io
     import motorlab.plot
-    import motorlab.report
-    import motorlab.session
+    import motorlab.report.document
+    import motorlab.session.characterize
+    import motorlab.session.spec
     import motorlab.ui.worker
 
     motorlab.cli.build_parser()  # imports every sub-command's module and the experiment descriptions
