@@ -70,7 +70,7 @@ def rig_files(n_seeds: int = 30) -> None:
 
 
 def bound_tables(n_seeds: int = 4, *, duration: float = 3.0, dt: float = 1e-4) -> None:
-    """Error/bound and stderr/bound on logs from the independent Radau simulator (tests/ivp_reference.py).
+    """Error/bound and stderr/bound on logs from the independent Radau simulator (tests/analyses/ivp_reference.py).
 
     Two drives, ``n_seeds`` seeds each: held levels switching between samples with 0.02 V noise on the
     logged voltage, and switching on sample instants with exact voltage; 0.02 A current noise, a

@@ -3,7 +3,7 @@
     python scripts/experiment_docs.py          # rewrite the tables
     python scripts/experiment_docs.py --check  # exit 1 if they are out of date
 
-tests/test_experiments.py runs the check.
+tests/experiments/test_registry.py runs the check.
 """
 
 from __future__ import annotations

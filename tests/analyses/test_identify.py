@@ -297,14 +297,14 @@ def test_text_output_names_the_input_model(tmp_path, capsys):
 
 
 # --------------------------------------------------------------------------------------------------
-# Drives that switch between samples, on an independent simulation path (tests/ivp_reference.py)
+# Drives that switch between samples, on an independent simulation path (tests/analyses/ivp_reference.py)
 # --------------------------------------------------------------------------------------------------
 
 TRUTH = MOTOR.to_dict()
 
 
 def _reference():
-    """tests/ivp_reference.py (pytest runs with --import-mode=importlib: load it by path)."""
+    """tests/analyses/ivp_reference.py (pytest runs with --import-mode=importlib: load it by path)."""
     import importlib.util
     import sys
     from pathlib import Path

@@ -150,7 +150,7 @@ def hac_covariance(
     With scores g_t = J_tᵀ·r_t, the sandwich is B·S·B, B = (JᵀJ)⁻¹, S the long-run covariance of
     the scores (:func:`hac_meat`), times n/(n − p) for the degrees of freedom. With independent
     residuals the result is close to the usual s²·(JᵀJ)⁻¹. Under AR(1) errors with φ = 0.8 and
-    n = 400 the 95 % intervals cover about 93 % (the plain ones about 45 %): tests/test_fitting.py.
+    n = 400 the 95 % intervals cover about 93 % (the plain ones about 45 %): tests/estimation/test_least_squares.py.
     """
     jac = np.asarray(jac, dtype=float)
     r = np.asarray(residuals, dtype=float)

@@ -9,7 +9,7 @@ amplifier and the tachometer); adding an experiment is adding one module. From t
 * the session file's experiment tables and their settings (:mod:`motorlab.session.spec`),
 * ``characterize``'s run order, adapters and what each experiment contributes to the final table
   (:mod:`motorlab.session.characterize`), and the experiments a simulated session runs on the virtual rig,
-* the option tables of docs/analyze.md (checked by ``tests/test_experiments.py``).
+* the option tables of docs/analyze.md (checked by ``tests/experiments/test_registry.py``).
 
 :meth:`Experiment.schema` is the JSON-able form (for the browser app's forms, issue 19).
 Values are SI; a quantity option takes a number (SI) or a string with a unit (parsed by pint).

@@ -8,7 +8,8 @@ from motorlab.errors import OptionError
 from motorlab.experiments import Experiment, FromSession, Option, RigRun, stderr_or_none
 from motorlab.experiments._shared import COLUMN, EXCLUDE, noted, spans, without_spans
 
-MECHANISMS = ("simple", "elevator", "arm")  # as motorlab.analyses.feedforward.MECHANISMS (tests/test_experiments.py)
+#: as motorlab.analyses.feedforward.MECHANISMS (tests/experiments/test_registry.py)
+MECHANISMS = ("simple", "elevator", "arm")
 #: frc-characterization units (motorlab.io.frc_json.UNITS), as its --units choices.
 UNIT_CHOICES = ("Meters", "Feet", "Inches", "Radians", "Rotations", "Degrees")
 

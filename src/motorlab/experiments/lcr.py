@@ -7,7 +7,7 @@ from typing import Any
 from motorlab.experiments import Experiment, FromSession, Option, RigRun, Setting
 from motorlab.experiments._shared import COLUMN, read_tables
 
-OUTLIER_Z = 3.5  # as motorlab.analyses.lcr.OUTLIER_Z (checked by tests/test_experiments.py)
+OUTLIER_Z = 3.5  # as motorlab.analyses.lcr.OUTLIER_Z (checked by tests/experiments/test_registry.py)
 
 
 def run(paths: list[str], v: dict[str, Any]) -> Any:

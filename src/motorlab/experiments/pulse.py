@@ -9,7 +9,7 @@ from motorlab.errors import LogFormatError, OptionError
 from motorlab.experiments import Experiment, FromSession, Option, RigRun, Setting, stderr_or_none
 from motorlab.experiments._shared import COLUMN
 
-DEFAULT_SKIP = 0.002  # as motorlab.analyses.pulse.DEFAULT_SKIP (checked by tests/test_experiments.py)
+DEFAULT_SKIP = 0.002  # as motorlab.analyses.pulse.DEFAULT_SKIP (checked by tests/experiments/test_registry.py)
 FRICTION_MODELS = ("viscous", "coulomb", "both")  # as motorlab.analyses.pulse.FRICTION_MODELS
 
 

@@ -38,7 +38,7 @@ Why each piece:
 What it can and cannot see: a change is detectable when ln(change) is well above the threshold
 times f_p. With the rig's default spread of b (10 %, from seed 1's sibling units), a doubled b
 (ln 2 = 6.9 f_p) in a fleet of three is flagged in about 95 % of simulated fleets and no healthy
-fleet of 200 raised a flag (``tests/test_fleet.py``); with a 25 % spread doubling would be only
+fleet of 200 raised a flag (``tests/session/test_fleet.py``); with a 25 % spread doubling would be only
 2.8 spreads and could not be told from a healthy draw.
 
 The message compares the unit with the median of its siblings (the others), which reads naturally:
