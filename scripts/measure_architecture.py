@@ -96,6 +96,10 @@ def measure(max_function: int = 100, max_module: int = 800) -> Measures:
         deps = {m if m in modules else m.rsplit(".", 1)[0] for m in deps}
         if any(m == "control" or m.startswith("control.") for m in deps):
             control_imports.append(name)
+        # importing a.b.c runs the packages a and a.b first: those not already running for this module count too
+        own = {name.rsplit(".", k)[0] for k in range(1, name.count(".") + 1)}
+        own |= {name} if path.name == "__init__.py" else set()
+        deps |= {d.rsplit(".", k)[0] for d in deps for k in range(1, d.count(".") + 1)} - own
         graph[name] = {m for m in deps if m in modules and m != name}
         if not name.startswith(FRONT_ENDS) and any(m.startswith(FRONT_ENDS) for m in graph[name]):
             cli_imports.append(name)

@@ -49,3 +49,24 @@ def test_at_most_twenty_modules_at_the_root(measures: tuple) -> None:
 
 def test_few_imports_of_another_modules_private_names(measures: tuple) -> None:
     assert len(measures.private_imports) <= 5, measures.private_imports
+
+
+def test_one_newey_west_rule_and_one_not_determined_rule() -> None:
+    """Every fit's standard errors follow estimation/covariance.py: no other module computes a long-run
+    covariance (a Bartlett-weighted sum of lagged scores) or keeps its own tolerance on singular values."""
+    import ast
+
+    src = Path(__file__).resolve().parents[1] / "src" / "motorlab"
+    bartlett, tolerances = [], []
+    for path in src.rglob("*.py"):
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        for node in ast.walk(tree):
+            if isinstance(node, ast.FunctionDef) and ("bartlett" in node.name or node.name == "hac_meat"):
+                bartlett.append(f"{path.relative_to(src)}:{node.name}")
+            if isinstance(node, ast.Assign):
+                names = [t.id for t in node.targets if isinstance(t, ast.Name)]
+                if any(n.endswith("TOLERANCE") and ("NULL" in n or "SINGULAR" in n or "INFO" in n) for n in names):
+                    tolerances.append(f"{path.relative_to(src)}:{names}")
+    assert bartlett, "no Newey–West rule found"
+    assert all(b.startswith("estimation/covariance.py") for b in bartlett), bartlett
+    assert tolerances == ["estimation/covariance.py:['NULL_TOLERANCE']"], tolerances

@@ -147,7 +147,7 @@ def test_an_exact_fit_has_unknown_not_zero_uncertainty():
 def test_hac_meat_through_the_fft_equals_the_lag_by_lag_sum(bandwidth: float) -> None:
     # The Bartlett-weighted sum of lagged cross-products, computed in the frequency domain, equals
     # the direct sum over lags within segments (segments shorter than the bandwidth included).
-    from motorlab.estimation.least_squares import _bartlett_meat, _segments
+    from motorlab.estimation.covariance import _bartlett_meat, _segments
 
     rng = np.random.default_rng(7)
     n, p = 700, 4

@@ -12,9 +12,9 @@ import motorlab.cli as cli
 from motorlab.catalog import Motor
 from motorlab.errors import OptionError
 from motorlab.model import MotorParams
+from motorlab.model.load import disc_inertia
 from motorlab.rig.plan import (
     coast_time,
-    disc_inertia,
     disc_mass,
     disc_radius_for_inertia,
     plan_rig,

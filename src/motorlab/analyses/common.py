@@ -35,10 +35,10 @@ from motorlab.estimation.least_squares import LeastSquares, fit_least_squares, f
 from motorlab.estimation.runs import reader_warnings
 from motorlab.io import text as _io_text
 from motorlab.model import phi_functions
+from motorlab.model.load import MATERIALS
 from motorlab.recording import Recording
-from motorlab.rig.plan import MATERIALS
 
-#: Mass densities of flywheel materials [kg/m³] (the one table, :data:`motorlab.rig.plan.MATERIALS`).
+#: Mass densities of flywheel materials [kg/m³] (the one table, :data:`motorlab.model.load.MATERIALS`).
 MATERIAL_DENSITY = MATERIALS
 
 

@@ -33,8 +33,8 @@ import numpy as np
 
 from motorlab.errors import FitError, OptionError
 from motorlab.estimation import output_error as _oe
+from motorlab.estimation.covariance import MAX_RELATIVE_STDERR
 from motorlab.estimation.decimate import block_mean
-from motorlab.estimation.least_squares import MAX_RELATIVE_STDERR
 from motorlab.estimation.runs import (
     excitation_warnings,
     fit_result,

@@ -37,8 +37,8 @@ from threadpoolctl import threadpool_limits
 from motorlab.errors import FitError, OptionError
 from motorlab.estimation import held_input
 from motorlab.estimation import output_error as _oe
+from motorlab.estimation.covariance import MAX_RELATIVE_STDERR
 from motorlab.estimation.decimate import driven_log
-from motorlab.estimation.least_squares import MAX_RELATIVE_STDERR
 from motorlab.estimation.noise import input_noise_gain
 from motorlab.estimation.noise import voltage_noise as run_voltage_noise
 from motorlab.estimation.runs import (

@@ -238,7 +238,7 @@ def pulse(
     BIC = n·ln(SSR/n) + k·ln(n) (k counts the start speeds too). Both assume independent residuals;
     tachometer ripple correlates them and makes the criteria over-eager for the richer model.
     The standard errors of the final fit do not make that assumption: they come from the
-    Newey–West (HAC) sandwich of :func:`motorlab.estimation.least_squares.hac_covariance`, with lags kept within
+    Newey–West (HAC) sandwich of :func:`motorlab.estimation.covariance.hac_covariance`, with lags kept within
     each region, because the tachometer's commutator ripple correlates neighbouring residuals.
 
     References

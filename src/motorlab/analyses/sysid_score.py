@@ -467,7 +467,7 @@ def fit_gains(
     exact for the voltage held over k rows, so that fit ends near the full one) and only the start
     whose end is best there is fitted to every row: one full fit, not one per start. The covariance
     is the Newey–West sandwich of the
-    weighted residuals at the optimum (:func:`motorlab.estimation.least_squares.hac_covariance`, runs of one test and
+    weighted residuals at the optimum (:func:`motorlab.estimation.covariance.hac_covariance`, runs of one test and
     one signal taken as uncorrelated): the residuals of real logs are dominated by unmodelled,
     serially correlated effects, not by measurement noise.
 
@@ -537,7 +537,7 @@ def _reweighted_fit(
 
 def _hac(gains: np.ndarray, tests: Sequence[ScoreTest], sc: Score, weight: float) -> tuple[np.ndarray, float]:
     """Newey–West covariance of the gains from the weighted score residuals (sensitivity Jacobian)."""
-    from motorlab.estimation.least_squares import hac_covariance
+    from motorlab.estimation.covariance import hac_covariance
 
     ws, wp = 1.0 / sc.speed, math.sqrt(weight) / sc.position
     sim = _Simulations(tests).at(np.array([gains[0], math.log(gains[1]), math.log(gains[2])]))

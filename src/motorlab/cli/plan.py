@@ -8,7 +8,8 @@ from typing import Any
 
 from motorlab.catalog import Motor
 from motorlab.cli.common import print_json, quantity
-from motorlab.rig.plan import MATERIALS, plan_rig
+from motorlab.model.load import MATERIALS
+from motorlab.rig.plan import plan_rig
 from motorlab.units import format_unit
 
 SECTION_TITLES = {

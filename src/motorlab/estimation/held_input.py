@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from motorlab.estimation import output_error as _oe
-from motorlab.estimation.least_squares import scaled_gram_inverse
+from motorlab.estimation.covariance import scaled_gram_inverse
 from motorlab.estimation.simulator import motor_plant
 
 #: A jump between two samples larger than this many standard deviations of the sample-to-sample

@@ -13,7 +13,7 @@ from typing import Protocol
 import numpy as np
 from scipy import linalg
 
-from motorlab.estimation.least_squares import scaled_gram_inverse
+from motorlab.estimation.covariance import scaled_gram_inverse
 from motorlab.estimation.simulator import StatePlant, moving_step
 from motorlab.model import HeldStep, first_order
 

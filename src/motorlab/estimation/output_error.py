@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from motorlab import progress
-from motorlab.estimation.least_squares import hac_meat, scaled_gram_inverse
+from motorlab.estimation.covariance import hac_meat, scaled_gram_inverse
 from motorlab.estimation.noise import input_noise_bias, noise_propagation_covariance
 from motorlab.estimation.simulator import StatePlant, simulate
 
@@ -506,7 +506,7 @@ def fit_output_error(
     -----
     Residuals are (simulated − measured)/σ per signal. The Jacobian of the model parameters is by
     forward differences of the simulation; the angle offsets enter linearly (analytic column).
-    Covariance: see :func:`hac_covariance`.
+    Covariance: see :func:`output_error_covariance`.
     """
     problem = _Problem(model, logs, p0, lower=lower, upper=upper, scale=scale, sigma=sigma)
     x_scale = problem.x_scale
@@ -539,7 +539,7 @@ def fit_output_error(
             res, sims = problem.residual_parts(*problem.unpack(values / x_scale))
         else:
             bias = np.zeros(values.size)
-    cov_hac, cov_white, null, bandwidth = hac_covariance(jx, res, blocks, len(problem.signals))
+    cov_hac, cov_white, null, bandwidth = output_error_covariance(jx, res, blocks, len(problem.signals))
     if ratio <= 2.0:  # the measured noises explain the residuals
         cov_full = cov_prop * max(1.0, ratio)  # never below what the residuals themselves show
         noise_model = "measured noise propagated (voltage, counting" + (", current)" if model.uses_current else ")")
@@ -683,14 +683,14 @@ def _both_sides(problem: _Problem, sol: _Solution) -> list[np.ndarray]:
     return starts
 
 
-def hac_covariance(
+def output_error_covariance(
     jac: np.ndarray, res: np.ndarray, blocks: list[tuple[int, int]], n_signals: int
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
     """Covariance of the parameters that allows for correlated residuals (Newey–West).
 
     cov = H⁻¹·S·H⁻¹·n/(n − p) with H = JᵀJ and S the long-run covariance of the score
     g_t = Σ_signals J_tᵀ·r_t of each instant t, by the one rule of every fit
-    (:func:`motorlab.estimation.least_squares.hac_meat`: VAR(1) prewhitening, Andrews' bandwidth, Bartlett weights),
+    (:func:`motorlab.estimation.covariance.hac_meat`: VAR(1) prewhitening, Andrews' bandwidth, Bartlett weights),
     no lag crossing from one run to the next. Residuals after the runs' (logged voltage samples
     against held levels) are white: each is a run of its own. For white residuals it is the usual
     s²·(JᵀJ)⁻¹.

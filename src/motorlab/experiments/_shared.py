@@ -7,7 +7,7 @@ from typing import Any
 
 from motorlab.errors import OptionError
 from motorlab.experiments import Option
-from motorlab.rig.plan import MATERIALS, disc_inertia
+from motorlab.model.load import MATERIALS, disc_inertia
 
 CPR = Option(
     "cpr", "count", positive=True, label="Encoder counts per revolution",

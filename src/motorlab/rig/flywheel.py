@@ -17,9 +17,9 @@ from typing import Any
 
 from motorlab.errors import OptionError
 from motorlab.model import MotorParams
-from motorlab.rig.plan import MATERIALS, disc_inertia
+from motorlab.model.load import MATERIALS, disc_inertia
 
-#: Densities [kg/m³] of disc materials (the one table, :data:`motorlab.rig.plan.MATERIALS`).
+#: Densities [kg/m³] of disc materials (the one table, :data:`motorlab.model.load.MATERIALS`).
 DENSITIES = MATERIALS
 
 

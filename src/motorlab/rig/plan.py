@@ -29,24 +29,8 @@ from threadpoolctl import threadpool_limits
 from motorlab.catalog import Motor
 from motorlab.errors import OptionError
 from motorlab.model import MotorParams
+from motorlab.model.load import MATERIALS, disc_inertia, require_positive
 from motorlab.units import STANDARD_GRAVITY
-
-#: Densities of common flywheel materials [kg/m³] (engineering handbook values; seed 1 uses 7850 for
-#: steel, seed 2 2600 for its aluminium wheel). The one table every module uses.
-MATERIALS: dict[str, float] = {
-    "steel": 7850.0,
-    "stainless steel": 8000.0,
-    "cast iron": 7200.0,
-    "aluminium": 2700.0,
-    "aluminum": 2700.0,
-    "brass": 8500.0,
-    "copper": 8960.0,
-    "acrylic": 1180.0,
-    "pla": 1240.0,
-    "abs": 1050.0,
-    "plywood": 600.0,
-    "hdpe": 960.0,
-}
 
 #: A supply setting above this many times the motor's nominal voltage is refused (12 V motors run
 #: to 24 V at most on a bench; 1e6 V is a typo).
@@ -67,40 +51,9 @@ RPM = 2.0 * math.pi / 60.0
 
 
 # ---- plain physics ------------------------------------------------------------------------------
-def disc_inertia(radius: float, thickness: float, density: float, *, ratio: float = 1.0) -> float:
-    """Moment of inertia of a uniform solid disc about its axis, reflected through a gear ratio.
-
-    Parameters
-    ----------
-    radius
-        Disc radius r [m].
-    thickness
-        Disc thickness h [m].
-    density
-        Material density ρ [kg/m³].
-    ratio
-        Disc speed / speed of the shaft the inertia is wanted at, N (25 for the seed's step-up
-        gearbox, seen from the encoder shaft) [-].
-
-    Returns
-    -------
-    float
-        J = ½·m·r² = ½·π·r⁴·ρ·h at the disc, times N² at the other shaft [kg·m²] (the gears and the
-        motor's own armature not included).
-
-    References
-    ----------
-    Seed 1, "First Experiment": r = 0.075 m, h = 0.05 m of steel gives 0.0195 kg·m² (the seed writes
-    0.0124, which is r⁴·ρ·h without the ½·π of its own formula).
-    """
-    _positive(radius=radius, thickness=thickness, density=density, ratio=ratio)
-    r2 = radius * radius  # products, not powers: float ** raises OverflowError where * gives inf
-    return 0.5 * math.pi * r2 * r2 * density * thickness * ratio * ratio
-
-
 def disc_mass(radius: float, thickness: float, density: float) -> float:
     """Mass m = π·r²·h·ρ of a uniform disc [kg] (radius [m], thickness [m], density [kg/m³])."""
-    _positive(radius=radius, thickness=thickness, density=density)
+    require_positive(radius=radius, thickness=thickness, density=density)
     return math.pi * radius**2 * thickness * density
 
 
@@ -111,7 +64,7 @@ def disc_radius_for_inertia(inertia: float, thickness: float, density: float) ->
     -----
     Inverts J = ½·π·r⁴·ρ·h: r = (2·J/(π·ρ·h))^¼ [m].
     """
-    _positive(inertia=inertia, thickness=thickness, density=density)
+    require_positive(inertia=inertia, thickness=thickness, density=density)
     return (2.0 * inertia / (math.pi * density * thickness)) ** 0.25
 
 
@@ -132,13 +85,13 @@ def required_inertia(torque: float, speed: float, time: float) -> float:
     float
         J = τ/α with α = Δω/t [kg·m²] (eq. (5) of seed 1; friction and back-EMF ignored).
     """
-    _positive(torque=torque, speed=speed, time=time)
+    require_positive(torque=torque, speed=speed, time=time)
     return torque * time / speed
 
 
 def reflected_inertia(inertia: float, ratio: float) -> float:
     """Inertia seen at the motor shaft of a load turning ``ratio`` times faster: J·N² [kg·m²]."""
-    _positive(ratio=ratio)
+    require_positive(ratio=ratio)
     if inertia < 0:
         raise OptionError(f"inertia must not be negative, got {inertia}")
     reflected = inertia * ratio * ratio  # not ratio**2: float ** raises OverflowError where * gives inf
@@ -149,7 +102,7 @@ def reflected_inertia(inertia: float, ratio: float) -> float:
 
 def step_up_ratio(required: float, available: float) -> float:
     """Step-up ratio N with available·N² = required: N = √(required/available) [-]."""
-    _positive(required=required, available=available)
+    require_positive(required=required, available=available)
     return math.sqrt(required / available)
 
 
@@ -176,7 +129,7 @@ def spin_up_time_current(params: MotorParams, current: float, speed: float) -> f
     t = −(J/b)·ln(1 − ω/ω_ss); with b = 0, t = J·ω/(K·i − Tf). Back-EMF does not act on an
     ideal current source (it only sets the compliance voltage, see :func:`spin_up_time_supply`).
     """
-    _positive(current=current, speed=speed)
+    require_positive(current=current, speed=speed)
     drive = params.K * current - params.Tf
     if drive <= 0:
         return math.inf
@@ -209,7 +162,7 @@ def spin_up_time_supply(params: MotorParams, voltage: float, current_limit: floa
     supply holds V and J·dω/dt = K·(V − K·ω)/R − b·ω − Tf, a first-order lag towards
     ω_ss = (K·V/R − Tf)/(K²/R + b) with time constant J/(K²/R + b).
     """
-    _positive(voltage=voltage, current_limit=current_limit, speed=speed)
+    require_positive(voltage=voltage, current_limit=current_limit, speed=speed)
     K, R, J, b, Tf = params.K, params.R, params.J, params.b, params.Tf
     crossover = max((voltage - R * current_limit) / K, 0.0)
     t = 0.0
@@ -248,7 +201,7 @@ def coast_time(params: MotorParams, speed: float, *, final_speed: float = 0.0) -
     J·dω/dt = −b·ω − Tf gives ω(t) = (ω₀ + Tf/b)·e^(−b·t/J) − Tf/b, hence
     t = (J/b)·ln((ω₀ + Tf/b)/(ω_f + Tf/b)); with b = 0 the decay is linear, t = J·(ω₀ − ω_f)/Tf.
     """
-    _positive(speed=speed)
+    require_positive(speed=speed)
     if not 0 <= final_speed < speed:
         raise OptionError(f"final speed must lie in [0, {speed}), got {final_speed}")
     J, b, Tf = params.J, params.b, params.Tf
@@ -272,12 +225,6 @@ def _time_to_speed(J: float, drive: float, damping: float, start: float, target:
     if final <= target:
         return math.inf
     return J / damping * math.log((final - start) / (final - target))
-
-
-def _positive(**values: float) -> None:
-    for name, value in values.items():
-        if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
-            raise OptionError(f"{name.replace('_', ' ')} must be a positive number, got {value!r}")
 
 
 # ---- the plan -----------------------------------------------------------------------------------
@@ -444,28 +391,28 @@ def _checked_plan_options(
         raise OptionError(f"unknown material {material!r}; choose from {', '.join(sorted(MATERIALS))}")
     if not (math.isfinite(fraction) and 0 < fraction < 1):
         raise OptionError(f"fraction must lie strictly between 0 and 1, got {fraction}")
-    _positive(time=time, radius=radius, thickness=thickness, ratio=ratio, log_period=log_period)
-    _positive(shunt_resistance=shunt_resistance)
+    require_positive(time=time, radius=radius, thickness=thickness, ratio=ratio, log_period=log_period)
+    require_positive(shunt_resistance=shunt_resistance)
     for name, value, high, unit in (("free speed", free_speed, 1e5, "rad/s"),
                                     ("stall torque", stall_torque, 1e5, "N·m")):
         if value is not None and math.isfinite(value) and value > high:  # a unit mistake, not a gearmotor
             raise OptionError(f"the {name} {value:g} {unit} is beyond any gearmotor (at most {high:g} {unit})")
     if free_speed is not None:
-        _positive(free_speed=free_speed)
+        require_positive(free_speed=free_speed)
         motor = replace(motor, free_speed=free_speed)
     if stall_torque is not None:
-        _positive(stall_torque=stall_torque)
+        require_positive(stall_torque=stall_torque)
         motor = replace(motor, stall_torque=stall_torque)
     if current is None:
         current = motor.stall_current / 2
-    _positive(current=current)
+    require_positive(current=current)
     if current > motor.stall_current:
         raise OptionError(
             f"current {current:g} A exceeds the stall current {motor.stall_current:g} A of {motor.key}"
         )
     if voltage is None:
         voltage = motor.nominal_voltage
-    _positive(voltage=voltage)
+    require_positive(voltage=voltage)
     if voltage > MAX_VOLTAGE_FACTOR * motor.nominal_voltage:
         raise OptionError(
             f"voltage {voltage:g} V is more than {MAX_VOLTAGE_FACTOR:g} times the nominal "
@@ -671,11 +618,11 @@ def _sensors_section(
         "drive_current": Figure("drive current", current, "A"),
     }
     if lever_arm is not None:
-        _positive(lever_arm=lever_arm)
+        require_positive(lever_arm=lever_arm)
         reading = torque / (STANDARD_GRAVITY * lever_arm)
         sensors["scale_reading"] = Figure("scale reading at the drive torque", reading, "kg")
         if scale_capacity is not None:
-            _positive(scale_capacity=scale_capacity)
+            require_positive(scale_capacity=scale_capacity)
             sensors["scale_capacity"] = Figure("scale capacity", scale_capacity, "kg")
             if reading > scale_capacity:
                 warnings.append(

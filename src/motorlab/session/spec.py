@@ -60,11 +60,11 @@ from motorlab.io.text import (
     load_json,
     read_bytes,
 )
-from motorlab.rig.plan import MATERIALS, disc_inertia
+from motorlab.model.load import MATERIALS, disc_inertia
 from motorlab.timespans import setting_spans
 from motorlab.units import format_unit, parse_quantity
 
-#: Densities of flywheel materials [kg/m³]: the one table of :mod:`motorlab.rig.plan`.
+#: Densities of flywheel materials [kg/m³]: the one table of :mod:`motorlab.model.load`.
 MATERIAL_DENSITY = MATERIALS
 
 #: Plausible ranges (SI) of the rig's quantities: a value outside is a unit mistake, refused at load.
