@@ -128,7 +128,7 @@ class TuneResult:
         if self.target.target.startswith("ftc") or self.target.target in ("roadrunner", "phoenix5"):
             return (self.units.cpr or 2 * math.pi) / (2 * math.pi)
         if self.target.target == "pedro":
-            return self.units.per_radian / 0.0254  # inches
+            return (self.units.metres or 0.0) / 0.0254  # inches (pedro refuses a unit that is not a distance)
         return self.units.per_radian
 
     def plot(self, *, fig: Any = None) -> Any:
