@@ -328,11 +328,9 @@ def file_units(recs: Sequence[Recording]) -> dict[str, Any] | None:
     """
     from motorlab.io.frc_json import GAIN_UNITS
 
-    own = {(rec.metadata.get("units"), rec.metadata.get("unitsPerRotation")) for rec in recs}
-    if len(own) != 1:
-        return None
-    units, per = own.pop()
-    if not isinstance(units, str) or units.lower() not in GAIN_UNITS:
+    own = [(rec.metadata.get("units"), rec.metadata.get("unitsPerRotation")) for rec in recs]
+    units, per = own[0]
+    if any(o != own[0] for o in own) or not isinstance(units, str) or units.lower() not in GAIN_UNITS:
         return None
     return {"units": units, "unitsPerRotation": per, "length_unit": GAIN_UNITS[units.lower()]}
 

@@ -144,6 +144,8 @@ class Plant:
     own_units
         The length unit of the file the model was fitted from (:data:`motorlab.io.frc_json.GAIN_UNITS`:
         ``"ft"`` for a SysId file in Feet), when its results say: the gains' default unit.
+    stderr
+        The standard errors the results give of kS, kV, kA (SI, as ``feedforward``), where they give one.
     """
 
     feedforward: Feedforward
@@ -153,6 +155,7 @@ class Plant:
     notes: tuple[str, ...] = ()
     length: str = "rad"
     own_units: str | None = None
+    stderr: dict[str, float] = field(default_factory=dict)
 
     def units(self, units: str | None = None, *, cpr: float | None = None,
               wheel_radius: float | None = None) -> MechanismUnits:
@@ -282,6 +285,7 @@ def load_plant(paths: list[str | PathLike[str]], *, unit: str | None = None) -> 
     merged: dict[str, float] = {}
     names = (*PARAMETER_NAMES, "kS", "kV", "kA", *GEOMETRY)
     lengths: tuple[str, str | None] = ("rad", None)  # of the file whose kV won the merge
+    errors: dict[str, float] = {}  # standard errors of the values that won the merge
     for path in paths:
         _name, raw = read_bytes(path)  # missing, a directory, a FIFO, too large: named in one line
         if not raw.strip():
@@ -307,6 +311,10 @@ def load_plant(paths: list[str | PathLike[str]], *, unit: str | None = None) -> 
                         if not math.isfinite(value):
                             raise LogFormatError(f"parameter {name} is not finite", path=path)
                         merged[name] = value
+                        errors.pop(name, None)
+                        error = entry[name].get("stderr") if isinstance(entry[name], dict) else None
+                        if isinstance(error, int | float) and not isinstance(error, bool) and math.isfinite(error):
+                            errors[name] = float(error)
         lengths = _lengths(doc, found) or lengths
         if not found or (len(merged) == before and not any(n in merged for n in names)):
             raise LogFormatError(
@@ -326,7 +334,8 @@ def load_plant(paths: list[str | PathLike[str]], *, unit: str | None = None) -> 
             if "kS" not in merged:  # absent or null (not determined): say so, do not print a silent 0
                 notes = (f"kS is not given (or not determined) in {source}: taken as 0 V, so there is no "
                          "static-friction feedforward",)
-            return Plant(ff, params, source, {k: merged[k] for k in GEOMETRY if k in merged}, notes, *lengths)
+            return Plant(ff, params, source, {k: merged[k] for k in GEOMETRY if k in merged}, notes, *lengths,
+                         stderr={k: errors[k] for k in ("kS", "kV", "kA") if k in errors})
     except InputError as exc:
         raise LogFormatError(exc.message, path=paths[-1] if len(paths) == 1 else source) from None
     if params is not None:
