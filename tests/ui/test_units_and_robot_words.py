@@ -66,8 +66,12 @@ def test_a_feet_file_gives_wpilib_gains_per_foot(page: Any) -> None:
     assert "wheel-radius" not in code, code
     page.check()
     page.shot("feet-gains-laptop.png")
+    address = page.d.current_url  # the same gains opened on a phone, by their address
     page.d.set_window_size(*browser.PHONE)
+    page.d.get(address)
+    page.wait(lambda: page.d.find_element("tag name", "body").get_attribute("data-ready") == "true", "the page")
     page.wait_text("Gains for WPILib")
+    assert re.search(r"\bkV\s+\S+\s+V·s/ft", page.d.find_element("css selector", "#gains-table").text)
     page.check()
     page.shot("feet-gains-phone.png")
 
@@ -97,6 +101,7 @@ def test_the_pull_lists_what_it_could_not_bring(page: Any, robot: EmulatedRobot)
     box = page.d.find_element("css selector", "section.not-pulled").text
     assert "Not brought back (1)" in box
     assert "2026_11_25__10_42_00_000__Two Words.log" in box
+    assert "its name holds a space, & or =, which Road Runner's file server cannot be asked for: not pulled" in box
     assert "What to do: rename it on the robot or copy it by USB." in box
     page.check()
     page.shot("robot-pull-partial.png")

@@ -13,7 +13,7 @@ from motorlab.control.emit import LANGUAGES, emit_snippet
 from motorlab.control.plant import MechanismUnits, Plant, load_plant
 from motorlab.control.targets import TARGET_INFO
 from motorlab.control.tolerances import describe_settings
-from motorlab.control.tune import TuneResult, tune
+from motorlab.control.tune import DesignRequest, TuneResult, tune
 from motorlab.errors import OptionError
 from motorlab.experiments._commands import command_options
 
@@ -62,8 +62,7 @@ def run(args: argparse.Namespace) -> int:
     if args.overshoot < 0 or args.overshoot >= 100:
         raise OptionError(f"--overshoot must be between 0 and 100 %, got {args.overshoot}")
     plant, units = plant_from_args(args)
-    result = tune(
-        plant,
+    request = DesignRequest(
         args.loop,
         method=args.method,
         target=args.target,
@@ -76,8 +75,8 @@ def run(args: argparse.Namespace) -> int:
         rise_time=args.rise_time,
         overshoot=args.overshoot,
         voltage=args.voltage,
-        step=args.step,
     )
+    result = tune(plant, request, step=args.step)
     snippet = emit_snippet(result.target, args.emit, drive=args.drive) if args.emit else None
     if args.plot is not None:
         import matplotlib

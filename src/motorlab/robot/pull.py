@@ -265,10 +265,10 @@ def _flight_logs(robot: RobotHttp, result: PullResult, out: Path) -> None:
                 path = f"/logs/download?file={name}"
                 with _each(result, path):
                     check_name(name, "/logs")
-                    if _UNASKABLE.search(name):
-                        raise RobotLinkError(f"/logs lists {name!r}, which Road Runner's /logs/download cannot be "
-                                             "asked for (it cuts the query at white space, & and =, and does not "
-                                             "URL-decode): not pulled; rename it on the robot or copy it by USB")
+                    if _UNASKABLE.search(name):  # the request line or the query would be cut there
+                        raise RobotLinkError(f"{path}: its name holds a space, & or =, which Road Runner's file "
+                                             "server cannot be asked for: not pulled; rename it on the robot or copy "
+                                             "it by USB")
                     got = robot.get(path)
                     if got.status != 200:
                         raise RobotLinkError(f"{path} from {robot.address}: HTTP {got.status} "

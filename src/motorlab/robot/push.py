@@ -81,13 +81,14 @@ def target_values(params: list[str], target: str, *, cpr: float | None = None, w
     """
     from motorlab.control.emit import emit_snippet
     from motorlab.control.plant import MechanismUnits, load_plant
-    from motorlab.control.tune import tune
+    from motorlab.control.tune import DesignRequest, tune
 
     if target not in TARGET_FIELDS:
         raise RobotLinkError(f"unknown target {target!r}: roadrunner, pedro or ftc-pidf")
     units = MechanismUnits.from_options("rad", cpr=cpr, wheel_radius=wheel_radius)
     plant = load_plant([Path(p) for p in params], unit=unit)
-    result = tune(plant, "velocity" if target == "ftc-pidf" else loop, target=target, units=units, voltage=voltage)
+    result = tune(plant, DesignRequest("velocity" if target == "ftc-pidf" else loop, target=target, units=units,
+                                       voltage=voltage))
     tg = result.target
     numbers = {**tg.feedforward, **tg.gains}
     values = {g: float(numbers[g]) for g in TARGET_FIELDS[target] if g in numbers}
