@@ -90,12 +90,7 @@ def robot(tmp_path_factory: pytest.TempPathFactory) -> Iterator[EmulatedRobot]:
 
 
 def test_the_pull_lists_what_it_could_not_bring(page: Any, robot: EmulatedRobot) -> None:
-    page.open(browser.LAPTOP)
-    page.click("Connect to the robot")
-    page.type("Robot address", "127.0.0.1")
-    page.type("Web server port", str(robot.http_port))
-    page.type("FTC Dashboard port", str(robot.dashboard_port))
-    page.click("Connect to the robot")
+    browser.pull_from(page, robot)
     page.wait_text("1 file brought back. 1 could not be brought back")
     page.wait_text("Road Runner ramp log")  # the file it brought, still shown
     box = page.d.find_element("css selector", "section.not-pulled").text
