@@ -95,7 +95,7 @@ CHOICES: dict[str, dict[str, str]] = {
     "loop": {"velocity": "speed (velocity loop)", "position": "position (position loop)"},
     "method": {"lqr": "LQR (as WPILib SysId)", "poles": "pole placement"},
     "units": {"rad": "radians", "rotations": "rotations", "degrees": "degrees", "ticks": "encoder ticks",
-              "m": "metres"},
+              "m": "metres", "ft": "feet", "in": "inches"},
     "mechanism": {"simple": "none (flywheel, drivetrain)", "elevator": "elevator (constant gravity)",
                   "arm": "arm (gravity × cos angle)"},
     "side": {"both": "both sides", "left": "left side", "right": "right side"},

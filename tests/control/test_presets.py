@@ -12,7 +12,7 @@ from motorlab.control.emit import emit_snippet
 from motorlab.control.plant import MechanismUnits, Plant
 from motorlab.control.presets import PRESETS
 from motorlab.control.targets import TARGET_INFO, TARGETS
-from motorlab.control.tune import tune
+from motorlab.control.tune import DesignRequest, tune
 from motorlab.errors import OptionError
 
 
@@ -23,8 +23,9 @@ def _gains(loop: str, kv: float, ka: float, target: str, *, cpr: float | None = 
     plant = Plant(Feedforward(0.0, kv / (2 * math.pi), ka / (2 * math.pi)))
     info = TARGET_INFO[target]
     # SysId's tolerances, given explicitly (per rotation: the unit in use), since tune's defaults are physical.
-    result = tune(plant, loop, target=target, units=units, period=info.period if period is None else period,
-                  delay=info.delay if delay is None else delay, qp=1.0, qv=1.5, r=7.0)
+    request = DesignRequest(loop, target=target, units=units, period=info.period if period is None else period,
+                            delay=info.delay if delay is None else delay, qp=1.0, qv=1.5, r=7.0)
+    result = tune(plant, request)
     return result.target.gains
 
 
@@ -68,13 +69,13 @@ def test_default_preset_and_its_latency_compensation_match_sysid() -> None:
 def test_feedforward_in_the_controllers_units() -> None:
     units = MechanismUnits.from_options("rotations", cpr=2048)
     plant = Plant(Feedforward(0.24, 1.2 / (2 * math.pi), 0.1 / (2 * math.pi)))
-    five = tune(plant, "velocity", target="phoenix5", units=units, period=0.001, delay=0.0815).target
+    five = tune(plant, DesignRequest("velocity", target="phoenix5", units=units, period=0.001, delay=0.0815)).target
     # kF: output (1023 = 12 V) per tick/100 ms = kV [V per rot/s] × 1023/12 / (2048 × 0.1)
     assert five.gains["kF"] == pytest.approx(1.2 * 1023 / 12 / (2048 * 0.1))
     assert five.feedforward["kS"] == pytest.approx(0.24 / 12)
-    spark = tune(plant, "velocity", target="spark", units=units, period=0.001, delay=0.112).target
+    spark = tune(plant, DesignRequest("velocity", target="spark", units=units, period=0.001, delay=0.112)).target
     assert spark.gains["kF"] == pytest.approx(1.2 / 60 / 12)  # duty cycle per RPM
-    six = tune(plant, "velocity", target="phoenix6", units=units, period=0.001, delay=0.001).target
+    six = tune(plant, DesignRequest("velocity", target="phoenix6", units=units, period=0.001, delay=0.001)).target
     assert six.feedforward == {"kS": pytest.approx(0.24), "kV": pytest.approx(1.2), "kA": pytest.approx(0.1)}
     assert "Slot0Configs" in emit_snippet(six, "java")
     assert "slot0.k_p" in emit_snippet(six, "python")
@@ -83,4 +84,4 @@ def test_feedforward_in_the_controllers_units() -> None:
     with pytest.raises(OptionError):
         emit_snippet(spark, "python")
     with pytest.raises(OptionError, match="cpr"):
-        tune(plant, "velocity", target="phoenix5", units=MechanismUnits.from_options("rotations"))
+        tune(plant, DesignRequest("velocity", target="phoenix5", units=MechanismUnits.from_options("rotations")))

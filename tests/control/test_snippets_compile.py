@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from motorlab.control import Feedforward, MechanismUnits, Plant, design_for_target, emit_snippet
+from motorlab.control import DesignRequest, Feedforward, MechanismUnits, Plant, design_for_target, emit_snippet
 from motorlab.control.emit import CODE, FIELDS
 from motorlab.control.targets import TARGET_INFO, TARGETS
 
@@ -59,7 +59,7 @@ CASES = _cases()
 
 
 def _snippet(target: str, loop: str, drive: str, language: str) -> str:
-    _, tg = design_for_target(FIT, loop, target=target, units=UNITS)
+    _, tg = design_for_target(FIT, DesignRequest(loop, target=target, units=UNITS))
     return emit_snippet(tg, language, drive=drive)
 
 

@@ -14,7 +14,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from motorlab.cli import main
-from motorlab.control import Feedforward, MechanismUnits, Plant, design_for_target, tune
+from motorlab.control import DesignRequest, Feedforward, MechanismUnits, Plant, design_for_target, tune
 from motorlab.control.targets import INCH, TARGETS
 from motorlab.control.tolerances import design_tolerances
 from motorlab.errors import OptionError
@@ -34,7 +34,7 @@ def _units(name: str, radius: float | None) -> MechanismUnits:
 
 
 def _design(target: str, loop: str, units: MechanismUnits, plant: Plant | None = None, **kw: object):
-    return design_for_target(plant or Plant(FIT), loop, target=target, units=units, **kw)  # type: ignore[arg-type]
+    return design_for_target(plant or Plant(FIT), DesignRequest(loop, target=target, units=units, **kw))  # type: ignore[arg-type]
 
 
 @pytest.mark.parametrize("loop", ["velocity", "position"])
@@ -130,8 +130,8 @@ def test_a_plant_written_in_any_unit_gets_the_same_design(kv, tau, ks, system, r
     n = user.per_radian
     typed = Feedforward(ks, kv / n, kv * tau / n)  # V·s per unit, as printed in that unit
     back = Plant(Feedforward(typed.kS, typed.kV * n, typed.kA * n))  # what the command line builds
-    reference, _ = design_for_target(Plant(si), loop, units=MechanismUnits("rad", 1.0))
-    design, tg = design_for_target(back, loop, target="wpilib", units=user)
+    reference, _ = design_for_target(Plant(si), DesignRequest(loop, units=MechanismUnits("rad", 1.0)))
+    design, tg = design_for_target(back, DesignRequest(loop, target="wpilib", units=user))
     for key, value in design.to_dict().items():
         assert value == pytest.approx(reference.to_dict()[key], rel=1e-9, abs=1e-12)
     assert tg.gains["kP"] * n == pytest.approx(reference.kP, rel=1e-9)
@@ -183,7 +183,7 @@ PLANTS = {
 @pytest.mark.parametrize("loop", ["position", "velocity"])
 def test_road_runner_default_design_settles_without_a_steady_error(plant: str, loop: str) -> None:
     units = _units("rad", 0.0175)
-    result = tune(PLANTS[plant], loop, target="roadrunner", units=units)
+    result = tune(PLANTS[plant], DesignRequest(loop, target="roadrunner", units=units))
     m = result.step.metrics
     assert result.step.settings["law"] == "roadrunner"
     assert result.warnings == []

@@ -187,3 +187,25 @@ def test_the_logs_page_is_read_exactly_whatever_the_name(name: str) -> None:
     entry = f'<li><a href="/logs/download?file={name}" download="{name}">{name}</a> (123 bytes)</li>'
     page = f"<!doctype html><html><head><title>Logs</title></head><body><ul>{entry}{entry}</ul></body></html>"
     assert log_entries(page) == [(name, 123), (name, 123)]
+
+
+def test_each_file_not_pulled_is_named_with_its_reason_and_what_to_do(robot_files: RobotFiles, tmp_path: Path) -> None:
+    """What the app lists (``not_pulled``): the file's name, why in words (no route, no address) and what to do;
+    the CLI's line for it unchanged (``failed``). The Wi-Fi drops after the smallest file's size."""
+    from motorlab.robot.pull import pull
+
+    served = [*robot_files.logs, *robot_files.motorlab,
+              *(max(f, key=lambda p: p.stat().st_mtime) for f in robot_files.tuning.values())]
+    cut = min(f.stat().st_size for f in served)
+    with EmulatedRobot(robot_files, drop_after=cut, dashboard=False, lifetime=20) as flaky:
+        result = pull("127.0.0.1", tmp_path / "pulled", http_port=flaky.http_port).to_dict()
+    named = {f.name for f in [*robot_files.logs, *robot_files.motorlab] if f.stat().st_size > cut}
+    assert named <= {n["file"] for n in result["not_pulled"]}
+    assert len(result["not_pulled"]) == sum(f.stat().st_size > cut for f in served)
+    for n in result["not_pulled"]:
+        assert n["todo"] == "pull again", n
+        assert "127.0.0.1" not in n["reason"], n
+        assert not n["reason"].startswith("/"), n
+        assert "nothing of it was kept" in n["reason"], n
+    assert [n["line"] for n in result["not_pulled"]] == result["failed"]
+    assert len(result["files"]) == sum(f.stat().st_size <= cut for f in served) > 0

@@ -175,6 +175,16 @@ class Page:
         assert width
 
 
+def pull_from(page: Page, robot: Any) -> None:
+    """Open the robot task on a fresh page and bring the files of the emulated ``robot`` (on 127.0.0.1)."""
+    page.open(LAPTOP)
+    page.click("Connect to the robot")
+    page.type("Robot address", "127.0.0.1")
+    page.type("Web server port", str(robot.http_port))
+    page.type("FTC Dashboard port", str(robot.dashboard_port))
+    page.click("Connect to the robot")
+
+
 def make_driver(profile: Path) -> Any:
     from selenium import webdriver
     from selenium.webdriver.chrome.service import Service

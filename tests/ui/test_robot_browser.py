@@ -29,12 +29,7 @@ def robot(tmp_path_factory: pytest.TempPathFactory) -> Iterator[EmulatedRobot]:
 
 
 def test_connect_record_stop_and_fit(page: Any, robot: EmulatedRobot) -> None:
-    page.open(browser.LAPTOP)
-    page.click("Connect to the robot")
-    page.type("Robot address", "127.0.0.1")
-    page.type("Web server port", str(robot.http_port))
-    page.type("FTC Dashboard port", str(robot.dashboard_port))
-    page.click("Connect to the robot")
+    browser.pull_from(page, robot)
     page.wait_text("1 file brought back")
     page.wait_text("Road Runner ramp log")
     page.check()

@@ -305,6 +305,9 @@ def feedforward(
     }
     if period > 0:
         details["status_frames"] = {"period_s": period, "lag_s": 0.5 * period}
+    own = file_units(recs)
+    if own is not None:
+        details["file_units"] = own
     try:
         details["sysid_ols"] = sysid_ols(recs, mechanism=mechanism)
     except (FitError, np.linalg.LinAlgError, ZeroDivisionError):
@@ -314,6 +317,22 @@ def feedforward(
     if mechanism == "simple" and fit.noise_model.startswith("Newey") and all("velocity" in rec for rec in recs):
         _report_open_loop(result, recs, length=result.rmse_unit)  # real logs: docs/real-logs.md
     return result
+
+
+def file_units(recs: Sequence[Recording]) -> dict[str, Any] | None:
+    """The length unit the files were logged in (a SysId file's ``units``, ``unitsPerRotation``), or None.
+
+    The fit runs in SI (rad, or m for a file in Meters, Feet or Inches); the gains of a team's code are in
+    the file's own unit (kV per foot for a file in Feet), which ``tune`` reads from here
+    (:func:`motorlab.control.plant.load_plant`). None when the files carry no units or differ.
+    """
+    from motorlab.io.frc_json import GAIN_UNITS
+
+    own = [(rec.metadata.get("units"), rec.metadata.get("unitsPerRotation")) for rec in recs]
+    units, per = own[0]
+    if any(o != own[0] for o in own) or not isinstance(units, str) or units.lower() not in GAIN_UNITS:
+        return None
+    return {"units": units, "unitsPerRotation": per, "length_unit": GAIN_UNITS[units.lower()]}
 
 
 def _checked_recordings(recordings: Recording | Sequence[Recording], *, mechanism: str,

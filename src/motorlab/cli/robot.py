@@ -262,10 +262,10 @@ def run_push(args: argparse.Namespace) -> int:
         return 0
     if not args.params or not args.target:
         raise RobotLinkError("give --params FIT.json and --target roadrunner|pedro|ftc-pidf (or --restore)")
-    values, snippet, notes = target_values(args.params, args.target, cpr=args.cpr, wheel_radius=args.wheel_radius,
-                                           unit=args.unit, voltage=args.voltage)
+    gains = target_values(args.params, args.target, cpr=args.cpr, wheel_radius=args.wheel_radius, unit=args.unit,
+                          voltage=args.voltage)
     with Dashboard(args.host, args.dashboard_port, timeout=args.timeout) as dash:
-        plan = prepare(dash, args.target, values, snippet, args.config)
+        plan = prepare(dash, args.target, gains, args.config)
         if not args.json:
             print(_table(plan.changes))
         if plan.running:
@@ -279,10 +279,10 @@ def run_push(args: argparse.Namespace) -> int:
         print_json({**plan.to_dict(), "state": str(state), "verified": True})
         return 0
     print(f"written, read back and checked; old values kept in {state} (motorlab robot push --restore)")
-    for line in plan.notes + notes:
+    for line in plan.notes + gains.notes:
         print(f"note: {line}")
     print(f"note: {LIFETIME}")
-    print(snippet, end="" if snippet.endswith("\n") else "\n")
+    print(gains.snippet, end="" if gains.snippet.endswith("\n") else "\n")
     return 0
 
 

@@ -13,7 +13,7 @@ from motorlab.control.emit import LANGUAGES, emit_snippet
 from motorlab.control.plant import MechanismUnits, Plant, load_plant
 from motorlab.control.targets import TARGET_INFO
 from motorlab.control.tolerances import describe_settings
-from motorlab.control.tune import TuneResult, tune
+from motorlab.control.tune import DesignRequest, TuneResult, tune
 from motorlab.errors import OptionError
 from motorlab.experiments._commands import command_options
 
@@ -37,28 +37,32 @@ def register(subparsers: Any) -> None:
     p.set_defaults(func=run)
 
 
-def plant_from_args(args: argparse.Namespace, units: MechanismUnits) -> Plant:
-    """The plant from ``--params`` or ``--kv/--ka/--ks`` (converted to SI)."""
+def plant_from_args(args: argparse.Namespace) -> tuple[Plant, MechanismUnits]:
+    """The plant from ``--params`` or ``--kv/--ka/--ks`` (converted to SI), and the user's length unit.
+
+    The unit is ``--units``, else the one of the file the results were fitted from (kV per foot for a
+    SysId file in Feet), else radians (metres for results fitted to distances).
+    """
     given = args.kv is not None or args.ka is not None
     check_option(not (given and args.params), "give either --kv/--ka/--ks or --params, not both")
     if args.params:
-        return load_plant(args.params, unit=args.unit)
+        plant = load_plant(args.params, unit=args.unit)
+        return plant, plant.units(args.units, cpr=args.cpr, wheel_radius=args.wheel_radius)
+    units = MechanismUnits.from_options(args.units or "rad", cpr=args.cpr, wheel_radius=args.wheel_radius)
     check_option(args.kv is not None and args.ka is not None, "give the plant: --kv and --ka, or --params FILE.json")
     # Numbers are per user unit: V·s/unit × unit/rad = V·s/rad.
     ff = Feedforward(args.ks, args.kv * units.per_radian, args.ka * units.per_radian).check_plant()
-    return Plant(ff, None, "--kv/--ka/--ks")
+    return Plant(ff, None, "--kv/--ka/--ks"), units
 
 
 def run(args: argparse.Namespace) -> int:
     """Run ``motorlab tune``."""
     if args.plot is not None:
         check_figure_path(args.plot)  # before the design and simulations, not after ("--plot ''" refused)
-    units = MechanismUnits.from_options(args.units, cpr=args.cpr, wheel_radius=args.wheel_radius)
     if args.overshoot < 0 or args.overshoot >= 100:
         raise OptionError(f"--overshoot must be between 0 and 100 %, got {args.overshoot}")
-    plant = plant_from_args(args, units)
-    result = tune(
-        plant,
+    plant, units = plant_from_args(args)
+    request = DesignRequest(
         args.loop,
         method=args.method,
         target=args.target,
@@ -71,8 +75,8 @@ def run(args: argparse.Namespace) -> int:
         rise_time=args.rise_time,
         overshoot=args.overshoot,
         voltage=args.voltage,
-        step=args.step,
     )
+    result = tune(plant, request, step=args.step)
     snippet = emit_snippet(result.target, args.emit, drive=args.drive) if args.emit else None
     if args.plot is not None:
         import matplotlib

@@ -12,8 +12,8 @@
 * :mod:`~motorlab.control.emit`: ready-to-paste Java/Kotlin/Python (:func:`emit_snippet`).
 * :mod:`~motorlab.control.tolerances`: the LQR's default tolerances in physical terms (so that units never
   change a design) and the user's tolerances read with their units.
-* :mod:`~motorlab.control.tune`: all of it in one call (:func:`tune`, :func:`tune_summary`;
-  :func:`design_for_target` without the simulations).
+* :mod:`~motorlab.control.tune`: all of it in one call (:func:`tune` of a :class:`DesignRequest`,
+  :func:`tune_summary`; :func:`design_for_target` without the simulations).
 """
 
 from motorlab.control.design import (
@@ -38,12 +38,13 @@ from motorlab.control.simulation import (
     trapezoid,
 )
 from motorlab.control.targets import TARGETS, TargetGains, to_target
-from motorlab.control.tune import TuneResult, design_for_target, tune, tune_summary
+from motorlab.control.tune import DesignRequest, TuneResult, design_for_target, tune, tune_summary
 
 __all__ = [
     "SYSID_PRESETS",
     "TARGETS",
     "ClosedLoopResponse",
+    "DesignRequest",
     "Feedforward",
     "Gains",
     "MechanismUnits",

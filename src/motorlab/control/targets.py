@@ -243,12 +243,15 @@ def to_target(
     if not (voltage > 0 and math.isfinite(voltage)):
         raise OptionError(f"battery voltage must be positive, got {voltage}")
     loop = gains.loop
+    if units.base == "m" and target not in ("volts", "wpilib", "pedro"):
+        raise OptionError(f"target {target} counts the motor's turns, but the model gives kV per metre travelled (its "
+                          "file logs distances): use volts, wpilib or pedro, or fit a log of the shaft's angle")
     if target in ("volts", "wpilib"):
         n = units.per_radian
         u = units.short
         conv = []
         if n != 1.0:
-            conv.append(f"lengths: 1 rad = {n:.6g} {u}; gains and kV, kA divided by {n:.6g}")
+            conv.append(f"lengths: 1 {units.base} = {n:.6g} {u}; gains and kV, kA divided by {n:.6g}")
         unit_map = {
             **_gain_units(loop, "V", u),
             **_ff_units("V", u),
@@ -328,15 +331,15 @@ def _roadrunner(gains: Gains, feedforward: Feedforward, units: MechanismUnits, v
         ff["trackWidthTicks"] = geometry["track_width_ticks"]
         unit_map["trackWidthTicks"] = "tick"
     free = feedforward.free_speed(voltage)
-    if units.name == "m":
-        in_per_tick = units.per_radian * rad_per_tick / INCH
+    if units.metres is not None:
+        in_per_tick = units.metres * rad_per_tick / INCH
         ff["inPerTick"] = in_per_tick
         if "lateral_ratio" in geometry:
             ff["lateralInPerTick"] = geometry["lateral_ratio"] * in_per_tick
             unit_map["lateralInPerTick"] = "in/tick"
             conv.append(f"lateralInPerTick = lateral_ratio × inPerTick = {geometry['lateral_ratio']:.6g} × inPerTick")
-        conv.append(f"inPerTick = 2π·r/cpr = {in_per_tick:.6g} in (wheel radius {units.per_radian:g} m)")
-        notes.append(f"maxWheelVel must stay below the free speed (V − kS)/kV = {free * units.per_radian / INCH:.4g} "
+        conv.append(f"inPerTick = 2π·r/cpr = {in_per_tick:.6g} in (wheel radius {units.metres:g} m)")
+        notes.append(f"maxWheelVel must stay below the free speed (V − kS)/kV = {free * units.metres / INCH:.4g} "
                      f"in/s at {voltage:g} V")
     else:
         notes.append("give the radius of the encoder's wheel to get inPerTick")
@@ -346,10 +349,10 @@ def _roadrunner(gains: Gains, feedforward: Feedforward, units: MechanismUnits, v
 def _pedro(gains: Gains, feedforward: Feedforward, units: MechanismUnits, voltage: float,
            geometry: dict[str, float]) -> TargetGains:
     """Pedro Pathing tuner constants (see the module docstring)."""
-    if units.name != "m":
+    if units.metres is None:
         raise OptionError("target pedro works in inches: give --wheel-radius (the radius of the wheel the gains "
                           "were measured at: a dead wheel or a drive wheel)")
-    in_per_rad = units.per_radian / INCH
+    in_per_rad = units.metres / INCH
     free = feedforward.free_speed(voltage)
     if free <= 0:
         raise OptionError(f"at {voltage:g} V the drive does not move (kS = {feedforward.kS:.3g} V)")
@@ -370,7 +373,8 @@ def _pedro(gains: Gains, feedforward: Feedforward, units: MechanismUnits, voltag
                 "nominalVoltage": "V", "driveP": "power/in", "driveD": "power*s/in", "output": "power",
                 "position": "in", "velocity": "in/s", "kS": "V", "kV": "V*s/in", "kA": "V*s^2/in"}
     conv = [
-        f"inches: wheel radius {units.per_radian:g} m = {in_per_rad:.6g} in per rad",
+        f"inches: 1 m = {in_per_rad:.6g} in" if units.base == "m" else
+        f"inches: wheel radius {units.metres:g} m = {in_per_rad:.6g} in per rad",
         f"xVelocity = (V − kS)/kV at {voltage:g} V = {ff['xVelocity']:.6g} in/s",
         f"drive P, D [power per in]: kP, kD [V per rad] / {voltage:g} V / {in_per_rad:.6g}",
     ]

@@ -179,9 +179,9 @@ def _parse(given: Any, name: str, units: MechanismUnits, scale: float) -> float:
         quantity = registry().Quantity(text)
     length = f"[length]{'/[time]' if per_time else ''}"
     if quantity is not None and hasattr(quantity, "check") and quantity.check(length):
-        if units.name != "m":
+        if units.metres is None:
             raise OptionError(f"{label}: {text!r} is a length at a wheel: give the wheel radius too")
-        return parse_quantity(text, f"m{per_time}", name=label) / units.per_radian
+        return parse_quantity(text, f"m{per_time}", name=label) / units.metres
     return parse_quantity(text, f"rad{per_time}", name=label)
 
 

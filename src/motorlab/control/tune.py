@@ -128,7 +128,7 @@ class TuneResult:
         if self.target.target.startswith("ftc") or self.target.target in ("roadrunner", "phoenix5"):
             return (self.units.cpr or 2 * math.pi) / (2 * math.pi)
         if self.target.target == "pedro":
-            return self.units.per_radian / 0.0254  # inches
+            return (self.units.metres or 0.0) / 0.0254  # inches (pedro refuses a unit that is not a distance)
         return self.units.per_radian
 
     def plot(self, *, fig: Any = None) -> Any:
@@ -159,29 +159,12 @@ def _duration(gains: Gains, ff: Feedforward, extra: float) -> float:
     return min(max(settle + extra, 40 * gains.period, 0.5), MAX_DURATION)
 
 
-def tune(
-    plant: Plant,
-    loop: str = "velocity",
-    *,
-    method: str = "lqr",
-    target: str = "volts",
-    units: MechanismUnits | None = None,
-    qp: float | str | None = None,
-    qv: float | str | None = None,
-    r: float | str | None = None,
-    period: float = 0.02,
-    delay: float = 0.0,
-    rise_time: float | None = None,
-    overshoot: float = 5.0,
-    voltage: float = 12.0,
-    step: float | None = None,
-) -> TuneResult:
-    """Design gains, convert them to a target and check them in closed-loop simulation.
+@dataclass(frozen=True)
+class DesignRequest:
+    """What :func:`tune` and :func:`design_for_target` design: ``motorlab tune``'s options, written once.
 
     Parameters
     ----------
-    plant
-        The plant (:class:`Plant`; SI).
     loop
         ``"velocity"`` or ``"position"``.
     method
@@ -189,7 +172,8 @@ def tune(
     target
         One of :data:`motorlab.control.targets.TARGETS`.
     units
-        The user's length unit; plain numbers given as ``qp``, ``qv`` and ``step`` are in it. Default rad.
+        The user's length unit; plain numbers given as ``qp``, ``qv`` (and :func:`tune`'s ``step``) are in it.
+        None: radians.
     qp, qv
         LQR tolerances on position [unit] and velocity [unit/s]: a number, a text with a unit or a
         percentage (:func:`motorlab.control.tolerances.design_tolerances`), or None for the physical
@@ -207,6 +191,36 @@ def tune(
         Pole placement: largest acceptable overshoot [%].
     voltage
         Supply voltage [V] (saturation, power and duty conversions, profile limits).
+    """
+
+    loop: str = "velocity"
+    method: str = "lqr"
+    target: str = "volts"
+    units: MechanismUnits | None = None
+    qp: float | str | None = None
+    qv: float | str | None = None
+    r: float | str | None = None
+    period: float = 0.02
+    delay: float = 0.0
+    rise_time: float | None = None
+    overshoot: float = 5.0
+    voltage: float = 12.0
+
+    @property
+    def mechanism(self) -> MechanismUnits:
+        """The length unit (radians when none was given)."""
+        return self.units or MechanismUnits("rad", 1.0)
+
+
+def tune(plant: Plant, request: DesignRequest | None = None, *, step: float | None = None) -> TuneResult:
+    """Design gains, convert them to a target and check them in closed-loop simulation.
+
+    Parameters
+    ----------
+    plant
+        The plant (:class:`Plant`; SI).
+    request
+        What to design (:class:`DesignRequest`; default: LQR of a velocity loop in volts per radian).
     step
         Step size [unit/s for velocity, unit for position]; default half the free speed, or one
         revolution of the shaft.
@@ -220,56 +234,41 @@ def tune(
     OptionError
         For impossible settings.
     """
-    units = units or MechanismUnits("rad", 1.0)
-    gains, tg = design_for_target(plant, loop, method=method, target=target, units=units, qp=qp, qv=qv, r=r,
-                                  period=period, delay=delay, rise_time=rise_time, overshoot=overshoot,
-                                  voltage=voltage)
+    request = request or DesignRequest()
+    units = request.mechanism
+    gains, tg = design_for_target(plant, request)
     ff = plant.feedforward
-    limits = max_profile(ff, voltage)
-    size = _step_size(ff, loop, step, units=units, voltage=voltage)
+    limits = max_profile(ff, request.voltage)
+    size = _step_size(ff, request.loop, step, units=units, voltage=request.voltage)
     step_resp, prof_resp = _simulate_step_and_profile(
-        gains, ff, tg.equivalent_feedforward, plant.simulated, size, limits, voltage=voltage, cpr=units.cpr,
-        law="roadrunner" if target == "roadrunner" else "pid",
+        gains, ff, tg.equivalent_feedforward, plant.simulated, size, limits, voltage=request.voltage, cpr=units.cpr,
+        law="roadrunner" if request.target == "roadrunner" else "pid",
     )
-    warnings = [*plant.notes, *_check(gains, step_resp, prof_resp, overshoot if method == "poles" else None, rise_time,
+    overshoot = request.overshoot if request.method == "poles" else None
+    warnings = [*plant.notes, *_check(gains, step_resp, prof_resp, overshoot, request.rise_time,
                                       static_friction=ff.kS)]
     return TuneResult(gains, tg, step_resp, prof_resp, limits, plant, units, warnings)
 
 
-def design_for_target(
-    plant: Plant,
-    loop: str = "velocity",
-    *,
-    method: str = "lqr",
-    target: str = "volts",
-    units: MechanismUnits | None = None,
-    qp: float | str | None = None,
-    qv: float | str | None = None,
-    r: float | str | None = None,
-    period: float = 0.02,
-    delay: float = 0.0,
-    rise_time: float | None = None,
-    overshoot: float = 5.0,
-    voltage: float = 12.0,
-) -> tuple[Gains, TargetGains]:
+def design_for_target(plant: Plant, request: DesignRequest | None = None) -> tuple[Gains, TargetGains]:
     """The design of :func:`tune` without its simulations: (SI gains, the gains in the target's units).
 
     Parameters and errors as :func:`tune`'s. The SI gains depend on the plant, the target's kind of
-    controller and the tolerances only, never on ``units`` (which reads user tolerances given as plain
-    numbers, and prints the target's numbers).
+    controller and the tolerances only, never on ``request.units`` (which reads user tolerances given as
+    plain numbers, and prints the target's numbers).
     """
-    units = units or MechanismUnits("rad", 1.0)
-    if loop not in LOOPS:
-        raise OptionError(f"unknown loop {loop!r} (expected velocity or position)")
-    if method not in METHODS:
-        raise OptionError(f"unknown method {method!r} (expected lqr or poles)")
-    if not (voltage > 0 and math.isfinite(voltage)):
-        raise OptionError(f"supply voltage must be positive, got {voltage}")
+    q = request or DesignRequest()
+    units = q.mechanism
+    if q.loop not in LOOPS:
+        raise OptionError(f"unknown loop {q.loop!r} (expected velocity or position)")
+    if q.method not in METHODS:
+        raise OptionError(f"unknown method {q.method!r} (expected lqr or poles)")
+    if not (q.voltage > 0 and math.isfinite(q.voltage)):
+        raise OptionError(f"supply voltage must be positive, got {q.voltage}")
     ff = plant.feedforward.check_plant()
-    tolerances = design_tolerances(ff, voltage, units, qp=qp, qv=qv, r=r)
-    gains = _design(ff, loop, method, target, tolerances, units=units, period=period, delay=delay,
-                    rise_time=rise_time, overshoot=overshoot)
-    return gains, to_target(gains, ff, target, units=units, voltage=voltage, geometry=plant.geometry)
+    tolerances = design_tolerances(ff, q.voltage, units, qp=q.qp, qv=q.qv, r=q.r)
+    gains = _design(ff, q, tolerances)
+    return gains, to_target(gains, ff, q.target, units=units, voltage=q.voltage, geometry=plant.geometry)
 
 
 #: Targets whose controller holds position and velocity together (Road Runner's HolonomicController):
@@ -277,13 +276,12 @@ def design_for_target(
 HOLONOMIC = ("roadrunner",)
 
 
-def _design(
-    ff: Feedforward, loop: str, method: str, target: str, tolerances: Tolerances, *, units: MechanismUnits,
-    period: float, delay: float, rise_time: float | None, overshoot: float,
-) -> Gains:
-    """Gains of :func:`tune` by ``method`` (SI: volts per rad)."""
-    if method == "poles":
-        return design_pid_poles(loop, ff, rise_time=rise_time, overshoot=overshoot, period=period, delay=delay)
+def _design(ff: Feedforward, request: DesignRequest, tolerances: Tolerances) -> Gains:
+    """Gains of :func:`tune` by ``request.method`` (SI: volts per rad)."""
+    loop, target, period, delay = request.loop, request.target, request.period, request.delay
+    if request.method == "poles":
+        return design_pid_poles(loop, ff, rise_time=request.rise_time, overshoot=request.overshoot, period=period,
+                                delay=delay)
     tol = tolerances
     if loop == "position" or target in HOLONOMIC:
         gains = design_position_lqr(ff.kV, ff.kA, qp=tol.qp, qv=tol.qv, r=tol.r, period=period, delay=delay)
@@ -293,7 +291,7 @@ def _design(
             gains = Gains("velocity", gains.kD, gains.kP, 0.0, method="lqr", period=period, delay=delay)
     else:
         gains = design_velocity_lqr(ff.kV, ff.kA, qv=tol.qv, r=tol.r, period=period, delay=delay)
-    settings = tol.settings(units)
+    settings = tol.settings(request.mechanism)
     if loop == "velocity" and target not in HOLONOMIC:
         settings = {k: v for k, v in settings.items() if not k.startswith("qp")}
     return replace(gains, settings=settings)
@@ -478,7 +476,8 @@ def tune_summary(
     delays = {"velocity": period / 2 if velocity_delay is None else velocity_delay, "position": 0.0}
     for loop in LOOPS:
         tgt = "ftc-power" if (loop == "position" and target == "ftc-pidf") else target
-        results[loop] = tune(plant, loop, target=tgt, units=mech, period=period, voltage=voltage, delay=delays[loop])
+        results[loop] = tune(plant, DesignRequest(loop, target=tgt, units=mech, period=period, voltage=voltage,
+                                                  delay=delays[loop]))
     lines = []
     for loop, res in results.items():
         g = res.target.gains

@@ -11,7 +11,7 @@ from __future__ import annotations
 from motorlab.experiments import Option
 
 #: ``--units`` of ``tune`` (as :data:`motorlab.control.plant.UNIT_NAMES`; tests/ui/test_api.py checks).
-UNIT_NAMES = ("rad", "rotations", "degrees", "ticks", "m")
+UNIT_NAMES = ("rad", "rotations", "degrees", "ticks", "m", "ft", "in")
 #: ``--method`` of ``tune`` (as :data:`motorlab.control.tune.METHODS`).
 METHODS = ("lqr", "poles")
 
@@ -36,9 +36,10 @@ def tune_options(targets: tuple[str, ...]) -> tuple[Option, ...]:
                     "kV, kA; several are merged"),
         Option("unit", kind="text", metavar="NAME", group=_PLANT, label="Which unit of the session",
                help="the unit's name in a session's results.json, when it has several"),
-        Option("units", kind="choice", choices=UNIT_NAMES, default="rad", group=_PLANT, label="Length unit",
-               help="of kV, kA, the tolerances and the step: radians, rotations, degrees, encoder ticks or metres "
-                    "at the wheel"),
+        Option("units", kind="choice", choices=UNIT_NAMES, group=_PLANT, label="Length unit",
+               help="of kV, kA, the tolerances and the step: radians, rotations, degrees, encoder ticks, or "
+                    "metres, feet or inches at the wheel; left empty: the unit of the file the results were "
+                    "fitted from (a SysId file's), else radians"),
         Option("cpr", "count", kind="number", positive=True, group=_PLANT, label="Encoder counts per revolution",
                help="of the shaft the gains are for (the FTC, Road Runner and Phoenix 5 targets count ticks)"),
         Option("wheel-radius", "m", positive=True, group=_PLANT, label="Wheel radius",

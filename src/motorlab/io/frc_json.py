@@ -41,6 +41,11 @@ UNITS: dict[str, tuple[str, str]] = {
 SI_PER_UNIT = {"meters": 1.0, "feet": 12 * 0.0254, "inches": 0.0254, "radians": 1.0, "rotations": 2 * math.pi,
                "degrees": math.pi / 180}
 
+#: The length unit of a file's gains in each unit (``motorlab tune --units``): a team's code counts in the
+#: file's own unit, so a file in Feet gives kV per foot.
+GAIN_UNITS = {"meters": "m", "feet": "ft", "inches": "in", "radians": "rad", "rotations": "rotations",
+              "degrees": "degrees"}
+
 _SIDES = ("left", "right")
 #: ``side="both"``: every drivetrain test twice, as ``<test>#left`` and ``<test>#right``.
 BOTH = "both"

@@ -87,18 +87,71 @@ class PulledFile:
 
 
 @dataclass
+class NotPulled:
+    """A file (or a list of files) that did not come: which, why and what to do, each in words.
+
+    ``line`` is the one line ``motorlab robot pull`` prints for it (the route and the robot's address in it).
+    """
+
+    file: str
+    reason: str
+    todo: str
+    line: str
+
+    def to_dict(self) -> dict[str, str]:
+        return {"file": self.file, "reason": self.reason, "todo": self.todo, "line": self.line}
+
+
+#: What to do about a failure whose message says nothing of it.
+DEFAULT_TODO = "pull again; if it fails again, copy the file from the robot by USB"
+#: Advice a failure's message may end with (its last clause): kept as the failure's "what to do".
+_ADVICE = re.compile(r"[:;]\s*((?:[^:;]*\b(?:pull again|by USB|rename it|install|copy)\b[^:;]*))$")
+
+
+def not_pulled(what: str, message: str, address: str) -> NotPulled:
+    """The failure of the file or route ``what`` (a path the robot serves) from its one-line ``message``."""
+    path, _, query = what.partition("?file=")
+    if query:
+        name = urllib.parse.unquote(query) if path == MOTORLAB_DOWNLOAD else query
+    elif path.startswith("/tuning/"):
+        name = f"the newest {path.split('/')[2]} file of Road Runner's tuning"
+    else:
+        name = {"/logs": "the list of FlightRecorder logs", MOTORLAB_LIST: "the list of motorlab's logs",
+                "": "the rest of the robot's files"}.get(path, f"the robot's files ({path})")
+    reason = message
+    for prefix in (f"{what} from {address}: ", f"{what}: ", f"{path} from {address}: "):
+        reason = reason.removeprefix(prefix)
+    advice = _ADVICE.search(reason)
+    todo = advice.group(1).strip() if advice else DEFAULT_TODO
+    if advice:
+        reason = reason[:advice.start()].strip()
+    return NotPulled(name, reason, todo, message)
+
+
+@dataclass
 class PullResult:
-    """What ``pull`` found: files, and the services the robot does not have (with what to do)."""
+    """What ``pull`` found: files, the services the robot does not have (with what to do), and the files that
+    did not come (``failed``: one line each; ``not_pulled``: the same, in words for the app)."""
 
     address: str
     folder: Path
     files: list[PulledFile] = field(default_factory=list)
     missing: list[str] = field(default_factory=list)
-    failed: list[str] = field(default_factory=list)
+    not_pulled: list[NotPulled] = field(default_factory=list)
+
+    @property
+    def failed(self) -> list[str]:
+        """One line per file or route that failed, as ``motorlab robot pull`` prints them."""
+        return [n.line for n in self.not_pulled]
+
+    def fail(self, what: str, message: str) -> None:
+        """Keep the failure of ``what`` (a route, or a file's download path)."""
+        self.not_pulled.append(not_pulled(what, message, self.address))
 
     def to_dict(self) -> dict[str, Any]:
         return {"address": self.address, "folder": str(self.folder), "files": [f.to_dict() for f in self.files],
-                "missing": list(self.missing), "failed": list(self.failed)}
+                "missing": list(self.missing), "failed": self.failed,
+                "not_pulled": [n.to_dict() for n in self.not_pulled]}
 
 
 def check_name(name: str, where: str) -> str:
@@ -166,7 +219,7 @@ def _each(result: PullResult, what: str) -> Iterator[None]:
     except RobotUnreachable:
         raise
     except RobotLinkError as exc:
-        result.failed.append(str(exc) if what in str(exc) else f"{what}: {exc}")
+        result.fail(what, str(exc) if what in str(exc) else f"{what}: {exc}")
 
 
 def _listed(robot: RobotHttp, path: str) -> Reply | None:
@@ -212,10 +265,10 @@ def _flight_logs(robot: RobotHttp, result: PullResult, out: Path) -> None:
                 path = f"/logs/download?file={name}"
                 with _each(result, path):
                     check_name(name, "/logs")
-                    if _UNASKABLE.search(name):
-                        raise RobotLinkError(f"/logs lists {name!r}, which Road Runner's /logs/download cannot be "
-                                             "asked for (it cuts the query at white space, & and =, and does not "
-                                             "URL-decode): not pulled; rename it on the robot or copy it by USB")
+                    if _UNASKABLE.search(name):  # the request line or the query would be cut there
+                        raise RobotLinkError(f"{path}: its name holds a space, & or =, which Road Runner's file "
+                                             "server cannot be asked for: not pulled; rename it on the robot or copy "
+                                             "it by USB")
                     got = robot.get(path)
                     if got.status != 200:
                         raise RobotLinkError(f"{path} from {robot.address}: HTTP {got.status} "
@@ -318,8 +371,8 @@ def pull(host: str, out: str | os.PathLike[str], *, http_port: int = 8080, timeo
         except RobotUnreachable as exc:
             if not result.files and not result.failed:
                 raise
-            result.failed.append(f"{exc}: the robot went away during the pull; what came is kept, pull again for "
-                                 "the rest")
+            result.fail("", f"{exc}: the robot went away during the pull; what came is kept, pull again for the "
+                            "rest")
             break
     if not result.files and result.failed:
         more = f" (and {len(result.failed) - 1} more)" if len(result.failed) > 1 else ""

@@ -38,6 +38,18 @@ LIFETIME = ("values written through FTC Dashboard live until the robot controlle
 
 
 @dataclass
+class TargetValues:
+    """The gains a target takes from a fit (full precision: what is written), the code to paste, the tune
+    notes, and for people each gain's unit and, where the fit gives it, its standard error (same unit)."""
+
+    values: dict[str, float]
+    snippet: str
+    notes: list[str]
+    units: dict[str, str] = field(default_factory=dict)
+    stderr: dict[str, float] = field(default_factory=dict)
+
+
+@dataclass
 class PushPlan:
     """What would be written: the changes, the code to paste, the robot's state, the tune result."""
 
@@ -46,48 +58,59 @@ class PushPlan:
     snippet: str
     running: str | None
     notes: list[str] = field(default_factory=list)
+    units: dict[str, str] = field(default_factory=dict)
+    stderr: dict[str, float] = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:
-        return {"target": self.target, "changes": [c.to_dict() for c in self.changes], "snippet": self.snippet,
+        """The plan as JSON; each change with its gain's ``unit`` and ``stderr`` (null when the fit gives none)."""
+        changes = [{**c.to_dict(), "unit": self.units.get(c.name, ""), "stderr": self.stderr.get(c.name)}
+                   for c in self.changes]
+        return {"target": self.target, "changes": changes, "snippet": self.snippet,
                 "running": self.running, "notes": list(self.notes), "lifetime": LIFETIME}
 
 
 def target_values(params: list[str], target: str, *, cpr: float | None = None, wheel_radius: float | None = None,
                   unit: str | None = None, voltage: float = 12.0, loop: str = "position",
-                  language: str = "java") -> tuple[dict[str, float], str, list[str]]:
+                  language: str = "java") -> TargetValues:
     """The gains ``target`` takes from the fit in ``params``, the code to paste, and the tune notes.
 
     ``roadrunner``: ``kS`` [V], ``kV`` [V·s/tick], ``kA`` [V·s²/tick] (``cpr`` required, as for
     ``motorlab tune --target roadrunner``); ``pedro``: the constants the fit determines; ``ftc-pidf``:
-    the hub's ``p, i, d, f`` for a velocity loop.
+    the hub's ``p, i, d, f`` for a velocity loop. kS, kV and kA carry the fit's standard errors, converted
+    as the values are (a change of unit is a factor: kV per tick = kV per rad × 2π/cpr, and so its error).
     """
     from motorlab.control.emit import emit_snippet
     from motorlab.control.plant import MechanismUnits, load_plant
-    from motorlab.control.tune import tune
+    from motorlab.control.tune import DesignRequest, tune
 
     if target not in TARGET_FIELDS:
         raise RobotLinkError(f"unknown target {target!r}: roadrunner, pedro or ftc-pidf")
     units = MechanismUnits.from_options("rad", cpr=cpr, wheel_radius=wheel_radius)
     plant = load_plant([Path(p) for p in params], unit=unit)
-    result = tune(plant, "velocity" if target == "ftc-pidf" else loop, target=target, units=units, voltage=voltage)
+    result = tune(plant, DesignRequest("velocity" if target == "ftc-pidf" else loop, target=target, units=units,
+                                       voltage=voltage))
     tg = result.target
     numbers = {**tg.feedforward, **tg.gains}
     values = {g: float(numbers[g]) for g in TARGET_FIELDS[target] if g in numbers}
     if not values:
         raise RobotLinkError(f"the fit in {', '.join(params)} gives none of {target}'s gains")
-    return values, emit_snippet(tg, language), list(tg.notes)
+    si = plant.feedforward.to_dict()
+    stderr = {g: abs(values[g] / si[g]) * plant.stderr[g] for g in values
+              if g in plant.stderr and si.get(g)}
+    return TargetValues(values, emit_snippet(tg, language), list(tg.notes),
+                        {g: tg.units.get(g, "") for g in values}, stderr)
 
 
-def prepare(dash: Dashboard, target: str, values: dict[str, float], snippet: str,
-            overrides: list[str] | None = None) -> PushPlan:
-    """Read the robot's tree and status and plan the write (nothing is written)."""
+def prepare(dash: Dashboard, target: str, gains: TargetValues, overrides: list[str] | None = None) -> PushPlan:
+    """Read the robot's tree and status and plan the write of ``gains`` (nothing is written)."""
+    values = gains.values
     tree = dash.config()
     paths = target_paths(tree, target, values, overrides)
     changes = plan(tree, paths, values)
     status = dash.status()
     running = None if is_idle(status) else f"{status.get('activeOpMode')} ({status.get('activeOpModeStatus')})"
     notes = [f"{g}: not on the robot, not written" for g in values if g not in paths]
-    return PushPlan(target, changes, snippet, running, notes)
+    return PushPlan(target, changes, gains.snippet, running, notes, gains.units, gains.stderr)
 
 
 def apply(dash: Dashboard, push_plan: PushPlan, state: Path, *, while_running: bool = False,

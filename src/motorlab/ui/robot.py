@@ -333,11 +333,11 @@ def _push_routes(link: _Link) -> list[Route]:
         cpr = float(fields["cpr"]) if fields.get("cpr") else None
         radius = (parse_quantity(fields["wheel-radius"], "m", name="wheel radius") if fields.get("wheel-radius")
                   else None)
-        values, snippet, notes = target_values([str(params)], target, cpr=cpr, wheel_radius=radius)
+        gains = target_values([str(params)], target, cpr=cpr, wheel_radius=radius)
         host, port = _host(fields.get("host")), _port(fields.get("dashboard-port"), DEFAULT_DASHBOARD_PORT)
         with Dashboard(host, port) as dash:
-            plan = prepare(dash, target, values, snippet, fields.get("config") or None)
-            answer = {**plan.to_dict(), "notes": plan.notes + notes, "lifetime": LIFETIME}
+            plan = prepare(dash, target, gains, fields.get("config") or None)
+            answer = {**plan.to_dict(), "notes": plan.notes + gains.notes, "lifetime": LIFETIME}
             if write:
                 if fields.get("confirm") != "yes":
                     raise MotorlabError("nothing written: the page did not confirm")

@@ -183,23 +183,20 @@ def _detect_one(path: str, columns: Sequence[str] = ()) -> dict[str, Any]:
     return entry
 
 
-#: A SysId or frc-characterization file's units → the gains' length unit (``tune --units``).
-_TUNE_UNITS = {"Rotations": "rotations", "Radians": "rad", "Degrees": "degrees", "Meters": "m", "Feet": "m",
-               "Inches": "m"}
-
-
 def own_units(metadata: dict[str, Any]) -> dict[str, Any] | None:
     """The units a file carries (SysId's ``units`` and ``unitsPerRotation``), or None.
 
     Such a file is fitted in them: no counts per revolution or wheel radius typed for another mechanism
     applies to it, and its gains default to them (``tune``: rotations for a shooter in rotations).
     """
+    from motorlab.io.frc_json import GAIN_UNITS
+
     units = metadata.get("units")
     if metadata.get("format") not in ("sysid-json", "frc-char-json", "wpilog") or not isinstance(units, str):
         return None
     per = metadata.get("unitsPerRotation")
     return {"units": units, "per_rotation": float(per) if isinstance(per, int | float) else None,
-            "assumed": bool(metadata.get("units_assumed")), "tune_units": _TUNE_UNITS.get(units, "rad")}
+            "assumed": bool(metadata.get("units_assumed")), "tune_units": GAIN_UNITS.get(units.lower(), "rad")}
 
 
 def detect(args: Sequence[str]) -> list[dict[str, Any]]:

@@ -14,6 +14,7 @@ import { addFiles, groups, runAll, staleness } from "./fit.js";
 
 const OWN = ["loop", "kv", "ka", "ks", "params", "target", "emit", "unit"];
 const PRIMARY = ["cpr", "wheel-radius", "units"];
+const DISTANCES = ["m", "ft", "in"];  // tune's length units that are distances (metres, feet, inches)
 const TYPED_UNITS = { K: "V*s/rad", R: "ohm", J: "kg*m^2", kV: "V*s/rad", kA: "V*s^2/rad", kS: "V" };
 const LANGUAGES = [["java", "Java"], ["kotlin", "Kotlin"], ["python", "Python"]];
 // The parameters of the motor model: two results giving one of them are two models, never merged silently.
@@ -169,11 +170,11 @@ function tuneValues(ctx, model) {
   const motor = ctx.task.key === "bench" ? sessionMotor(ctx) : null;
   if (motor) values.cpr = String(motor.counts_per_revolution);  // the session's catalogue motor's encoder
   const own = ownUnits(model);
-  const units = values.units || "rad";
-  if (own && own.tune_units === "m" && units === "m") values["wheel-radius"] = "1 m";  // its lengths are metres already
-  // a wheel radius turns lengths into metres at the wheel: only when metres are the length unit (or the target
-  // counts in inches: Road Runner's inPerTick, Pedro), never silently under a box that says radians
-  else if (!(units === "m" || ["roadrunner", "pedro"].includes(g.target))) values["wheel-radius"] = "";
+  const units = values.units || (own ? own.tune_units : "rad");
+  // a file that logs distances (Meters, Feet, Inches) gives gains per its own length already: no wheel radius;
+  // else a wheel radius turns lengths into distances at the wheel: only when a distance is the length unit (or
+  // the target counts in inches: Road Runner's inPerTick, Pedro), never silently under a box that says radians
+  if ((own && DISTANCES.includes(own.tune_units)) || !(DISTANCES.includes(units) || ["roadrunner", "pedro"].includes(g.target))) values["wheel-radius"] = "";
   return values;
 }
 
@@ -345,7 +346,8 @@ export function render(host, ctx) {
   const note = (f) => {
     const fit = isShared(f.name) && usedBy(f.name);
     if (fit) return `as ${fit.label} was fitted with it`;
-    if (f.name === "wheel-radius" && !["roadrunner", "pedro"].includes(g.target)) return "used when the length unit is metres";
+    if (f.name === "wheel-radius" && own && DISTANCES.includes(own.tune_units)) return "not used: the file logs distances";
+    if (f.name === "wheel-radius" && !["roadrunner", "pedro"].includes(g.target)) return "used when the length unit is metres, feet or inches";
     if (f.name === "units" && own) return `the file's own unit is ${own.units.toLowerCase()}`;
     return wanted.includes(f.name) && !settings()[f.name] ? `needed for ${targetLabel(g.target)}` : "";
   };

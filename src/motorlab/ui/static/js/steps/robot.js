@@ -48,9 +48,10 @@ registerStep("robot-pull", {
       robotFields());
     const status = el("p", { class: "status", role: "status" });
     const list = el("ul", { class: "files" });
+    const notPulled = el("div", {});
     const button = el("button", { class: "primary", type: "button", text: "Connect to the robot" });
     button.addEventListener("click", async () => {
-      status.textContent = "downloading…"; list.replaceChildren(); button.disabled = true;
+      status.textContent = "downloading…"; list.replaceChildren(); notPulled.replaceChildren(); button.disabled = true;
       try {
         const answer = await post("api/robot/pull", form());
         const files = [];
@@ -65,13 +66,19 @@ registerStep("robot-pull", {
             entry.info && entry.info.experiment ? `, proposed: ${entry.info.experiment}` : ""));
         }
         save();
-        status.textContent = files.length ? `${files.length} file${files.length > 1 ? "s" : ""} brought back.` : "The robot has no files to bring back yet.";
+        const failed = answer.not_pulled || [];
+        status.textContent = (files.length ? `${files.length} file${files.length > 1 ? "s" : ""} brought back.` : "The robot has no files to bring back yet.")
+          + (failed.length ? ` ${failed.length} could not be brought back (below).` : "");
         for (const line of answer.missing) list.append(el("li", { class: "small", text: line }));
+        // each file the pull could not bring: which, why and what to do, in words (motorlab robot pull's exit 3)
+        if (failed.length) notPulled.append(el("section", { class: "card not-pulled", role: "alert" },
+          el("h3", { text: `Not brought back (${failed.length})` }),
+          el("ul", {}, failed.map((n) => el("li", {}, el("strong", { text: n.file }), `: ${n.reason}. What to do: ${n.todo}.`)))));
         for (const key of tasks) host.append(el("p", {}, el("a", { class: "button", href: `#/${key}/fit`, text: `Open them in “${key}”` })));
       } catch (e) { status.textContent = ""; status.append(el("span", { class: "error", role: "alert", text: e.message })); }
       button.disabled = false;
     });
-    host.append(el("p", {}, button), status, list);
+    host.append(el("p", {}, button), status, list, notPulled);
   },
 });
 
@@ -255,7 +262,10 @@ registerStep("robot-push", {
     const show = el("button", { class: "primary", type: "button", text: "Show old and new values", onclick: async () => {
       try {
         const plan = await post("api/robot/push/plan", fields());
-        const rows = plan.changes.map((c) => el("tr", {}, el("td", { text: c.path }), el("td", { text: String(c.old) }), el("td", { text: String(c.new) })));
+        // for people: the new value rounded to its uncertainty (from the fit) with its unit; the value on the robot
+        // has no uncertainty of its own (4 significant digits). What is written is the full value.
+        const shown = (c, v, stderr) => (typeof v === "number" ? quantity(v, stderr, c.unit) : String(v));
+        const rows = plan.changes.map((c) => el("tr", {}, el("td", { text: c.path }), el("td", { class: "num", text: shown(c, c.old, null) }), el("td", { class: "num", text: shown(c, c.new, c.stderr) })));
         const write = el("button", { class: "primary", type: "button", text: "Write these values to the robot", onclick: async () => {
           const f = fields(); f.append("confirm", "yes");
           if (plan.running) {
@@ -265,7 +275,7 @@ registerStep("robot-push", {
           try {
             await post("api/robot/push/apply", f);
             out.append(el("p", { role: "status", text: `Written, read back and checked. ${plan.lifetime.charAt(0).toUpperCase()}${plan.lifetime.slice(1)}.` }), el("details", {}, el("summary", { text: "The code to paste into your robot code" }), el("pre", { style: "overflow-x:auto" }, el("code", { text: plan.snippet }))),
-              el("p", { text: `The old values are kept: ${plan.changes.map((c) => `${c.path.split(".").pop()} ${c.old}`).join(", ")}.` }),
+              el("p", { text: `The old values are kept: ${plan.changes.map((c) => `${c.path.split(".").pop()} ${shown(c, c.old, null)}`).join(", ")}.` }),
               el("button", { type: "button", text: "Put the old values back", onclick: async () => {
                 try { await post("api/robot/push/restore", form()); out.append(el("p", { role: "status", text: "The old values are back on the robot." })); } catch (e) { fail(e); }
               } }));
