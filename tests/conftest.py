@@ -32,5 +32,5 @@ def dyno_dir() -> Path:
     """VEX Robotics' dynamometer exports, ``../shared/data/real/dyno`` (skips the test, saying where it looked)."""
     found = find_dyno_dir()
     if found is None:
-        pytest.skip(not_found("the shared dynamometer exports (../shared/data/real/dyno)"))
+        pytest.skip(not_found("the shared dynamometer exports (dyno/ of ../shared/data/real)"))
     return found

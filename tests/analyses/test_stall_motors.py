@@ -31,7 +31,7 @@ DYNO = find_dyno_dir()
 def _dyno(name: str) -> str:
     """A VEX export of the shared folder (skips the test, saying where it looked, when the folder is absent)."""
     if DYNO is None:
-        pytest.skip(not_found("the shared dynamometer exports (../shared/data/real/dyno)"))
+        pytest.skip(not_found("the shared dynamometer exports (dyno/ of ../shared/data/real)"))
     return str(DYNO / name)
 
 
