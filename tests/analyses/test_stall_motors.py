@@ -40,6 +40,17 @@ def _exports(pattern: str) -> list[str]:
     return sorted(str(p) for p in Path(_dyno(".")).glob(pattern))
 
 
+def _files(motor: str) -> list[str]:
+    """A motor's locked-rotor exports, all of them, as they are."""
+    return _exports(f"{motor}-locked-rotor-data-*.csv")
+
+
+def _curve_of(motor: str) -> str:
+    """A motor's 12 V curve."""
+    (path,) = _exports(f"{motor}-motor-curve-data-*.csv")
+    return path
+
+
 # ---- VEX exports (../shared/data/real/dyno: kForth/FrcMotorCompare@ed54731, byte for byte) ---------------------
 
 
@@ -60,8 +71,7 @@ def test_ftc_neverest_run_reads_and_fits() -> None:
 
 def _maker_k(motor: str) -> float:
     """The maker's 12 V stall torque / stall current: the speed-0 row of VEX's curve [N·m/A]."""
-    (path,) = _exports(f"{motor}-motor-curve-data-*.csv")
-    rec = read_csv(path)
+    rec = read_csv(_curve_of(motor))
     row = int(np.argmin(rec["speed"]))
     return float(rec["torque"][row] / rec["current"][row])
 
@@ -78,7 +88,7 @@ def test_k_within_20_percent_of_the_makers_stall_figures(motor: str) -> None:
     """All of a motor's locked-rotor exports together, as they are (torque-only ones, another shaft, failures
     and all): K within 20 % of the maker's stall torque / stall current, R within 10 % of V/I at the first
     full sample of the coolest run (the hidden check of issue 23, on these motors)."""
-    files = _exports(f"{motor}-locked-rotor-data-*.csv")
+    files = _files(motor)
     result = stall(read_runs(files))
     assert result["K"].determined
     assert result["K"].value == pytest.approx(_maker_k(motor), rel=0.20)
@@ -131,8 +141,7 @@ def test_775pro_12v_starts_at_the_current_limit_and_collapses() -> None:
 @pytest.mark.parametrize("motor", SHARED_MOTORS)
 def test_other_vex_curves_match_their_free_and_stall_rows(motor: str) -> None:
     """Every VEX curve of the shared exports (the hidden check: each within 2 % of its own rows)."""
-    (name,) = _exports(f"{motor}-motor-curve-data-*.csv")
-    rec = read_csv(name)
+    rec = read_csv(_curve_of(motor))
     result = curve(rec, voltage=12.0)
     speed, torque, current = rec["speed"], rec["torque"], rec["current"]
     free, held = int(np.argmax(speed)), int(np.argmin(speed))
@@ -340,15 +349,6 @@ def test_a_dense_log_is_analysed_as_medians_of_consecutive_samples():
 
 
 # ---- K the rows agree with, on every motor (issue 34) ----------------------------------------------------------
-
-def _files(motor: str) -> list[str]:
-    return _exports(f"{motor}-locked-rotor-data-*.csv")
-
-
-def _curve_of(motor: str) -> str:
-    (path,) = _exports(f"{motor}-motor-curve-data-*.csv")
-    return path
-
 
 def _first_seconds(rec: Recording, start: float, cut: float | None, seconds: float = 5.0) -> float:
     """The run's own torque ÷ current over its first ``seconds`` of healthy rows (from its first full sample)."""
