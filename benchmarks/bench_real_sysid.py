@@ -6,7 +6,8 @@ the file's own units. Ratios are RMSE / the team's RMSE (below 1: better than th
 
     python benchmarks/bench_real_sysid.py [--dir DIR] [--plots DIR] [--limits]
 
-``--dir`` a folder of JSON logs with a ``team_gains.csv`` (default tests/data/real/sysid);
+``--dir`` a folder of JSON logs whose README.md tables the teams' gains (default ../shared/data/real/sysid, read
+in place; a folder without that table is scored with the default folder's gains for the files it holds);
 ``--plots`` writes one PNG per file (logged against simulated speed and position, team and
 motorlab, residuals beneath); ``--limits`` also fits the best three gains for each score alone
 (the lower bounds any three gains can reach) and each drivetrain side alone.
@@ -15,8 +16,8 @@ motorlab, residuals beneath); ``--limits`` also fits the best three gains for ea
 from __future__ import annotations
 
 import argparse
-import csv
 import math
+import sys
 import time
 from pathlib import Path
 
@@ -27,17 +28,21 @@ from motorlab.analyses.sysid_score import Score, file_tests, fit_gains, score, s
 from motorlab.io import read_any
 
 HERE = Path(__file__).resolve().parent
-DEFAULT_DIR = HERE.parent / "tests" / "data" / "real" / "sysid"
+sys.path.insert(0, str(HERE.parent))
+from tests.real_data import find_real_dir, not_found, team_gains  # noqa: E402
+
+REAL = find_real_dir()
+DEFAULT_DIR = REAL / "sysid" if REAL is not None else None
 
 
 def team_table(folder: Path) -> dict[str, tuple[float, float, float]]:
-    """The teams' gains of the files in ``folder`` (its team_gains.csv, else the tests' one for the files present)."""
-    table = folder / "team_gains.csv"
-    if not table.exists():
-        return {k: v for k, v in team_table(DEFAULT_DIR).items() if (folder / k).exists()}
-    with open(table, newline="") as fh:
-        return {r["file"]: (float(r["kS_V"]), float(r["kV_V_per_unit_per_s"]), float(r["kA_V_per_unit_per_s2"]))
-                for r in csv.DictReader(fh)}
+    """The teams' gains of the files in ``folder`` (its README's table, else the shared one for the files present)."""
+    try:
+        return team_gains(folder)
+    except (OSError, ValueError):
+        if DEFAULT_DIR is None or folder.resolve() == DEFAULT_DIR.resolve():
+            raise
+        return {k: v for k, v in team_gains(DEFAULT_DIR).items() if (folder / k).exists()}
 
 
 def evaluate(path: Path, team: tuple[float, float, float], *, limits: bool) -> dict:
@@ -126,6 +131,9 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--plots", type=Path, default=None)
     parser.add_argument("--limits", action="store_true")
     args, _ = parser.parse_known_args(argv)  # benchmarks/run.py passes its own arguments through
+    if args.dir is None:
+        print(not_found("the shared real SysId logs (../shared/data/real/sysid)") + ": give --dir")
+        return
     teams = team_table(args.dir)
     labels = ["motorlab", "ols", "motor model"] + (["best speed", "best position"] if args.limits else [])
     print("RMSE ratio to the team's gains (speed / position); team RMSE in the file's units")

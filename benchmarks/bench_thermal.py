@@ -5,12 +5,21 @@
 - the heated simulator: 300 s of a stalled motor on the virtual dynamometer (for reference).
 
 Runs on a real 300 s export (VEX's BAG at 4 V) when ../shared/data/real/dyno is beside the clone, else on a
-simulated one.
+simulated one. Then, on VEX's exports (the shared ones, and those of ``--dyno DIR``): each motor's K against its
+maker's figure, each healthy run's forecast from its first 120 s, and the population of cases behind the prior.
+
+    python benchmarks/bench_thermal.py [--dyno DIR ...]
+
+``--dyno`` a folder of VEX's dynamometer exports fetched by the person (e.g. ``motor_data/`` of the public
+repository kForth/FrcMotorCompare, commit ed54731, which also holds the AndyMark 775 and BaneBots 550 and 775
+that ../shared/data/real/dyno lacks); an export of the same name in the shared folder is read once.
 """
 
 from __future__ import annotations
 
+import argparse
 import json
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -21,7 +30,8 @@ from motorlab.rig import VirtualRig
 from motorlab.thermal.forecast import forecast, load_fit
 
 HERE = Path(__file__).resolve().parents[1]
-REAL = [HERE.parent / "shared/data/real/dyno", HERE.parent.parent / "shared/data/real/dyno"]
+sys.path.insert(0, str(HERE))
+from tests.real_data import find_dyno_dir  # noqa: E402
 
 
 def best_of(n: int, fn) -> float:
@@ -33,11 +43,17 @@ def best_of(n: int, fn) -> float:
     return min(times)
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--dyno", type=Path, action="append", default=[],
+                        help="a folder of VEX dynamometer exports besides ../shared/data/real/dyno (repeatable)")
+    args, _ = parser.parse_known_args(argv)  # benchmarks/run.py passes its own arguments through
+    shared = find_dyno_dir()
+    dirs = [d for d in (shared, *args.dyno) if d is not None]
     with tempfile.TemporaryDirectory() as tmp:
         rig = VirtualRig("neverest40", noise_seed=1)
         t_rig = best_of(1, lambda: rig.stall(Path(tmp) / "s.csv", voltage=6.0, duration=300.0))
-        real = next((d / "bag-locked-rotor-data-4v-20151207.csv" for d in REAL if d.is_dir()), None)
+        real = shared / "bag-locked-rotor-data-4v-20151207.csv" if shared is not None else None
         path = str(real) if real is not None else str(Path(tmp) / "s.csv")
         rec = read_runs([path])[0]
         result = stall(rec)
@@ -49,15 +65,56 @@ def main() -> None:
     print(f"fit of a 300 s stall run ({Path(path).name}, {result.n_points} samples): {t_fit:8.3f} s   (target < 2 s)")
     print(f"forecast, 300 s at 0.1 s with the answers:          {t_fc * 1e3:8.1f} ms  (target < 200 ms)")
     print(f"virtual dynamometer, 300 s stalled and heating:     {t_rig:8.2f} s")
-    dyno = next((d for d in REAL if d.is_dir()), None)
-    if dyno is not None:
-        forecasts(dyno)
-    population([d for d in (dyno, HERE / "tests/data/dyno") if d is not None])
+    if not dirs:
+        print("no dynamometer exports: ../shared/data/real/dyno is not beside the clone and no --dyno was given")
+        return
+    makers(dirs)
+    forecasts(dirs)
+    population(dirs)
 
 
-def forecasts(dyno: Path) -> None:
-    """Each shared run that heating explains, fitted on its first 120 s and forecast over the rest (relative RMS
-    of the current; the judged aim: under 5 %)."""
+def exports(dirs: list[Path], pattern: str) -> list[Path]:
+    """The exports matching ``pattern`` in ``dirs``, one per file name (the first folder's), sorted by name."""
+    found: dict[str, Path] = {}
+    for d in dirs:
+        for p in d.glob(pattern):
+            found.setdefault(p.name, p)
+    return [found[name] for name in sorted(found)]
+
+
+def makers(dirs: list[Path]) -> None:
+    """Each motor's locked-rotor runs fitted together: K against the maker's 12 V stall torque / stall current (the
+    speed-0 row of VEX's curve), R at 25 °C against V/I at the first full sample of the coolest run (the bars of
+    tests/analyses/test_stall_motors.py and test_stall.py: 20 % and 10 %)."""
+    import numpy as np
+
+    from motorlab.io.csv_table import read_csv
+
+    print("K of all of a motor's runs against the maker's stall torque / stall current, R against V/I:")
+    for curve_path in exports(dirs, "*-motor-curve-data-*.csv"):
+        motor = curve_path.name.split("-motor-curve-data-")[0]
+        files = [str(p) for p in exports(dirs, f"{motor}-locked-rotor-data-*.csv")]
+        if not files:
+            continue
+        curve_rec = read_csv(curve_path)
+        row = int(np.argmin(curve_rec["speed"]))
+        maker = float(curve_rec["torque"][row] / curve_rec["current"][row])
+        result = stall(read_runs(files))
+        fitted = [r for r in result.details["runs"] if r["heating explains it"] and r["healthy samples"] >= 30]
+        text = f"  {motor:10s} K {result['K'].value:.5f} ± {result['K'].stderr:.5f} N·m/A, maker {maker:.5f} " \
+               f"({100 * (result['K'].value / maker - 1):+.0f} %)"
+        if fitted:
+            coolest = min(fitted, key=lambda r: r["initial winding temperature (°C)"])
+            rec = read_runs([next(f for f in files if Path(f).name == coolest["file"])])[0]
+            k0 = int(np.searchsorted(rec.time, coolest["first full sample (s)"]))
+            vi = float(rec["voltage"][k0] / rec["current"][k0])
+            text += f"; R {result['R'].value:.4f} Ω, V/I {vi:.4f} Ω ({100 * (result['R'].value / vi - 1):+.0f} %)"
+        print(text)
+
+
+def forecasts(dirs: list[Path]) -> None:
+    """Each run that heating explains, fitted on its first 120 s and forecast over the rest (relative RMS of the
+    current; the judged aim: under 5 %)."""
     import math
 
     import numpy as np
@@ -66,8 +123,10 @@ def forecasts(dyno: Path) -> None:
 
     print("forecast of each healthy run from its first 120 s (relative RMS of the current over the rest):")
     with tempfile.TemporaryDirectory() as tmp:
-        for path in sorted(dyno.glob("*-locked-rotor-data-*.csv")):
+        for path in exports(dirs, "*-locked-rotor-data-*.csv"):
             rec = read_runs([str(path)])[0]
+            if not np.any(np.asarray(rec["current"]) > 0):
+                continue  # torque only (Amps and Volts 0 in every row): no run to forecast
             fit = stall(rec, until=120.0)
             row = fit.details["runs"][0]
             end = row["cut (s)"] or float(rec.time[-1])
@@ -123,7 +182,7 @@ def population(dirs: list[Path]) -> None:
 
     runs = []
     shipped = (_stall_fit.PRIOR_CASE_TIME_CONSTANT, _stall_fit.PRIOR_LOG_SIGMA)
-    for path in sorted({p.name: p for d in dirs for p in d.glob("*-locked-rotor-data-*.csv")}.values()):
+    for path in exports(dirs, "*-locked-rotor-data-*.csv"):
         rec = read_runs([str(path)])[0]
         if not np.any(np.asarray(rec["current"]) > 0):
             continue

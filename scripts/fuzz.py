@@ -40,6 +40,7 @@ for _name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests" / "fuzz"))
+sys.path.insert(1, str(ROOT))  # tests.real_data: where the shared real data are (the corpus's real logs)
 
 from fuzz_app import app_case, app_client  # noqa: E402
 from fuzz_cases import case_for  # noqa: E402

@@ -1,42 +1,36 @@
-"""Shared fixtures: paths to the small real-format files in tests/data."""
+"""Shared fixtures: the small files the project made in tests/data, and the public real data read in place."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
 import pytest
+from tests.real_data import find_dyno_dir, find_real_dir, not_found
 
 DATA = Path(__file__).parent / "data"
 
 
 @pytest.fixture
 def data_dir() -> Path:
-    """``tests/data``: small files in the formats real rigs write (see tests/data/README.md)."""
+    """``tests/data``: small files in the formats real rigs write, crafted by the project (tests/data/README.md)."""
     return DATA
 
 
-@pytest.fixture
+@pytest.fixture(scope="session")
 def real_dir() -> Path:
-    """``tests/data/real``: public logs recorded on robots (SysId and frc-characterization JSON)."""
-    return DATA / "real"
+    """``../shared/data/real``: public logs recorded by others (SysId and frc-characterization JSON in ``sysid/`` and
+    at the top, VEX's exports in ``dyno/``, ``roadrunner-encoder/``, ``ftc-datalogger/``), read in place; skips the
+    test, saying where it looked, when the folder is not beside the clone (tests/real_data.py)."""
+    found = find_real_dir()
+    if found is None:
+        pytest.skip(not_found("the shared real data (../shared/data/real)"))
+    return found
 
 
-#: VEX Robotics' dynamometer exports (issue 23), read in place: ``../shared/data/real/dyno`` beside the
-#: clone (as CI has it), or two levels up for a git worktree under ``wt/``.
-_ROOT = Path(__file__).resolve().parent.parent
-DYNO_CANDIDATES = [_ROOT.parent / "shared" / "data" / "real" / "dyno",
-                   _ROOT.parent.parent / "shared" / "data" / "real" / "dyno"]
-
-
-def find_dyno_dir() -> Path | None:
-    """The shared folder of real dynamometer exports, or None when this checkout has none beside it."""
-    return next((p for p in DYNO_CANDIDATES if (p / "README.md").is_file()), None)
-
-
-@pytest.fixture
+@pytest.fixture(scope="session")
 def dyno_dir() -> Path:
-    """The shared real dynamometer exports (skips the test when they are not beside the clone)."""
+    """VEX Robotics' dynamometer exports, ``../shared/data/real/dyno`` (skips the test, saying where it looked)."""
     found = find_dyno_dir()
     if found is None:
-        pytest.skip("the shared dynamometer exports (../shared/data/real/dyno) are not beside this clone")
+        pytest.skip(not_found("the shared dynamometer exports (dyno/ of ../shared/data/real)"))
     return found

@@ -145,8 +145,8 @@ def _run(args: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str,
     return code, out.out, out.err
 
 
-def test_cli(data_dir: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    path = data_dir / "dyno" / "bag-motor-curve-data-20151207.csv"
+def test_cli(dyno_dir: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    path = dyno_dir / "bag-motor-curve-data-20151207.csv"
     figure = tmp_path / "curve.png"
     code, out, _err = _run(["analyze", "curve", str(path), "--voltage", "12 V", "--json", "--plot", str(figure)],
                            capsys)

@@ -1,18 +1,19 @@
 """The fair score of gains on SysId logs: an exact simulator, the fit to it, and five real robots' logs.
 
-The real files (tests/data/real/sysid/, provenance in its README) are read with both drivetrain sides,
-fitted by ``motorlab.analyses.feedforward.feedforward`` and scored against the gains the teams published.
+The real files (../shared/data/real/sysid/, read in place; provenance and the teams' gains in its README) are read
+with both drivetrain sides, fitted by ``motorlab.analyses.feedforward.feedforward`` and scored against the gains
+the teams published.
 """
 
 from __future__ import annotations
 
 import argparse
-import csv
 import json
 import math
 
 import numpy as np
 import pytest
+from tests.real_data import team_gains
 
 from motorlab.analyses.feedforward import feedforward
 from motorlab.analyses.sysid_score import (
@@ -201,22 +202,13 @@ def test_long_logs_rank_the_starts_on_every_kth_row(seed, monkeypatch):
 # --------------------------------------------------------------------------------------------------
 
 
-def team_gains(real_dir) -> dict[str, tuple[float, float, float]]:
-    with open(real_dir / "sysid" / "team_gains.csv", newline="") as fh:
-        rows = list(csv.DictReader(fh))
-    return {r["file"]: (float(r["kS_V"]), float(r["kV_V_per_unit_per_s"]), float(r["kA_V_per_unit_per_s2"]))
-            for r in rows}
-
-
 @pytest.fixture(scope="module")
-def real_scores(request):
-    """file -> (motorlab's gains in the file's units, its score, the team's score, the FitResult)."""
-    from tests.conftest import DATA
-
-    real = DATA / "real"
+def real_scores(real_dir):
+    """file -> (motorlab's gains in the file's units, its score, the team's score, the FitResult), for the five logs
+    of the table of the teams' gains in ../shared/data/real/sysid/README.md."""
     out = {}
-    for name, team in team_gains(real).items():
-        path = real / "sysid" / name
+    for name, team in team_gains(real_dir / "sysid").items():
+        path = real_dir / "sysid" / name
         rec = read_sysid_json(path, side="both")
         result = feedforward(rec.split())
         unit = rec.metadata["si_per_unit"]

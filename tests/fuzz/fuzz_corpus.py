@@ -1,33 +1,26 @@
 """The fuzz corpus: valid files of every format motorlab reads, and the command that reads each.
 
 Written by the virtual dynamometer (``motorlab.rig``: the same code ``motorlab simulate`` runs) into a
-folder once, plus the real logs shipped in ``tests/data/real`` and, when present, the shared real
-data in ``../shared/data/real`` (relative to the repository; ``MOTORLAB_REAL_DATA`` names another
-folder). Each :class:`Seed` is one valid run: its files, the command and the options that make it
-succeed. The fuzzer mutates the files, the options or both (``tests/fuzz/mutate.py``).
+folder once, plus, when present, the shared real data in ``../shared/data/real`` (where
+``tests/real_data.py`` finds it; ``MOTORLAB_REAL_DATA`` names another folder). Each :class:`Seed` is one
+valid run: its files, the command and the options that make it succeed. The fuzzer mutates the files, the
+options or both (``tests/fuzz/mutate.py``).
 """
 
 from __future__ import annotations
 
 import json
-import os
 import shutil
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+from tests.real_data import find_real_dir as shared_real
 
-ROOT = Path(__file__).resolve().parents[2]
-TESTS_REAL = ROOT / "tests" / "data" / "real"
-
-
-def shared_real() -> Path | None:
-    """``../shared/data/real`` beside the repository (or ``$MOTORLAB_REAL_DATA``), None when absent."""
-    env = os.environ.get("MOTORLAB_REAL_DATA")
-    for candidate in ([Path(env)] if env else []) + [ROOT.parent / "shared" / "data" / "real"]:
-        if candidate.is_dir():
-            return candidate
-    return None
+#: Real logs also given as ``real-*`` seeds (identify on the flywheel, feed-forward on the others): the five scored
+#: SysId logs of real robots and a SysId flywheel, in ``../shared/data/real``.
+REAL_LOGS = ("sysid/mbb_drivetrain.json", "sysid/romi_drivetrain_small.json", "sysid/stma7028_shooter_0309.json",
+             "sysid/t581_drivetrain_compbot.json", "sysid/t581_spu_roller.json", "sysid-flywheel.json")
 
 
 @dataclass(frozen=True)
@@ -114,11 +107,10 @@ def _write(folder: Path) -> None:
                        "kA": {"value": 0.045, "stderr": 0.003, "unit": "V*s^2/rad"}},
         "warnings": [],
     }, indent=2))
-    for path in sorted(TESTS_REAL.glob("sysid/*.json")) + sorted(TESTS_REAL.glob("*.json")):
-        if path.stat().st_size < 3_000_000:
-            shutil.copy(path, folder / f"real_{path.name}")
     shared = shared_real()
     if shared is not None:
+        for name in REAL_LOGS:
+            shutil.copy(shared / name, folder / f"real_{Path(name).name}")
         (folder / "shared").mkdir(exist_ok=True)
         for path in sorted(shared.rglob("*")):
             if path.is_file() and path.suffix in (".json", ".csv") and path.stat().st_size < 3_000_000:

@@ -28,6 +28,7 @@ from fuzz_cases import make_case, pick_seed
 from fuzz_corpus import Seed, build, shared_real
 from fuzz_harness import GOOD, run, warm
 from fuzz_mutate import SPECIAL_FILES, mutators_for
+from tests.real_data import not_found
 
 T = TypeVar("T")
 PROFILE = os.environ.get("HYPOTHESIS_PROFILE", "quick")
@@ -104,6 +105,8 @@ def test_slow_readers(data: st.DataObject, corpus, scratch) -> None:
 def test_real_files_are_read_or_refused_in_one_line(corpus, scratch) -> None:
     """Every real file as it is: a result (or, for a table no analysis reads yet, one line)."""
     folder, seeds = corpus
+    if shared_real() is None:
+        pytest.skip(not_found("the shared real data (../shared/data/real)"))
     real = [s for s in seeds if s.real]
     assert any(s.name.startswith("real-") for s in real)
     chosen = real if LONG else [s for s in real if "any-outcome" in s.tags][:3]
@@ -112,8 +115,6 @@ def test_real_files_are_read_or_refused_in_one_line(corpus, scratch) -> None:
     for seed in chosen:
         case = make_case(seed, folder, RandomChooser(0), modes=("valid",))
         _assert_kept(run(case, scratch, time_limit=120.0), case)
-    if shared_real() is None:
-        pytest.skip("../shared/data/real is absent (set MOTORLAB_REAL_DATA): only tests/data/real was fuzzed")
 
 
 def test_every_special_file_and_mutator_is_exercised(corpus) -> None:

@@ -20,9 +20,7 @@ from motorlab.model import MotorParams, feedforward_from_params
 from motorlab.model.simulate import VoltageDrive, simulate
 from motorlab.proposal import propose
 
-#: hawkbsilleee/FTC-Data-logging's logs (README there), read in place beside the clone or the worktree.
-_ROOT = Path(__file__).resolve().parents[2]
-CANDIDATES = [_ROOT.parent / "shared/data/real/ftc-datalogger", _ROOT.parent.parent / "shared/data/real/ftc-datalogger"]
+#: hawkbsilleee/FTC-Data-logging's logs (README there), read in place: ../shared/data/real/ftc-datalogger.
 BATTERY = ("voltage_just_intake.txt", "voltage_just_drive.txt", "voltage_drive_and_intake.txt")
 INTAKE = ("Velocity_Intake.txt", "Velocity_Drive.txt", "Just_Intake_Velocity.txt", "voltage_intake_velocity.txt")
 #: goBILDA 5203 312 rpm (the team's README and analysis sheet): 537.6 counts per output revolution.
@@ -30,11 +28,8 @@ CPR = 537.6
 
 
 @pytest.fixture
-def logs() -> Path:
-    found = next((p / "logs" for p in CANDIDATES if (p / "README.md").is_file()), None)
-    if found is None:
-        pytest.skip("the shared real Datalogger files (../shared/data/real/ftc-datalogger) are not beside this clone")
-    return found
+def logs(real_dir: Path) -> Path:
+    return real_dir / "ftc-datalogger" / "logs"
 
 
 def _rows(path: Path) -> list[list[str]]:

@@ -97,9 +97,9 @@ def test_real_exports_read_as_they_are(dyno_dir: Path) -> None:
             assert rec.has("current", "output_power"), path.name
 
 
-def test_locked_rotor_values_in_si(data_dir: Path) -> None:
+def test_locked_rotor_values_in_si(dyno_dir: Path) -> None:
     """Latin-1 ``N · m`` header, CRLF: values as written, in SI (first row 0.001 s, 92.27 A, 12 V, 0.383 N·m)."""
-    path = data_dir / "dyno" / "am-9015-locked-rotor-data-12v-20151210.csv"
+    path = dyno_dir / "am-9015-locked-rotor-data-12v-20151210.csv"
     assert b"\xb7" in path.read_bytes()[:60]
     rec = read_csv(path)
     assert rec.time[0] == pytest.approx(0.001)
@@ -110,9 +110,9 @@ def test_locked_rotor_values_in_si(data_dir: Path) -> None:
     assert rec.lines[0] == 2
 
 
-def test_curve_units_converted(data_dir: Path) -> None:
+def test_curve_units_converted(dyno_dir: Path) -> None:
     """RPM -> rad/s and % -> a fraction; the free-speed row of the BAG curve (13177.689 rpm, 1.8 A)."""
-    rec = read_csv(data_dir / "dyno" / "bag-motor-curve-data-20151207.csv")
+    rec = read_csv(dyno_dir / "bag-motor-curve-data-20151207.csv")
     assert rec["speed"][-1] == pytest.approx(13177.689 * 2 * np.pi / 60)
     assert rec["current"][-1] == pytest.approx(1.8)
     assert np.max(rec["efficiency"]) < 1.0 < 100 * np.max(rec["efficiency"])

@@ -118,10 +118,9 @@ def test_truncated_json_names_the_line(tmp_path, ramp):
         read_roadrunner_ramp(bad, cpr=truth["cpr"])
 
 
-def test_real_hub_overflow_log_is_repaired():
-    from pathlib import Path
-
-    path = Path(__file__).resolve().parents[1] / "data" / "real" / "roadrunner-overflow-enc1.csv"
+def test_real_hub_overflow_log_is_repaired(real_dir):
+    """Road Runner's own test data for its velocity-overflow repair (../shared/data/real/roadrunner-encoder)."""
+    path = real_dir / "roadrunner-encoder" / "enc1.csv"
     raw = np.genfromtxt(path, delimiter=",", skip_header=1)
     pos, vel, t = raw[:, 0], raw[:, 1], raw[:, 2]
     estimate = np.gradient(pos, t)

@@ -38,19 +38,10 @@ try {
 """
 
 
-#: The shared real data, read in place: ``../shared/data/real`` beside the clone, or two levels up for a worktree.
-_ROOT = Path(__file__).resolve().parents[2]
-_SHOOTER = [base / "shared" / "data" / "real" / "sysid" / "stma7028_shooter_0309.json"
-            for base in (_ROOT.parent, _ROOT.parent.parent)]
-
-
 @pytest.fixture(scope="module")
-def shooter() -> Path:
-    """A team's real SysId file of a shooter (units: rotations), from ../shared/data/real/sysid."""
-    found = next((p for p in _SHOOTER if p.is_file()), None)
-    if found is None:
-        pytest.skip(f"the shared real data are not beside this checkout (looked at {_SHOOTER[0]})")
-    return found
+def shooter(real_dir: Path) -> Path:
+    """A team's real SysId file of a shooter (units: rotations), read in place from ../shared/data/real/sysid."""
+    return real_dir / "sysid" / "stma7028_shooter_0309.json"
 
 
 def _number(text: str) -> float:

@@ -124,8 +124,9 @@ def _guess(runs: Sequence[StallData], reference: int, ambient: float) -> list[fl
 #: of R_ca·C_c over a population of real motors, the 14 healthy 2–7.2 V locked-rotor runs of eight motors
 #: (VEX's dynamometer exports of the mini-CIM, BAG, AndyMark 9015, 775pro, AndyMark 775, BaneBots 550, CIM and
 #: NeveRest) whose whole run (up to 300 s) determines R_ca, each fitted alone: 80–358 s, geometric mean 186 s, a
-#: factor 1.50 either way (``benchmarks/bench_thermal.py`` recomputes it, and the prior of each motor from the
-#: others: 177–200 s). It replaced 800 s (VEX's BAG 2 V run, where R_ca is not determined either).
+#: factor 1.50 either way (``benchmarks/bench_thermal.py --dyno DIR`` recomputes it, DIR holding kForth's exports
+#: of the AndyMark 775 and BaneBots 550; and the prior of each motor from the others: 177–200 s). It replaced
+#: 800 s (VEX's BAG 2 V run, where R_ca is not determined either).
 PRIOR_CASE_TIME_CONSTANT = 186.0
 PRIOR_LOG_SIGMA = 0.408
 #: The winding's time constant R_wc·C_w a run whose own network is no motor's is held near [s], and the spread of
