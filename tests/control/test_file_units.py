@@ -16,18 +16,14 @@ import pytest
 
 import motorlab.cli
 
-_ROOT = Path(__file__).resolve().parents[2]
 #: A team's real drivetrain SysId file recorded in Feet, read in place from ../shared/data/real/sysid.
-_FEET = [base / "shared" / "data" / "real" / "sysid" / "t2168_drivetrain_0311.json"
-         for base in (_ROOT.parent, _ROOT.parent.parent)]
+FEET = "sysid/t2168_drivetrain_0311.json"
 
 
 @pytest.fixture(scope="module")
-def feet_fit(tmp_path_factory: pytest.TempPathFactory) -> Path:
+def feet_fit(tmp_path_factory: pytest.TempPathFactory, real_dir: Path) -> Path:
     """``motorlab analyze feedforward --json`` of the real Feet file, written where tune reads it."""
-    found = next((p for p in _FEET if p.is_file()), None)
-    if found is None:
-        pytest.skip(f"the shared real data are not beside this checkout (looked at {_FEET[0]})")
+    found = real_dir / FEET
     out = tmp_path_factory.mktemp("feet") / "feet.json"
     buffer = io.StringIO()
     with contextlib.redirect_stdout(buffer):

@@ -28,19 +28,25 @@ from motorlab.io import detect_format, read_any, write_sysid_wpilog
         ("scope/edges_plain.txt", "scope-times"),
         ("scope/rigol_ds1054z.csv", "scope-waveform"),
         ("scope/waveform_table.csv", "scope-waveform"),
-        ("real/sysid-flywheel.json", "sysid-json"),
-        ("real/frc-characterization-drivetrain-linear.json", "frc-char-json"),
     ],
 )
 def test_detect_format(data_dir, name, fmt):
     assert detect_format(data_dir / name) == fmt
 
 
-def test_read_any_reads_with_the_right_reader(data_dir, tmp_path):
+@pytest.mark.parametrize(
+    ("name", "fmt"),
+    [("sysid-flywheel.json", "sysid-json"), ("frc-characterization-drivetrain-linear.json", "frc-char-json")],
+)
+def test_detect_format_of_real_logs(real_dir, name, fmt):
+    assert detect_format(real_dir / name) == fmt
+
+
+def test_read_any_reads_with_the_right_reader(data_dir, real_dir, tmp_path):
     assert read_any(data_dir / "ftc/power_log.txt", cpr=1120).has("position")
     assert read_any(data_dir / "csv/terminal.csv").metadata["format"] == "csv"
     assert read_any(data_dir / "scope/rigol_ds1054z.csv", channel="CH1").metadata["kind"] == "edges"
-    assert read_any(data_dir / "real/frc-characterization-drivetrain-linear.json", side="right").metadata["side"] == (
+    assert read_any(real_dir / "frc-characterization-drivetrain-linear.json", side="right").metadata["side"] == (
         "right"
     )
     split = read_any([data_dir / "ftc/split/testFile.txt", data_dir / "ftc/split/testFile2.txt"])
@@ -52,9 +58,9 @@ def test_read_any_reads_with_the_right_reader(data_dir, tmp_path):
     assert list(read_any(path).segments) == ["dynamic-forward"]
 
 
-def test_read_any_refuses_options_that_do_not_apply(data_dir):
+def test_read_any_refuses_options_that_do_not_apply(data_dir, real_dir):
     with pytest.raises(OptionError, match="'cpr' does not apply to sysid-json"):
-        read_any(data_dir / "real/sysid-flywheel.json", cpr=1120)
+        read_any(real_dir / "sysid-flywheel.json", cpr=1120)
     with pytest.raises(OptionError, match="'threshold' does not apply to ftc-log"):
         read_any(data_dir / "ftc/power_log.txt", threshold=1.0)
     with pytest.raises(OptionError, match="split FTC log"):

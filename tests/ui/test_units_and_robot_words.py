@@ -22,10 +22,8 @@ from motorlab.robot.emulator import EmulatedRobot, RobotFiles
 
 pytestmark = browser.needs_browser
 
-_ROOT = Path(__file__).resolve().parents[2]
-#: A team's real drivetrain SysId file in Feet (unitsPerRotation 1.047 ft), read in place.
-_FEET = [base / "shared" / "data" / "real" / "sysid" / "t2168_drivetrain_0311.json"
-         for base in (_ROOT.parent, _ROOT.parent.parent)]
+#: A team's real drivetrain SysId file in Feet (unitsPerRotation 1.047 ft), read in place from ../shared/data/real.
+FEET = "sysid/t2168_drivetrain_0311.json"
 _SUPERSCRIPT = str.maketrans("⁻⁰¹²³⁴⁵⁶⁷⁸⁹", "-0123456789")
 
 
@@ -36,10 +34,8 @@ def _number(text: str) -> float:
     return float(found.group(1)) * 10.0 ** (int(found.group(2).translate(_SUPERSCRIPT)) if found.group(2) else 0)
 
 
-def test_a_feet_file_gives_wpilib_gains_per_foot(page: Any) -> None:
-    feet = next((p for p in _FEET if p.is_file()), None)
-    if feet is None:
-        pytest.skip(f"the shared real data are not beside this checkout (looked at {_FEET[0]})")
+def test_a_feet_file_gives_wpilib_gains_per_foot(page: Any, real_dir: Path) -> None:
+    feet = real_dir / FEET
     page.open(browser.LAPTOP)
     page.click("Tune a mechanism")
     page.upload("Choose or drop your files", feet)
