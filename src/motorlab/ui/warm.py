@@ -34,6 +34,7 @@ def preload() -> None:
 
     import motorlab.analyses.feedforward
     import motorlab.analyses.identify
+    import motorlab.analyses.sysid_score  # a SysId file's open-loop fit (imported by the fit, not by the module)
     import motorlab.cli
     import motorlab.control
     import motorlab.io
@@ -41,6 +42,7 @@ def preload() -> None:
     import motorlab.report.document
     import motorlab.session.characterize
     import motorlab.session.spec
+    import motorlab.thermal.warning
     import motorlab.ui.worker
 
     motorlab.cli.build_parser()  # imports every sub-command's module and the experiment descriptions
