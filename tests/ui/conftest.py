@@ -113,6 +113,21 @@ def ramp(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, float]:
     return folder / "ramp.json", expected["kV"] * 2 * math.pi / expected["cpr"]
 
 
+#: The shared real data, read in place: ``../shared/data/real`` beside the clone, or two levels up for a worktree.
+_ROOT = Path(__file__).resolve().parents[2]
+_SHOOTER = [base / "shared" / "data" / "real" / "sysid" / "stma7028_shooter_0309.json"
+            for base in (_ROOT.parent, _ROOT.parent.parent)]
+
+
+@pytest.fixture(scope="session")
+def shooter() -> Path:
+    """A team's real SysId file of a shooter (12,905 rows, units: rotations), from ../shared/data/real/sysid."""
+    found = next((p for p in _SHOOTER if p.is_file()), None)
+    if found is None:
+        pytest.skip(f"the shared real data are not beside this checkout (looked at {_SHOOTER[0]})")
+    return found
+
+
 @pytest.fixture(scope="module")
 def page(server: Served, tmp_path_factory: pytest.TempPathFactory, request: pytest.FixtureRequest) -> Iterator[Any]:
     """A headless Chromium on the test server for one test module, driven by visible words (``browser.Page``)."""

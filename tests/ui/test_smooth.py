@@ -45,20 +45,6 @@ return [...document.querySelectorAll("main table")].filter((t) => t.getBoundingC
                t.parentElement.clientWidth]);
 """
 
-_ROOT = Path(__file__).resolve().parents[2]
-_SHOOTER = [base / "shared" / "data" / "real" / "sysid" / "stma7028_shooter_0309.json"
-            for base in (_ROOT.parent, _ROOT.parent.parent)]
-
-
-@pytest.fixture(scope="module")
-def shooter() -> Path:
-    """A team's real SysId file of a shooter (12,905 rows), from ../shared/data/real/sysid, read in place."""
-    found = next((p for p in _SHOOTER if p.is_file()), None)
-    if found is None:
-        pytest.skip(f"the shared real data are not beside this checkout (looked at {_SHOOTER[0]})")
-    return found
-
-
 def _poll(page: Any, script: str, what: str, seconds: float = 240) -> Any:
     return page.wait(lambda: page.d.execute_script(script), what, seconds)
 

@@ -21,7 +21,6 @@ import time
 from pathlib import Path
 from typing import Any
 
-import pytest
 import ui_browser as browser  # tests/ui/browser.py, loaded by conftest.py
 
 pytestmark = browser.needs_browser
@@ -36,21 +35,6 @@ try {
   new PerformanceObserver(seen).observe({ type: "longtask", buffered: true });
 } catch (e) { window.__long = null; }
 """
-
-
-#: The shared real data, read in place: ``../shared/data/real`` beside the clone, or two levels up for a worktree.
-_ROOT = Path(__file__).resolve().parents[2]
-_SHOOTER = [base / "shared" / "data" / "real" / "sysid" / "stma7028_shooter_0309.json"
-            for base in (_ROOT.parent, _ROOT.parent.parent)]
-
-
-@pytest.fixture(scope="module")
-def shooter() -> Path:
-    """A team's real SysId file of a shooter (units: rotations), from ../shared/data/real/sysid."""
-    found = next((p for p in _SHOOTER if p.is_file()), None)
-    if found is None:
-        pytest.skip(f"the shared real data are not beside this checkout (looked at {_SHOOTER[0]})")
-    return found
 
 
 def _number(text: str) -> float:
