@@ -113,6 +113,13 @@ def ramp(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, float]:
     return folder / "ramp.json", expected["kV"] * 2 * math.pi / expected["cpr"]
 
 
+@pytest.fixture(scope="session")
+def shooter(real_dir: Path) -> Path:
+    """A team's real SysId file of a shooter (12,905 rows, units: rotations), read in place from
+    ../shared/data/real/sysid."""
+    return real_dir / "sysid" / "stma7028_shooter_0309.json"
+
+
 @pytest.fixture(scope="module")
 def page(server: Served, tmp_path_factory: pytest.TempPathFactory, request: pytest.FixtureRequest) -> Iterator[Any]:
     """A headless Chromium on the test server for one test module, driven by visible words (``browser.Page``)."""

@@ -21,7 +21,6 @@ import time
 from pathlib import Path
 from typing import Any
 
-import pytest
 import ui_browser as browser  # tests/ui/browser.py, loaded by conftest.py
 
 pytestmark = browser.needs_browser
@@ -36,12 +35,6 @@ try {
   new PerformanceObserver(seen).observe({ type: "longtask", buffered: true });
 } catch (e) { window.__long = null; }
 """
-
-
-@pytest.fixture(scope="module")
-def shooter(real_dir: Path) -> Path:
-    """A team's real SysId file of a shooter (units: rotations), read in place from ../shared/data/real/sysid."""
-    return real_dir / "sysid" / "stma7028_shooter_0309.json"
 
 
 def _number(text: str) -> float:

@@ -369,6 +369,18 @@ async def _collect(proc: subprocess.Popen[bytes], on_progress: Callable[[dict[st
         err_transport.close()
 
 
+#: Seconds after the last command ends before the spares it used are replaced: a new Python importing scipy
+#: takes a CPU for seconds, and on a two-core laptop the browser draws the answer's figures in those first moments.
+REFILL_DELAY = 1.5
+
+
+def _refill_if_idle() -> None:
+    """Replace the spares used and start the resident worker, unless a command runs again."""
+    if not RUNNING:
+        POOL.fill()
+        resident().start_soon()
+
+
 async def run_module(
     module: str, argv: Sequence[str], *, cwd: str, time_limit: float | None = None, slot: str = "short",
     on_progress: Callable[[dict[str, Any]], None] | None = None,
@@ -403,9 +415,8 @@ async def run_module(
             if running:
                 end(proc)
             RUNNING.discard(proc)
-            if not RUNNING:  # idle: replace the spares used (not while commands run: they need the CPU)
-                POOL.fill()
-                resident().start_soon()
+            if not RUNNING:  # idle: replace the spares used soon (not while commands run: they need the CPU)
+                asyncio.get_running_loop().call_later(REFILL_DELAY, _refill_if_idle)
             if running:  # reap it (in a thread: Popen.wait blocks)
                 with contextlib.suppress(asyncio.CancelledError):
                     await asyncio.shield(asyncio.get_running_loop().run_in_executor(None, proc.wait))

@@ -1,6 +1,7 @@
 // motorlab ui: the page. Hash routes "#/<task>/<step>", one shared state (store.js), steps in steps/*.js.
 import { $, el, keepFocus } from "./dom.js";
 import { getJson } from "./api.js";
+import * as plots from "./plots.js";
 import { load, setActive, state, task as taskState } from "./store.js";
 import { STEPS, TASKS, findTask, registerStep } from "./tasks.js";
 import { setSchema } from "./words.js";
@@ -67,6 +68,9 @@ async function start() {
   window.addEventListener("hashchange", () => { render(); window.scrollTo(0, 0); });
   render();
   document.body.dataset.ready = "true";
+  // Plotly's one-time set-up, paid now (the task chooser shown) rather than when the first result is drawn
+  const warm = () => plots.warmUp();
+  if (window.requestIdleCallback) window.requestIdleCallback(warm, { timeout: 2000 }); else setTimeout(warm, 500);
 }
 
 start().catch((e) => { $("#view").replaceChildren(el("p", { class: "error", role: "alert", text: `The page could not start: ${e.message}. Reload it; if it stays, restart motorlab ui.` })); });

@@ -42,6 +42,23 @@ function figure(host, title, traces, layout, then) {
   return div;
 }
 
+// Plotly's first figure in a page costs several times the next ones (its styles, fonts and text measuring set
+// up): one small figure of the same shape as a fit's (two plots, points, a line, a legend) is drawn out of sight
+// when the page has started and removed, so that cost is paid while the student chooses a file, not when the
+// first result's figures are drawn.
+export function warmUp() {
+  if (!window.Plotly) return;
+  const div = el("div", { "aria-hidden": "true", style: "position:absolute;left:-10000px;top:0;width:600px" });
+  document.body.append(div);
+  const layout = { ...base(300), xaxis: { anchor: "y", showticklabels: false }, yaxis: { domain: [0.34, 1], title: { text: "speed" } },
+    xaxis2: { matches: "x", anchor: "y2", title: { text: "time in s" } }, yaxis2: { domain: [0, 0.26], title: { text: "residual" }, anchor: "x2" } };
+  later(div, () => {
+    window.Plotly.react(div, [{ x: [0, 1, 2], y: [0, 1, 0], mode: "markers", name: "measured" }, { x: [0, 2], y: [0, 1], mode: "lines", name: "model" },
+      { x: [0, 1], y: [0, 1], mode: "markers", xaxis: "x2", yaxis: "y2", name: "residual" }], layout, CONFIG);
+    setTimeout(() => { window.Plotly.purge(div); div.remove(); }, 0);
+  });
+}
+
 export function raw(host, item) {
   host.replaceChildren();
   if (!item.signals || !item.signals.length) return;
