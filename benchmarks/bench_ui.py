@@ -35,7 +35,7 @@ import httpx
 import uvicorn
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from tests.real_data import find_real_dir  # noqa: E402
+from tests.real_data import find_real_dir
 
 
 def _long_spindown(folder: Path) -> Path:
