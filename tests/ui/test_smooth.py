@@ -9,13 +9,11 @@ themselves are measured in benchmarks/bench_ui.py, never asserted here.
 
 from __future__ import annotations
 
-import os
 import shutil
 import time
 from pathlib import Path
 from typing import Any
 
-import pytest
 import ui_browser as browser  # tests/ui/browser.py, loaded by conftest.py
 
 pytestmark = browser.needs_browser
@@ -23,13 +21,8 @@ pytestmark = browser.needs_browser
 #: Long tasks of the page's main thread from the page's start, and the moment a result first appears (its
 #: heading "Result from …"), in the page's own clock. Read by a one-line script: the test's polling runs no long
 #: script in the page (WebDriver's reading of a page's text does, seconds on a page of plots).
-_WATCH = """
-window.__long = [];
+_WATCH = browser.LONG_TASKS + """
 window.__shown = null;
-try {
-  const seen = (list) => { for (const e of list.getEntries()) window.__long.push([e.startTime, e.duration]); };
-  new PerformanceObserver(seen).observe({ type: "longtask", buffered: true });
-} catch (e) { window.__long = null; }
 const result = (h) => h.textContent.startsWith("Result from");
 const look = () => {
   if (window.__shown === null && [...document.querySelectorAll("h4")].some(result)) window.__shown = performance.now();
@@ -63,24 +56,19 @@ def _tables_fit(page: Any) -> None:
     assert not wider, f"tables wider than their box (cut off or scrolled): {wider}"
 
 
-#: Load average per CPU above which the long-task timing measures the machine, not the page: Chromium's tasks
-#: then wait for a CPU (a figure drawn in 60-100 ms on a quiet machine took 1.6-2.1 s at a load of 17 on 2 CPUs).
-_BUSY = 1.5
-
-
 def test_a_sysid_result_draws_without_freezing_and_fits_laptop_and_phone(page: Any, shooter: Path) -> None:
     page.d.execute_cdp_cmd("Page.addScriptToEvaluateOnNewDocument", {"source": _WATCH})
     page.open(browser.LAPTOP)
     page.click("Tune a mechanism")
     page.upload("Choose or drop your files", shooter)
     page.wait_text("WPILib SysId file")
-    load = os.getloadavg()[0] / (os.cpu_count() or 1)
+    load = browser.load_per_cpu()
     page.click("Run the fit")
     shown = _poll(page, "return window.__shown", "the result", 300)
     page.wait(lambda: _figures_drawn(page), "the result's figures")
     time.sleep(1.0)  # the page's work after the figures (keeping the result) inside the window watched
     long_tasks = page.d.execute_script("return window.__long")
-    load = max(load, os.getloadavg()[0] / (os.cpu_count() or 1))
+    load = max(load, browser.load_per_cpu())
     _tables_fit(page)
     page.check()
     page.shot("smooth-sysid-laptop.png")
@@ -93,13 +81,7 @@ def test_a_sysid_result_draws_without_freezing_and_fits_laptop_and_phone(page: A
     page.shot("smooth-sysid-phone.png")
     page.d.set_window_size(*browser.LAPTOP)
 
-    if long_tasks is None:  # a browser without the long-task timing
-        return
-    late = [round(d) for start, d in long_tasks if start >= shown]
-    if late and max(late) >= 200 and load > _BUSY:
-        pytest.skip(f"the machine is busy (load average {load:.1f} per CPU): tasks after the result {late} ms "
-                    "measure its load, not the page")
-    assert not late or max(late) < 200, f"tasks of 200 ms or more after the result appeared: {late}"
+    browser.no_long_task_after(long_tasks, shown, load)
 
 
 def test_a_session_table_at_1366_and_its_report_on_a_phone(page: Any, sim_session: Path, tmp_path: Path) -> None:

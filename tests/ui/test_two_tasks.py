@@ -27,16 +27,6 @@ pytestmark = browser.needs_browser
 
 _SUPERSCRIPT = str.maketrans("⁻⁰¹²³⁴⁵⁶⁷⁸⁹", "-0123456789")
 
-#: Long tasks of the page's main thread (Chromium's long-task timing), recorded from the page's start.
-_LONG_TASKS = """
-window.__long = [];
-try {
-  const seen = (list) => { for (const e of list.getEntries()) window.__long.push([e.startTime, e.duration]); };
-  new PerformanceObserver(seen).observe({ type: "longtask", buffered: true });
-} catch (e) { window.__long = null; }
-"""
-
-
 def _number(text: str) -> float:
     """ "1.234", "(1.2 ± 0.1) × 10⁻³" or "9.61 × 10⁻⁵" as a float (the value, not its uncertainty)."""
     found = re.match(r"\(?(-?[0-9.]+(?:[eE][+-]?\d+)?)(?: ± [0-9.]+\))?(?: × 10([⁻⁰-⁹¹²³]+))?", text.strip())
@@ -71,7 +61,7 @@ def _no_copy(page: Any) -> bool:
 def test_ramp_then_shooter_then_the_first_gains_again(page: Any, ramp: tuple[Path, float], shooter: Path,
                                                        tmp_path: Path) -> None:
     path, true_kv = ramp
-    page.d.execute_cdp_cmd("Page.addScriptToEvaluateOnNewDocument", {"source": _LONG_TASKS})
+    page.d.execute_cdp_cmd("Page.addScriptToEvaluateOnNewDocument", {"source": browser.LONG_TASKS})
     page.open(browser.LAPTOP)
 
     # Task 1: the drive's dead wheels. 8192 counts per revolution, the ramp fitted, Road Runner gains with the
@@ -139,6 +129,7 @@ def test_ramp_then_shooter_then_the_first_gains_again(page: Any, ramp: tuple[Pat
     box = page.field("counts per revolution")
     time.sleep(1.0)
     shown = page.d.execute_script("return performance.now()")
+    load = browser.load_per_cpu()
     box.clear()
     box.send_keys("8192")  # the view drawn again with its result and plots
     page.d.execute_script("window.scrollTo(0, document.body.scrollHeight)")
@@ -146,9 +137,7 @@ def test_ramp_then_shooter_then_the_first_gains_again(page: Any, ramp: tuple[Pat
     page.d.execute_script("window.scrollTo(0, 0)")
     time.sleep(0.5)
     long_tasks = page.d.execute_script("return window.__long")
-    if long_tasks is not None:  # Chromium gives the long-task timing
-        late = [d for start, d in long_tasks if start >= shown]
-        assert not late or max(late) < 200, late
+    load = max(load, browser.load_per_cpu())
 
     # A counts per revolution changed after the fit: the result says so, and nothing is offered to copy.
     page.type("counts per revolution", "1120")
@@ -171,6 +160,7 @@ def test_ramp_then_shooter_then_the_first_gains_again(page: Any, ramp: tuple[Pat
     # another tab on another mechanism, then two models ticked at once.
     _a_second_tab_on_another_mechanism_changes_nothing(page, true_kv)
     _two_models_are_never_merged_silently(page, shooter, tmp_path)
+    browser.no_long_task_after(long_tasks, shown, load)  # last: on a busy machine it skips, saying why
 
 
 def _a_second_tab_on_another_mechanism_changes_nothing(page: Any, true_kv: float) -> None:
