@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 import pytest
+from tests._coverage import assert_coverage
 
 from motorlab.analyses.feedforward import (
     feedforward,
@@ -86,14 +87,20 @@ def test_round_trip_meets_accuracy_targets(seed):
 
 
 def test_coverage_of_95_percent_intervals():
+    """kS, kV, kA's 95 % intervals over 30 seeds of SysId's four tests: each holds the truth a number of
+    times inside the binomial window of 30 trials (25–30, tests/_coverage.py).
+
+    What it catches: intervals that hold the truth 60 % of the time (white-residual standard errors)
+    pass less than one time in a hundred per gain. The 50-seed version with the 90–98 % bar is
+    benchmarks/bench_coverage.py (figures in docs/identify.md).
+    """
     inside: dict[str, list[bool]] = {}
-    for seed in range(50):
+    for seed in range(30):
         result = feedforward(sysid_tests(500 + seed))
         for name, truth in GAINS.items():
             lo, hi = result[name].interval(1.96)
             inside.setdefault(name, []).append(lo <= truth <= hi)
-    for name, hits in inside.items():
-        assert 0.90 <= np.mean(hits) <= 0.98, (name, np.mean(hits))
+    assert_coverage(inside)
 
 
 @pytest.mark.parametrize("seed", [3, 8, 9])
