@@ -31,7 +31,9 @@ NAMES = ("K", "R", "L", "J", "b", "Tf")
 
 
 def _load(path: Path, name: str):
-    """A helper module of the tests, loaded by path (the tests are not a package)."""
+    """A helper module of the tests, loaded by path (the tests are not a package; they import ``tests._coverage``)."""
+    if str(HERE.parent) not in sys.path:
+        sys.path.insert(0, str(HERE.parent))
     if name not in sys.modules:
         spec = importlib.util.spec_from_file_location(name, path)
         assert spec is not None

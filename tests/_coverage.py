@@ -14,6 +14,8 @@ The full-size checks with the original bars (90–98 % of 100 seeds) are benchma
 
 from __future__ import annotations
 
+from functools import cache
+
 import numpy as np
 from scipy.stats import binom
 
@@ -25,6 +27,7 @@ BROKEN = 0.60
 MISSED = 0.01
 
 
+@cache
 def coverage_window(n: int, *, nominal: float = 0.95, false_alarm: float = FALSE_ALARM) -> tuple[int, int]:
     """(lo, hi): the counts of n calibrated intervals that hold the truth, but for ``false_alarm``.
 
@@ -37,6 +40,7 @@ def coverage_window(n: int, *, nominal: float = 0.95, false_alarm: float = FALSE
     return lo, hi
 
 
+@cache
 def pass_chance(n: int, coverage: float, *, nominal: float = 0.95, false_alarm: float = FALSE_ALARM) -> float:
     """Chance that intervals of true ``coverage`` pass the window of n trials at ``nominal``."""
     lo, hi = coverage_window(n, nominal=nominal, false_alarm=false_alarm)
