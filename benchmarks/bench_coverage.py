@@ -10,7 +10,7 @@ original size, with the original bars, and print the figures docs/identify.md re
   twelve seeds per drive: within 3 standard errors in at least ten, within 2 in 90 % of all.
 - ``feedforward``: SysId quasistatic and dynamic tests, fifty seeds: 90-98 % coverage of kS, kV, kA.
 
-``python benchmarks/run.py coverage`` (about 6 minutes on one core).
+``python benchmarks/run.py coverage`` (about 4 minutes of one core; far longer on a loaded machine).
 """
 
 from __future__ import annotations
