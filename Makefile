@@ -22,9 +22,12 @@ lint: install
 	$(BIN)/mypy
 
 # The suite runs on every core (pytest-xdist; tests finish in any order and share nothing); BLAS on
-# one thread per worker, so that two workers on two cores do not fight over four threads.
+# one thread per worker, so that two workers on two cores do not fight over four threads. Bytecode is
+# written even where PYTHONDONTWRITEBYTECODE is set (uv installs none): otherwise every Python process
+# the suite starts (workers, commands, the app's workers) compiles numpy, scipy, matplotlib and motorlab
+# again, 8 s of CPU for one import of the CLI and the engine against 3 s (docs/ARCHITECTURE.md).
 test: lint
-	MPLBACKEND=Agg OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 $(BIN)/pytest -n auto --dist worksteal
+	MPLBACKEND=Agg OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 PYTHONDONTWRITEBYTECODE= $(BIN)/pytest -n auto --dist worksteal
 
 demo: install
 	MPLBACKEND=Agg $(BIN)/motorlab demo -o out/demo

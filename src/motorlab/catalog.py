@@ -16,6 +16,7 @@ import math
 import re
 import tomllib
 from dataclasses import dataclass, field
+from functools import lru_cache
 from importlib import resources
 from os import PathLike
 from pathlib import Path
@@ -371,6 +372,13 @@ def list_motors(*, path: str | PathLike[str] | None = None) -> list[Motor]:
     else:
         where = str(path)
         text = Path(path).read_text(encoding="utf-8")
+    return list(_parsed_catalog(text, where))
+
+
+@lru_cache(maxsize=8)
+def _parsed_catalog(text: str, where: str) -> tuple[Motor, ...]:
+    """The entries of a catalogue's text, parsed once per text (pint's parsing of every figure takes a
+    third of a second: every virtual rig and every ``--motor`` looks the catalogue up; entries are frozen)."""
     try:
         table = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
@@ -378,7 +386,7 @@ def list_motors(*, path: str | PathLike[str] | None = None) -> list[Motor]:
     except (ValueError, RecursionError):  # an integer of 4,300 digits, or tables nested too deeply
         raise InputError("not a valid catalogue: a number or a nesting beyond any motor's figures",
                          path=where) from None
-    return [_motor_from_entry(key, entry, where) for key, entry in table.items()]
+    return tuple(_motor_from_entry(key, entry, where) for key, entry in table.items())
 
 
 def _motor_from_entry(key: str, entry: Any, where: str) -> Motor:

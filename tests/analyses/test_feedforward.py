@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 import pytest
+from tests._coverage import assert_coverage
 
 from motorlab.analyses.feedforward import (
     feedforward,
@@ -86,14 +87,21 @@ def test_round_trip_meets_accuracy_targets(seed):
 
 
 def test_coverage_of_95_percent_intervals():
+    """kS, kV, kA's 95 % intervals over 50 seeds of SysId's four tests: each holds the truth a number of
+    times inside the binomial window of 50 trials (43–50, tests/_coverage.py).
+
+    What it catches: the stationary residual models (white or Newey–West) held the truth 40–75 % of the
+    time here (docs/feedforward.md); at 75 % a gain passes this window 4.5 % of the time, at 60 % never.
+    Fifty seeds, not thirty: thirty would pass a 75 % rule one time in five. The same seeds against the
+    90–98 % bar: benchmarks/bench_coverage.py.
+    """
     inside: dict[str, list[bool]] = {}
     for seed in range(50):
         result = feedforward(sysid_tests(500 + seed))
         for name, truth in GAINS.items():
             lo, hi = result[name].interval(1.96)
             inside.setdefault(name, []).append(lo <= truth <= hi)
-    for name, hits in inside.items():
-        assert 0.90 <= np.mean(hits) <= 0.98, (name, np.mean(hits))
+    assert_coverage(inside)
 
 
 @pytest.mark.parametrize("seed", [3, 8, 9])

@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 import pytest
+from tests._coverage import assert_coverage
 
 from motorlab.analyses.identify import identify
 from motorlab.cli.analyze import add_arguments, from_cli
@@ -80,18 +81,21 @@ RIG_TOLERANCE = {"K": 0.002, "R": 0.005, "L": 0.03, "J": 0.005, "b": 0.05, "Tf":
 def test_rig_transient_files_round_trip_with_honest_intervals(tmp_path):
     """Identify reads the virtual dynamometer's own transient files (1 kHz, V ± 20 mV, I ± 5 mA, 1120 counts).
 
-    Five units, twenty noise seeds each, 1.2 s step logs: every parameter within a fraction of a
-    percent (a few percent for L, b, Tf) and its 95 % interval holding the truth 90–98 % of the time
-    (100 seeds: with 50 the binomial scatter alone leaves that window one time in ten). The
-    logged voltage's noise enters the simulated current (errors in the input variable) and the
-    quantised angle's errors repeat at rest or at a whole number of counts per sample: both are
-    modelled (docs/identify.md), which the previous white-residual intervals were not.
+    Five units, six noise seeds each, 1.2 s step logs: every parameter within a fraction of a
+    percent (a few percent for L, b, Tf), and its 95 % interval holding the truth a number of times
+    inside the binomial window of 30 trials (25–30, tests/_coverage.py). The logged voltage's noise
+    enters the simulated current (errors in the input variable) and the quantised angle's errors
+    repeat at rest or at a whole number of counts per sample: both are modelled (docs/identify.md).
+
+    What it catches: intervals that hold the truth 60 % of the time, as the previous white-residual
+    intervals did, pass this window less than one time in a hundred per parameter. The 100-seed
+    version with the 90–98 % bar is benchmarks/bench_coverage.py (figures in docs/identify.md).
     """
     from motorlab.io import read_any
     from motorlab.rig import VirtualRig
 
     inside: dict[str, list[bool]] = {name: [] for name in RIG_TOLERANCE}
-    for seed in range(100):
+    for seed in range(30):
         rig = VirtualRig("neverest40", unit_seed=seed % 5, noise_seed=seed)
         run = rig.transient(tmp_path / "transient.csv", duration=1.2)
         result = identify(read_any(run.paths[0], cpr=rig.motor.cpr), cpr=rig.motor.cpr)
@@ -102,8 +106,7 @@ def test_rig_transient_files_round_trip_with_honest_intervals(tmp_path):
             assert abs(est.value / truth[name] - 1) < tolerance, (seed, name, est, truth[name])
             lo, hi = est.interval(1.96)
             inside[name].append(lo <= truth[name] <= hi)
-    rates = {name: float(np.mean(hits)) for name, hits in inside.items()}
-    assert all(0.90 <= rate <= 0.98 for rate in rates.values()), rates
+    assert_coverage(inside)
 
 
 def _truth_started_cost(rec: Recording) -> float:
@@ -121,7 +124,8 @@ def _truth_started_cost(rec: Recording) -> float:
     return fit.cost
 
 
-def test_real_supply_ripple_is_input_not_noise():
+@pytest.mark.parametrize("seed", [10, 11, 12])
+def test_real_supply_ripple_is_input_not_noise(seed):
     """Ripple the motor sees and the log records is input: no bias 'correction', no absurd error bars.
 
     (A review found R = 2.4839 ± 1.8e-7 Ω against 2.5 Ω here: a near-singular information matrix
@@ -129,21 +133,20 @@ def test_real_supply_ripple_is_input_not_noise():
     Then seed 11 ended at cost 2,485 beside a cliff, R = 2.4841 ± 7.8e-9 Ω, where a start from the truth
     reaches 1,394: the simulator froze the current of a shaft that broke away and stopped again within
     one step. Every seed now reaches the minimum a start from the truth reaches, with finite, plausible
-    standard errors.)
+    standard errors. One case per seed, so that the workers share them.)
     """
-    for seed in (10, 11, 12):
-        rec = random_steps(seed, duration=1.5, dt=1e-3, ripple=0.2)
-        result = identify(rec)
-        assert "bias removed" not in result.details["method"]
-        assert result.details["cost"] <= _truth_started_cost(rec) * (1 + 1e-4), seed
-        assert not any("no standard errors" in w for w in result.warnings), (seed, result.warnings)
-        for name in ("K", "R", "J", "b", "Tf"):
-            est = result[name]
-            assert est.determined, (seed, name, est)
-            assert math.isfinite(est.stderr), (seed, name, est)
-            assert 1e-3 <= est.stderr / est.value <= 0.25, (seed, name, est)  # plausible (R: 0.7-1 %, b: 10 %)
-            assert abs(est.value - getattr(MOTOR, name)) <= 3.5 * est.stderr, (seed, name, est)
-        assert abs(result.value("R") - MOTOR.R) <= 3.0 * result["R"].stderr, seed
+    rec = random_steps(seed, duration=1.5, dt=1e-3, ripple=0.2)
+    result = identify(rec)
+    assert "bias removed" not in result.details["method"]
+    assert result.details["cost"] <= _truth_started_cost(rec) * (1 + 1e-4), seed
+    assert not any("no standard errors" in w for w in result.warnings), (seed, result.warnings)
+    for name in ("K", "R", "J", "b", "Tf"):
+        est = result[name]
+        assert est.determined, (seed, name, est)
+        assert math.isfinite(est.stderr), (seed, name, est)
+        assert 1e-3 <= est.stderr / est.value <= 0.25, (seed, name, est)  # plausible (R: 0.7-1 %, b: 10 %)
+        assert abs(est.value - getattr(MOTOR, name)) <= 3.5 * est.stderr, (seed, name, est)
+    assert abs(result.value("R") - MOTOR.R) <= 3.0 * result["R"].stderr, seed
 
 
 class _CliffModel(_oe.OEModel):
@@ -187,9 +190,10 @@ def test_a_fit_beside_a_cliff_says_so_instead_of_giving_standard_errors():
 
 
 def test_inductance_not_determined_when_the_current_rise_is_invisible():
-    # τe = L/R = 0.4 µs against samples every 2 ms: neither the current nor the angle sees L
+    # τe = L/R = 0.4 µs against samples every 2 ms: neither the current nor the angle sees L (a claim about
+    # the sampling, not the length: 1 s of log, where 2 s took three times as long to fit)
     fast = MOTOR.scaled(L=1e-6)
-    result = identify(random_steps(7, duration=2.0, dt=2e-3, params=fast))
+    result = identify(random_steps(7, duration=1.0, dt=2e-3, params=fast))
     assert not result["L"].determined
     assert "τe" in result["L"].note
     assert "L" not in result.to_dict()["parameters"] or result.to_dict()["parameters"]["L"]["value"] is None
@@ -229,9 +233,9 @@ def test_saturated_current_is_flagged():
 
 
 def test_encoder_overflow_is_flagged():
-    rec = random_steps(10, duration=1.0, dt=1e-3)
+    rec = random_steps(10, duration=0.5, dt=1e-3)  # the check reads the data; the fit across the jump is slow
     q = 2 * math.pi / CPR
-    rec.signals["position"][600:] -= 65536 * q
+    rec.signals["position"][300:] -= 65536 * q
     result = identify(rec, use_current=True)
     assert any("overflow" in w for w in result.warnings)
 
@@ -365,41 +369,41 @@ def test_held_levels_are_detected_and_ripple_or_ramps_are_not():
     assert "ripple" in why
 
 
+@pytest.mark.parametrize("seed", [20, 26, 28, 31])
 @pytest.mark.parametrize("on_samples", [False, True])
-def test_independent_simulator_coverage_and_bound(on_samples):
+def test_independent_simulator_truth_and_bound(on_samples, seed):
     """0.6 s at 10 kHz from the Radau reference (0.02 A, 560 counts, 0.02 V noise when switching between samples).
 
-    Over twelve seeds, every parameter within 3 reported standard errors of the truth in at least ten
-    and within 4 in all, and 90 % of all within 2 (95 % for calibrated intervals); the input model
-    named; each standard error at (or not far above) the Cramér–Rao bound the result reports for its
-    own log. Seeds 28 and 31 have one switch a little off its sample instant among few: taken for a
-    synchronised drive, that switch once biased L by 6 standard errors. The 3 s tables are in
-    benchmarks/bench_identify.py.
+    Every parameter within 4 reported standard errors of the truth; the input model named; each
+    standard error at (or not far above) the Cramér–Rao bound the result reports for its own log.
+    Seeds 28 and 31 have one switch a little off its sample instant among few: taken for a
+    synchronised drive, that switch once biased L by 6 standard errors; seed 26 reports K and J
+    below their bound. One case per seed and drive (the reference simulation is most of the cost),
+    so that the workers share them.
+
+    What it catches: a sample-held model of a drive switching between samples (L biased by 6σ),
+    standard errors far from the bound either way (the white-residual ones were ~2.3 times too
+    small: an error of 2σ then reads above 4σ). The pooled figures over twelve seeds per drive
+    (within 3σ in at least ten, within 2σ in 90 %) are benchmarks/bench_coverage.py and
+    docs/identify.md; the 3 s tables benchmarks/bench_identify.py.
     """
     logged = _reference().logged
-    within: dict[str, int] = dict.fromkeys(TRUTH, 0)
-    within_2: list[bool] = []
-    for seed in range(20, 32):
-        rec, _ = logged(TRUTH, seed, duration=0.6, dt=1e-4, on_samples=on_samples,
-                        voltage_noise=0.0 if on_samples else 0.02)
-        result = identify(rec)
-        model = result.details["input_model"]
-        assert ("on sample instants" in model["text"]) == on_samples, model
-        bound = result.details["cramer_rao_bound"]
-        for name, truth in TRUTH.items():
-            est = result[name]
-            assert est.determined, name
-            z = abs(est.value - truth) / est.stderr
-            assert z < 4.0, (seed, name, est, truth)
-            within[name] += int(z < 3.0)
-            within_2.append(bool(z < 2.0))
-            # below 1 is possible: the bound approximates counting errors as white (q²/12); seed 26 (both
-            # drives) reports K and J at 0.46× their bound, with |z| < 1 (left open on issue 18)
-            assert (0.4 if name in ("K", "R", "L", "J") else 0.2) < bound["stderr_over_bound"][name] < 3.0, (
-                seed, name, bound)
-            assert "the best any method could do on this log" in est.note
-    assert all(n >= 10 for n in within.values()), within
-    assert np.mean(within_2) >= 0.9, np.mean(within_2)
+    rec, _ = logged(TRUTH, seed, duration=0.6, dt=1e-4, on_samples=on_samples,
+                    voltage_noise=0.0 if on_samples else 0.02)
+    result = identify(rec)
+    model = result.details["input_model"]
+    assert ("on sample instants" in model["text"]) == on_samples, model
+    bound = result.details["cramer_rao_bound"]
+    for name, truth in TRUTH.items():
+        est = result[name]
+        assert est.determined, name
+        z = abs(est.value - truth) / est.stderr
+        assert z < 4.0, (seed, name, est, truth)
+        # below 1 is possible: the bound approximates counting errors as white (q²/12); seed 26 (both
+        # drives) reports K and J at 0.46× their bound, with |z| < 1 (left open on issue 18)
+        assert (0.4 if name in ("K", "R", "L", "J") else 0.2) < bound["stderr_over_bound"][name] < 3.0, (
+            seed, name, bound)
+        assert "the best any method could do on this log" in est.note
 
 
 def test_long_log_with_switches_inside_blocks_is_windowed_not_blurred():

@@ -59,29 +59,32 @@ def test_thermal_needs_the_current(tmp_path: Path) -> None:
 
 
 @pytest.mark.slow
-def test_heated_log_round_trip_truth_within_three_standard_errors(tmp_path: Path) -> None:
-    for seed in (1, 4, 5):
-        rec, truth, cpr = _heated_log(tmp_path, seed)
-        expected = truth["expected"]
-        assert truth["temperatures"]["winding_end_C"] > 26.0  # it heated
-        result = identify(rec, cpr=cpr, thermal=True)
-        for name in NAMES:
-            est = result[name]
-            if est.determined:
-                assert abs(est.value - expected[name]) <= 3 * est.stderr, (seed, name, est.value, expected[name])
-        assert result["R"].determined
-        assert result["K"].determined
-        assert "25 °C" in result["R"].note
-        assert "25 °C" in result.details["R_temperature"]
-        thermal = result.details["thermal"]
-        assert "neverest40" in thermal["network_from"]
-        assert thermal["winding_max_C"] == pytest.approx(truth["temperatures"]["winding_max_C"], abs=0.3)
-        assert any("the winding warmed from 25 to" in w for w in result.warnings)
-        if seed == 1:  # the same log fitted as if R were constant: R comes out high, beyond its uncertainty
-            plain = identify(rec, cpr=cpr)
-            bias = plain["R"].value - expected["R"]
-            assert bias > 5 * plain["R"].stderr, (bias, plain["R"].stderr)
-            assert math.isclose(plain["R"].value / expected["R"] - 1, 0.00393 * 0.6, rel_tol=0.6)
+@pytest.mark.parametrize("seed", [1, 4, 5])
+def test_heated_log_round_trip_truth_within_three_standard_errors(tmp_path: Path, seed: int) -> None:
+    """Three noise seeds (one case each, so that the workers share them): every determined parameter
+    within 3 standard errors, R at 25 °C, the winding's peak within 0.3 °C; seed 1 also fitted as if R
+    were constant, which biases R beyond 5 standard errors (what the heat state is for)."""
+    rec, truth, cpr = _heated_log(tmp_path, seed)
+    expected = truth["expected"]
+    assert truth["temperatures"]["winding_end_C"] > 26.0  # it heated
+    result = identify(rec, cpr=cpr, thermal=True)
+    for name in NAMES:
+        est = result[name]
+        if est.determined:
+            assert abs(est.value - expected[name]) <= 3 * est.stderr, (seed, name, est.value, expected[name])
+    assert result["R"].determined
+    assert result["K"].determined
+    assert "25 °C" in result["R"].note
+    assert "25 °C" in result.details["R_temperature"]
+    thermal = result.details["thermal"]
+    assert "neverest40" in thermal["network_from"]
+    assert thermal["winding_max_C"] == pytest.approx(truth["temperatures"]["winding_max_C"], abs=0.3)
+    assert any("the winding warmed from 25 to" in w for w in result.warnings)
+    if seed == 1:  # the same log fitted as if R were constant: R comes out high, beyond its uncertainty
+        plain = identify(rec, cpr=cpr)
+        bias = plain["R"].value - expected["R"]
+        assert bias > 5 * plain["R"].stderr, (bias, plain["R"].stderr)
+        assert math.isclose(plain["R"].value / expected["R"] - 1, 0.00393 * 0.6, rel_tol=0.6)
 
 
 def test_cli_takes_the_network_a_stall_run_measured(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

@@ -163,8 +163,13 @@ class Page:
         assert scroll_width <= width, f"the page is {scroll_width} px wide in a {width} px window"
 
     def shot(self, name: str) -> None:
-        """A screenshot of the whole view (``MOTORLAB_UI_SCREENSHOTS=docs/img`` keeps them for the docs)."""
+        """A screenshot of the whole view, taken when ``MOTORLAB_UI_SCREENSHOTS`` names a folder (``docs/img``
+        refreshes the docs' pictures; any folder to look at the pages). ``make test`` looks at none of them:
+        it does not take them (each is a resize, a pause and a full-page capture)."""
         width = self.d.execute_script("return window.innerWidth")
+        if not os.environ.get("MOTORLAB_UI_SCREENSHOTS"):
+            assert width
+            return
         height = self.d.execute_script("return document.body.scrollHeight")
         size = self.d.get_window_size()
         self.d.set_window_size(size["width"], min(max(int(height) + 120, 600), 3200))

@@ -104,11 +104,11 @@ def truth(sim_session: Path) -> dict[str, Any]:
 def ramp(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, float]:
     """A simulated Road Runner forward ramp (8192-count dead wheels) and its true kV per tick [V·s/tick]."""
     import math
-    import subprocess
+
+    from motorlab.cli import main
 
     folder = tmp_path_factory.mktemp("ramp")
-    subprocess.run([sys.executable, "-m", "motorlab", "simulate", "roadrunner-ramp", "-o", str(folder / "ramp.json")],
-                   check=True, capture_output=True)
+    assert main(["simulate", "roadrunner-ramp", "-o", str(folder / "ramp.json")]) == 0  # in this process
     expected = json.loads((folder / "truth.json").read_text())["runs"]["ramp.json"]["expected"]
     return folder / "ramp.json", expected["kV"] * 2 * math.pi / expected["cpr"]
 

@@ -101,6 +101,7 @@ class _Modal:
     def __init__(self, plant: StatePlant, s: int):
         self.plant = plant
         self.s = s
+        self._steps: dict[float, HeldStep] = {}
         a, self.bv, self.c = _regime(plant, s)
         self.a = a
         lam, vec = np.linalg.eig(a)
@@ -115,19 +116,48 @@ class _Modal:
             self.inv = inv
             self.row = vec[plant.w]
 
+    def full_step(self, dt: float) -> HeldStep:
+        """``discrete(dt)``, kept: every simulation of this plant on a dt grid takes the same full step."""
+        step = self._steps.get(dt)
+        if step is None:
+            step = self._steps[dt] = self.discrete(dt)
+        return step
+
     def discrete(self, tau: float) -> HeldStep:
         if not self.ok:
             return _discretise_expm(self.plant, self.s, tau)
         e, phi1, phi2 = phi_functions(self.lam * tau)
         vec, inv = self.vec, self.inv
+        phi1 = tau * phi1
+        phi2 = tau * tau * phi2
         ad = ((vec * e) @ inv).real
-        bv = (vec @ (tau * phi1 * self.pb)).real
-        c = (vec @ (tau * phi1 * self.pc)).real
+        bv = (vec @ (phi1 * self.pb)).real
+        c = (vec @ (phi1 * self.pc)).real
         moving = 1.0 if self.s != 0 else 0.0
-        hx = moving * ((self.row * (tau * phi1)) @ inv).real
-        hv = moving * float((self.row @ (tau * tau * phi2 * self.pb)).real)
-        hc = moving * float((self.row @ (tau * tau * phi2 * self.pc)).real)
+        hx = moving * ((self.row * phi1) @ inv).real
+        hv = moving * float((self.row @ (phi2 * self.pb)).real)
+        hc = moving * float((self.row @ (phi2 * self.pc)).real)
         return HeldStep(ad, bv, c, hx, hv, hc)
+
+
+#: Decompositions of the plants simulated lately, by regime and exact matrices: a fit simulates one
+#: parameter vector many times (the residual, then the Jacobian's columns restarted in chunks, the
+#: probes of smoothness), and the same matrices give the same eigenvectors, so each is computed once.
+_MODALS: dict[tuple[int, int, bytes, bytes, bytes], _Modal] = {}
+_MODALS_KEPT = 256
+
+
+def modal_of(plant: StatePlant, s: int) -> _Modal:
+    """The eigen-decomposition of regime s of ``plant`` (computed once for the same matrices)."""
+    key = (s, plant.w, plant.a.tobytes(), plant.b_drive.tobytes(), plant.b_friction.tobytes())
+    found = _MODALS.get(key)
+    if found is None:
+        own = StatePlant(plant.a.copy(), plant.b_drive.copy(), plant.b_friction.copy(), plant.w)
+        found = _Modal(own, s)
+        if len(_MODALS) >= _MODALS_KEPT:
+            _MODALS.clear()
+        _MODALS[key] = found
+    return found
 
 
 def moving_step(plant: StatePlant, tau: float) -> HeldStep:
@@ -206,13 +236,13 @@ class _Regimes:
     def modal(self, s: int) -> _Modal:
         """Eigen-decomposition of regime s (built on first use)."""
         if s not in self._modal:
-            self._modal[s] = _Modal(self.plant, s)
+            self._modal[s] = modal_of(self.plant, s)
         return self._modal[s]
 
     def discrete(self, s: int) -> HeldStep:
         """ZOH matrices of regime s over one grid step (built on first use)."""
         if s not in self._discrete:
-            self._discrete[s] = self.modal(s).discrete(self.dt)
+            self._discrete[s] = self.modal(s).full_step(self.dt)
         return self._discrete[s]
 
     def drive(self, xs: np.ndarray, v: np.ndarray | float) -> np.ndarray | float:
