@@ -27,7 +27,7 @@ lint: install
 # the suite starts (workers, commands, the app's workers) compiles numpy, scipy, matplotlib and motorlab
 # again, 8 s of CPU for one import of the CLI and the engine against 3 s (docs/ARCHITECTURE.md).
 test: lint
-	MPLBACKEND=Agg OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 PYTHONDONTWRITEBYTECODE= $(BIN)/pytest -n auto --dist worksteal
+	MPLBACKEND=Agg OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 PYTHONDONTWRITEBYTECODE= $(BIN)/pytest -n auto --dist worksteal --durations=30
 
 demo: install
 	MPLBACKEND=Agg $(BIN)/motorlab demo -o out/demo

@@ -211,8 +211,12 @@ function checkFigure(label, c) {
   const layout = { height: 300, margin: { t: 16, r: 12, b: 44, l: 58 }, font: { size: 12, family: "system-ui, sans-serif" },
     legend: { orientation: "h", y: -0.3 }, xaxis: { title: { text: "time in s" } }, yaxis: { title: { text: `velocity in ${c.unit}` } } };
   const traces = [{ x: c.time, y: c.target, name: "target (vref)", mode: "lines", line: { dash: "dash", width: 3 } }, { x: c.time, y: c.measured, name: "measured", mode: "lines" }];
-  if (window.Plotly) window.Plotly.react(div, traces, layout, { responsive: true, displaylogo: false });
-  return figure;
+  // drawn once in the page (a figure drawn detached takes Plotly's default 700 px width and overflows a phone)
+  const draw = (tries = 0) => {
+    if (!div.isConnected && tries < 40) { setTimeout(() => draw(tries + 1), 25); return; }
+    if (window.Plotly && div.isConnected) window.Plotly.react(div, traces, layout, { responsive: true, displaylogo: false });
+  };
+  return [figure, draw];
 }
 
 async function showChecks(host) {
@@ -221,7 +225,8 @@ async function showChecks(host) {
   host.replaceChildren();
   if (!figures.length) return;
   host.append(el("h3", { text: "Before and after" }), el("p", { role: "status", class: "check-words", text: checks.words }),
-    el("div", { style: "display:grid;grid-template-columns:repeat(auto-fit,minmax(min(100%,320px),1fr));gap:.8em" }, ...figures));
+    el("div", { style: "display:grid;grid-template-columns:repeat(auto-fit,minmax(min(100%,320px),1fr));gap:.8em" }, ...figures.map(([f]) => f)));
+  for (const [, draw] of figures) draw();
 }
 
 registerStep("robot-push", {
