@@ -4,8 +4,8 @@ Targets: a 30 000-row spin-down posted to ``/api/analyze/spindown`` answers in �
 (``/api/tune``, and ``/api/tune/response`` as the page asks at each change) in ≤ 0.5 s; a short
 analysis is not queued behind running sessions; an 8-unit session's results table (the streamed
 ``partial`` line) in ≤ 10 s, the report following. The app runs in this process (uvicorn in a
-thread) with its warm workers, and the same requests are timed with ``MOTORLAB_UI_WARM=0`` (a fresh
-``python -m`` per command, as before the warm workers). Wall time depends on the machine's load: the
+thread) with its fork server and resident worker, and the same requests are timed with ``MOTORLAB_UI_WARM=0``
+(a fresh ``python -m`` per command). Wall time depends on the machine's load: the
 load average is printed with the figures.
 
     python benchmarks/bench_ui.py            # all
@@ -15,8 +15,8 @@ load average is printed with the figures.
 
 Issue 31, point 8 (``page``): click → result with its plots (``/api/analyze/<experiment>/plots``, as the page
 asks) for a Road Runner ramp of the virtual rig, a team's real SysId files (12,905 and 16,083 rows) and a
-20,004-row SysId file of the virtual dynamometer, target ≤ 1 s, broken down into the upload, the hand-off to the
-warm worker, the file's reading, the fit, the figure curves, the JSON and the answer sent; a session of three
+20,004-row SysId file of the virtual dynamometer, target ≤ 1 s, broken down into the upload, the hand-off (a fork of
+the app's fork server), the file's reading, the fit, the figure curves, the JSON and the answer sent; a session of three
 units to its table, target ≤ 2 s, with its analyses' CPU seconds.
 """
 
@@ -69,13 +69,6 @@ def _timed(fn: Any) -> tuple[float, Any]:
     t0 = time.perf_counter()
     out = fn()
     return time.perf_counter() - t0, out
-
-
-def _wait_for_spares(seconds: float = 60.0) -> None:
-    from motorlab.ui import runner
-
-    runner.POOL.fill()
-    time.sleep(min(seconds, 12.0))  # the spares import numpy, scipy, matplotlib, motorlab
 
 
 def _analysis(url: str, log: Path) -> float:
@@ -153,7 +146,7 @@ def _session_only() -> None:
         body = _session_zip(8, Path(tmp) / "eight")
         print(f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} CPUs")
         _server, url = _serve()
-        _wait_for_spares()
+        _workers_ready()
         table, report = _session_streamed(url, body)
         print(f"8-unit session: results table {table:.1f} s (target ≤ 10 s), report with its figures {report:.1f} s")
         print(f"load average {os.getloadavg()[0]:.1f} at the end")
@@ -184,25 +177,15 @@ def _cpu_ticks(pid: int) -> int:
     return int(fields[11]) + int(fields[12])  # utime + stime
 
 
-def _spares_ready(limit: float = 120.0) -> float:
-    """Wait until the warm spares (and the resident worker) have done their imports: their CPU time stops
-    growing (Linux' /proc; elsewhere a fixed wait). Seconds waited."""
+def _workers_ready(limit: float = 120.0) -> float:
+    """Wait until the fork server and the resident worker have done their imports. Seconds waited."""
     from motorlab.ui import runner
 
     t0 = time.perf_counter()
     runner.POOL.fill()
     runner.resident().start_soon()
-    if not Path("/proc/self/stat").is_file():
-        time.sleep(12.0)
-        return time.perf_counter() - t0
-    while time.perf_counter() - t0 < limit:
-        pids = [p.pid for p in runner.POOL._spares]
-        if runner.RESIDENT.proc is not None:
-            pids.append(runner.RESIDENT.proc.pid)
-        before = [_cpu_ticks(pid) for pid in pids]
-        time.sleep(0.5)
-        if before == [_cpu_ticks(pid) for pid in pids]:
-            return time.perf_counter() - t0
+    while time.perf_counter() - t0 < limit and not (runner.POOL.ready and runner.RESIDENT.ready):
+        time.sleep(0.05)
     return time.perf_counter() - t0
 
 
@@ -279,17 +262,17 @@ def _click(url: str, experiment: str, path: Path, fields: dict[str, str]) -> dic
 
 
 def _breakdown(name: str, url: str, experiment: str, path: Path, fields: dict[str, str]) -> None:
-    """Click → result for one file, best of 3 with warm spares ready, and where the time goes."""
-    _spares_ready()  # measured alone: not while the spares used by the case before are replaced
+    """Click → result for one file, best of 3 with the fork server ready, and where the time goes."""
+    _workers_ready()  # measured alone: not while a worker of the case before is started again
     work = _in_process(experiment, path, fields)
     clicks = []
     for _ in range(3):
-        _spares_ready()
+        _workers_ready()
         clicks.append(_click(url, experiment, path, fields))
     best = min(clicks, key=lambda c: c["total"])
     handoff = best["run"] - work["work"]
     three = ", ".join(f"{c['total']:.2f}" for c in clicks)
-    print(f"{name}: click → result {best['total']:.2f} s (best of 3, warm worker; the 3: {three})\n"
+    print(f"{name}: click → result {best['total']:.2f} s (best of 3, forked; the 3: {three})\n"
           f"    upload saved {best['upload']:.3f} s | child process {best['run']:.2f} s = hand-off and start "
           f"{handoff:.2f} s + read {work['read']:.3f} s + fit {work['fit']:.2f} s + figure curves "
           f"{work['figures']:.3f} s + JSON {work['json']:.3f} s (in this process, warm: {work['cpu']:.2f} s of CPU) | "
@@ -301,10 +284,10 @@ def _breakdown(name: str, url: str, experiment: str, path: Path, fields: dict[st
 def _page() -> None:
     """Issue 31, point 8: click → result, broken down, for a ramp, SysId files and a three-unit session.
 
-    Each click is timed with the warm spares ready (their imports done: their CPU time no longer grows), best of
+    Each click is timed with the fork server and resident worker ready (their imports done), best of
     3; the app's ``Server-Timing`` gives the upload's saving and the child process's run; the child's work (read,
     fit, figure curves, JSON) is timed again in this process, warm, with its CPU seconds (what a busy machine
-    stretches); the rest of the child's run is the hand-off to the warm worker and its end.
+    stretches); the rest of the child's run is the hand-off (a fork) and the child's end.
     """
     import json
     import subprocess
@@ -324,10 +307,10 @@ def _page() -> None:
         session_cpu = _session_cpu(folder / "three" / "session.toml")
         print(f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} CPUs")
         _server, url = _serve()
-        print(f"warm spares ready after {_spares_ready():.1f} s")
+        print(f"fork server and resident worker ready after {_workers_ready():.1f} s")
         for case in cases:
             _breakdown(case[0], url, *case[1:])
-        _spares_ready()
+        _workers_ready()
         table, report = _session_streamed(url, three)
         print(f"3-unit session: results table {table:.1f} s (target ≤ 2 s), report with its figures {report:.1f} s; "
               f"its analyses alone (in this process, one after another) {session_cpu:.1f} s of CPU")
@@ -362,28 +345,28 @@ def main() -> None:
         for mode in ("warm", "cold"):
             os.environ["MOTORLAB_UI_WARM"] = "1" if mode == "warm" else "0"
             if mode == "warm":
-                _wait_for_spares()
+                _workers_ready()
             analysis = []
             for _ in range(3):
                 analysis.append(_analysis(url, log))
                 if mode == "warm":
-                    _wait_for_spares(3.0)
+                    _workers_ready()
             gains = []
             for _ in range(3):
                 gains.append(_gains(url))
                 if mode == "warm":
-                    _wait_for_spares(3.0)
+                    _workers_ready()
             # A change of an option on the gains step: the page asks for the gains with their curves, at once.
             changes = [_gains(url, "/api/tune/response", kv) for kv in ("0.121", "0.122", "0.123", "0.124", "0.125")]
             print(f"{mode}: 30k-row spin-down click → result {min(analysis):.2f} s (best of 3; target ≤ 1.0 s); "
                   f"gains {min(gains):.2f} s (target ≤ 0.5 s); five changes one after another (the page's "
                   f"gains with curves) {max(changes):.2f} s the slowest, {sorted(changes)[2]:.2f} s the median")
         os.environ["MOTORLAB_UI_WARM"] = "1"
-        _wait_for_spares()
+        _workers_ready()
         print(f"a short analysis beside two running sessions: {_beside_sessions(url, log, small):.2f} s")
         if not quick:
             body = _session_zip(8, folder / "eight")
-            _wait_for_spares()
+            _workers_ready()
             table, report = _session_streamed(url, body)
             print(f"8-unit session: results table {table:.1f} s (target ≤ 10 s), "
                   f"report with its figures {report:.1f} s")

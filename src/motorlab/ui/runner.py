@@ -6,13 +6,13 @@ answer is the CLI's own, byte for byte. A child process (not a thread) because a
 stopped only by ending its process: a hostile or huge file gets its time-limit error, a client that
 went away ends its command, while the event loop keeps serving other requests.
 
-Warm workers: a child process pays Python's start-up and the imports of numpy, scipy, matplotlib
-and motorlab (about 1 s; several on a busy machine) before it can work. :class:`Pool` keeps
-:data:`SPARES` children started ahead (:mod:`motorlab.ui.warm`: imported, waiting for one job on
-stdin); a command takes one, runs in it, and the process exits, so nothing of one request survives
-into the next. The spares are replaced when no command runs (on a two-core laptop a replacement
-importing scipy would slow the commands running); a burst that uses them up runs the rest in fresh
-``python -P -m motorlab`` processes, which import only what their command needs.
+The fork server: a child process would pay Python's start-up and the imports of numpy, scipy,
+matplotlib and motorlab (about 3 s of CPU; seconds of waiting on a busy machine) before it works.
+:class:`Pool` keeps one process that did those imports (:mod:`motorlab.ui.warm` ``--fork-server``); each
+command is forked from it (milliseconds), runs in its own process and session, and exits, so nothing of
+one request survives into the next and a command is still ended by ending its process group. Until the
+server is ready (its own imports, at the app's start) or when it is gone, a command runs in a fresh
+``python -P -m motorlab`` process, which imports only what its command needs.
 
 Slots: sessions (``characterize``, many seconds) and short commands (one analysis, gains, the
 page's plots) have separate semaphores, so a short analysis never waits behind running sessions.
@@ -23,9 +23,11 @@ from __future__ import annotations
 import asyncio
 import atexit
 import contextlib
+import itertools
 import json
 import os
 import signal
+import socket
 import subprocess
 import sys
 import tempfile
@@ -33,7 +35,7 @@ import threading
 import weakref
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import IO, Any
+from typing import IO, Any, TypeAlias
 
 #: Seconds one command may run before it is ended.
 TIME_LIMIT = 120.0
@@ -48,8 +50,8 @@ CONCURRENCY = max(1, min(4, os.cpu_count() or 1))
 #: Sessions (``characterize``) at once, in their own slots.
 SESSIONS = max(1, min(2, (os.cpu_count() or 1) // 2))
 
-#: Warm child processes kept ready (0, or env ``MOTORLAB_UI_WARM=0``: a fresh ``python -m`` per command).
-SPARES = 2
+#: Seconds a command waits for the fork server to say it has forked it (it does nothing else: milliseconds).
+FORK_WAIT = 10.0
 
 _TRUE = {"1", "true", "on", "yes"}
 
@@ -118,7 +120,7 @@ def _child_env() -> dict[str, str]:
 _OWN_GROUP: dict[str, Any] = {"start_new_session": True} if os.name == "posix" else {}
 
 
-def end(proc: subprocess.Popen[bytes]) -> None:
+def end(proc: subprocess.Popen[bytes] | Forked) -> None:
     """End a command at once: its whole process group (POSIX), or the process."""
     if _OWN_GROUP:
         with contextlib.suppress(ProcessLookupError, PermissionError):
@@ -128,55 +130,156 @@ def end(proc: subprocess.Popen[bytes]) -> None:
 
 
 def _warm_enabled() -> bool:
-    return SPARES > 0 and os.environ.get("MOTORLAB_UI_WARM", "1") not in ("0", "false", "no")
+    """Whether commands are forked from the fork server and gains run in the resident worker (env
+    ``MOTORLAB_UI_WARM=0``: a fresh ``python -P -m`` per command)."""
+    return os.environ.get("MOTORLAB_UI_WARM", "1") not in ("0", "false", "no")
+
+
+class Forked:
+    """A command forked by the fork server, seen as a :class:`subprocess.Popen` is (``pid``, ``stdout``,
+    ``stderr``, ``poll``, ``wait``, ``kill``, ``returncode``); its exit code comes from the server, which reaps it."""
+
+    stdin = None
+
+    def __init__(self, stdout: int, stderr: int) -> None:
+        self.pid = 0
+        self.returncode: int | None = None
+        self.stdout: IO[bytes] = os.fdopen(stdout, "rb")
+        self.stderr: IO[bytes] = os.fdopen(stderr, "rb")
+        self.forked = threading.Event()
+        self._ended = threading.Event()
+
+    def ended(self, code: int) -> None:
+        self.returncode = code
+        self._ended.set()
+
+    def poll(self) -> int | None:
+        return self.returncode
+
+    def wait(self, timeout: float | None = None) -> int:
+        if not self._ended.wait(timeout):
+            raise subprocess.TimeoutExpired(f"forked command {self.pid}", timeout or 0.0)
+        assert self.returncode is not None
+        return self.returncode
+
+    def kill(self) -> None:
+        if self.returncode is None and self.pid:
+            with contextlib.suppress(ProcessLookupError, PermissionError):
+                os.kill(self.pid, signal.SIGKILL)
+
+
+#: A command's process: a fresh Python, or one forked by the fork server.
+Child: TypeAlias = "subprocess.Popen[bytes] | Forked"
 
 
 class Pool:
-    """Warm child processes (:mod:`motorlab.ui.warm`), shared by every event loop of the process."""
+    """The fork server (``python -P -m motorlab.ui.warm --fork-server FD``), shared by every event loop of the
+    process: started by :meth:`fill`, it forks each command (:meth:`fork`)."""
 
     def __init__(self) -> None:
         self._lock = threading.Lock()
-        self._spares: list[subprocess.Popen[bytes]] = []
-        self.started = 0  # warm processes started so far (for tests and benchmarks)
+        self._send = threading.Lock()
+        self.server: subprocess.Popen[bytes] | None = None
+        self._socket: socket.socket | None = None
+        self.ready = False
+        self._jobs: dict[int, Forked] = {}
+        self._ids = itertools.count(1)
+        self.started = 0  # Python processes started so far, the fork server's and the resident's (tests, benchmarks)
         atexit.register(self.close)
 
-    def spawn(self, *args: str) -> subprocess.Popen[bytes]:
-        """A new warm process (``python -P -m motorlab.ui.warm ARGS``); its stderr is not read (``--serve``)."""
+    def spawn(self, *args: str, **popen: Any) -> subprocess.Popen[bytes]:
+        """A new Python preloaded with the commands' imports (``python -P -m motorlab.ui.warm ARGS``)."""
         self.started += 1
-        return subprocess.Popen(
-            [sys.executable, "-P", "-m", "motorlab.ui.warm", *args], cwd=tempfile.gettempdir(), env=_child_env(),
-            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL if args else subprocess.PIPE,
-            **_OWN_GROUP,
-        )
+        streams = {"stdin": subprocess.PIPE, "stdout": subprocess.PIPE, "stderr": subprocess.DEVNULL, **popen}
+        return subprocess.Popen([sys.executable, "-P", "-m", "motorlab.ui.warm", *args], cwd=tempfile.gettempdir(),
+                                env=_child_env(), **streams, **_OWN_GROUP)
 
     def fill(self) -> None:
-        """Start spares until :data:`SPARES` are ready (or starting)."""
+        """Start the fork server unless it runs (its imports take seconds: :meth:`fork` uses it once ready)."""
         if not _warm_enabled():
             return
         with self._lock:
-            self._spares = [p for p in self._spares if p.poll() is None]
-            while len(self._spares) < SPARES:
-                self._spares.append(self.spawn())
+            if self.server is not None and self.server.poll() is None:
+                return
+            ours, theirs = socket.socketpair(socket.AF_UNIX, socket.SOCK_SEQPACKET)
+            with theirs:
+                server = self.spawn("--fork-server", str(theirs.fileno()), pass_fds=(theirs.fileno(),),
+                                    stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL)
+            self.server, self._socket, self.ready = server, ours, False
+        threading.Thread(target=self._listen, args=(server, ours), daemon=True).start()
 
-    def take(self) -> subprocess.Popen[bytes] | None:
-        """A warm process for one job, or None when none is ready (the caller starts a fresh one)."""
+    def _listen(self, server: subprocess.Popen[bytes], sock: socket.socket) -> None:
+        """The server's messages: ready, each command forked, each command ended; at its end, its commands
+        are ended too (no one would report their exit)."""
+        with contextlib.suppress(OSError):
+            while message := sock.recv(1 << 16):
+                said = json.loads(message)
+                if said.get("ready"):
+                    with self._lock:
+                        self.ready = self.server is server
+                    continue
+                job = self._jobs.get(int(said["id"]))
+                if job is None:
+                    continue
+                if "pid" in said:
+                    job.pid = int(said["pid"])
+                    job.forked.set()
+                else:
+                    self._jobs.pop(int(said["id"]), None)
+                    job.ended(int(said["exit"]))
         with self._lock:
-            while self._spares:
-                proc = self._spares.pop(0)
-                if proc.poll() is None:
-                    return proc
+            if self.server is server:
+                self.server, self._socket, self.ready = None, None, False
+            orphans = [job for job in self._jobs.values() if job.returncode is None]
+        for job in orphans:
+            end(job)
+            job.forked.set()
+            job.ended(-signal.SIGKILL)
+        with contextlib.suppress(OSError):
+            sock.close()
+        server.wait()
+
+    def fork(self, module: str, argv: Sequence[str], cwd: str, env: Mapping[str, str]) -> Forked | None:
+        """The command forked by the server, or None when it is not ready (the caller starts a fresh Python)."""
+        with self._lock:
+            sock = self._socket if self.ready else None
+        if sock is None:
             return None
+        out_r, out_w = os.pipe()
+        err_r, err_w = os.pipe()
+        job, ident = Forked(out_r, err_r), next(self._ids)
+        self._jobs[ident] = job
+        message = json.dumps({"id": ident, "module": module, "argv": list(argv), "cwd": cwd, "env": dict(env)})
+        try:
+            with self._send:
+                socket.send_fds(sock, [message.encode()], [out_w, err_w])
+        except OSError:
+            self._jobs.pop(ident, None)
+            return None
+        finally:
+            os.close(out_w)
+            os.close(err_w)
+        if not job.forked.wait(FORK_WAIT) or not job.pid:  # the server is stuck or gone
+            self._jobs.pop(ident, None)
+            for pipe in (job.stdout, job.stderr):
+                pipe.close()
+            return None
+        return job
 
     def close(self) -> None:
-        """End the spares (at exit; they also end by themselves when the app's end of their stdin closes)."""
-        with self._lock:
-            spares, self._spares = self._spares, []
-        for proc in [*spares, *RUNNING]:  # the commands still running too: they are in groups of their own
+        """End the commands still running (they are in groups of their own), then the fork server."""
+        for proc in list(RUNNING):
             end(proc)
-            proc.wait()
-            for pipe in (proc.stdin, proc.stdout, proc.stderr):
-                if pipe is not None:
-                    pipe.close()
+            with contextlib.suppress(subprocess.TimeoutExpired):
+                proc.wait(timeout=5)
+        with self._lock:
+            server, sock, self.server, self._socket, self.ready = self.server, self._socket, None, None, False
+        if sock is not None:
+            with contextlib.suppress(OSError):
+                sock.close()
+        if server is not None:
+            end(server)
+            server.wait()
 
 
 POOL = Pool()
@@ -204,10 +307,10 @@ SESSION_NICENESS = 10
 class Resident:
     """One warm process (``motorlab.ui.warm --serve``) running short jobs one at a time, for the whole app.
 
-    A gains change would otherwise take a spare (then replaced: a new Python importing scipy) for
-    0.1 s of work. A job that runs past its time limit, or whose client goes away, ends the process (the
+    A gains change (0.1 s of work, at each option changed) would otherwise be a process forked, its pipes
+    and its end. A job that runs past its time limit, or whose client goes away, ends the process (the
     next is started when the app is idle); while the resident is busy or starting, a job runs the
-    ordinary way, in a spare or a fresh process, so nothing queues behind it. One per Python process,
+    ordinary way, forked or in a fresh process, so nothing queues behind it. One per Python process,
     whatever the event loops: its answers are read in a thread, not through a loop's pipe transport.
     """
 
@@ -307,31 +410,18 @@ def resident() -> Resident:
 
 
 #: Commands running now (their processes), for tests: a cancelled request leaves none behind.
-RUNNING: set[subprocess.Popen[bytes]] = set()
+RUNNING: set[Child] = set()
 
 
-def _start(module: str, argv: Sequence[str], cwd: str, env: Mapping[str, str]) -> subprocess.Popen[bytes]:
-    """A child running ``module argv`` in ``cwd``: a warm one given the job, or a fresh ``python -P -m``."""
-    proc = POOL.take() if _warm_enabled() else None
-    if proc is None:  # a burst used the spares up: a fresh process imports only what its command needs
+def _start(module: str, argv: Sequence[str], cwd: str, env: Mapping[str, str]) -> Child:
+    """A child running ``module argv`` in ``cwd``: forked by the fork server, or a fresh ``python -P -m``."""
+    proc = POOL.fork(module, argv, cwd, env) if _warm_enabled() else None
+    if proc is None:  # the fork server is starting (or gone): a fresh process imports only what its command needs
+        POOL.fill()
         return subprocess.Popen(
             [sys.executable, "-P", "-m", module, *argv], cwd=cwd, env={**_child_env(), **env},
             stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE, **_OWN_GROUP,
         )
-    job = json.dumps({"module": module, "argv": list(argv), "cwd": cwd, "env": dict(env)}) + "\n"
-    stdin = proc.stdin
-    assert stdin is not None
-
-    def send() -> None:  # a thread: the child reads its job only once its imports are done
-        try:
-            stdin.write(job.encode())
-        except OSError:
-            pass  # ended before it read its job (killed): its outcome says so
-        finally:
-            with contextlib.suppress(OSError):
-                stdin.close()
-
-    threading.Thread(target=send, daemon=True).start()
     return proc
 
 
@@ -342,7 +432,7 @@ async def _reader(pipe: IO[bytes]) -> tuple[asyncio.StreamReader, asyncio.BaseTr
     return reader, transport
 
 
-async def _collect(proc: subprocess.Popen[bytes], on_progress: Callable[[dict[str, Any]], None] | None) -> tuple[
+async def _collect(proc: Child, on_progress: Callable[[dict[str, Any]], None] | None) -> tuple[
         bytes, bytes]:
     """Read the child's stdout and stderr to their end; progress lines go to ``on_progress``, not stderr."""
     assert proc.stdout is not None
@@ -369,13 +459,14 @@ async def _collect(proc: subprocess.Popen[bytes], on_progress: Callable[[dict[st
         err_transport.close()
 
 
-#: Seconds after the last command ends before the spares it used are replaced: a new Python importing scipy
-#: takes a CPU for seconds, and on a two-core laptop the browser draws the answer's figures in those first moments.
+#: Seconds after the last command ends before a resident worker (or fork server) that has gone is started again:
+#: a new Python importing scipy takes a CPU for seconds, and on a two-core laptop the browser draws the answer's
+#: figures in those first moments.
 REFILL_DELAY = 1.5
 
 
 def _refill_if_idle() -> None:
-    """Replace the spares used and start the resident worker, unless a command runs again."""
+    """Start the fork server and the resident worker where they have gone, unless a command runs again."""
     if not RUNNING:
         POOL.fill()
         resident().start_soon()
@@ -415,7 +506,7 @@ async def run_module(
             if running:
                 end(proc)
             RUNNING.discard(proc)
-            if not RUNNING:  # idle: replace the spares used soon (not while commands run: they need the CPU)
+            if not RUNNING:  # idle: restart what has gone, soon (not while commands run: they need the CPU)
                 asyncio.get_running_loop().call_later(REFILL_DELAY, _refill_if_idle)
             if running:  # reap it (in a thread: Popen.wait blocks)
                 with contextlib.suppress(asyncio.CancelledError):

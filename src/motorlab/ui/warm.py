@@ -1,12 +1,19 @@
-"""A warm child process of the app: motorlab, numpy, scipy and matplotlib imported, waiting for one command.
+"""The app's fork server: motorlab, numpy, scipy and matplotlib imported once, each command forked from it.
 
-``python -P -m motorlab.ui.warm`` imports what the commands need, then reads ONE job from stdin, a
-JSON line ``{"module": "motorlab" | "motorlab.ui.worker", "argv": [...], "cwd": ..., "env": {...}}``,
-runs it exactly as ``python -m <module> argv...`` would (in ``cwd``, the CLI's own ``main``, its
-stdout, stderr and exit code) and exits. One command per process: nothing of one request survives
-into another, and the app can still end a command by ending its process (the time limit, a client
-that went away). :mod:`motorlab.ui.runner` keeps spares started ahead, so a request does not wait
-for Python and these imports (about 1 s, more on a busy machine).
+``python -P -m motorlab.ui.warm --fork-server FD`` imports what the commands need, says it is ready on
+the Unix socket ``FD`` (a ``SOCK_SEQPACKET`` pair of :mod:`motorlab.ui.runner`), then forks one child
+per job it receives there: a JSON message ``{"id", "module": "motorlab" | "motorlab.ui.worker",
+"argv": [...], "cwd", "env"}`` with two file descriptors, the write ends of the command's stdout and
+stderr pipes. The child runs the job exactly as ``python -m <module> argv...`` would (in ``cwd``, the
+CLI's own ``main``, its stdout, stderr and exit code) in a session of its own, and exits. The server
+answers ``{"id", "pid"}`` when the child is forked and ``{"id", "exit"}`` when it has ended (its exit
+code, or minus the signal that ended it). One command per process: nothing of one request survives into
+another (the server itself runs none), and the app ends a command by ending its process group (the
+time limit, a client that went away). A fork costs milliseconds; a new Python importing scipy costs
+seconds of CPU (about 3 s on this project's 2-core build machine).
+
+``--serve`` is the resident worker (:class:`motorlab.ui.runner.Resident`): jobs one after another in one
+process, for the gains.
 
 ``-P`` keeps the folder the process starts in off ``sys.path``, so that an uploaded file named like
 a module (``numpy.py``) is never imported.
@@ -127,23 +134,89 @@ def serve() -> int:
     return 0
 
 
+def _forked(job: dict[str, object], fds: list[int], inherited: list[int]) -> None:
+    """In the forked child: a session of its own, the command's pipes as stdout and stderr, run, exit."""
+    import contextlib
+    import signal
+
+    code = 1
+    try:
+        signal.set_wakeup_fd(-1)
+        signal.signal(signal.SIGCHLD, signal.SIG_DFL)
+        for fd in inherited:
+            os.close(fd)
+        os.setsid()  # a process group of its own: ending the command ends what it started
+        devnull = os.open(os.devnull, os.O_RDONLY)
+        for fd, target in ((devnull, 0), (fds[0], 1), (fds[1], 2)):
+            os.dup2(fd, target)
+            os.close(fd)
+        code = run(job)
+    except BaseException as exc:  # the child ends here: it never returns into the server's loop
+        print(f"motorlab: internal error: {type(exc).__name__}: {exc}", file=sys.stderr)
+    finally:
+        with contextlib.suppress(Exception):
+            sys.stdout.flush()
+            sys.stderr.flush()
+        # The answer is out: end now. The interpreter's own shutdown (freeing every module of numpy, scipy,
+        # matplotlib and motorlab) took 0.3-1.5 s after the answer, and the app waits for the process's end to
+        # answer the click. The command closed its files itself; nothing is left to run at exit.
+        os._exit(code)
+
+
+def fork_server(fd: int) -> int:
+    """Preload, say ``ready`` on the socket ``fd``, then fork a child per job (see the module docstring) until
+    the app closes its end."""
+    import selectors
+    import signal
+    import socket
+
+    preload()
+    sock = socket.socket(fileno=fd)
+    wake_r, wake_w = os.pipe()
+    os.set_blocking(wake_w, False)
+    signal.signal(signal.SIGCHLD, lambda *_: None)  # a child's end wakes the loop (the handler only has to exist)
+    signal.set_wakeup_fd(wake_w)
+    children: dict[int, object] = {}  # pid -> the job's id
+    sock.sendall(b'{"ready": true}')
+    selector = selectors.DefaultSelector()
+    selector.register(sock, selectors.EVENT_READ)
+    selector.register(wake_r, selectors.EVENT_READ)
+    while True:
+        for key, _ in selector.select():
+            if key.fileobj is not sock:
+                os.read(wake_r, 4096)
+                continue
+            message, fds, _, _ = socket.recv_fds(sock, 1 << 20, 2)
+            if not message:  # the app closed its end: its commands were ended by it
+                return 0
+            job = json.loads(message)
+            pid = os.fork()
+            if pid == 0:
+                _forked(job, fds, [sock.fileno(), wake_r, wake_w])
+            for passed in fds:
+                os.close(passed)
+            children[pid] = job["id"]
+            sock.sendall(json.dumps({"id": job["id"], "pid": pid}).encode())
+        while children:
+            try:
+                pid, status = os.waitpid(-1, os.WNOHANG)
+            except ChildProcessError:
+                break
+            if pid == 0:
+                break
+            if pid in children:
+                ident = children.pop(pid)
+                sock.sendall(json.dumps({"id": ident, "exit": os.waitstatus_to_exitcode(status)}).encode())
+
+
 def main() -> int:
-    """Preload, wait for the job on stdin, run it (``--serve``: run jobs until stdin closes)."""
+    """``--fork-server FD`` (the app's commands) or ``--serve`` (its resident worker)."""
+    if len(sys.argv) == 3 and sys.argv[1] == "--fork-server":
+        return fork_server(int(sys.argv[2]))
     if sys.argv[1:] == ["--serve"]:
         return serve()
-    preload()
-    line = sys.stdin.readline()
-    if not line.strip():  # the app went away before giving a job
-        return 0
-    devnull = os.open(os.devnull, os.O_RDONLY)
-    os.dup2(devnull, 0)  # the command reads no input, as with stdin=DEVNULL
-    code = run(json.loads(line))
-    sys.stdout.flush()
-    sys.stderr.flush()
-    # The answer is out: end now. The interpreter's own shutdown (freeing every module of numpy, scipy,
-    # matplotlib and motorlab) took 0.3-1.5 s after the answer, and the app waits for the process's end (the
-    # pipes closing) to answer the click. The command closed its files itself; nothing is left to run at exit.
-    os._exit(code)
+    print("usage: python -P -m motorlab.ui.warm --fork-server FD | --serve", file=sys.stderr)
+    return 2
 
 
 if __name__ == "__main__":  # pragma: no cover
