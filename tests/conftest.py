@@ -34,3 +34,16 @@ def dyno_dir() -> Path:
     if found is None:
         pytest.skip(not_found("the shared dynamometer exports (dyno/ of ../shared/data/real)"))
     return found
+
+
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """The longest tests first: the browser's (a Chromium, the app's commands, a minute each on a busy machine),
+    then those marked ``slow``, then the rest, each group in its collection order. pytest-xdist's workers take
+    the queue from its head and, once idle, steal from the tail of another's: the suite then ends on short tests
+    on every core, not on one browser journey while the other core waits."""
+    def cost(item: pytest.Item) -> int:
+        if "page" in getattr(item, "fixturenames", ()):
+            return 0
+        return 1 if item.get_closest_marker("slow") is not None else 2
+
+    items.sort(key=cost)  # stable: the collection order within each group
