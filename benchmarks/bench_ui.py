@@ -182,9 +182,9 @@ def _workers_ready(limit: float = 120.0) -> float:
     from motorlab.ui import runner
 
     t0 = time.perf_counter()
-    runner.POOL.fill()
     runner.resident().start_soon()
-    while time.perf_counter() - t0 < limit and not (runner.POOL.ready and runner.RESIDENT.ready):
+    runner.POOL.wait_ready(limit)
+    while time.perf_counter() - t0 < limit and not runner.RESIDENT.ready:
         time.sleep(0.05)
     return time.perf_counter() - t0
 

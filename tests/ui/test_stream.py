@@ -1,4 +1,4 @@
-"""Streamed answers (``Accept: application/x-ndjson``), cancelled requests and the warm workers."""
+"""Streamed answers (``Accept: application/x-ndjson``), cancelled requests, the fork server and the resident worker."""
 
 from __future__ import annotations
 
@@ -27,6 +27,12 @@ def _zip(folder: Path) -> bytes:
             if path.is_file():
                 zf.write(path, f"bench/{path.relative_to(folder)}")
     return buffer.getvalue()
+
+
+@pytest.fixture
+def forking() -> None:
+    """The app's fork server ready: commands are forked from it, not run in a fresh Python."""
+    assert runner.POOL.wait_ready(), "the fork server did not start"
 
 
 def _lines(response: httpx.Response) -> list[dict[str, Any]]:
@@ -103,7 +109,8 @@ def _wait_until(condition: Any, seconds: float) -> bool:
 
 
 @pytest.mark.parametrize("streamed", [True, False])
-def test_a_client_that_goes_away_ends_its_command(server: Any, sim_session: Path, streamed: bool) -> None:
+def test_a_client_that_goes_away_ends_its_command(server: Any, sim_session: Path, streamed: bool,
+                                                  forking: None) -> None:
     import socket
 
     assert _wait_until(lambda: not runner.RUNNING, 120)
@@ -118,9 +125,8 @@ def test_a_client_that_goes_away_ends_its_command(server: Any, sim_session: Path
     assert all(child.wait(timeout=5) < 0 for child in children)  # ended by a signal, not finished
 
 
-def test_the_time_limit_ends_a_command_in_a_warm_worker(server: Any, sim_session: Path,
-                                                        monkeypatch: pytest.MonkeyPatch) -> None:
-    runner.POOL.fill()
+def test_the_time_limit_ends_a_forked_command(server: Any, sim_session: Path, monkeypatch: pytest.MonkeyPatch,
+                                              forking: None) -> None:
     monkeypatch.setattr(runner, "SESSION_TIME_LIMIT", 0.5)  # a session takes seconds
     response = httpx.post(f"{server.url}/api/characterize", files=[("file", ("bench.zip", _zip(sim_session)))],
                           timeout=120)
@@ -128,16 +134,18 @@ def test_the_time_limit_ends_a_command_in_a_warm_worker(server: Any, sim_session
     assert "0.5 s" in response.json()["error"]
 
 
-def test_warm_workers_answer_as_a_fresh_process(sim_session: Path, tmp_path: Path,
-                                                monkeypatch: pytest.MonkeyPatch) -> None:
+def test_a_forked_command_answers_as_a_fresh_process(sim_session: Path, tmp_path: Path,
+                                                     monkeypatch: pytest.MonkeyPatch, forking: None) -> None:
     (tmp_path / "lcr.csv").write_bytes((sim_session / "A" / "lcr.csv").read_bytes())
     argv = ["analyze", "lcr", "lcr.csv", "--json"]
 
     async def both() -> tuple[runner.Outcome, runner.Outcome]:
-        runner.POOL.fill()
+        forks = runner.POOL.forks
         warm = await runner.run_cli(argv, cwd=str(tmp_path))
+        assert runner.POOL.forks == forks + 1  # forked, not a fresh Python
         monkeypatch.setenv("MOTORLAB_UI_WARM", "0")
         cold = await runner.run_cli(argv, cwd=str(tmp_path))
+        assert runner.POOL.forks == forks + 1
         return warm, cold
 
     warm, cold = asyncio.run(both())
@@ -146,8 +154,38 @@ def test_warm_workers_answer_as_a_fresh_process(sim_session: Path, tmp_path: Pat
     assert warm.stderr == cold.stderr
     # An uploaded file named like a module is never imported (python -P: the folder is not on sys.path).
     (tmp_path / "json.py").write_text("raise SystemExit('imported an upload')\n")
+    monkeypatch.delenv("MOTORLAB_UI_WARM")
+    forks = runner.POOL.forks
     again = asyncio.run(runner.run_cli(argv, cwd=str(tmp_path)))
+    assert runner.POOL.forks == forks + 1
     assert again.stdout == cold.stdout
+    # A command that fails (a file that is not there) ends as the CLI does; the next one is forked as before.
+    missing = asyncio.run(runner.run_cli(["analyze", "lcr", "nothing.csv", "--json"], cwd=str(tmp_path)))
+    assert missing.code == 2
+    assert "nothing.csv" in missing.error_line()
+    assert asyncio.run(runner.run_cli(argv, cwd=str(tmp_path))).stdout == cold.stdout
+    assert runner.POOL.forks == forks + 3
+
+
+def test_a_fork_server_that_has_gone_is_started_again(sim_session: Path, tmp_path: Path, forking: None) -> None:
+    """Killed (as by the kernel's out-of-memory killer), the server is started again: meanwhile a command runs in
+    a fresh Python, with the same answer."""
+    (tmp_path / "lcr.csv").write_bytes((sim_session / "A" / "lcr.csv").read_bytes())
+    argv = ["analyze", "lcr", "lcr.csv", "--json"]
+    before = asyncio.run(runner.run_cli(argv, cwd=str(tmp_path)))
+    server = runner.POOL.server
+    assert server is not None
+    os.kill(server.pid, signal.SIGKILL)
+    assert _wait_until(lambda: not runner.POOL.ready, 10)
+    forks = runner.POOL.forks
+    meanwhile = asyncio.run(runner.run_cli(argv, cwd=str(tmp_path)))
+    assert runner.POOL.forks == forks  # a fresh Python
+    assert meanwhile.stdout == before.stdout
+    assert runner.POOL.wait_ready()
+    assert runner.POOL.server is not server
+    again = asyncio.run(runner.run_cli(argv, cwd=str(tmp_path)))
+    assert runner.POOL.forks == forks + 1
+    assert again.stdout == before.stdout
 
 
 def _group(pgid: int) -> list[int]:
@@ -164,7 +202,7 @@ def _group(pgid: int) -> list[int]:
 
 
 @pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="reads the process table from /proc")
-def test_ending_a_session_ends_the_processes_analysing_its_units(tmp_path: Path) -> None:
+def test_ending_a_session_ends_the_processes_analysing_its_units(tmp_path: Path, forking: None) -> None:
     from motorlab.session.simulated import write_simulated_session
 
     toml = write_simulated_session("neverest40", out_dir=tmp_path, units=2, seed=4,

@@ -32,6 +32,7 @@ import subprocess
 import sys
 import tempfile
 import threading
+import time
 import weakref
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
@@ -185,7 +186,16 @@ class Pool:
         self._jobs: dict[int, Forked] = {}
         self._ids = itertools.count(1)
         self.started = 0  # Python processes started so far, the fork server's and the resident's (tests, benchmarks)
+        self.forks = 0  # commands forked so far (tests, benchmarks)
         atexit.register(self.close)
+
+    def wait_ready(self, seconds: float = 120.0) -> bool:
+        """:meth:`fill`, then wait until the fork server has done its imports (or ``seconds`` have passed)."""
+        self.fill()
+        deadline = time.monotonic() + seconds
+        while not self.ready and time.monotonic() < deadline and _warm_enabled():
+            time.sleep(0.02)
+        return self.ready
 
     def spawn(self, *args: str, **popen: Any) -> subprocess.Popen[bytes]:
         """A new Python preloaded with the commands' imports (``python -P -m motorlab.ui.warm ARGS``)."""
@@ -264,6 +274,7 @@ class Pool:
             for pipe in (job.stdout, job.stderr):
                 pipe.close()
             return None
+        self.forks += 1
         return job
 
     def close(self) -> None:
