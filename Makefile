@@ -24,10 +24,18 @@ lint: install
 # The suite runs on every core (pytest-xdist; tests finish in any order and share nothing); BLAS on
 # one thread per worker, so that two workers on two cores do not fight over four threads. Bytecode is
 # written even where PYTHONDONTWRITEBYTECODE is set (uv installs none): otherwise every Python process
-# the suite starts (workers, commands, the app's workers) compiles numpy, scipy, matplotlib and motorlab
-# again, 8 s of CPU for one import of the CLI and the engine against 3 s (docs/ARCHITECTURE.md).
-test: lint
-	MPLBACKEND=Agg OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 PYTHONDONTWRITEBYTECODE= $(BIN)/pytest -n auto --dist worksteal --durations=30
+# the suite starts (workers, commands) compiles numpy, scipy, matplotlib and motorlab again, 8 s of CPU
+# for one import of the CLI and the engine against 3 s (docs/ARCHITECTURE.md). mypy (30 s of one CPU
+# from a fresh clone) checks the types beside the tests, in the moments a worker waits for a browser:
+# make test fails when either fails, and prints mypy's report after the tests' own.
+test: install
+	$(BIN)/ruff check src tests benchmarks
+	@mkdir -p out; $(BIN)/mypy > out/mypy.txt 2>&1 & typing=$$!; \
+	MPLBACKEND=Agg OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 PYTHONDONTWRITEBYTECODE= \
+	    $(BIN)/pytest -n auto --dist worksteal --durations=30; tests=$$?; \
+	wait $$typing; typed=$$?; echo "mypy: $$(tail -n 1 out/mypy.txt)"; \
+	if [ $$typed -ne 0 ]; then cat out/mypy.txt; fi; \
+	exit $$(( tests != 0 ? tests : typed ))
 
 demo: install
 	MPLBACKEND=Agg $(BIN)/motorlab demo -o out/demo
