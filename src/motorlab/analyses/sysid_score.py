@@ -459,9 +459,10 @@ def fit_gains(
     """The (kS, kV, kA) that minimise log RMSE_speed + w·log RMSE_position of the score.
 
     Output error: every test is simulated from its logged voltage and first row, and the residuals
-    are those of the score. Each round weighs the speed and position residuals by the inverse of
-    their RMSE at the previous round's gains (iteratively reweighted least squares, whose fixed
-    point minimises the criterion: each score counts by its relative change, independent of units).
+    are those of the score. Each step weighs the speed and position residuals by the inverse of
+    their RMSE at the current gains (a round of iteratively reweighted least squares to first order,
+    :func:`_reweighted_fit`, whose fixed point minimises the criterion: each score counts by its relative
+    change, independent of units).
     Every start is tried and the best end kept. On a long log (more than :data:`COARSE_ROWS` rows)
     with several starts, each start is first fitted to every k-th row only (the simulation stays
     exact for the voltage held over k rows, so that fit ends near the full one) and only the start
@@ -517,22 +518,63 @@ def _every(test: ScoreTest, k: int) -> ScoreTest:
 def _reweighted_fit(
     sims: _Simulations, x: np.ndarray, weight: float, rounds: int
 ) -> tuple[float, np.ndarray, Score, int]:
-    """(criterion, p, score, evaluations) at the end of the reweighted fit from p = (kS, ln kV, ln kA) = ``x``."""
-    from scipy.optimize import least_squares
+    """(criterion, p, score, evaluations) at the minimum of the criterion from p = (kS, ln kV, ln kA) = ``x``.
 
-    current = sims.at(x).score
-    nfev = 0
-    for _ in range(rounds):
-        ws, wp = 1.0 / max(current.speed, 1e-300), math.sqrt(weight) / max(current.position, 1e-300)
-        weighted = _Weighted(sims, ws, wp)
-        sol = least_squares(weighted.fun, x, jac=weighted.jac, max_nfev=60, ftol=1e-6, xtol=1e-6,
-                            x_scale=np.array([max(abs(x[0]), 0.05), 0.1, 0.3]))
-        nfev += int(sol.nfev)
-        new = sims.at(sol.x).score
-        if not _objective(new, weight) < _objective(current, weight) - 1e-5:
+    Levenberg–Marquardt on F(p) = ln RMSE_speed + w·ln RMSE_position itself: its gradient is
+    ∇F = (ws²·D_sᵀr_s + wp²·D_pᵀr_p)/n with ws = 1/RMSE_speed, wp² = w/RMSE_position² at p (the score's
+    residuals r and their sensitivities D, one simulation), and the step solves the Gauss–Newton system
+    of those weights, (ws²·D_sᵀD_s + wp²·D_pᵀD_p)/n. Each step is one round of the iteratively
+    reweighted least squares (weights from the last point) solved to first order, so the fixed point is
+    the same, reached with one simulation a step instead of a least-squares solve a round. Stops when a
+    step lowers F by less than :data:`CRITERION_TOLERANCE` (F is on the log scale: a relative change of
+    the RMSEs) or no step lowers it; at most ``rounds`` × :data:`STEPS_PER_ROUND` steps.
+    """
+    sim = sims.at(x)
+    value = _objective(sim.score, weight)
+    nfev = 1
+    if not math.isfinite(value):
+        return value, x, sim.score, nfev
+    mu = 1e-3
+    for _ in range(rounds * STEPS_PER_ROUND):
+        ws2, wp2 = 1.0 / sim.score.speed**2, weight / sim.score.position**2
+        n = sim.speed.size
+        grad = (ws2 * (sim.d_speed @ sim.speed) + wp2 * (sim.d_position @ sim.position)) / n
+        hess = (ws2 * (sim.d_speed @ sim.d_speed.T) + wp2 * (sim.d_position @ sim.d_position.T)) / n
+        diag = np.diag(hess).copy()
+        diag = np.where(diag > 0, diag, 1.0)
+        accepted = False
+        for _ in range(12):
+            try:
+                step = -np.linalg.solve(hess + mu * np.diag(diag), grad)
+            except np.linalg.LinAlgError:
+                mu *= 10.0
+                continue
+            x_new = x + step
+            try:
+                new = sims.at(x_new)
+            except OptionError:  # kV or kA beyond a double (a step far outside): a shorter step
+                mu *= 4.0
+                continue
+            nfev += 1
+            value_new = _objective(new.score, weight) if new.score.speed > 0 and new.score.position > 0 else math.inf
+            if value_new < value:
+                accepted = True
+                break
+            mu *= 4.0
+        if not accepted:
             break
-        x, current = sol.x, new
-    return _objective(current, weight), x, current, nfev
+        drop = value - value_new
+        x, sim, value = x_new, new, value_new
+        mu = max(mu / 3.0, 1e-9)
+        if drop < CRITERION_TOLERANCE:
+            break
+    return value, x, sim.score, nfev
+
+
+#: :func:`_reweighted_fit` stops when a step lowers ln RMSE_speed + w·ln RMSE_position by less than this.
+CRITERION_TOLERANCE = 1e-8
+#: Steps of :func:`_reweighted_fit` per round of ``rounds``.
+STEPS_PER_ROUND = 5
 
 
 def _hac(gains: np.ndarray, tests: Sequence[ScoreTest], sc: Score, weight: float) -> tuple[np.ndarray, float]:
