@@ -115,6 +115,8 @@ class _Modal:
             self.pc = inv @ self.c
             self.inv = inv
             self.row = vec[plant.w]
+        # one state (the feedforward model): P = P⁻¹ = 1, so the products below reduce to products of floats
+        self.scalar = self.ok and lam.size == 1 and bool(vec[0, 0] == 1.0 and inv[0, 0] == 1.0 and lam.imag[0] == 0)
 
     def full_step(self, dt: float) -> HeldStep:
         """``discrete(dt)``, kept: every simulation of this plant on a dt grid takes the same full step."""
@@ -126,6 +128,10 @@ class _Modal:
     def discrete(self, tau: float) -> HeldStep:
         if not self.ok:
             return _discretise_expm(self.plant, self.s, tau)
+        if self.scalar:
+            step = self._discrete_scalar(tau)
+            if step is not None:
+                return step
         e, phi1, phi2 = phi_functions(self.lam * tau)
         vec, inv = self.vec, self.inv
         phi1 = tau * phi1
@@ -138,6 +144,26 @@ class _Modal:
         hv = moving * float((self.row @ (phi2 * self.pb)).real)
         hc = moving * float((self.row @ (phi2 * self.pc)).real)
         return HeldStep(ad, bv, c, hx, hv, hc)
+
+    def _discrete_scalar(self, tau: float) -> HeldStep | None:
+        """:meth:`discrete` of a one-state plant in floats: the same operations on the same numbers (numpy's exp
+        and expm1, then correctly rounded products and quotients), so the same bits, without two dozen numpy
+        calls on arrays of one element (a fit locates hundreds of friction events, each a few fractional steps).
+        None near z = 0 (the series of :func:`motorlab.model.phi_functions` there), except z = 0 exactly."""
+        z = float(self.lam.real[0]) * tau
+        if z == 0.0:  # the stuck regime: e = φ₁ = 1, φ₂ = 1/2 exactly
+            e, phi1, phi2 = 1.0, 1.0, 0.5
+        elif abs(z) < 1e-3:
+            return None
+        else:
+            em1 = float(np.expm1(z))
+            e, phi1, phi2 = float(np.exp(z)), em1 / z, (em1 - z) / (z * z)
+        phi1 = tau * phi1
+        phi2 = tau * tau * phi2
+        pb, pc = float(self.pb[0].real), float(self.pc[0].real)
+        moving = 1.0 if self.s != 0 else 0.0
+        return HeldStep(np.array([[e]]), np.array([phi1 * pb]), np.array([phi1 * pc]), np.array([moving * phi1]),
+                        moving * (phi2 * pb), moving * (phi2 * pc))
 
 
 #: Decompositions of the plants simulated lately, by regime and exact matrices: a fit simulates one
