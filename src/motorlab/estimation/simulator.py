@@ -129,9 +129,7 @@ class _Modal:
         if not self.ok:
             return _discretise_expm(self.plant, self.s, tau)
         if self.scalar:
-            step = self._discrete_scalar(tau)
-            if step is not None:
-                return step
+            return self._discrete_scalar(tau)
         e, phi1, phi2 = phi_functions(self.lam * tau)
         vec, inv = self.vec, self.inv
         phi1 = tau * phi1
@@ -145,19 +143,20 @@ class _Modal:
         hc = moving * float((self.row @ (phi2 * self.pc)).real)
         return HeldStep(ad, bv, c, hx, hv, hc)
 
-    def _discrete_scalar(self, tau: float) -> HeldStep | None:
-        """:meth:`discrete` of a one-state plant in floats: the same operations on the same numbers (numpy's exp
-        and expm1, then correctly rounded products and quotients), so the same bits, without two dozen numpy
-        calls on arrays of one element (a fit locates hundreds of friction events, each a few fractional steps).
-        None near z = 0 (the series of :func:`motorlab.model.phi_functions` there), except z = 0 exactly."""
+    def _discrete_scalar(self, tau: float) -> HeldStep:
+        """:meth:`discrete` of a one-state plant in floats: the same operations on the same numbers (numpy's exp,
+        expm1 and power, then correctly rounded sums, products and quotients in the same order), so the same numbers bit for bit
+        (``tests/estimation/test_simulator.py``), without two dozen numpy calls on arrays of one element (a fit
+        locates hundreds of friction events, each a few fractional steps)."""
         z = float(self.lam.real[0]) * tau
-        if z == 0.0:  # the stuck regime: e = φ₁ = 1, φ₂ = 1/2 exactly
-            e, phi1, phi2 = 1.0, 1.0, 0.5
-        elif abs(z) < 1e-3:
-            return None
+        e = float(np.exp(z))
+        if abs(z) < 1e-3:  # the series (a slow mode, a flywheel's; z = 0 when stuck), as phi_functions sums it
+            cube = float(np.power(z, 3))
+            phi1 = 1.0 + z / 2.0 + z * z / 6.0 + cube / 24.0
+            phi2 = 0.5 + z / 6.0 + z * z / 24.0 + cube / 120.0
         else:
             em1 = float(np.expm1(z))
-            e, phi1, phi2 = float(np.exp(z)), em1 / z, (em1 - z) / (z * z)
+            phi1, phi2 = em1 / z, (em1 - z) / (z * z)
         phi1 = tau * phi1
         phi2 = tau * tau * phi2
         pb, pc = float(self.pb[0].real), float(self.pc[0].real)
