@@ -116,7 +116,8 @@ class _Modal:
             self.inv = inv
             self.row = vec[plant.w]
         # one state (the feedforward model): P = P⁻¹ = 1, so the products below reduce to products of floats
-        self.scalar = self.ok and lam.size == 1 and bool(vec[0, 0] == 1.0 and inv[0, 0] == 1.0 and lam.imag[0] == 0)
+        self.scalar = self.ok and lam.size == 1 and bool(vec[0, 0] == 1.0 and self.inv[0, 0] == 1.0
+                                                         and lam.imag[0] == 0)
 
     def full_step(self, dt: float) -> HeldStep:
         """``discrete(dt)``, kept: every simulation of this plant on a dt grid takes the same full step."""
@@ -145,9 +146,9 @@ class _Modal:
 
     def _discrete_scalar(self, tau: float) -> HeldStep:
         """:meth:`discrete` of a one-state plant in floats: the same operations on the same numbers (numpy's exp,
-        expm1 and power, then correctly rounded sums, products and quotients in the same order), so the same numbers bit for bit
-        (``tests/estimation/test_simulator.py``), without two dozen numpy calls on arrays of one element (a fit
-        locates hundreds of friction events, each a few fractional steps)."""
+        expm1 and power, then correctly rounded sums, products and quotients in the same order), so the same numbers
+        bit for bit (``tests/estimation/test_simulator.py``), without two dozen numpy calls on arrays of one element
+        (a fit locates hundreds of friction events, each a few fractional steps)."""
         z = float(self.lam.real[0]) * tau
         e = float(np.exp(z))
         if abs(z) < 1e-3:  # the series (a slow mode, a flywheel's; z = 0 when stuck), as phi_functions sums it
