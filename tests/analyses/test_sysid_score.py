@@ -115,7 +115,7 @@ def test_rows_of_many_time_constants_are_simulated_in_blocks(monkeypatch):
     import motorlab.analyses.sysid_score as sysid_score
 
     calls = []
-    for name in ("_linear_block", "_stiff_block"):
+    for name in ("_linear_steps", "_stiff_block"):
         original = getattr(sysid_score, name)
         monkeypatch.setattr(sysid_score, name, lambda *a, _f=original: calls.append(1) or _f(*a))
     t = np.arange(5000) * 0.01

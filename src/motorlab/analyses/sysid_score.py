@@ -102,23 +102,27 @@ def score_file(path: str | os.PathLike[str], gains: Gains) -> Score:
     return score(gains, file_tests(path))
 
 
-def _linear_block(v0: float, dt: np.ndarray, u: np.ndarray, tau: float) -> tuple[np.ndarray, np.ndarray]:
-    """Speeds after each step and the distance of each step of τ·v' = u − v from v0 (no sign event)."""
+def _linear_steps(
+    v0: float, dt: np.ndarray, u: np.ndarray, tau: float
+) -> tuple[np.ndarray, np.ndarray, tuple[np.ndarray, np.ndarray, np.ndarray | None] | None]:
+    """Speeds after each step and the distance of each step of τ·v' = u − v from v0 (no sign event), and what
+    their sensitivities reuse (:func:`_block_sensitivity`): dt/τ, e^(−dt/τ) and the block's e^c (None without τ)."""
     if tau <= 0.0:
         v = u.copy()
-        return v, u * dt
-    a = np.exp(-dt / tau)
+        return v, u * dt, None
+    x = dt / tau
+    a = np.exp(-x)  # (−dt/τ is −(dt/τ) exactly)
     if dt.size == 1:  # one step (possibly of many time constants): directly
         v_end = a * v0 + (1.0 - a) * u
-        return v_end, u * dt + (v0 - u) * tau * (1.0 - a)
-    c = np.concatenate([[0.0], np.cumsum(dt / tau)])
+        return v_end, u * dt + (v0 - u) * tau * (1.0 - a), (x, a, None)
+    c = np.concatenate([[0.0], np.cumsum(x)])
     c -= 0.5 * c[-1]  # about the middle: e^c stays within range over a block of Σ dt/τ ≤ _BLOCK_EXPONENT
     # v_i = e^(−c_i)·(v0·e^(c_0) + Σ_{j<i} (e^(c_{j+1}) − e^(c_j))·u_j): v_{j+1} = a_j·v_j + (1 − a_j)·u_j
     e = np.exp(c)
     acc = v0 * e[0] + np.cumsum((e[1:] - e[:-1]) * u)
     v = acc / e[1:]
     v_start = np.concatenate([[v0], v[:-1]])
-    return v, u * dt + (v_start - u) * tau * (1.0 - a)
+    return v, u * dt + (v_start - u) * tau * (1.0 - a), (x, a, e)
 
 
 def simulate_gains(ks: float, kv: float, ka: float, test: ScoreTest) -> tuple[np.ndarray, np.ndarray]:
@@ -172,9 +176,13 @@ def _simulate(
             stiff = dt[k] >= _STIFF_EXPONENT * tau  # rows each of many time constants: each settles
             stop = min(n - 1, k + (_stiff_span(dt, k, tau) if stiff else max(span, 1)))
         u = (volts[k:stop] - ks * s) / kv
-        v_new, dist = (_stiff_block if stiff else _linear_block)(v, dt[k:stop], u, tau)
+        shared = None
+        if stiff:
+            v_new, dist = _stiff_block(v, dt[k:stop], u, tau)
+        else:
+            v_new, dist, shared = _linear_steps(v, dt[k:stop], u, tau)
         if sensitivity:
-            w_new, dd = _block_sensitivity(v, d_speed[:, k], dt[k:stop], u, tau, s / kv, v_new, stiff)
+            w_new, dd = _block_sensitivity(v, d_speed[:, k], dt[k:stop], u, tau, s / kv, v_new, stiff, shared)
         cross = np.flatnonzero(s * v_new <= 0.0)
         j = int(cross[0]) if cross.size else stop - k
         speed[k + 1:k + j + 1] = v_new[:j]
@@ -224,25 +232,31 @@ def _stop_sensitivity(
 
 
 def _block_sensitivity(
-    v0: float, w0: np.ndarray, dt: np.ndarray, u: np.ndarray, tau: float, s_kv: float, v: np.ndarray, stiff: bool
+    v0: float, w0: np.ndarray, dt: np.ndarray, u: np.ndarray, tau: float, s_kv: float, v: np.ndarray, stiff: bool,
+    shared: tuple[np.ndarray, np.ndarray, np.ndarray | None] | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Derivatives in (kS, ln kV, ln kA), each (3 × steps), of a block's speeds ``v`` and step distances
-    (:func:`_linear_block`), from the block's first speed ``v0`` and its derivatives ``w0``.
+    (:func:`_linear_steps`), from the block's first speed ``v0`` and its derivatives ``w0``.
 
     Differentiating v_{j+1} = a_j·v_j + (1 − a_j)·u_j, a_j = e^(−dt_j/τ), u_j = (V_j − kS·s)/kV, τ = kA/kV
     gives the same recursion for the derivative w: w_{j+1} = a_j·w_j + b_j with
     b_j = ∂a_j·(v_j − u_j) + (1 − a_j)·∂u_j, ∂u = (−s/kV, −u, 0), ∂a = a·dt/τ·(0, −1, 1); it is summed
-    as :func:`_linear_block` sums the speeds (about the block's middle). The distance
+    as :func:`_linear_steps` sums the speeds (about the block's middle). The distance
     d_j = u_j·dt_j + (v_j − u_j)·τ·(1 − a_j) is differentiated term by term (∂τ = τ·(0, −1, 1)).
+    ``shared``: dt/τ, a and the block's e^c as :func:`_linear_steps` computed them (the same numbers, not again).
     """
     m = dt.size
     du = np.empty((3, m))
     du[0], du[1], du[2] = -s_kv, -u, 0.0
     if tau <= 0.0:
         return du, du * dt
-    x = dt / tau
-    a = np.exp(-x)
+    if shared is None:
+        x = dt / tau
+        a, e = np.exp(-x), None
+    else:
+        x, a, e = shared
     one_a = 1.0 - a
+    v_before = np.concatenate([[v0], v[:-1]]) - u
     if stiff:  # each step settles: its start is the previous step's settled speed (as _stiff_block)
         q = np.concatenate([[v0], u[:-1]]) - u
         w_start = np.concatenate([w0[:, None], du[:, :-1]], axis=1)
@@ -251,19 +265,19 @@ def _block_sensitivity(
         w[1] -= g
         w[2] += g
     else:
-        q = np.concatenate([[v0], v[:-1]]) - u
-        g = a * x * q
+        g = a * x * v_before
         bias = one_a * du
         bias[1] -= g
         bias[2] += g
         if m == 1:
             w = a * w0[:, None] + bias
         else:
-            c = np.concatenate([[0.0], np.cumsum(x)])
-            c -= 0.5 * c[-1]
-            e = np.exp(c)
+            if e is None:
+                c = np.concatenate([[0.0], np.cumsum(x)])
+                c -= 0.5 * c[-1]
+                e = np.exp(c)
             w = (w0[:, None] * e[0] + np.cumsum(bias * e[1:], axis=1)) / e[1:]
-    q = np.concatenate([[v0], v[:-1]]) - u
+    q = v_before
     r = tau * one_a
     h = q * (r - tau * a * x)
     w_start = np.concatenate([w0[:, None], w[:, :-1]], axis=1)
@@ -300,7 +314,7 @@ def _stiff_span(dt: np.ndarray, k: int, tau: float) -> int:
 
 
 def _stiff_block(v0: float, dt: np.ndarray, u: np.ndarray, tau: float) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`_linear_block` over steps each of at least :data:`_STIFF_EXPONENT` time constants, at once.
+    """:func:`_linear_steps` over steps each of at least :data:`_STIFF_EXPONENT` time constants, at once.
 
     Each step's speed is a·v_start + (1 − a)·u with a = e^(−dt/τ) ≤ e^(−400): the step's start enters
     only through a, so taking the previous step's start as its settled speed u changes a result by
@@ -459,9 +473,10 @@ def fit_gains(
     """The (kS, kV, kA) that minimise log RMSE_speed + w·log RMSE_position of the score.
 
     Output error: every test is simulated from its logged voltage and first row, and the residuals
-    are those of the score. Each round weighs the speed and position residuals by the inverse of
-    their RMSE at the previous round's gains (iteratively reweighted least squares, whose fixed
-    point minimises the criterion: each score counts by its relative change, independent of units).
+    are those of the score. Each step weighs the speed and position residuals by the inverse of
+    their RMSE at the current gains (a round of iteratively reweighted least squares to first order,
+    :func:`_reweighted_fit`, whose fixed point minimises the criterion: each score counts by its relative
+    change, independent of units).
     Every start is tried and the best end kept. On a long log (more than :data:`COARSE_ROWS` rows)
     with several starts, each start is first fitted to every k-th row only (the simulation stays
     exact for the voltage held over k rows, so that fit ends near the full one) and only the start
@@ -517,22 +532,63 @@ def _every(test: ScoreTest, k: int) -> ScoreTest:
 def _reweighted_fit(
     sims: _Simulations, x: np.ndarray, weight: float, rounds: int
 ) -> tuple[float, np.ndarray, Score, int]:
-    """(criterion, p, score, evaluations) at the end of the reweighted fit from p = (kS, ln kV, ln kA) = ``x``."""
-    from scipy.optimize import least_squares
+    """(criterion, p, score, evaluations) at the minimum of the criterion from p = (kS, ln kV, ln kA) = ``x``.
 
-    current = sims.at(x).score
-    nfev = 0
-    for _ in range(rounds):
-        ws, wp = 1.0 / max(current.speed, 1e-300), math.sqrt(weight) / max(current.position, 1e-300)
-        weighted = _Weighted(sims, ws, wp)
-        sol = least_squares(weighted.fun, x, jac=weighted.jac, max_nfev=60, ftol=1e-6, xtol=1e-6,
-                            x_scale=np.array([max(abs(x[0]), 0.05), 0.1, 0.3]))
-        nfev += int(sol.nfev)
-        new = sims.at(sol.x).score
-        if not _objective(new, weight) < _objective(current, weight) - 1e-5:
+    Levenberg–Marquardt on F(p) = ln RMSE_speed + w·ln RMSE_position itself: its gradient is
+    ∇F = (ws²·D_sᵀr_s + wp²·D_pᵀr_p)/n with ws = 1/RMSE_speed, wp² = w/RMSE_position² at p (the score's
+    residuals r and their sensitivities D, one simulation), and the step solves the Gauss–Newton system
+    of those weights, (ws²·D_sᵀD_s + wp²·D_pᵀD_p)/n. Each step is one round of the iteratively
+    reweighted least squares (weights from the last point) solved to first order, so the fixed point is
+    the same, reached with one simulation a step instead of a least-squares solve a round. Stops when a
+    step lowers F by less than :data:`CRITERION_TOLERANCE` (F is on the log scale: a relative change of
+    the RMSEs) or no step lowers it; at most ``rounds`` × :data:`STEPS_PER_ROUND` steps.
+    """
+    sim = sims.at(x)
+    value = _objective(sim.score, weight)
+    nfev = 1
+    if not math.isfinite(value):
+        return value, x, sim.score, nfev
+    mu = 1e-3
+    for _ in range(rounds * STEPS_PER_ROUND):
+        ws2, wp2 = 1.0 / sim.score.speed**2, weight / sim.score.position**2
+        n = sim.speed.size
+        grad = (ws2 * (sim.d_speed @ sim.speed) + wp2 * (sim.d_position @ sim.position)) / n
+        hess = (ws2 * (sim.d_speed @ sim.d_speed.T) + wp2 * (sim.d_position @ sim.d_position.T)) / n
+        diag = np.diag(hess).copy()
+        diag = np.where(diag > 0, diag, 1.0)
+        accepted = False
+        for _ in range(12):
+            try:
+                step = -np.linalg.solve(hess + mu * np.diag(diag), grad)
+            except np.linalg.LinAlgError:
+                mu *= 10.0
+                continue
+            x_new = x + step
+            try:
+                new = sims.at(x_new)
+            except OptionError:  # kV or kA beyond a double (a step far outside): a shorter step
+                mu *= 4.0
+                continue
+            nfev += 1
+            value_new = _objective(new.score, weight) if new.score.speed > 0 and new.score.position > 0 else math.inf
+            if value_new < value:
+                accepted = True
+                break
+            mu *= 4.0
+        if not accepted:
             break
-        x, current = sol.x, new
-    return _objective(current, weight), x, current, nfev
+        drop = value - value_new
+        x, sim, value = x_new, new, value_new
+        mu = max(mu / 3.0, 1e-9)
+        if drop < CRITERION_TOLERANCE:
+            break
+    return value, x, sim.score, nfev
+
+
+#: :func:`_reweighted_fit` stops when a step lowers ln RMSE_speed + w·ln RMSE_position by less than this.
+CRITERION_TOLERANCE = 1e-8
+#: Steps of :func:`_reweighted_fit` per round of ``rounds``.
+STEPS_PER_ROUND = 5
 
 
 def _hac(gains: np.ndarray, tests: Sequence[ScoreTest], sc: Score, weight: float) -> tuple[np.ndarray, float]:

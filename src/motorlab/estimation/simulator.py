@@ -115,6 +115,9 @@ class _Modal:
             self.pc = inv @ self.c
             self.inv = inv
             self.row = vec[plant.w]
+        # one state (the feedforward model): P = P⁻¹ = 1, so the products below reduce to products of floats
+        self.scalar = self.ok and lam.size == 1 and bool(vec[0, 0] == 1.0 and self.inv[0, 0] == 1.0
+                                                         and lam.imag[0] == 0)
 
     def full_step(self, dt: float) -> HeldStep:
         """``discrete(dt)``, kept: every simulation of this plant on a dt grid takes the same full step."""
@@ -126,6 +129,8 @@ class _Modal:
     def discrete(self, tau: float) -> HeldStep:
         if not self.ok:
             return _discretise_expm(self.plant, self.s, tau)
+        if self.scalar:
+            return self._discrete_scalar(tau)
         e, phi1, phi2 = phi_functions(self.lam * tau)
         vec, inv = self.vec, self.inv
         phi1 = tau * phi1
@@ -138,6 +143,27 @@ class _Modal:
         hv = moving * float((self.row @ (phi2 * self.pb)).real)
         hc = moving * float((self.row @ (phi2 * self.pc)).real)
         return HeldStep(ad, bv, c, hx, hv, hc)
+
+    def _discrete_scalar(self, tau: float) -> HeldStep:
+        """:meth:`discrete` of a one-state plant in floats: the same operations on the same numbers (numpy's exp,
+        expm1 and power, then correctly rounded sums, products and quotients in the same order), so the same numbers
+        bit for bit (``tests/estimation/test_simulator.py``), without two dozen numpy calls on arrays of one element
+        (a fit locates hundreds of friction events, each a few fractional steps)."""
+        z = float(self.lam.real[0]) * tau
+        e = float(np.exp(z))
+        if abs(z) < 1e-3:  # the series (a slow mode, a flywheel's; z = 0 when stuck), as phi_functions sums it
+            cube = float(np.power(z, 3))
+            phi1 = 1.0 + z / 2.0 + z * z / 6.0 + cube / 24.0
+            phi2 = 0.5 + z / 6.0 + z * z / 24.0 + cube / 120.0
+        else:
+            em1 = float(np.expm1(z))
+            phi1, phi2 = em1 / z, (em1 - z) / (z * z)
+        phi1 = tau * phi1
+        phi2 = tau * tau * phi2
+        pb, pc = float(self.pb[0].real), float(self.pc[0].real)
+        moving = 1.0 if self.s != 0 else 0.0
+        return HeldStep(np.array([[e]]), np.array([phi1 * pb]), np.array([phi1 * pc]), np.array([moving * phi1]),
+                        moving * (phi2 * pb), moving * (phi2 * pc))
 
 
 #: Decompositions of the plants simulated lately, by regime and exact matrices: a fit simulates one
