@@ -230,6 +230,9 @@ class Pool:
                     continue
                 job = self._jobs.get(int(said["id"]))
                 if job is None:
+                    if "pid" in said:  # forked after its command gave up waiting: nobody reads its pipes
+                        with contextlib.suppress(ProcessLookupError, PermissionError):
+                            os.kill(int(said["pid"]), signal.SIGKILL)
                     continue
                 if "pid" in said:
                     job.pid = int(said["pid"])
