@@ -140,11 +140,10 @@ class Forked:
     """A command forked by the fork server, seen as a :class:`subprocess.Popen` is (``pid``, ``stdout``,
     ``stderr``, ``poll``, ``wait``, ``kill``, ``returncode``); its exit code comes from the server, which reaps it."""
 
-    stdin = None
-
-    def __init__(self, stdout: int, stderr: int) -> None:
+    def __init__(self, stdout: int, stderr: int, stdin: int | None = None) -> None:
         self.pid = 0
         self.returncode: int | None = None
+        self.stdin: IO[bytes] | None = None if stdin is None else os.fdopen(stdin, "wb")
         self.stdout: IO[bytes] = os.fdopen(stdout, "rb")
         self.stderr: IO[bytes] = os.fdopen(stderr, "rb")
         self.forked = threading.Event()
@@ -167,6 +166,13 @@ class Forked:
         if self.returncode is None and self.pid:
             with contextlib.suppress(ProcessLookupError, PermissionError):
                 os.kill(self.pid, signal.SIGKILL)
+
+    def close(self) -> None:
+        """Close this side's pipes."""
+        for pipe in (self.stdin, self.stdout, self.stderr):
+            if pipe is not None:
+                with contextlib.suppress(OSError):
+                    pipe.close()
 
 
 #: A command's process: a fresh Python, or one forked by the fork server.
@@ -254,31 +260,39 @@ class Pool:
 
     def fork(self, module: str, argv: Sequence[str], cwd: str, env: Mapping[str, str]) -> Forked | None:
         """The command forked by the server, or None when it is not ready (the caller starts a fresh Python)."""
+        return self._fork({"module": module, "argv": list(argv), "cwd": cwd, "env": dict(env)})
+
+    def fork_resident(self) -> Forked | None:
+        """A resident worker (:func:`motorlab.ui.warm.serve`) forked by the server, its stdin a pipe; or None."""
+        return self._fork({"serve": True}, with_stdin=True)
+
+    def _fork(self, job: dict[str, Any], *, with_stdin: bool = False) -> Forked | None:
         with self._lock:
             sock = self._socket if self.ready else None
         if sock is None:
             return None
         out_r, out_w = os.pipe()
         err_r, err_w = os.pipe()
-        job, ident = Forked(out_r, err_r), next(self._ids)
-        self._jobs[ident] = job
-        message = json.dumps({"id": ident, "module": module, "argv": list(argv), "cwd": cwd, "env": dict(env)})
+        in_r, in_w = os.pipe() if with_stdin else (None, None)
+        passed = [fd for fd in (in_r, out_w, err_w) if fd is not None]
+        forked, ident = Forked(out_r, err_r, in_w), next(self._ids)
+        self._jobs[ident] = forked
         try:
             with self._send:
-                socket.send_fds(sock, [message.encode()], [out_w, err_w])
+                socket.send_fds(sock, [json.dumps({"id": ident, **job}).encode()], passed)
         except OSError:
             self._jobs.pop(ident, None)
+            forked.close()
             return None
         finally:
-            os.close(out_w)
-            os.close(err_w)
-        if not job.forked.wait(FORK_WAIT) or not job.pid:  # the server is stuck or gone
+            for fd in passed:
+                os.close(fd)
+        if not forked.forked.wait(FORK_WAIT) or not forked.pid:  # the server is stuck or gone
             self._jobs.pop(ident, None)
-            for pipe in (job.stdout, job.stderr):
-                pipe.close()
+            forked.close()
             return None
         self.forks += 1
-        return job
+        return forked
 
     def close(self) -> None:
         """End the commands still running (they are in groups of their own), then the fork server."""
@@ -319,7 +333,8 @@ SESSION_NICENESS = 10
 
 
 class Resident:
-    """One warm process (``motorlab.ui.warm --serve``) running short jobs one at a time, for the whole app.
+    """One process running short jobs one at a time, for the whole app: forked by the fork server once it is ready
+    (:func:`motorlab.ui.warm.serve`), else a new Python (``motorlab.ui.warm --serve``).
 
     A gains change (0.1 s of work, at each option changed) would otherwise be a process forked, its pipes
     and its end. A job that runs past its time limit, or whose client goes away, ends the process (the
@@ -330,7 +345,7 @@ class Resident:
 
     def __init__(self) -> None:
         self._lock = threading.Lock()
-        self.proc: subprocess.Popen[bytes] | None = None
+        self.proc: Child | None = None
         self.ready = False
         self.busy = False
         self.jobs = 0  # jobs run so far (for tests and benchmarks)
@@ -342,11 +357,11 @@ class Resident:
         with self._lock:
             if self.busy or (self.proc is not None and self.proc.poll() is None):
                 return
-            self.proc, self.ready = POOL.spawn("--serve"), False
+            self.proc, self.ready = POOL.fork_resident() or POOL.spawn("--serve"), False
             proc = self.proc
         threading.Thread(target=self._wait_ready, args=(proc,), daemon=True).start()
 
-    def _wait_ready(self, proc: subprocess.Popen[bytes]) -> None:
+    def _wait_ready(self, proc: Child) -> None:
         assert proc.stdout is not None
         with contextlib.suppress(OSError, ValueError):
             said = proc.stdout.readline().strip() == b"ready"
@@ -360,7 +375,7 @@ class Resident:
         while self.proc is not None and not self.ready and self.proc.poll() is None:
             await asyncio.sleep(0.05)
 
-    def _take(self) -> subprocess.Popen[bytes] | None:
+    def _take(self) -> Child | None:
         with self._lock:
             proc = self.proc
             if self.busy or not self.ready or proc is None or proc.poll() is not None:
@@ -407,7 +422,8 @@ class Resident:
             proc, self.proc, self.ready = self.proc, None, False
         if proc is not None:
             end(proc)
-            proc.wait()
+            with contextlib.suppress(subprocess.TimeoutExpired):
+                proc.wait(timeout=10)
             for pipe in (proc.stdin, proc.stdout, proc.stderr):
                 if pipe is not None:
                     with contextlib.suppress(OSError):

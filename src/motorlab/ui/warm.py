@@ -96,8 +96,9 @@ def run(job: dict[str, object]) -> int:
         return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
 
 
-def serve() -> int:
-    """Preload, say ``ready``, then run jobs one after another: a JSON line in, a JSON line out.
+def serve(*, preloaded: bool = False) -> int:
+    """Preload (unless ``preloaded``: forked by the fork server), say ``ready``, then run jobs one after
+    another: a JSON line in, a JSON line out.
 
     The resident worker of :mod:`motorlab.ui.runner` for the gains (pure computations on typed
     numbers, recomputed at each change of an option): ``{"code", "stdout", "stderr"}`` per job, what
@@ -110,7 +111,8 @@ def serve() -> int:
 
     import matplotlib.pyplot as plt
 
-    preload()
+    if not preloaded:
+        preload()
     answers = sys.stdout
     answers.write("ready\n")
     answers.flush()
@@ -135,7 +137,8 @@ def serve() -> int:
 
 
 def _forked(job: dict[str, object], fds: list[int], inherited: list[int]) -> None:
-    """In the forked child: a session of its own, the command's pipes as stdout and stderr, run, exit."""
+    """In the forked child: a session of its own, the command's pipes as stdout and stderr (and, for the resident
+    worker, ``{"serve": true}``, its stdin), run, exit."""
     import contextlib
     import signal
 
@@ -146,11 +149,11 @@ def _forked(job: dict[str, object], fds: list[int], inherited: list[int]) -> Non
         for fd in inherited:
             os.close(fd)
         os.setsid()  # a process group of its own: ending the command ends what it started
-        devnull = os.open(os.devnull, os.O_RDONLY)
-        for fd, target in ((devnull, 0), (fds[0], 1), (fds[1], 2)):
+        streams = fds if len(fds) == 3 else [os.open(os.devnull, os.O_RDONLY), *fds]
+        for target, fd in enumerate(streams):
             os.dup2(fd, target)
             os.close(fd)
-        code = run(job)
+        code = serve(preloaded=True) if job.get("serve") else run(job)
     except BaseException as exc:  # the child ends here: it never returns into the server's loop
         print(f"motorlab: internal error: {type(exc).__name__}: {exc}", file=sys.stderr)
     finally:
@@ -186,7 +189,7 @@ def fork_server(fd: int) -> int:
             if key.fileobj is not sock:
                 os.read(wake_r, 4096)
                 continue
-            message, fds, _, _ = socket.recv_fds(sock, 1 << 20, 2)
+            message, fds, _, _ = socket.recv_fds(sock, 1 << 20, 3)
             if not message:  # the app closed its end: its commands were ended by it
                 return 0
             job = json.loads(message)
