@@ -167,6 +167,35 @@ def test_a_forked_command_answers_as_a_fresh_process(sim_session: Path, tmp_path
     assert runner.POOL.forks == forks + 3
 
 
+def test_where_commands_are_not_forked_a_spare_answers_as_a_fresh_process(sim_session: Path, tmp_path: Path,
+                                                                         monkeypatch: pytest.MonkeyPatch) -> None:
+    """Not Linux (``runner.FORKING`` false): spare Pythons started ahead, one taken per command."""
+    monkeypatch.setattr(runner, "FORKING", False)
+    (tmp_path / "lcr.csv").write_bytes((sim_session / "A" / "lcr.csv").read_bytes())
+    argv = ["analyze", "lcr", "lcr.csv", "--json"]
+    runner.POOL.fill()
+    spares = list(runner.POOL._spares)
+    try:
+        assert len(spares) == runner.SPARES
+        forks = runner.POOL.forks
+        warm = asyncio.run(runner.run_cli(argv, cwd=str(tmp_path)))
+        assert runner.POOL.forks == forks
+        assert spares[0].poll() is not None  # taken, and ended after its one command
+        assert runner.POOL._spares == spares[1:]
+        monkeypatch.setenv("MOTORLAB_UI_WARM", "0")
+        cold = asyncio.run(runner.run_cli(argv, cwd=str(tmp_path)))
+        assert warm.code == cold.code == 0
+        assert warm.stdout == cold.stdout
+    finally:
+        for proc in spares:
+            runner.end(proc)
+            proc.wait()
+            for pipe in (proc.stdin, proc.stdout, proc.stderr):
+                if pipe is not None:
+                    pipe.close()
+        runner.POOL._spares = []
+
+
 def test_a_fork_server_that_has_gone_is_started_again(sim_session: Path, tmp_path: Path, forking: None) -> None:
     """Killed (as by the kernel's out-of-memory killer), the server is started again: meanwhile a command runs in
     a fresh Python, with the same answer."""

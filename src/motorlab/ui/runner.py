@@ -54,6 +54,13 @@ SESSIONS = max(1, min(2, (os.cpu_count() or 1) // 2))
 #: Seconds a command waits for the fork server to say it has forked it (it does nothing else: milliseconds).
 FORK_WAIT = 10.0
 
+#: Whether commands are forked from a fork server here: Linux (file descriptors passed over a ``SOCK_SEQPACKET``
+#: socket; macOS's system frameworks are not safe to use in a forked child, Windows has no fork).
+FORKING = sys.platform == "linux" and hasattr(socket, "send_fds")
+
+#: Elsewhere, warm processes kept started ahead, each taking one command (``python -P -m motorlab.ui.warm``).
+SPARES = 2
+
 _TRUE = {"1", "true", "on", "yes"}
 
 #: Environment variables a child must not inherit from the app's own environment.
@@ -190,16 +197,18 @@ class Pool:
         self._socket: socket.socket | None = None
         self.ready = False
         self._jobs: dict[int, Forked] = {}
+        self._spares: list[subprocess.Popen[bytes]] = []
         self._ids = itertools.count(1)
         self.started = 0  # Python processes started so far, the fork server's and the resident's (tests, benchmarks)
         self.forks = 0  # commands forked so far (tests, benchmarks)
         atexit.register(self.close)
 
     def wait_ready(self, seconds: float = 120.0) -> bool:
-        """:meth:`fill`, then wait until the fork server has done its imports (or ``seconds`` have passed)."""
+        """:meth:`fill`, then wait until the fork server has done its imports (or ``seconds`` have passed); False
+        where commands are not forked."""
         self.fill()
         deadline = time.monotonic() + seconds
-        while not self.ready and time.monotonic() < deadline and _warm_enabled():
+        while FORKING and not self.ready and time.monotonic() < deadline and _warm_enabled():
             time.sleep(0.02)
         return self.ready
 
@@ -211,8 +220,15 @@ class Pool:
                                 env=_child_env(), **streams, **_OWN_GROUP)
 
     def fill(self) -> None:
-        """Start the fork server unless it runs (its imports take seconds: :meth:`fork` uses it once ready)."""
+        """Start the fork server unless it runs (its imports take seconds: :meth:`fork` uses it once ready); where
+        there is none (not :data:`FORKING`), start spares until :data:`SPARES` are ready or starting."""
         if not _warm_enabled():
+            return
+        if not FORKING:
+            with self._lock:
+                self._spares = [p for p in self._spares if p.poll() is None]
+                while len(self._spares) < SPARES:
+                    self._spares.append(self.spawn(stderr=subprocess.PIPE))
             return
         with self._lock:
             if self.server is not None and self.server.poll() is None:
@@ -268,7 +284,7 @@ class Pool:
 
     def _fork(self, job: dict[str, Any], *, with_stdin: bool = False) -> Forked | None:
         with self._lock:
-            sock = self._socket if self.ready else None
+            sock = self._socket if self.ready and FORKING else None
         if sock is None:
             return None
         out_r, out_w = os.pipe()
@@ -294,12 +310,38 @@ class Pool:
         self.forks += 1
         return forked
 
+    def spare(self, module: str, argv: Sequence[str], cwd: str, env: Mapping[str, str]) -> Child | None:
+        """Where commands are not forked: a spare given the command, or None when none is left."""
+        with self._lock:
+            spares = [p for p in self._spares if p.poll() is None]
+            proc, self._spares = (spares[0], spares[1:]) if spares else (None, [])
+        if proc is None:
+            return None
+        stdin = proc.stdin
+        assert stdin is not None
+        job = json.dumps({"module": module, "argv": list(argv), "cwd": cwd, "env": dict(env)}) + "\n"
+
+        def send() -> None:  # a thread: the spare reads its job only once its imports are done
+            with contextlib.suppress(OSError):  # ended before it read its job: its outcome says so
+                stdin.write(job.encode())
+            with contextlib.suppress(OSError):
+                stdin.close()
+
+        threading.Thread(target=send, daemon=True).start()
+        return proc
+
     def close(self) -> None:
-        """End the commands still running (they are in groups of their own), then the fork server."""
-        for proc in list(RUNNING):
+        """End the commands still running (they are in groups of their own), the spares, then the fork server."""
+        with self._lock:
+            spares, self._spares = self._spares, []
+        for proc in [*spares, *RUNNING]:
             end(proc)
             with contextlib.suppress(subprocess.TimeoutExpired):
                 proc.wait(timeout=5)
+        for proc in spares:
+            for pipe in (proc.stdin, proc.stdout, proc.stderr):
+                if pipe is not None:
+                    pipe.close()
         with self._lock:
             server, sock, self.server, self._socket, self.ready = self.server, self._socket, None, None, False
         if sock is not None:
@@ -445,8 +487,9 @@ RUNNING: set[Child] = set()
 
 def _start(module: str, argv: Sequence[str], cwd: str, env: Mapping[str, str]) -> Child:
     """A child running ``module argv`` in ``cwd``: forked by the fork server, or a fresh ``python -P -m``."""
-    proc = POOL.fork(module, argv, cwd, env) if _warm_enabled() else None
-    if proc is None:  # the fork server is starting (or gone): a fresh process imports only what its command needs
+    proc = (POOL.fork(module, argv, cwd, env) or POOL.spare(module, argv, cwd, env)) if _warm_enabled() else None
+    if proc is None:  # the fork server is starting (or gone), or the spares are used up: a fresh process imports
+        # only what its command needs
         POOL.fill()
         return subprocess.Popen(
             [sys.executable, "-P", "-m", module, *argv], cwd=cwd, env={**_child_env(), **env},

@@ -13,7 +13,8 @@ time limit, a client that went away). A fork costs milliseconds; a new Python im
 seconds of CPU (about 3 s on this project's 2-core build machine).
 
 ``--serve`` is the resident worker (:class:`motorlab.ui.runner.Resident`): jobs one after another in one
-process, for the gains.
+process, for the gains. Without arguments, where commands are not forked (:data:`motorlab.ui.runner.FORKING`:
+not Linux), a spare: one job read from stdin, run, exit.
 
 ``-P`` keeps the folder the process starts in off ``sys.path``, so that an uploaded file named like
 a module (``numpy.py``) is never imported.
@@ -212,13 +213,29 @@ def fork_server(fd: int) -> int:
                 sock.sendall(json.dumps({"id": ident, "exit": os.waitstatus_to_exitcode(status)}).encode())
 
 
+def one_job() -> int:
+    """A spare, where commands are not forked: preload, wait for one job on stdin, run it, exit."""
+    preload()
+    line = sys.stdin.readline()
+    if not line.strip():  # the app went away before giving a job
+        return 0
+    devnull = os.open(os.devnull, os.O_RDONLY)
+    os.dup2(devnull, 0)  # the command reads no input, as with stdin=DEVNULL
+    code = run(json.loads(line))
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(code)  # at once, as a forked child does (:func:`_forked`)
+
+
 def main() -> int:
-    """``--fork-server FD`` (the app's commands) or ``--serve`` (its resident worker)."""
+    """``--fork-server FD`` (the app's commands, Linux), ``--serve`` (its resident worker), or a spare."""
     if len(sys.argv) == 3 and sys.argv[1] == "--fork-server":
         return fork_server(int(sys.argv[2]))
     if sys.argv[1:] == ["--serve"]:
         return serve()
-    print("usage: python -P -m motorlab.ui.warm --fork-server FD | --serve", file=sys.stderr)
+    if not sys.argv[1:]:
+        return one_job()
+    print("usage: python -P -m motorlab.ui.warm [--fork-server FD | --serve]", file=sys.stderr)
     return 2
 
 
