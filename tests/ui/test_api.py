@@ -277,9 +277,9 @@ def test_time_limit_ends_the_command(server: Any, sim_session: Path, monkeypatch
 def _start_ui(*args: str) -> tuple[subprocess.Popen[str], str]:
     """``motorlab ui --no-browser ARGS`` in a child process: the process and the line with its URL."""
     port = socket_port()
-    proc = subprocess.Popen(
+    proc = subprocess.Popen(  # no fork server (3 s of CPU importing): these tests run no command
         [sys.executable, "-m", "motorlab", "ui", "--no-browser", "--port", str(port), *args],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env={**os.environ, "MOTORLAB_UI_WARM": "0"},
     )
     assert proc.stdout is not None
     line = proc.stdout.readline()
