@@ -8,6 +8,7 @@ window.
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import os
 import re
@@ -229,6 +230,55 @@ def make_driver(profile: Path) -> Any:
     driver = webdriver.Chrome(service=Service(executable_path=str(CHROMEDRIVER)), options=options)
     driver.set_page_load_timeout(60)
     return driver
+
+
+class Chromium:
+    """One headless Chromium lent to one test module after another, each starting as on a new profile: a single
+    tab without the scripts a test added to every page, nothing the app's page stored (its IndexedDB), the window's
+    first size. A browser that died is started again."""
+
+    def __init__(self, folder: Path) -> None:
+        self.folder, self.origin = folder, ""
+        self.driver: Any = None
+        self.size = {"width": 0, "height": 0}
+
+    def lend(self, origin: str) -> Any:
+        try:
+            assert self.driver is not None
+            self.driver.window_handles  # noqa: B018 (alive?)
+        except Exception:
+            self.quit()
+            self.driver = make_driver(self.folder / f"profile-{time.monotonic_ns()}")
+            self.size = self.driver.get_window_size()
+        self.origin = origin
+        return self.driver
+
+    def give_back(self) -> None:
+        """The state a module leaves: closed (its tabs, their scripts and alerts), cleared (the page's stored
+        state), the window at its first size, on a blank page (no page of the app left running)."""
+        d = self.driver
+        if d is None:
+            return
+        try:
+            old = d.window_handles
+            d.switch_to.new_window("tab")
+            kept = d.current_window_handle
+            for handle in old:
+                d.switch_to.window(handle)
+                with contextlib.suppress(Exception):  # an alert left open
+                    d.switch_to.alert.dismiss()
+                d.close()
+            d.switch_to.window(kept)
+            d.execute_cdp_cmd("Storage.clearDataForOrigin", {"origin": self.origin, "storageTypes": "all"})
+            d.set_window_size(self.size["width"], self.size["height"])
+        except Exception:  # a browser left in a state it cannot leave: the next module gets a new one
+            self.quit()
+
+    def quit(self) -> None:
+        if self.driver is not None:
+            with contextlib.suppress(Exception):
+                self.driver.quit()
+        self.driver = None
 
 
 def shots_folder(tmp: Path) -> Path:
