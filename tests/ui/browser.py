@@ -94,7 +94,10 @@ class Page:
 
     # -- looking -------------------------------------------------------------------------------------
     def wait(self, condition: Any, what: str, seconds: float = 240) -> Any:
-        deadline = time.monotonic() + seconds
+        """``condition()``'s first true answer, asked every 0.1 s for two seconds, then every 0.25 s (a fit or a
+        session takes seconds: the page is asked less often while it works)."""
+        start = time.monotonic()
+        deadline = start + seconds
         while True:
             try:
                 got = condition()
@@ -107,7 +110,7 @@ class Page:
                     "return [...document.querySelectorAll('.error, [role=status], [role=alert]')]"
                     ".map(e => e.textContent).filter(Boolean)")
                 pytest.fail(f"timed out waiting for {what}; the page says {said}")
-            time.sleep(0.1)
+            time.sleep(0.1 if time.monotonic() - start < 2 else 0.25)
 
     def text(self, element: Any = None) -> str:
         """The words shown in ``main`` (or in ``element``) as WebDriver's ``.text`` gives them, from the browser's
@@ -152,17 +155,18 @@ class Page:
                 time.sleep(0.2)
         pytest.fail(f"the control saying {words!r} was replaced five times before it could be clicked")
 
+    def labelled(self, words: str) -> list[str]:
+        """The ids of the controls whose visible label holds ``words``, in the page's order."""
+        labels = self._visible("//label")
+        named = self.d.execute_script(f"return arguments[0].map((e) => [({_WORDS})(e), e.htmlFor])", labels)
+        return [control for text, control in named if words.lower() in text.lower() and control]
+
     def field(self, words: str) -> Any:
         """The visible input named ``words`` by its label (or aria-label)."""
-        lower = words.lower()
 
         def find() -> Any:
-            labels = self._visible("//label")
-            for text, control in self.d.execute_script(f"return arguments[0].map((e) => [({_WORDS})(e), e.htmlFor])",
-                                                       labels):
-                if lower in text.lower() and control:
-                    return self.d.find_element("id", control)
-            return None
+            ids = self.labelled(words)
+            return self.d.find_element("id", ids[0]) if ids else None
 
         return self.wait(find, f"a field labelled {words!r}")
 

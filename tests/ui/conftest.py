@@ -114,6 +114,18 @@ def ramp(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, float]:
 
 
 @pytest.fixture(scope="session")
+def simulated_sysid(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, dict[str, Any]]:
+    """A simulated WPILib SysId file of a NeveRest 40 (``motorlab simulate sysid``, in this process, once) and its
+    expected gains (per radian)."""
+    from motorlab.cli import main
+
+    folder = tmp_path_factory.mktemp("sysid")
+    assert main(["simulate", "sysid", "--motor", "neverest40", "-o", str(folder / "sysid.json")]) == 0
+    expected = next(iter(json.loads((folder / "truth.json").read_text())["runs"].values()))["expected"]
+    return folder / "sysid.json", dict(expected)
+
+
+@pytest.fixture(scope="session")
 def shooter(real_dir: Path) -> Path:
     """A team's real SysId file of a shooter (12,905 rows, units: rotations), read in place from
     ../shared/data/real/sysid."""
