@@ -73,12 +73,12 @@ _WORDS = r"""(e) => e.innerText.replace(/ *\t[\t ]*/g, ' ').replace(/\u00a0/g, '
 @functools.cache
 def _visible_script() -> str:
     """A script giving the elements an XPath finds that WebDriver's own ``is_displayed`` script calls shown."""
-    from selenium.webdriver.remote import webelement
+    import pkgutil
 
-    if webelement.isDisplayed_js is None:
-        webelement._load_js()
+    atom = pkgutil.get_data("selenium.webdriver.remote", "isDisplayed.js")  # the script is_displayed() sends
+    assert atom, "selenium without its isDisplayed.js"
     return f"""
-const shown = ({webelement.isDisplayed_js});
+const shown = ({atom.decode("utf8")});
 const found = document.evaluate(arguments[0], document, null, XPathResult.ORDERED_NODE_SNAPSHOT_TYPE, null);
 const out = [];
 for (let k = 0; k < found.snapshotLength; k++) if (shown(found.snapshotItem(k))) out.push(found.snapshotItem(k));
@@ -239,7 +239,7 @@ def make_driver(profile: Path) -> Any:
 class Chromium:
     """One headless Chromium lent to one test module after another, each starting as on a new profile: a single
     tab without the scripts a test added to every page, nothing the app's page stored (its IndexedDB), the window's
-    first size. A browser that died is started again."""
+    first size, no permission granted. A browser that died is started again."""
 
     def __init__(self, folder: Path) -> None:
         self.folder, self.origin = folder, ""
@@ -259,7 +259,8 @@ class Chromium:
 
     def give_back(self) -> None:
         """The state a module leaves: closed (its tabs, their scripts and alerts), cleared (the page's stored
-        state), the window at its first size, on a blank page (no page of the app left running)."""
+        state, the permissions granted), the window at its first size, on a blank page (no page of the app left
+        running)."""
         d = self.driver
         if d is None:
             return
@@ -274,6 +275,7 @@ class Chromium:
                 d.close()
             d.switch_to.window(kept)
             d.execute_cdp_cmd("Storage.clearDataForOrigin", {"origin": self.origin, "storageTypes": "all"})
+            d.execute_cdp_cmd("Browser.resetPermissions", {})  # the clipboard a test granted
             d.set_window_size(self.size["width"], self.size["height"])
         except Exception:  # a browser left in a state it cannot leave: the next module gets a new one
             self.quit()
