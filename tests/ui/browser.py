@@ -8,6 +8,8 @@ window.
 
 from __future__ import annotations
 
+import contextlib
+import functools
 import os
 import re
 import shutil
@@ -63,6 +65,27 @@ return [texts, unnamed, document.documentElement.scrollWidth, window.innerWidth]
 """
 
 
+#: The words an element shows, as WebDriver's ``.text`` gives them (see ``Page.text``).
+_WORDS = r"""(e) => e.innerText.replace(/ *\t[\t ]*/g, ' ').replace(/\u00a0/g, ' ').split('\n').map((s) => s.trim())
+  .filter(Boolean).join('\n')"""
+
+
+@functools.cache
+def _visible_script() -> str:
+    """A script giving the elements an XPath finds that WebDriver's own ``is_displayed`` script calls shown."""
+    import pkgutil
+
+    atom = pkgutil.get_data("selenium.webdriver.remote", "isDisplayed.js")  # the script is_displayed() sends
+    assert atom, "selenium without its isDisplayed.js"
+    return f"""
+const shown = ({atom.decode("utf8")});
+const found = document.evaluate(arguments[0], document, null, XPathResult.ORDERED_NODE_SNAPSHOT_TYPE, null);
+const out = [];
+for (let k = 0; k < found.snapshotLength; k++) if (shown(found.snapshotItem(k))) out.push(found.snapshotItem(k));
+return out;
+"""
+
+
 class Page:
     """A browser tab on the app, driven by visible words."""
 
@@ -71,7 +94,10 @@ class Page:
 
     # -- looking -------------------------------------------------------------------------------------
     def wait(self, condition: Any, what: str, seconds: float = 240) -> Any:
-        deadline = time.monotonic() + seconds
+        """``condition()``'s first true answer, asked every 0.1 s for two seconds, then every 0.25 s (a fit or a
+        session takes seconds: the page is asked less often while it works)."""
+        start = time.monotonic()
+        deadline = start + seconds
         while True:
             try:
                 got = condition()
@@ -84,16 +110,22 @@ class Page:
                     "return [...document.querySelectorAll('.error, [role=status], [role=alert]')]"
                     ".map(e => e.textContent).filter(Boolean)")
                 pytest.fail(f"timed out waiting for {what}; the page says {said}")
-            time.sleep(0.1)
+            time.sleep(0.1 if time.monotonic() - start < 2 else 0.25)
 
-    def text(self) -> str:
-        return str(self.d.find_element("tag name", "main").text)
+    def text(self, element: Any = None) -> str:
+        """The words shown in ``main`` (or in ``element``) as WebDriver's ``.text`` gives them, from the browser's
+        own ``innerText`` (what is rendered: nothing hidden, no closed section; a code box's spaces as laid out): a
+        table's cells parted by one space, no-break spaces as spaces, lines trimmed, blank ones dropped. WebDriver's
+        ``.text`` walks the page in a script of its own, over a second on a page of plots."""
+        return str(self.d.execute_script(f"return ({_WORDS})(arguments[0] || document.querySelector('main'))", element))
 
     def wait_text(self, words: str, seconds: float = 240) -> None:
         self.wait(lambda: words in self.text(), f"the words {words!r}", seconds)
 
     def _visible(self, xpath: str) -> list[Any]:
-        return [e for e in self.d.find_elements("xpath", xpath) if e.is_displayed()]
+        """The elements ``xpath`` finds that WebDriver's ``is_displayed`` calls shown (its own script, run once for
+        them all rather than once an element: a round trip and 17 kB of script each)."""
+        return list(self.d.execute_script(_visible_script(), xpath))
 
     # -- doing ---------------------------------------------------------------------------------------
     def open(self, size: tuple[int, int], *, fresh: bool = True) -> None:
@@ -123,17 +155,18 @@ class Page:
                 time.sleep(0.2)
         pytest.fail(f"the control saying {words!r} was replaced five times before it could be clicked")
 
+    def labelled(self, words: str) -> list[str]:
+        """The ids of the controls whose visible label holds ``words``, in the page's order."""
+        labels = self._visible("//label")
+        named = self.d.execute_script(f"return arguments[0].map((e) => [({_WORDS})(e), e.htmlFor])", labels)
+        return [control for text, control in named if words.lower() in text.lower() and control]
+
     def field(self, words: str) -> Any:
         """The visible input named ``words`` by its label (or aria-label)."""
-        lower = words.lower()
 
         def find() -> Any:
-            for label in self._visible("//label"):
-                if lower in label.text.lower():
-                    control = label.get_attribute("for")
-                    if control:
-                        return self.d.find_element("id", control)
-            return None
+            ids = self.labelled(words)
+            return self.d.find_element("id", ids[0]) if ids else None
 
         return self.wait(find, f"a field labelled {words!r}")
 
@@ -201,6 +234,57 @@ def make_driver(profile: Path) -> Any:
     driver = webdriver.Chrome(service=Service(executable_path=str(CHROMEDRIVER)), options=options)
     driver.set_page_load_timeout(60)
     return driver
+
+
+class Chromium:
+    """One headless Chromium lent to one test module after another, each starting as on a new profile: a single
+    tab without the scripts a test added to every page, nothing the app's page stored (its IndexedDB), the window's
+    first size, no permission granted. A browser that died is started again."""
+
+    def __init__(self, folder: Path) -> None:
+        self.folder, self.origin = folder, ""
+        self.driver: Any = None
+        self.size = {"width": 0, "height": 0}
+
+    def lend(self, origin: str) -> Any:
+        try:
+            assert self.driver is not None
+            self.driver.window_handles  # noqa: B018 (alive?)
+        except Exception:
+            self.quit()
+            self.driver = make_driver(self.folder / f"profile-{time.monotonic_ns()}")
+            self.size = self.driver.get_window_size()
+        self.origin = origin
+        return self.driver
+
+    def give_back(self) -> None:
+        """The state a module leaves: closed (its tabs, their scripts and alerts), cleared (the page's stored
+        state, the permissions granted), the window at its first size, on a blank page (no page of the app left
+        running)."""
+        d = self.driver
+        if d is None:
+            return
+        try:
+            old = d.window_handles
+            d.switch_to.new_window("tab")
+            kept = d.current_window_handle
+            for handle in old:
+                d.switch_to.window(handle)
+                with contextlib.suppress(Exception):  # an alert left open
+                    d.switch_to.alert.dismiss()
+                d.close()
+            d.switch_to.window(kept)
+            d.execute_cdp_cmd("Storage.clearDataForOrigin", {"origin": self.origin, "storageTypes": "all"})
+            d.execute_cdp_cmd("Browser.resetPermissions", {})  # the clipboard a test granted
+            d.set_window_size(self.size["width"], self.size["height"])
+        except Exception:  # a browser left in a state it cannot leave: the next module gets a new one
+            self.quit()
+
+    def quit(self) -> None:
+        if self.driver is not None:
+            with contextlib.suppress(Exception):
+                self.driver.quit()
+        self.driver = None
 
 
 def shots_folder(tmp: Path) -> Path:

@@ -2,7 +2,7 @@
 
 The browser tests' helpers (``browser.py``: a headless Chromium driven by visible words) are loaded
 once here and importable by the test modules as ``ui_browser``; the ``page`` fixture gives each
-browser test module its own Chromium on the test server.
+browser test module a tab on the test server, in a Chromium each test process starts once (``chromium``).
 """
 
 from __future__ import annotations
@@ -114,16 +114,38 @@ def ramp(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, float]:
 
 
 @pytest.fixture(scope="session")
+def simulated_sysid(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, dict[str, Any]]:
+    """A simulated WPILib SysId file of a NeveRest 40 (``motorlab simulate sysid``, in this process, once) and its
+    expected gains (per radian)."""
+    from motorlab.cli import main
+
+    folder = tmp_path_factory.mktemp("sysid")
+    assert main(["simulate", "sysid", "--motor", "neverest40", "-o", str(folder / "sysid.json")]) == 0
+    expected = next(iter(json.loads((folder / "truth.json").read_text())["runs"].values()))["expected"]
+    return folder / "sysid.json", dict(expected)
+
+
+@pytest.fixture(scope="session")
 def shooter(real_dir: Path) -> Path:
     """A team's real SysId file of a shooter (12,905 rows, units: rotations), read in place from
     ../shared/data/real/sysid."""
     return real_dir / "sysid" / "stma7028_shooter_0309.json"
 
 
+@pytest.fixture(scope="session")
+def chromium(tmp_path_factory: pytest.TempPathFactory) -> Iterator[browser.Chromium]:
+    """One headless Chromium per test process (each xdist worker), lent to one test module at a time: starting
+    one and loading the page's scripts into a new profile cost seconds a module."""
+    lender = browser.Chromium(tmp_path_factory.mktemp("chromium"))
+    yield lender
+    lender.quit()
+
+
 @pytest.fixture(scope="module")
-def page(server: Served, tmp_path_factory: pytest.TempPathFactory, request: pytest.FixtureRequest) -> Iterator[Any]:
-    """A headless Chromium on the test server for one test module, driven by visible words (``browser.Page``)."""
+def page(chromium: browser.Chromium, server: Served, tmp_path_factory: pytest.TempPathFactory,
+         request: pytest.FixtureRequest) -> Iterator[Any]:
+    """A browser tab on the test server for one test module, driven by visible words (``browser.Page``); the module
+    starts as on a new profile (one tab, nothing the page stored, the window's first size)."""
     tmp = tmp_path_factory.mktemp(request.module.__name__.rsplit(".", 1)[-1])
-    driver = browser.make_driver(tmp / "profile")
-    yield browser.Page(driver, server.url, browser.shots_folder(tmp))
-    driver.quit()
+    yield browser.Page(chromium.lend(server.url), server.url, browser.shots_folder(tmp))
+    chromium.give_back()

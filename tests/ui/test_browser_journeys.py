@@ -10,12 +10,9 @@
 
 from __future__ import annotations
 
-import json
 import math
 import re
 import shutil
-import subprocess
-import sys
 from pathlib import Path
 from typing import Any
 
@@ -113,13 +110,11 @@ def test_session_zip_and_loose_files(page: Any, sim_session: Path, truth: dict[s
     page.d.set_window_size(*browser.LAPTOP)
 
 
-def test_sysid_to_wpilib_on_a_phone(page: Any, tmp_path: Path) -> None:
-    subprocess.run([sys.executable, "-m", "motorlab", "simulate", "sysid", "--motor", "neverest40", "-o",
-                    str(tmp_path / "sysid.json")], check=True, capture_output=True)
-    expected = next(iter(json.loads((tmp_path / "truth.json").read_text())["runs"].values()))["expected"]
+def test_sysid_to_wpilib_on_a_phone(page: Any, simulated_sysid: tuple[Path, dict[str, Any]]) -> None:
+    path, expected = simulated_sysid
     page.open(browser.PHONE)
     page.click("Tune a mechanism")
-    page.upload("Choose or drop your files", tmp_path / "sysid.json")
+    page.upload("Choose or drop your files", path)
     page.wait_text("WPILib SysId file")
     page.check()
     page.click("Run the fit")

@@ -12,11 +12,8 @@ more while results are shown.
 
 from __future__ import annotations
 
-import json
 import math
 import re
-import subprocess
-import sys
 import time
 from pathlib import Path
 from typing import Any
@@ -46,12 +43,12 @@ def _gain_row(page: Any, symbol: str) -> tuple[float, str]:
 
 def _type_everywhere(page: Any, words: str, value: str) -> int:
     """Type ``value`` in every visible field whose label holds ``words`` (as the hidden check does)."""
-    labels = [lab for lab in page._visible("//label") if words.lower() in lab.text.lower() and lab.get_attribute("for")]
-    for lab in labels:
-        box = page.d.find_element("id", lab.get_attribute("for"))
+    ids = page.labelled(words)
+    for control in ids:
+        box = page.d.find_element("id", control)
         box.clear()
         box.send_keys(value)
-    return len(labels)
+    return len(ids)
 
 
 def _no_copy(page: Any) -> bool:
@@ -59,7 +56,7 @@ def _no_copy(page: Any) -> bool:
 
 
 def test_ramp_then_shooter_then_the_first_gains_again(page: Any, ramp: tuple[Path, float], shooter: Path,
-                                                       tmp_path: Path) -> None:
+                                                       simulated_sysid: tuple[Path, dict[str, Any]]) -> None:
     path, true_kv = ramp
     page.d.execute_cdp_cmd("Page.addScriptToEvaluateOnNewDocument", {"source": browser.LONG_TASKS})
     page.open(browser.LAPTOP)
@@ -159,7 +156,7 @@ def test_ramp_then_shooter_then_the_first_gains_again(page: Any, ramp: tuple[Pat
     # The same sitting goes on (one test: the steps share the browser's state, so no scheduler may split them):
     # another tab on another mechanism, then two models ticked at once.
     _a_second_tab_on_another_mechanism_changes_nothing(page, true_kv)
-    _two_models_are_never_merged_silently(page, shooter, tmp_path)
+    _two_models_are_never_merged_silently(page, shooter, simulated_sysid)
     browser.no_long_task_after(long_tasks, shown, load)  # last: on a busy machine it skips, saying why
 
 
@@ -182,15 +179,13 @@ def _a_second_tab_on_another_mechanism_changes_nothing(page: Any, true_kv: float
     assert abs(browser.kv_per_tick(page) - true_kv) / true_kv < 0.03
 
 
-def _two_models_are_never_merged_silently(page: Any, shooter: Path, tmp_path: Path) -> None:
+def _two_models_are_never_merged_silently(page: Any, shooter: Path, sysid: tuple[Path, dict[str, Any]]) -> None:
     """A shooter and a simulated drivetrain mechanism, both fitted: the gains wait for the student's choice."""
-    subprocess.run([sys.executable, "-m", "motorlab", "simulate", "sysid", "--motor", "neverest40", "-o",
-                    str(tmp_path / "sysid.json")], check=True, capture_output=True)
-    expected = next(iter(json.loads((tmp_path / "truth.json").read_text())["runs"].values()))["expected"]
+    path, expected = sysid
     page.open(browser.LAPTOP, fresh=False)
     page.d.get(f"{page.url}/#/mechanism/fit")
     page.wait_text(f"Result from {shooter.name}")
-    page.upload("Add more files", tmp_path / "sysid.json")
+    page.upload("Add more files", path)
     page.wait_text("sysid.json")
     cards = page.d.find_elements("css selector", "[data-group]")
     assert len(cards) == 2
