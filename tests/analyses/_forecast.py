@@ -6,8 +6,11 @@ fit given as the network of the run's first 120 s (``analyze stall RUN --until 1
 
 from __future__ import annotations
 
+import functools
 import json
 import math
+import pickle
+from collections.abc import Iterable
 from pathlib import Path
 
 import numpy as np
@@ -15,7 +18,19 @@ import numpy as np
 from motorlab.analyses.stall import stall
 from motorlab.errors import MotorlabError
 from motorlab.experiments.stall import read_runs
+from motorlab.results import FitResult
 from motorlab.thermal.forecast import forecast, load_fit
+
+
+@functools.cache
+def _fitted(paths: tuple[str, ...]) -> bytes:
+    return pickle.dumps(stall(read_runs(list(paths))))
+
+
+def stall_of_files(paths: Iterable[str | Path]) -> FitResult:
+    """``stall(read_runs(paths))`` of published files that several tests fit alike: fitted once in this process,
+    each caller given its own copy (the files are read in place and never change during a run)."""
+    return pickle.loads(_fitted(tuple(str(p) for p in paths)))
 
 
 def other_runs(path: str | Path) -> list[str]:
@@ -32,7 +47,7 @@ def forecast_fit(path: str | Path, folder: Path, fitted_for: float = 120.0) -> t
     fit = stall(rec, until=fitted_for)
     if fit.details["network"] != "fitted to these runs" and other_runs(path):
         try:
-            others = stall(read_runs(other_runs(path)))
+            others = stall_of_files(other_runs(path))
             (folder / "others.json").write_text(json.dumps(others.to_dict()))
             fit = stall(rec, until=fitted_for, network=load_fit(folder / "others.json").thermal,
                         network_source="the fit of the motor's other runs")

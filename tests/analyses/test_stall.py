@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from tests.analyses._forecast import forecast_rms
+from tests.analyses._forecast import forecast_rms, stall_of_files
 from tests.conftest import find_dyno_dir
 
 from motorlab.analyses.stall import stall
@@ -127,7 +127,7 @@ def test_no_current_is_refused_in_one_line(tmp_path: Path) -> None:
 @pytest.mark.parametrize("motor", sorted(MAKER_K))
 def test_real_exports_read_cut_and_fit(motor: str) -> None:
     files = sorted(str(p) for p in REAL.glob(f"{motor}-locked-rotor-data-*.csv"))
-    result = stall(read_runs(files))
+    result = stall_of_files(files)
     k = result["K"].value
     assert k == pytest.approx(MAKER_K[motor], rel=0.20)
     rows = {row["file"].rsplit("-", 1)[0]: row for row in result.details["runs"]}
@@ -157,7 +157,7 @@ def test_real_exports_read_cut_and_fit(motor: str) -> None:
 @needs_real
 def test_brush_contact_run_is_flagged_not_forecast() -> None:
     files = sorted(str(p) for p in REAL.glob("mini-cim-locked-rotor-data-*.csv"))
-    result = stall(read_runs(files))
+    result = stall_of_files(files)
     flagged = [w for w in result.warnings if "heating does not explain" in w]
     assert len(flagged) == 1
     assert "2v" in flagged[0]
@@ -204,7 +204,7 @@ def test_brush_contact_run_alone_is_flagged_and_not_forecast(tmp_path: Path, unt
 @pytest.mark.parametrize("name", sorted(p.name for p in REAL.glob("*-locked-rotor-data-*.csv")
                                         if "mini-cim-locked-rotor-data-2v" not in p.name and p.name not in TORQUE_ONLY))
 def test_every_other_real_run_alone_is_explained_by_heating(name: str) -> None:
-    result = stall(read_runs([str(REAL / name)]))
+    result = stall_of_files([str(REAL / name)])
     assert "unexplained" not in result.details, result.details.get("unexplained")
     assert not any("heating does not explain" in w for w in result.warnings)
 

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from tests.analyses._forecast import forecast_rms
+from tests.analyses._forecast import forecast_rms, stall_of_files
 from tests.real_data import find_dyno_dir, not_found
 
 from motorlab.analyses.curve import curve
@@ -89,7 +89,7 @@ def test_k_within_20_percent_of_the_makers_stall_figures(motor: str) -> None:
     and all): K within 20 % of the maker's stall torque / stall current, R within 10 % of V/I at the first
     full sample of the coolest run (the hidden check of issue 23, on these motors)."""
     files = _files(motor)
-    result = stall(read_runs(files))
+    result = stall_of_files(files)
     assert result["K"].determined
     assert result["K"].value == pytest.approx(_maker_k(motor), rel=0.20)
     fitted = [r for r in result.details["runs"] if r["heating explains it"] and r["healthy samples"] >= 30]
@@ -281,7 +281,7 @@ def test_a_run_no_single_network_fits_is_forecast_from_the_motors_other_runs(tmp
     low, high = (float(x) for x in band.split("would be ")[1].split(" A")[0].split("–"))
     assert low < float(out.current[-1]) < high
     # the motor's other runs, through the experiment's description (CLI, notebook, app: --network FIT.json)
-    others = stall(read_runs(other_runs(path)))
+    others = stall_of_files(other_runs(path))
     (tmp_path / "others.json").write_text(json.dumps(others.to_dict()))
     held = run_stall([path], {**_defaults(), "until": 120.0, "network": [str(tmp_path / "others.json")]})
     assert held.details["network"] == "held at the fit others.json"
@@ -384,8 +384,8 @@ def test_each_motors_k_within_20_percent_of_its_maker_and_not_above_its_curve(mo
     listed beside it in words."""
     curve_fit = curve(read_csv(_curve_of(motor)))
     ke = curve_fit["K"].value
-    plain = stall(read_runs(_files(motor)))
-    given = stall(read_runs([*_files(motor), _curve_of(motor)]))
+    plain = stall_of_files(_files(motor))
+    given = stall_of_files([*_files(motor), _curve_of(motor)])
     assert any("a motor curve, not a locked-rotor run" in w for w in given.warnings)
     for result in (plain, given):
         k = result["K"]
@@ -416,7 +416,7 @@ def test_cim_runs_that_select_an_offset_above_the_back_emf_constant() -> None:
     prefer it narrowly (19 against 21 % RMS). Given the curve it is refused as above K_e; without it, as above every
     run's own torque per amp. K is the runs' random-effects mean, between them."""
     files = [_dyno(f"cim-locked-rotor-data-{v}v-20151104.csv") for v in (2, 4, 6)]
-    result = stall(read_runs([*files, _dyno("cim-motor-curve-data-20151104.csv")]))
+    result = stall_of_files([*files, _dyno("cim-motor-curve-data-20151104.csv")])
     ke = curve(read_csv(_dyno("cim-motor-curve-data-20151104.csv")))["K"].value
     k = result["K"]
     assert k.value <= ke + k.stderr
@@ -426,7 +426,7 @@ def test_cim_runs_that_select_an_offset_above_the_back_emf_constant() -> None:
     assert k.stderr >= 0.5 * np.std(runs) / math.sqrt(len(runs))  # the between-run scatter is in it
     assert result.details["K_model"]["selection"].startswith("form chosen by the held-out runs")
     # without the curve the offset form, selected by the held-out runs, puts K above every run's own torque per amp
-    plain = stall(read_runs(files))
+    plain = stall_of_files(files)
     assert "tau0" not in plain.parameters
     assert any("above every run's own torque per amp" in w and "refused" in w for w in plain.warnings)
     assert plain["K"].value == pytest.approx(k.value, rel=1e-9)

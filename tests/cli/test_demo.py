@@ -4,16 +4,35 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any
 
 import pytest
 
 from motorlab.cli import main
 
 
-def test_demo_writes_report_and_prints_table(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    out = tmp_path / "demo"
-    assert main(["demo", "-o", str(out), "--units", "2", "--seed", "1"]) == 0
-    printed = capsys.readouterr().out
+@pytest.fixture(scope="module")
+def demo(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, str, Any]:
+    """One ``motorlab demo`` (two units, seed 1), run once for the tests that read it: its folder, what it printed
+    and the characterisation whose table it printed (kept as the demo hands it to its table)."""
+    import contextlib
+    import io
+
+    from motorlab.cli import demo as demo_module
+
+    out = tmp_path_factory.mktemp("demo") / "demo"
+    tabled: list[Any] = []
+    table = demo_module.print_experiment_table
+    printed = io.StringIO()
+    with pytest.MonkeyPatch.context() as patch, contextlib.redirect_stdout(printed):
+        patch.setattr(demo_module, "print_experiment_table", lambda result: (tabled.append(result), table(result)))
+        assert main(["demo", "-o", str(out), "--units", "2", "--seed", "1"]) == 0
+    assert len(tabled) == 1
+    return out, printed.getvalue(), tabled[0]
+
+
+def test_demo_writes_report_and_prints_table(demo: tuple[Path, str, Any]) -> None:
+    out, printed, _ = demo
     assert "truth" in printed
     assert "σ" in printed
     assert "velocity loop" in printed  # the gains of the demo motor
@@ -28,17 +47,14 @@ def test_demo_writes_report_and_prints_table(tmp_path: Path, capsys: pytest.Capt
     assert html.count("data:image/png;base64,") >= 10
 
 
-def test_demo_table_shows_every_analysis_against_the_truth(tmp_path: Path) -> None:
+def test_demo_table_shows_every_analysis_against_the_truth(demo: tuple[Path, str, Any]) -> None:
+    """The table the demo printed, from the characterisation it printed it of (the demo's own run)."""
     import re
 
     from motorlab.cli.demo import experiment_rows
     from motorlab.experiments import all_experiments
-    from motorlab.session.characterize import characterize
-    from motorlab.session.simulated import write_simulated_session
-    from motorlab.session.spec import load_session
 
-    toml = write_simulated_session("neverest40", out_dir=tmp_path / "s", units=1, seed=3)
-    rows = experiment_rows(characterize(load_session(toml), control=False, figures=False))
+    rows = experiment_rows(demo[2])
     # every analysis the virtual rig can run is in the demo (a dynamometer's motor curve has no rig run)
     assert {exp for exp, *_ in rows} == {name for name, exp in all_experiments().items() if exp.rig is not None}
     distances = [float(m.group(1)) for *_, cells in rows for c in cells if (m := re.search(r"\(([+-][\d.]+)σ\)", c))]
