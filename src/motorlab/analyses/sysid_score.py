@@ -566,7 +566,7 @@ def _reweighted_fit(
             x_new = x + step
             try:
                 new = sims.at(x_new)
-            except OptionError:  # kV or kA beyond a double (a step far outside): a shorter step
+            except (OptionError, OverflowError):  # kV or kA beyond a double (a step far outside): a shorter step
                 mu *= 4.0
                 continue
             nfev += 1
