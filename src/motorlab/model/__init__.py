@@ -350,25 +350,38 @@ def propagate(step: HeldStep, x0: np.ndarray, v: np.ndarray) -> tuple[np.ndarray
     """
     n = x0.size
     m = v.size
-    e = np.empty((n, m + 2))
-    e[:, 0] = x0
-    e[:, 1 : m + 1] = step.bv[:, None] * v[None, :] + step.c[:, None]
-    e[:, m + 1] = 0.0
     if n == 1:
-        x = first_order(float(step.ad[0, 0]), e[0, :-1])[:, None]  # lfilter([0, 1], [1, −a], e[0])[1:]
+        e = np.empty(m + 1)
+        e[0] = x0[0]
+        e[1:] = step.bv[0] * v + step.c[0]
+        x = first_order(float(step.ad[0, 0]), e)[:, None]  # lfilter([0, 1], [1, −a], e)[1:]
     else:
         from scipy import signal
 
-        (a11, a12), (a21, a22) = step.ad
+        (a11, a12), (a21, a22) = step.ad.tolist()
         den = [1.0, -(a11 + a22), a11 * a22 - a12 * a21]
-        e0, e1 = e
-        u0 = np.zeros(m + 2)
-        u1 = np.zeros(m + 2)
-        # X0 = z⁻¹[(1 − a22 z⁻¹)E0 + a12 z⁻¹ E1]/det,  X1 = z⁻¹[a21 z⁻¹ E0 + (1 − a11 z⁻¹)E1]/det
-        u0[1:] = e0[:-1]
-        u0[2:] += -a22 * e0[:-2] + a12 * e1[:-2]
-        u1[1:] = e1[:-1]
-        u1[2:] += -a11 * e1[:-2] + a21 * e0[:-2]
-        x = np.ascontiguousarray(signal.lfilter([1.0], den, np.stack([u0, u1]), axis=1)[:, 1:].T)  # one call
+        (bv0, bv1), (c0, c1) = step.bv.tolist(), step.c.tolist()
+        # X0 = z⁻¹[(1 − a22 z⁻¹)E0 + a12 z⁻¹ E1]/det,  X1 = z⁻¹[a21 z⁻¹ E0 + (1 − a11 z⁻¹)E1]/det with
+        # E = (x0, bv·v_0 + c, …, bv·v_(M−1) + c, 0): both rows in one array, one lfilter call
+        u = np.zeros((2, m + 2))
+        u0, u1 = u
+        u0[1] = x0[0]
+        u1[1] = x0[1]
+        e0 = u0[2:]  # E0[1 : m + 1], written in place, then the a·E terms added from the E's kept in front
+        e1 = u1[2:]
+        np.multiply(v, bv0, out=e0)
+        e0 += c0
+        np.multiply(v, bv1, out=e1)
+        e1 += c1
+        if m:
+            p0 = np.empty(m)
+            p0[0] = x0[0]
+            p0[1:] = e0[:-1]
+            p1 = np.empty(m)
+            p1[0] = x0[1]
+            p1[1:] = e1[:-1]
+            e0 += -a22 * p0 + a12 * p1
+            e1 += -a11 * p1 + a21 * p0
+        x = np.ascontiguousarray(signal.lfilter([1.0], den, u, axis=1)[:, 1:].T)
     dtheta = x[:-1] @ step.hx + step.hv * v + step.hc
     return x, dtheta
