@@ -265,11 +265,13 @@ def test_schema_is_the_descriptions_and_agrees_with_the_cli_parsers() -> None:
 def test_time_limit_ends_the_command(server: Any, sim_session: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     from motorlab.ui import runner
 
-    monkeypatch.setattr(runner, "TIME_LIMIT", 0.05)  # shorter than reading its job and the file
+    # Shorter than any command's run (a forked LCR analysis answered within 0.05 s): the command is started, then
+    # ended by the limit.
+    monkeypatch.setattr(runner, "TIME_LIMIT", 1e-6)
     with open(sim_session / "A" / "lcr.csv", "rb") as handle:
         response = httpx.post(f"{server.url}/api/analyze/lcr", files=[("file", ("lcr.csv", handle))], timeout=60)
     assert response.status_code == 422
-    assert "0.05 s" in response.json()["error"]
+    assert "1e-06 s" in response.json()["error"]
     monkeypatch.undo()
     _alive(server)
 

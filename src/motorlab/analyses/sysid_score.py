@@ -381,7 +381,6 @@ class _Simulations:
 
     def __init__(self, tests: Sequence[ScoreTest]):
         self.tests = tests
-        self.norm = math.sqrt(sum(t.time.size for t in tests))
         self.kept: dict[bytes, _Simulation] = {}
 
     def at(self, p: np.ndarray) -> _Simulation:
@@ -401,26 +400,6 @@ class _Simulations:
             del self.kept[next(iter(self.kept))]
         self.kept[key] = sim
         return sim
-
-
-class _Weighted:
-    """The weighted residuals of :func:`fit_gains` in p = (kS, ln kV, ln kA) and their Jacobian.
-
-    The Jacobian is that of the sensitivity equations (:func:`simulate_sensitivity`), computed with
-    the residuals in the same pass and kept for the point least squares asks it of next (the one it
-    has just evaluated): one simulation per point instead of four (forward differences).
-    """
-
-    def __init__(self, sims: _Simulations, ws: float, wp: float):
-        self.sims, self.ws, self.wp = sims, ws, wp
-
-    def fun(self, p: np.ndarray) -> np.ndarray:
-        sim = self.sims.at(p)
-        return np.concatenate([self.ws * sim.speed, self.wp * sim.position]) / self.sims.norm
-
-    def jac(self, p: np.ndarray) -> np.ndarray:
-        sim = self.sims.at(p)
-        return np.concatenate([self.ws * sim.d_speed, self.wp * sim.d_position], axis=1).T / self.sims.norm
 
 
 def score(gains: Gains, tests: Sequence[ScoreTest]) -> Score:

@@ -147,10 +147,12 @@ class Forked:
     """A command forked by the fork server, seen as a :class:`subprocess.Popen` is (``pid``, ``stdout``,
     ``stderr``, ``poll``, ``wait``, ``kill``, ``returncode``); its exit code comes from the server, which reaps it."""
 
-    def __init__(self, stdout: int, stderr: int, stdin: int | None = None) -> None:
+    stdin = None
+
+    def __init__(self, stdout: int, stderr: int, server: socket.socket) -> None:
         self.pid = 0
         self.returncode: int | None = None
-        self.stdin: IO[bytes] | None = None if stdin is None else os.fdopen(stdin, "wb")
+        self.server = server  # the fork server's socket: it reports this command's end
         self.stdout: IO[bytes] = os.fdopen(stdout, "rb")
         self.stderr: IO[bytes] = os.fdopen(stderr, "rb")
         self.forked = threading.Event()
@@ -176,10 +178,9 @@ class Forked:
 
     def close(self) -> None:
         """Close this side's pipes."""
-        for pipe in (self.stdin, self.stdout, self.stderr):
-            if pipe is not None:
-                with contextlib.suppress(OSError):
-                    pipe.close()
+        for pipe in (self.stdout, self.stderr):
+            with contextlib.suppress(OSError):
+                pipe.close()
 
 
 #: A command's process: a fresh Python, or one forked by the fork server.
@@ -265,7 +266,7 @@ class Pool:
         with self._lock:
             if self.server is server:
                 self.server, self._socket, self.ready = None, None, False
-            orphans = [job for job in self._jobs.values() if job.returncode is None]
+            orphans = [job for job in self._jobs.values() if job.server is sock and job.returncode is None]
         for job in orphans:
             end(job)
             job.forked.set()
@@ -278,20 +279,15 @@ class Pool:
         """The command forked by the server, or None when it is not ready (the caller starts a fresh Python)."""
         return self._fork({"module": module, "argv": list(argv), "cwd": cwd, "env": dict(env)})
 
-    def fork_resident(self) -> Forked | None:
-        """A resident worker (:func:`motorlab.ui.warm.serve`) forked by the server, its stdin a pipe; or None."""
-        return self._fork({"serve": True}, with_stdin=True)
-
-    def _fork(self, job: dict[str, Any], *, with_stdin: bool = False) -> Forked | None:
+    def _fork(self, job: dict[str, Any]) -> Forked | None:
         with self._lock:
             sock = self._socket if self.ready and FORKING else None
         if sock is None:
             return None
         out_r, out_w = os.pipe()
         err_r, err_w = os.pipe()
-        in_r, in_w = os.pipe() if with_stdin else (None, None)
-        passed = [fd for fd in (in_r, out_w, err_w) if fd is not None]
-        forked, ident = Forked(out_r, err_r, in_w), next(self._ids)
+        passed = [out_w, err_w]
+        forked, ident = Forked(out_r, err_r, sock), next(self._ids)
         self._jobs[ident] = forked
         try:
             with self._send:
@@ -375,8 +371,7 @@ SESSION_NICENESS = 10
 
 
 class Resident:
-    """One process running short jobs one at a time, for the whole app: forked by the fork server once it is ready
-    (:func:`motorlab.ui.warm.serve`), else a new Python (``motorlab.ui.warm --serve``).
+    """One warm process (``motorlab.ui.warm --serve``) running short jobs one at a time, for the whole app.
 
     A gains change (0.1 s of work, at each option changed) would otherwise be a process forked, its pipes
     and its end. A job that runs past its time limit, or whose client goes away, ends the process (the
@@ -399,7 +394,7 @@ class Resident:
         with self._lock:
             if self.busy or (self.proc is not None and self.proc.poll() is None):
                 return
-            self.proc, self.ready = POOL.fork_resident() or POOL.spawn("--serve"), False
+            self.proc, self.ready = POOL.spawn("--serve"), False
             proc = self.proc
         threading.Thread(target=self._wait_ready, args=(proc,), daemon=True).start()
 
@@ -545,6 +540,16 @@ def _refill_if_idle() -> None:
         resident().start_soon()
 
 
+def _reap(proc: Child) -> None:
+    """Wait for an ended command's process, at most :data:`REAP_WAIT` s (a slot is never held for ever)."""
+    with contextlib.suppress(subprocess.TimeoutExpired):
+        proc.wait(timeout=REAP_WAIT)
+
+
+#: Seconds to wait for the end of a command that was ended (SIGKILL: at once, unless the machine is stalled).
+REAP_WAIT = 10.0
+
+
 async def run_module(
     module: str, argv: Sequence[str], *, cwd: str, time_limit: float | None = None, slot: str = "short",
     on_progress: Callable[[dict[str, Any]], None] | None = None,
@@ -583,7 +588,11 @@ async def run_module(
                 asyncio.get_running_loop().call_later(REFILL_DELAY, _refill_if_idle)
             if running:  # reap it (in a thread: Popen.wait blocks)
                 with contextlib.suppress(asyncio.CancelledError):
-                    await asyncio.shield(asyncio.get_running_loop().run_in_executor(None, proc.wait))
+                    await asyncio.shield(asyncio.get_running_loop().run_in_executor(None, _reap, proc))
+            for pipe in (proc.stdout, proc.stderr):  # closed already when read to their end
+                if pipe is not None:
+                    with contextlib.suppress(OSError):
+                        pipe.close()
     return Outcome(int(proc.returncode or 0), out.decode("utf-8", "replace"), err.decode("utf-8", "replace"))
 
 

@@ -97,9 +97,8 @@ def run(job: dict[str, object]) -> int:
         return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
 
 
-def serve(*, preloaded: bool = False) -> int:
-    """Preload (unless ``preloaded``: forked by the fork server), say ``ready``, then run jobs one after
-    another: a JSON line in, a JSON line out.
+def serve() -> int:
+    """Preload, say ``ready``, then run jobs one after another: a JSON line in, a JSON line out.
 
     The resident worker of :mod:`motorlab.ui.runner` for the gains (pure computations on typed
     numbers, recomputed at each change of an option): ``{"code", "stdout", "stderr"}`` per job, what
@@ -112,8 +111,7 @@ def serve(*, preloaded: bool = False) -> int:
 
     import matplotlib.pyplot as plt
 
-    if not preloaded:
-        preload()
+    preload()
     answers = sys.stdout
     answers.write("ready\n")
     answers.flush()
@@ -138,8 +136,7 @@ def serve(*, preloaded: bool = False) -> int:
 
 
 def _forked(job: dict[str, object], fds: list[int], inherited: list[int]) -> None:
-    """In the forked child: a session of its own, the command's pipes as stdout and stderr (and, for the resident
-    worker, ``{"serve": true}``, its stdin), run, exit."""
+    """In the forked child: a session of its own, the command's pipes as stdout and stderr, run, exit."""
     import contextlib
     import signal
 
@@ -150,11 +147,10 @@ def _forked(job: dict[str, object], fds: list[int], inherited: list[int]) -> Non
         for fd in inherited:
             os.close(fd)
         os.setsid()  # a process group of its own: ending the command ends what it started
-        streams = fds if len(fds) == 3 else [os.open(os.devnull, os.O_RDONLY), *fds]
-        for target, fd in enumerate(streams):
+        for target, fd in enumerate([os.open(os.devnull, os.O_RDONLY), *fds]):
             os.dup2(fd, target)
             os.close(fd)
-        code = serve(preloaded=True) if job.get("serve") else run(job)
+        code = run(job)
     except BaseException as exc:  # the child ends here: it never returns into the server's loop
         print(f"motorlab: internal error: {type(exc).__name__}: {exc}", file=sys.stderr)
     finally:
@@ -190,7 +186,7 @@ def fork_server(fd: int) -> int:
             if key.fileobj is not sock:
                 os.read(wake_r, 4096)
                 continue
-            message, fds, _, _ = socket.recv_fds(sock, 1 << 20, 3)
+            message, fds, _, _ = socket.recv_fds(sock, 1 << 20, 2)
             if not message:  # the app closed its end: its commands were ended by it
                 return 0
             job = json.loads(message)
