@@ -62,6 +62,7 @@ def test_a_sysid_result_draws_without_freezing_and_fits_laptop_and_phone(page: A
     page.click("Tune a mechanism")
     page.upload("Choose or drop your files", shooter)
     page.wait_text("WPILib SysId file")
+    browser.foreground(page)
     load = browser.load_per_cpu()
     page.click("Run the fit")
     shown = _poll(page, "return window.__shown", "the result", 300)

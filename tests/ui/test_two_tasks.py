@@ -125,6 +125,7 @@ def test_ramp_then_shooter_then_the_first_gains_again(page: Any, ramp: tuple[Pat
     page.wait(lambda: len(page.d.find_elements("css selector", ".plots .main-svg")) >= 2, "the fit's plots")
     box = page.field("counts per revolution")
     time.sleep(1.0)
+    browser.foreground(page)
     shown = page.d.execute_script("return performance.now()")
     load = browser.load_per_cpu()
     box.clear()
