@@ -68,6 +68,8 @@ def test_a_feet_file_gives_wpilib_gains_per_foot(page: Any, real_dir: Path) -> N
     page.wait(lambda: page.d.find_element("tag name", "body").get_attribute("data-ready") == "true", "the page")
     page.wait_text("Gains for WPILib")
     assert re.search(r"\bkV\s+\S+\s+V·s/ft", page.d.find_element("css selector", "#gains-table").text)
+    page.wait(lambda: page.d.execute_script("return document.documentElement.scrollWidth <= window.innerWidth"),
+              "the figures drawn to the phone's width")  # Plotly follows its box's size a moment after drawing
     page.check()
     page.shot("feet-gains-phone.png")
 
