@@ -277,9 +277,7 @@ class Pool:
 
     def fork(self, module: str, argv: Sequence[str], cwd: str, env: Mapping[str, str]) -> Forked | None:
         """The command forked by the server, or None when it is not ready (the caller starts a fresh Python)."""
-        return self._fork({"module": module, "argv": list(argv), "cwd": cwd, "env": dict(env)})
-
-    def _fork(self, job: dict[str, Any]) -> Forked | None:
+        job = {"module": module, "argv": list(argv), "cwd": cwd, "env": dict(env)}
         with self._lock:
             sock = self._socket if self.ready and FORKING else None
         if sock is None:
