@@ -142,18 +142,25 @@ class Page:
         upper = "ABCDEFGHIJKLMNOPQRSTUVWXYZ"
         xpath = ("//*[self::button or self::a or self::label or self::summary]"
                  f"[contains(translate(normalize-space(.), '{upper}', '{upper.lower()}'), {lower!r})]")
+
+        def click() -> None:
+            target = self.wait(lambda: self._visible(xpath), f"a control saying {words!r}")[-1]
+            self.d.execute_script("arguments[0].scrollIntoView({block: 'center'})", target)
+            target.click()
+
+        self._again(click, f"the control saying {words!r}")
+
+    def _again(self, act: Any, what: str) -> Any:
+        """``act()``, done again (finding its element again) when the page re-rendered the element between
+        finding it and acting on it, up to five times."""
         from selenium.common.exceptions import StaleElementReferenceException
 
-        for _ in range(5):  # the page may re-render between finding the control and clicking it: find it again
-            found = self.wait(lambda: self._visible(xpath), f"a control saying {words!r}")
-            target = found[-1]
+        for _ in range(5):
             try:
-                self.d.execute_script("arguments[0].scrollIntoView({block: 'center'})", target)
-                target.click()
-                return
+                return act()
             except StaleElementReferenceException:
                 time.sleep(0.2)
-        pytest.fail(f"the control saying {words!r} was replaced five times before it could be clicked")
+        pytest.fail(f"{what} was replaced five times before it could be used")
 
     def labelled(self, words: str) -> list[str]:
         """The ids of the controls whose visible label holds ``words``, in the page's order."""
@@ -171,18 +178,22 @@ class Page:
         return self.wait(find, f"a field labelled {words!r}")
 
     def type(self, words: str, value: str) -> None:
-        box = self.field(words)
-        box.clear()
-        box.send_keys(value)
+        def type_in() -> None:
+            box = self.field(words)
+            box.clear()
+            box.send_keys(value)
+
+        self._again(type_in, f"the field labelled {words!r}")
 
     def choose(self, words: str, option: str) -> None:
         from selenium.webdriver.support.ui import Select
 
-        Select(self.field(words)).select_by_visible_text(option)
+        self._again(lambda: Select(self.field(words)).select_by_visible_text(option), f"the list labelled {words!r}")
 
     def upload(self, words: str, *paths: Path) -> None:
         """Choose files in the file box whose label holds ``words``."""
-        self.field(words).send_keys("\n".join(str(p) for p in paths))
+        names = "\n".join(str(p) for p in paths)
+        self._again(lambda: self.field(words).send_keys(names), f"the file box labelled {words!r}")
 
     # -- checking ------------------------------------------------------------------------------------
     def check(self) -> None:
@@ -347,20 +358,55 @@ try {
 #: Load average per CPU above which the long-task timing measures the machine, not the page: Chromium's tasks
 #: then wait for a CPU (a figure drawn in 60-100 ms on a quiet machine took 1.6-2.1 s at a load of 17 on 2 CPUs).
 BUSY = 1.5
+#: Share of the watched time in which some runnable thread waited for a CPU (Linux's pressure stall
+#: information, ``/proc/pressure/cpu``) above which the same holds: 0.18-0.20 while a SysId file is fitted and
+#: drawn on a quiet 2-CPU machine (the fit's process, the browser's and the test's share it), 0.58 with two more
+#: programs busy (tasks of the page then 53-90 ms, the browser given the CPU first).
+WAITING = 0.35
 
 
 def load_per_cpu() -> float:
     return os.getloadavg()[0] / (os.cpu_count() or 1)
 
 
-def no_long_task_after(long_tasks: list[list[float]] | None, since: float, load: float) -> None:
-    """No task of 200 ms or more after ``since`` (the page's clock); on a machine busier than :data:`BUSY` the
-    timing is the machine's, and the test says so by skipping (everything before it has passed)."""
+def _cpu_waited() -> float | None:
+    """Seconds during which some runnable thread of this machine has waited for a CPU since it started."""
+    try:
+        some = Path("/proc/pressure/cpu").read_text().splitlines()[0]
+    except (OSError, IndexError):
+        return None
+    return int(some.rsplit("total=", 1)[1]) / 1e6
+
+
+class Contention:
+    """How busy the machine is while a page is timed, from now to :meth:`end`: the load average per CPU at the
+    start and at the end, and the share of the time between in which a thread waited for a CPU (what a long task
+    of the page then holds besides the page's own work)."""
+
+    def __init__(self) -> None:
+        self.load, self.start, self.waited = load_per_cpu(), time.monotonic(), _cpu_waited()
+        self.why: str | None = None
+
+    def end(self) -> None:
+        """The timed stretch is over: say whether its timing measured the machine (:attr:`why`) or the page."""
+        load = max(self.load, load_per_cpu())
+        now = _cpu_waited()
+        share = None if now is None or self.waited is None else (now - self.waited) / max(
+            time.monotonic() - self.start, 1e-3)
+        if load > BUSY:
+            self.why = f"load average {load:.1f} per CPU"
+        elif share is not None and share > WAITING:
+            self.why = f"threads waited for a CPU {share:.0%} of the time"
+
+
+def no_long_task_after(long_tasks: list[list[float]] | None, since: float, machine: Contention) -> None:
+    """No task of 200 ms or more after ``since`` (the page's clock); on a machine busier than :data:`BUSY` or
+    :data:`WAITING` while it was timed (``machine``, ended), the timing is the machine's, and the test says so by
+    skipping (everything before it has passed)."""
     if long_tasks is None:  # a browser without the long-task timing
         return
     late = [round(d) for start, d in long_tasks if start >= since]
-    if late and max(late) >= 200 and load > BUSY:
-        pytest.skip(f"the machine is busy (load average {load:.1f} per CPU): tasks after the result {late} ms "
-                    "measure its load, not the page")
+    if late and max(late) >= 200 and machine.why:
+        pytest.skip(f"the machine is busy ({machine.why}): tasks after the result {late} ms measure its load, "
+                    "not the page")
     assert not late or max(late) < 200, f"tasks of 200 ms or more while results are shown: {late}"
-

@@ -249,7 +249,7 @@ def _series(series: Any, keep: np.ndarray | None = None, *, clock: Any = None,
 
 #: Measured points drawn per panel (and as many residuals): each is an element of the page's drawing, so
 #: fewer than a line's points, keeping each stretch's extremes (a figure then draws in tens of milliseconds).
-MAX_MARKERS = 600
+MAX_MARKERS = 300
 
 
 def panel_curves(result: Any) -> list[dict[str, Any]]:

@@ -29,7 +29,8 @@ function pump() {
 
 function later(div, draw) {
   queue.push({ div, draw, tries: 0 });
-  if (!pumping) { pumping = true; setTimeout(pump, 0); }
+  // the first figure waits for the page's next frame: the view it sits in is laid out in a task of its own
+  if (!pumping) { pumping = true; requestAnimationFrame(() => setTimeout(pump, 0)); }
 }
 
 // Resolves once every figure asked for so far is drawn (tests, and a view that waits for its plots).
@@ -38,25 +39,47 @@ export const settled = () => new Promise((resolve) => { const wait = () => (pump
 function figure(host, title, traces, layout, then) {
   const div = el("div", { class: "plot-area" });
   host.append(el("figure", { class: "plot" }, el("figcaption", { text: title }), div));
-  later(div, () => { if (window.Plotly) { window.Plotly.react(div, traces, layout, CONFIG); if (then) then(div); } });
+  draw(div, traces, layout, then);
   return div;
 }
 
+// Tick labels are left where Plotly puts them: its default check that none overflows the figure measures each
+// label's box (a layout of the page each), up to half of a figure's drawing.
+const axes = (layout) => Object.fromEntries(Object.entries(layout).map(([k, v]) =>
+  [k, /^[xy]axis\d*$/.test(k) ? { ticklabeloverflow: "allow", ...v } : v]));
+
+function draw(div, traces, layout, then) {
+  later(div, () => { if (window.Plotly) { window.Plotly.react(div, traces, axes(layout), CONFIG); if (then) then(div); } });
+}
+
+// Two figures that zoom and pan along x together (a fit and its residuals, drawn as two tasks, not one).
+function linked(a, b) {
+  let busy = false;
+  const follow = (from, to) => from.on("plotly_relayout", (ev) => {
+    if (busy || !ev || !to.layout) return;
+    const x = ev["xaxis.autorange"] ? { "xaxis.autorange": true }
+      : "xaxis.range[0]" in ev ? { "xaxis.range": [ev["xaxis.range[0]"], ev["xaxis.range[1]"]] }
+      : ev["xaxis.range"] ? { "xaxis.range": ev["xaxis.range"] } : null;
+    if (!x) return;
+    busy = true;
+    Promise.resolve(window.Plotly.relayout(to, x)).finally(() => { busy = false; });
+  });
+  if (a.on && b.on) { follow(a, b); follow(b, a); }
+}
+
 // Plotly's first figure in a page costs several times the next ones (its styles, fonts and text measuring set
-// up): one small figure of the same shape as a fit's (two plots, points, a line, a legend) is drawn out of sight
-// when the page has started and removed, so that cost is paid while the student chooses a file, not when the
-// first result's figures are drawn.
+// up, and its code for points compiled at their first use): a figure of the same shape as a fit's (300 points,
+// a line, a legend) is drawn out of sight once the page has started, then removed, so that cost is paid while
+// the student chooses a file, not when the first result's figures are drawn.
 export function warmUp() {
   if (!window.Plotly) return;
   const div = el("div", { "aria-hidden": "true", style: "position:absolute;left:-10000px;top:0;width:600px" });
   document.body.append(div);
-  const layout = { ...base(300), xaxis: { anchor: "y", showticklabels: false }, yaxis: { domain: [0.34, 1], title: { text: "speed" } },
-    xaxis2: { matches: "x", anchor: "y2", title: { text: "time in s" } }, yaxis2: { domain: [0, 0.26], title: { text: "residual" }, anchor: "x2" } };
-  later(div, () => {
-    window.Plotly.react(div, [{ x: [0, 1, 2], y: [0, 1, 0], mode: "markers", name: "measured" }, { x: [0, 2], y: [0, 1], mode: "lines", name: "model" },
-      { x: [0, 1], y: [0, 1], mode: "markers", xaxis: "x2", yaxis: "y2", name: "residual" }], layout, CONFIG);
-    setTimeout(() => { window.Plotly.purge(div); div.remove(); }, 0);
-  });
+  const x = Array.from({ length: 300 }, (_, k) => k / 100);
+  draw(div, [{ x, y: x.map(Math.sin), mode: "markers", marker: { size: 4 }, name: "measured" },
+    { x, y: x.map(Math.cos), mode: "lines", name: "model" }],
+  { ...base(300), xaxis: { title: { text: "time in s" } }, yaxis: { title: { text: "speed" } } },
+  () => setTimeout(() => { window.Plotly.purge(div); div.remove(); }, 0));
 }
 
 export function raw(host, item) {
@@ -77,8 +100,10 @@ export function raw(host, item) {
 const againstLogTime = (p) => p.data && p.time && p.time.length === p.data.x.length
   && p.data.x.every((x, k) => x === null || p.time[k] === null || Math.abs(x - p.time[k]) < 1e-9);
 
-// Data against the fitted model, residuals below. onSelect(points) gets the points picked with the box/lasso tool;
-// `leftOut` (spans [start, end] of the log's time) are shaded on plots against that time.
+// Data against the fitted model, residuals below (a figure of their own under it, x zoomed together: each
+// figure is one task of the page, a fit's points and its residuals in one took up to twice as long).
+// onSelect(points) gets the points picked with the box/lasso tool on either; `leftOut` (spans [start, end] of
+// the log's time) are shaded on plots against that time.
 export function panels(host, list, { onSelect, leftOut = [] } = {}) {
   host.replaceChildren();
   for (const p of list || []) {
@@ -87,27 +112,29 @@ export function panels(host, list, { onSelect, leftOut = [] } = {}) {
     if (p.model) traces.push({ x: p.model.x, y: p.model.y, name: p.model.label || "model", mode: "lines" });
     for (const s of p.extra || []) if (s) traces.push({ x: s.x, y: s.y, name: s.label, mode: s.kind === "data" ? "markers" : "lines" });
     const layout = { ...base(narrow() ? 360 : 420), xaxis: { title: { text: p.x_label } }, yaxis: { title: { text: p.y_label } }, dragmode: "zoom" };
-    if (p.same_x && p.data && p.model) {
-      // measured − model at the measured points drawn (the worker's; a result kept from before, computed here)
-      const res = p.residual || { x: p.data.x, y: p.data.y.map((y, k) => (y === null || p.model.y[k] === null ? null : y - p.model.y[k])) };
-      traces.push({ x: res.x, y: res.y, name: "residual", mode: "markers", marker: { size: 3 }, xaxis: "x2", yaxis: "y2" });
-      layout.height += 120;
-      layout.xaxis = { anchor: "y", showticklabels: false };
-      layout.yaxis.domain = [0.34, 1];
-      layout.xaxis2 = { matches: "x", anchor: "y2", title: { text: p.x_label } };
-      layout.yaxis2 = { domain: [0, 0.26], title: { text: "residual" }, anchor: "x2" };
-    }
-    if (leftOut.length && againstLogTime(p)) {
+    const shaded = leftOut.length && againstLogTime(p);
+    if (shaded) {
       layout.shapes = leftOut.map(([x0, x1]) => ({ type: "rect", xref: "x", yref: "paper", x0, x1, y0: 0, y1: 1,
         fillcolor: "#d33", opacity: 0.08, line: { width: 0 }, layer: "below" }));
       layout.annotations = leftOut.map(([x0, x1]) => ({ xref: "x", yref: "paper", x: (x0 + x1) / 2, y: 1, yanchor: "bottom",
         text: "left out", showarrow: false, font: { ...FONT, color: "#a33" } }));
     }
     // the measured points and their residuals share indices: a selection on either names the same rows
-    const selectable = new Set([0, p.same_x && p.data && p.model ? traces.length - 1 : 0]);
-    figure(host, p.title, traces, layout, (div) => {
-      if (onSelect && div.on) div.on("plotly_selected", (ev) => onSelect(p, ev ? [...new Set(ev.points.filter((pt) => selectable.has(pt.curveNumber)).map((pt) => pt.pointIndex))] : []));
-    });
+    const picked = (div) => {
+      if (onSelect && div.on) div.on("plotly_selected", (ev) => onSelect(p, ev ? [...new Set(ev.points.filter((pt) => pt.curveNumber === 0).map((pt) => pt.pointIndex))] : []));
+    };
+    const main = figure(host, p.title, traces, layout, picked);
+    if (p.same_x && p.data && p.model) {
+      // measured − model at the measured points drawn (the worker's; a result kept from before, computed here)
+      const res = p.residual || { x: p.data.x, y: p.data.y.map((y, k) => (y === null || p.model.y[k] === null ? null : y - p.model.y[k])) };
+      const below = { ...base(narrow() ? 170 : 190), showlegend: false, dragmode: "zoom", xaxis: { title: { text: p.x_label } },
+        yaxis: { title: { text: "measured − model" } }, margin: { t: 8, r: 12, b: 44, l: 58 } };
+      if (shaded) below.shapes = layout.shapes;
+      const div = el("div", { class: "plot-area residuals" });
+      main.after(div);
+      draw(div, [{ x: res.x, y: res.y, name: "residual", mode: "markers", marker: { size: 3, color: "#7f7f7f" } }], below,
+        (d) => { picked(d); linked(main, d); });
+    }
   }
 }
 

@@ -222,6 +222,9 @@ function snippetBox(code, language) {
 }
 
 async function compute(ctx, out, list, model) {
+  // a change typed in a view just left (its 350 ms pause ending after a link was followed) computes nothing:
+  // it would stop the shown view's computation and leave it saying "computing the gains…" for ever
+  if (!out.status.isConnected) return;
   const g = ctx.state.gains;
   if (controller) controller.abort();
   controller = new AbortController();
