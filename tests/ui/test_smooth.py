@@ -73,6 +73,7 @@ def test_a_sysid_result_draws_without_freezing_and_fits_laptop_and_phone(page: A
     _tables_fit(page)
     page.check()
     page.shot("smooth-sysid-laptop.png")
+    _residuals_zoom_with_their_fit(page)
 
     page.d.set_window_size(*browser.PHONE)
     page.wait(lambda: page.d.execute_script("return document.documentElement.scrollWidth <= window.innerWidth"),
@@ -83,6 +84,28 @@ def test_a_sysid_result_draws_without_freezing_and_fits_laptop_and_phone(page: A
     page.d.set_window_size(*browser.LAPTOP)
 
     browser.no_long_task_after(long_tasks, shown, machine)
+
+
+def _residuals_zoom_with_their_fit(page: Any) -> None:
+    """A stretch dragged across the first fit's plot (zooming in on it) zooms its residuals' figure beneath to the
+    same stretch of time, and back (a double click)."""
+    from selenium.webdriver.common.action_chains import ActionChains
+
+    area = page.d.find_element("css selector", ".plots .plot-area .nsewdrag")
+    page.d.execute_script("arguments[0].scrollIntoView({block: 'center'})", area)
+    width = area.size["width"]
+    ActionChains(page.d).move_to_element_with_offset(area, -width // 5, 0).click_and_hold() \
+        .move_by_offset(width // 3, 0).move_by_offset(5, 0).release().perform()
+    ranges = """const main = document.querySelector('.plots .plot-area');
+      const below = main.nextElementSibling;
+      return [main.layout.xaxis.range, below.layout.xaxis.range, main._fullLayout.xaxis.autorange];"""
+    zoomed = page.wait(lambda: (lambda r: r if r[0] == r[1] and r[2] is False else None)(page.d.execute_script(ranges)),
+                       "the residuals zoomed with their fit", 10)
+    start, end = zoomed[0]
+    assert 0 < end - start, zoomed
+    ActionChains(page.d).double_click(area).perform()
+    page.wait(lambda: (lambda r: r[0] == r[1] and r[2] is True)(page.d.execute_script(ranges)),
+              "the residuals zoomed back with their fit", 10)
 
 
 def test_a_session_table_at_1366_and_its_report_on_a_phone(page: Any, sim_session: Path, tmp_path: Path) -> None:
