@@ -129,7 +129,7 @@ export function panels(host, list, { onSelect, leftOut = [] } = {}) {
       const res = p.residual || { x: p.data.x, y: p.data.y.map((y, k) => (y === null || p.model.y[k] === null ? null : y - p.model.y[k])) };
       const below = { ...base(narrow() ? 170 : 190), showlegend: false, dragmode: "zoom", xaxis: { title: { text: p.x_label } },
         yaxis: { title: { text: "measured − model" } }, margin: { t: 8, r: 12, b: 44, l: 58 } };
-      if (shaded) below.shapes = layout.shapes;
+      if (shaded) below.shapes = layout.shapes.map((s) => ({ ...s }));  // its own: Plotly keeps and edits a figure's layout
       const div = el("div", { class: "plot-area residuals" });
       main.after(div);
       draw(div, [{ x: res.x, y: res.y, name: "residual", mode: "markers", marker: { size: 3, color: "#7f7f7f" } }], below,
