@@ -68,7 +68,17 @@ def test_road_runner_ramp_to_gains(page: Any, ramp: tuple[Path, float], size: tu
 
 
 def test_reload_back_and_offline(page: Any, ramp: tuple[Path, float]) -> None:
-    """After the journey above: a reload keeps the results, back/forward walk the steps, no foreign host."""
+    """After the journey above (made again here: xdist may run this test in another worker, on a browser of its
+    own): a reload keeps the results, back/forward walk the steps, no foreign host."""
+    page.open(browser.LAPTOP)
+    page.click("Tune a Road Runner or Pedro Pathing drive")
+    page.upload("Choose or drop your files", ramp[0])
+    page.type("counts per revolution", "8192")
+    page.click("Run the fit")
+    page.wait_text("Result from ramp.json")
+    page.click("Gains")
+    page.click("Road Runner")
+    browser.kv_per_tick(page)
     page.d.refresh()
     page.wait(lambda: page.d.find_element("tag name", "body").get_attribute("data-ready") == "true", "the page")
     assert abs(browser.kv_per_tick(page) - ramp[1]) / ramp[1] < 0.03  # the gains view came back with its result
