@@ -9,14 +9,13 @@ propagation of the measured noises, the errors-in-variables bias). The simulator
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from motorlab import progress
 from motorlab.estimation.covariance import hac_meat, scaled_gram_inverse
+from motorlab.estimation.levenberg_marquardt import Solution, levenberg_marquardt
 from motorlab.estimation.noise import input_noise_bias, noise_propagation_covariance
 from motorlab.estimation.simulator import StatePlant, simulate
 
@@ -579,7 +578,7 @@ SECANT_TOLERANCE = 0.5
 RESTARTS = 2
 
 
-def smoothness(problem: _Problem, sol: _Solution) -> tuple[str, np.ndarray | None]:
+def smoothness(problem: _Problem, sol: Solution) -> tuple[str, np.ndarray | None]:
     """Whether the cost is smooth around the end point, and a better start when a probe found one.
 
     The Jacobian of a simulation with friction events is by forward differences of 1e-6: across a
@@ -639,7 +638,7 @@ def smoothness(problem: _Problem, sol: _Solution) -> tuple[str, np.ndarray | Non
     return reason, best if best is not None else across
 
 
-def _converged(problem: _Problem, max_iterations: int) -> tuple[_Solution, str]:
+def _converged(problem: _Problem, max_iterations: int) -> tuple[Solution, str]:
     """Levenberg–Marquardt from the problem's start, restarted where the end point is not a smooth minimum.
 
     After each run :func:`smoothness` probes the end point; where a probe lowers the cost, or the cost
@@ -672,7 +671,7 @@ def _converged(problem: _Problem, max_iterations: int) -> tuple[_Solution, str]:
     return sol, reason
 
 
-def _both_sides(problem: _Problem, sol: _Solution) -> list[np.ndarray]:
+def _both_sides(problem: _Problem, sol: Solution) -> list[np.ndarray]:
     """Starts 5 % to either side of the end point in every global model parameter (within the bounds)."""
     glob = np.array([k for k in range(problem.n_model) if problem.model.local_start(k) is None], dtype=int)
     starts = []
@@ -719,79 +718,3 @@ def output_error_covariance(
     meat, bandwidth = hac_meat(np.concatenate(scores), groups=np.concatenate(groups))
     cov = h_inv @ meat @ h_inv * (n / max(n - p, 1))
     return cov, cov_white, null, bandwidth
-
-
-@dataclass
-class _Solution:
-    x: np.ndarray
-    fun: np.ndarray
-    jac: np.ndarray
-    nfev: int
-    success: bool
-    message: str
-
-
-def levenberg_marquardt(
-    fun: Callable[[np.ndarray], np.ndarray],
-    jac: Callable[[np.ndarray], np.ndarray],
-    x0: np.ndarray,
-    lower: np.ndarray,
-    upper: np.ndarray,
-    *,
-    max_iterations: int = 60,
-    ftol: float = 1e-7,
-) -> _Solution:
-    """Bounded Levenberg–Marquardt on the normal equations (p × p), steps projected onto the bounds.
-
-    The problems here have few parameters and many residuals: forming JᵀJ costs a matrix product,
-    where a trust-region solver's SVD of the tall Jacobian (scipy's ``trf``) costs far more on a busy
-    machine. Stops when an accepted step lowers the cost by less than ``ftol`` relative (with residuals
-    in units of their noise that is far below one unit of χ²).
-    """
-    x = np.clip(x0, lower, upper)
-    r = fun(x)
-    cost = float(r @ r)
-    nfev = 1
-    j = jac(x)
-    mu = 1e-3
-    message = "maximum number of iterations reached"
-    success = False
-    with progress.task("Fitting the model", total=max_iterations, unit="iterations") as report:
-        for _ in range(max_iterations):
-            report.advance(detail=f"χ² {cost:.6g}")
-            g = j.T @ r
-            h = j.T @ j
-            diag = np.diag(h).copy()
-            diag = np.where(diag > 0, diag, 1.0)
-            # Parameters held at a bound by the gradient stay there (active set): a step computed for all
-            # and then clipped would crawl along the bound (a switch on its sample instant, f = 1).
-            free = ~(((x <= lower) & (g > 0)) | ((x >= upper) & (g < 0)))
-            accepted = False
-            for _ in range(12):
-                step = np.zeros_like(x)
-                try:
-                    step[free] = -np.linalg.solve((h + mu * np.diag(diag))[np.ix_(free, free)], g[free])
-                except np.linalg.LinAlgError:
-                    mu *= 10.0
-                    continue
-                x_new = np.clip(x + step, lower, upper)
-                r_new = fun(x_new)
-                nfev += 1
-                cost_new = float(r_new @ r_new) if np.all(np.isfinite(r_new)) else np.inf
-                if cost_new < cost:
-                    accepted = True
-                    break
-                mu *= 4.0
-            if not accepted:
-                message = "no step lowers the cost"
-                success = True  # at a (local) minimum to the precision of the simulation
-                break
-            drop = (cost - cost_new) / max(cost, 1e-300)
-            x, r, cost = x_new, r_new, cost_new
-            j = jac(x)
-            mu = max(mu / 3.0, 1e-9)
-            if drop < ftol:
-                message = "relative cost reduction below tolerance"
-                success = True
-                break
-    return _Solution(x, r, j, nfev, success, message)
