@@ -25,17 +25,22 @@ lint: install
 # one thread per worker, so that two workers on two cores do not fight over four threads. Bytecode is
 # written even where PYTHONDONTWRITEBYTECODE is set (uv installs none): otherwise every Python process
 # the suite starts (workers, commands) compiles numpy, scipy, matplotlib and motorlab again, 8 s of CPU
-# for one import of the CLI and the engine against 3 s (docs/ARCHITECTURE.md). mypy (30 s of one CPU
-# from a fresh clone) checks the types beside the tests, in the moments a worker waits for a browser:
-# make test fails when either fails, and prints mypy's report after the tests' own.
+# for one import of the CLI and the engine against 3 s (docs/ARCHITECTURE.md). The tests marked
+# realtime (an emulated robot or meter on the wall clock: 2 min of waiting, 20 s of CPU) run in a
+# process of their own beside the workers, and mypy (30 s of one CPU from a fresh clone) checks the
+# types there too, in the moments the workers wait for a browser. make test fails when any of the three
+# fails, and prints their reports after the workers' own.
+PYTEST_ENV := MPLBACKEND=Agg OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 PYTHONDONTWRITEBYTECODE=
 test: install
 	$(BIN)/ruff check src tests benchmarks
 	@mkdir -p out; $(BIN)/mypy > out/mypy.txt 2>&1 & typing=$$!; \
-	MPLBACKEND=Agg OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 PYTHONDONTWRITEBYTECODE= \
-	    $(BIN)/pytest -n auto --dist worksteal --durations=30; tests=$$?; \
+	$(PYTEST_ENV) $(BIN)/pytest -p no:xdist -m realtime --durations=10 > out/realtime-tests.txt 2>&1 & waiting=$$!; \
+	$(PYTEST_ENV) $(BIN)/pytest -n auto --dist worksteal -m "not realtime" --durations=30; tests=$$?; \
+	wait $$waiting; timed=$$?; echo "tests on the wall clock: $$(tail -n 1 out/realtime-tests.txt)"; \
+	if [ $$timed -ne 0 ]; then cat out/realtime-tests.txt; fi; \
 	wait $$typing; typed=$$?; echo "mypy: $$(tail -n 1 out/mypy.txt)"; \
 	if [ $$typed -ne 0 ]; then cat out/mypy.txt; fi; \
-	exit $$(( tests != 0 ? tests : typed ))
+	exit $$(( tests != 0 ? tests : timed != 0 ? timed : typed ))
 
 demo: install
 	MPLBACKEND=Agg $(BIN)/motorlab demo -o out/demo

@@ -14,6 +14,9 @@ from motorlab.acquire.es51919 import encode
 from motorlab.acquire.lcr import acquire_lcr
 from motorlab.cli import main
 
+#: The emulated meter sends its readings on the wall clock: make test runs these beside the others (the Makefile).
+pytestmark = pytest.mark.realtime
+
 
 def _truth(seed: int, n: int = 6) -> tuple[np.ndarray, np.ndarray]:
     rng = np.random.default_rng(seed)

@@ -21,6 +21,9 @@ from motorlab.robot.dashboard import STOP_TAG
 from motorlab.robot.emulator import EmulatedRobot, RobotFiles
 from motorlab.ui.app import create_app
 
+#: The emulated robot runs on the wall clock: make test runs these beside the others (the Makefile).
+pytestmark = pytest.mark.realtime
+
 
 def page_client() -> TestClient:
     """A client of a new app holding the robot token its page holds (as the page's own requests do)."""

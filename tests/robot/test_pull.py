@@ -10,6 +10,9 @@ import pytest
 from motorlab.cli import main
 from motorlab.robot.emulator import EmulatedRobot, RobotFiles
 
+#: The emulated robot runs on the wall clock: make test runs these beside the others (the Makefile).
+pytestmark = pytest.mark.realtime
+
 
 def _pull(robot: EmulatedRobot, out: Path, *extra: str) -> int:
     return main(["robot", "pull", "--host", "127.0.0.1", "--http-port", str(robot.http_port), "-o", str(out), *extra])

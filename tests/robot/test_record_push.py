@@ -21,6 +21,9 @@ from motorlab.robot.dashboard import STOP_TAG, Dashboard
 from motorlab.robot.emulator import EmulatedRobot, Plant, default_config_tree
 from motorlab.robot.record import Recorder
 
+#: The emulated robot runs on the wall clock: make test runs these beside the others (the Makefile).
+pytestmark = pytest.mark.realtime
+
 OPMODE = "motorlab: quasistatic ramp"
 
 

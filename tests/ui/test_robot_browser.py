@@ -16,7 +16,8 @@ from motorlab.robot.config import leaves
 from motorlab.robot.dashboard import STOP_TAG
 from motorlab.robot.emulator import EmulatedRobot, RobotFiles
 
-pytestmark = browser.needs_browser
+#: The emulated robot runs on the wall clock: make test runs these beside the others (the Makefile).
+pytestmark = [browser.needs_browser, pytest.mark.realtime]
 
 
 @pytest.fixture(scope="module")
