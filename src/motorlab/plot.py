@@ -59,7 +59,9 @@ def plot_panel(panel: Panel, ax: Axes) -> Axes:
         _draw_series(ax, panel.model, main=True)
     for series in panel.extra:
         _draw_series(ax, series, main=False)
-    ax.set_title(panel.title, fontsize=10)
+    # at the axes' top, where matplotlib would put it after measuring every tick label for top ones (none here): a
+    # fifth of the time a report took to draw
+    ax.set_title(panel.title, fontsize=10, y=1.0)
     ax.set_xlabel(panel.x_label)
     ax.set_ylabel(panel.y_label)
     ax.grid(True, alpha=0.3)
@@ -268,7 +270,7 @@ def plot_motor_curves(
         a.set_ylim(bottom=0)
     ax.set_xlim(left=0)
     ax.grid(True, alpha=0.3)
-    ax.set_title(f"Motor curves at {abs(voltage):g} V")
+    ax.set_title(f"Motor curves at {abs(voltage):g} V", y=1.0)  # placed, not measured (plot_panel)
     handles, labels = [], []
     for a in (ax, ax_i, ax_p, ax_e):
         h, lab = a.get_legend_handles_labels()

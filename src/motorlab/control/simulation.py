@@ -689,7 +689,7 @@ def plot_response(
     title = f"{resp.loop} {resp.kind}"
     if resp.kind == "step" and math.isfinite(m.get("rise_time", math.nan)):
         title += f": rise {m['rise_time'] * 1e3:.0f} ms, overshoot {format_percent(m['overshoot'] / 100, '.1f')}"
-    ax.set_title(title, fontsize=10)
+    ax.set_title(title, fontsize=10, y=1.0)  # placed, not measured (motorlab.plot.plot_panel)
     if voltage_axis:
         ax2 = ax.twinx()
         ax2.step(resp.time, resp.voltage, where="post", color="C3", alpha=0.5, lw=0.8, label="voltage")

@@ -519,6 +519,6 @@ def summary_figure(results: dict[str, TuneResult]) -> Any:
     for ax, (loop, res) in zip(axes, results.items(), strict=True):
         disp = res._display_per_radian()
         plot_response(res.step, ax=ax, per_radian=disp, unit=res.target.units["position"])
-        ax.set_title(ax.get_title().replace(f"{loop} step", f"{loop} step with LQR gains", 1), fontsize=10)
+        ax.set_title(ax.get_title().replace(f"{loop} step", f"{loop} step with LQR gains", 1), fontsize=10, y=1.0)
     fig.tight_layout()
     return fig
