@@ -134,6 +134,10 @@ PRIOR_LOG_SIGMA = 0.408
 #: (docs/experiments/stall.md, "a winding slower than its case": 3–107 s).
 PRIOR_WINDING_TIME_CONSTANT = 20.0
 PRIOR_WINDING_LOG_SIGMA = 0.92
+#: The heating fits stop when a step changes the cost or the (logarithmic) parameters by less than this, relative:
+#: far below their standard errors (VEX's mini-CIM, CIM and BAG: K and R move in the fifth digit against scipy's
+#: 1e-8), a third fewer simulations of the runs.
+TOLERANCE = 1e-6
 
 
 def _needs_prior(fit: LeastSquares, hi: Sequence[float]) -> bool:
@@ -210,7 +214,7 @@ def fit_heating(runs: Sequence[StallData], *, magnet: float, ambient: float, win
     sub = [names[k] for k in active]
     bounds = ([lo[k] for k in active], [hi[k] for k in active])
     fit = fit_least_squares(residual, [x0[k] for k in active], sub, bounds=bounds, x_scale=[1.0] * len(active),
-                            covariance="hac", groups=groups, max_nfev=200 * len(x0))
+                            covariance="hac", groups=groups, max_nfev=200 * len(x0), tolerance=TOLERANCE)
     prior = False
     if network is None:
         # R_ca "from the prior" when the runs alone cannot tell it (too short for the case to approach its steady
@@ -229,7 +233,7 @@ def fit_heating(runs: Sequence[StallData], *, magnet: float, ambient: float, win
 
         fit = fit_least_squares(with_prior, list(fit.values), names, bounds=(lo, hi), x_scale=[1.0] * len(x0),
                                 covariance="hac", groups=np.append(groups, [len(runs)] * (1 + winding_prior)),
-                                max_nfev=200 * len(x0))
+                                max_nfev=200 * len(x0), tolerance=TOLERANCE)
     else:
         fit = _expand(fit, active, held, names)
     shared = np.exp(fit.values[: len(SHARED)])

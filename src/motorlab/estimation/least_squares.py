@@ -68,6 +68,7 @@ def fit_least_squares(
     loss: str = "linear",
     covariance: str = "standard",
     groups: np.ndarray | None = None,
+    tolerance: float = 1e-8,
 ) -> LeastSquares:
     """Minimise ``sum(residual(x)**2)`` with scipy's trust-region least squares.
 
@@ -90,6 +91,9 @@ def fit_least_squares(
         for serially correlated residuals; see :func:`motorlab.estimation.covariance.hac_covariance`).
     groups
         For ``"hac"``: a label per residual; lags never cross a change of label.
+    tolerance
+        Stop when a step changes the cost or the parameters by less than this, relative (scipy's ``ftol`` and
+        ``xtol``; its default 1e-8).
 
     Raises
     ------
@@ -108,7 +112,8 @@ def fit_least_squares(
         raise FitError(f"{r0.size} data points cannot determine {start.size} parameters")
     lo, hi = bounds if bounds is not None else (-np.inf, np.inf)
     sol = optimize.least_squares(
-        residual, start, bounds=(lo, hi), x_scale=x_scale, max_nfev=max_nfev, method="trf", loss=loss
+        residual, start, bounds=(lo, hi), x_scale=x_scale, max_nfev=max_nfev, method="trf", loss=loss,
+        ftol=tolerance, xtol=tolerance,
     )
     cov, stderr, corr, determined, bandwidth = covariance_and_bandwidth(
         sol.jac, sol.fun, sol.x, sigma_known=sigma_known, covariance=covariance, groups=groups
