@@ -83,7 +83,7 @@ def test_report_splits_kt_ke_into_motor_and_gearbox(tmp_path):
     result = characterize(load_session(toml), control=False, figures=False)
     curve_fit = result.units["A"].fits["curve"]
     assert curve_fit["Kt_over_K"].value == pytest.approx(0.9, abs=0.01)
-    html = render_report(result)
+    html = render_report(result, figures=False)  # its words are checked; the figures are tests/report's
     assert "Split with the curve run of unit A" in html
     for name in ("A", "B"):  # B has no curve of its own: the session's (the same motor model) is used
         eta = result.units[name].parameters["efficiency"].estimate.value
@@ -91,7 +91,7 @@ def test_report_splits_kt_ke_into_motor_and_gearbox(tmp_path):
     # without a bare-motor run the report says where the rest would come from
     toml2 = write_simulated_session("neverest40", out_dir=tmp_path / "plain", units=1, seed=3, gearbox="catalog",
                                     experiments=("spindown", "torque"))
-    plain = render_report(characterize(load_session(toml2), control=False, figures=False))
+    plain = render_report(characterize(load_session(toml2), control=False, figures=False), figures=False)
     assert "All of it is given to the gearbox here" in plain
 
 
@@ -108,6 +108,6 @@ def test_a_stall_run_held_at_the_gearbox_output_is_not_taken_for_the_bare_motor(
     unit = result.units["A"]
     assert unit.fits["stall"]["K"].value > 5 * unit.parameters["K"].estimate.value / 40  # the output shaft's
     assert bare_motor_ratio({"A": unit.fits}, "A", k_output=unit.parameters["K"].estimate, ratio=40.0) is None
-    html = render_report(result)
+    html = render_report(result, figures=False)  # its words are checked; the figures are tests/report's
     assert "Split with" not in html
     assert "All of it is given to the gearbox here" in html
