@@ -332,10 +332,11 @@ def _stop_within_step(
     v: float, u: float, dt: float, tau: float, volts: float, ks: float, kv: float, threshold: float
 ) -> tuple[float, float]:
     """(speed at the step's end, distance) when the speed reaches zero inside a step."""
-    if tau <= 0:  # no inertia: the speed is at zero at once
+    ratio = (v - u) / -u if u != 0 else math.inf
+    if tau <= 0 or ratio <= 1.0:  # no inertia, or a speed already at zero (a derivative's nudge past it): at once
         t0 = 0.0
     else:
-        t0 = dt if u == 0 else min(dt, tau * math.log((v - u) / -u))
+        t0 = dt if u == 0 else min(dt, tau * math.log(ratio))
     dist = 0.0 if tau <= 0 else u * t0 + (v - u) * tau * (1.0 - math.exp(-t0 / tau))
     rest = dt - t0
     if rest <= 0 or abs(volts) <= threshold:

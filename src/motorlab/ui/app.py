@@ -328,7 +328,8 @@ async def characterize(request: Request) -> Response:
         if refused:
             return _error(f"--{refused[0]}: the app sets this option itself")
         out = folder / "_results"
-        argv = [*runner.build_argv(["characterize"], fields, values, [session]), "--quiet", f"--output={out}"]
+        argv = [*runner.build_argv(["characterize"], fields, values, [session]), "--quiet", f"--output={out}",
+                f"--processes={runner.SESSION_PROCESSES}"]
 
         def finish(outcome: runner.Outcome) -> Response:
             if outcome.code not in (0, 3):

@@ -51,6 +51,12 @@ CONCURRENCY = max(1, min(4, os.cpu_count() or 1))
 #: Sessions (``characterize``) at once, in their own slots.
 SESSIONS = max(1, min(2, (os.cpu_count() or 1) // 2))
 
+#: Processes a session's units are analysed and its report drawn in (``characterize --processes``): twice the
+#: CPUs, at most 4. The units take about the same time each, so three units in two processes end in two units'
+#: time, in three processes sharing the two CPUs in one and a half (the 3-unit session's table 2.2–2.4 s against
+#: 2.5–2.9 s, benchmarks/bench_ui.py); a session runs at a lower priority, so short commands still come first.
+SESSION_PROCESSES = max(2, min(4, 2 * (os.cpu_count() or 1)))
+
 #: Seconds a command waits for the fork server to say it has forked it (it does nothing else: milliseconds).
 FORK_WAIT = 10.0
 
