@@ -380,3 +380,16 @@ def test_identify_applies_cpr_to_a_json_file_too(real_dir):
     roller = str(real_dir / "sysid" / "t581_spu_roller.json")
     with pytest.raises(OptionError, match="finer than half a count"):
         identify.from_cli("identify", [roller], parser.parse_args(["--cpr", "2048"]))
+
+
+def test_a_speed_already_past_zero_stops_at_once():
+    """A derivative's nudge can start a stopping step with the speed just past zero: the stop is at once (no
+    logarithm of a negative number), the distance zero, and a drive under the static friction leaves it at rest."""
+    from motorlab.analyses.sysid_score import _stop_within_step
+
+    for v, u in ((1e-9, 0.5), (-1e-9, -0.5), (0.0, 0.5), (0.01, 1e-9)):  # the speed already on u's side of zero
+        speed, dist = _stop_within_step(v, u, 0.01, 0.05, 0.1, 0.2, 1.0, 0.2)
+        assert (speed, dist) == (0.0, 0.0)
+    speed, dist = _stop_within_step(0.01, -0.5, 0.01, 0.05, -0.1, 0.2, 1.0, 0.2)  # a real stop inside the step
+    assert speed == 0.0
+    assert 0.0 < dist < 0.01 * 0.01
