@@ -576,6 +576,9 @@ def _hac(gains: np.ndarray, tests: Sequence[ScoreTest], sc: Score, weight: float
     from motorlab.estimation.covariance import hac_covariance
 
     ws, wp = 1.0 / sc.speed, math.sqrt(weight) / sc.position
+    # a fit that drove kA to nothing (a log too short to show any inertia: exp(ln kA) underflowed to 0) is taken at
+    # the smallest positive kA, where its column says it is not determined
+    gains = np.array([gains[0], gains[1], max(float(gains[2]), np.finfo(float).tiny)])
     sim = _Simulations(tests).at(np.array([gains[0], math.log(gains[1]), math.log(gains[2])]))
     r0 = np.concatenate([ws * sim.speed, wp * sim.position])
     jac = np.concatenate([ws * sim.d_speed, wp * sim.d_position], axis=1).T
