@@ -332,11 +332,8 @@ def _stop_within_step(
     v: float, u: float, dt: float, tau: float, volts: float, ks: float, kv: float, threshold: float
 ) -> tuple[float, float]:
     """(speed at the step's end, distance) when the speed reaches zero inside a step."""
-    ratio = (v - u) / -u if u != 0 else math.inf
-    if tau <= 0 or ratio <= 1.0:  # no inertia, or a speed already at zero (a derivative's nudge past it): at once
-        t0 = 0.0
-    else:
-        t0 = dt if u == 0 else min(dt, tau * math.log(ratio))
+    ratio = (v - u) / -u if u != 0 else math.inf  # ≤ 1: the speed already at or past zero (a derivative's nudge)
+    t0 = 0.0 if tau <= 0 or ratio <= 1.0 else dt if u == 0 else min(dt, tau * math.log(ratio))
     dist = 0.0 if tau <= 0 else u * t0 + (v - u) * tau * (1.0 - math.exp(-t0 / tau))
     rest = dt - t0
     if rest <= 0 or abs(volts) <= threshold:
@@ -576,8 +573,7 @@ def _hac(gains: np.ndarray, tests: Sequence[ScoreTest], sc: Score, weight: float
     from motorlab.estimation.covariance import hac_covariance
 
     ws, wp = 1.0 / sc.speed, math.sqrt(weight) / sc.position
-    # a fit that drove kA to nothing (a log too short to show any inertia: exp(ln kA) underflowed to 0) is taken at
-    # the smallest positive kA, where its column says it is not determined
+    # kA driven to nothing (exp(ln kA) underflowed on a log too short to show inertia): the smallest positive one
     gains = np.array([gains[0], gains[1], max(float(gains[2]), np.finfo(float).tiny)])
     sim = _Simulations(tests).at(np.array([gains[0], math.log(gains[1]), math.log(gains[2])]))
     r0 = np.concatenate([ws * sim.speed, wp * sim.position])
