@@ -1,31 +1,41 @@
 """The output-error simulator's fast paths: one state (the feedforward model) bit for bit, two states (the motor
 model) to rounding, against the general matrix form."""
 
+from collections.abc import Iterator
+
 import numpy as np
 import pytest
 
 from motorlab.estimation.simulator import _Modal, feedforward_plant, motor_plant
 
+FIELDS = ("ad", "bv", "c", "hx", "hv", "hc")
+
+
+def _both_paths(plant, taus: np.ndarray, fast_path: str) -> Iterator[tuple[_Modal, int, float, str, np.ndarray,
+                                                                           np.ndarray]]:
+    """(regime, s, τ, field, the fast path's value, the general path's) for every regime (moving either way, stuck)
+    and step; ``fast_path`` names the flag that selects it (``scalar`` or ``pair``), switched off for the other."""
+    for s in (1, -1, 0):
+        modal = _Modal(plant, s)
+        assert getattr(modal, fast_path)
+        for tau in taus:
+            fast = modal.discrete(float(tau))
+            setattr(modal, fast_path, False)
+            general = modal.discrete(float(tau))
+            setattr(modal, fast_path, True)
+            for name in FIELDS:
+                yield modal, s, float(tau), name, np.asarray(getattr(fast, name)), np.asarray(getattr(general, name))
+
 
 @pytest.mark.parametrize("gains", [(0.34, 0.9455, 18.12), (0.46, 0.0172, 0.0028), (0.1, 2.0, 1e-4), (0.0, 1e-6, 5.0)])
 def test_one_state_steps_are_the_general_steps_bit_for_bit(gains):
-    """Fractional steps of every regime (moving either way, stuck), fast and slow modes, both forms of φ."""
-    plant = feedforward_plant(*gains)
+    """Fractional steps of every regime, fast and slow modes, both forms of φ."""
     taus = np.concatenate([[0.0, 1e-12, 0.01], np.random.default_rng(7).uniform(0.0, 0.02, 300),
                            np.geomspace(1e-9, 10.0, 200)])
-    for s in (1, -1, 0):
-        modal = _Modal(plant, s)
-        assert modal.scalar
-        for tau in taus:
-            fast = modal._discrete_scalar(float(tau))
-            modal.scalar = False
-            general = modal.discrete(float(tau))
-            modal.scalar = True
-            for name in ("ad", "bv", "c", "hx", "hv", "hc"):
-                a, b = np.asarray(getattr(fast, name)), np.asarray(getattr(general, name))
-                # the same numbers bit for bit (a zero's sign aside: the general path's matrix product sums −0 to +0)
-                assert a.shape == b.shape, (s, tau, name)
-                assert (a + 0.0).tobytes() == (b + 0.0).tobytes(), (s, tau, name, a, b)
+    for _modal, s, tau, name, a, b in _both_paths(feedforward_plant(*gains), taus, "scalar"):
+        # the same numbers bit for bit (a zero's sign aside: the general path's matrix product sums −0 to +0)
+        assert a.shape == b.shape, (s, tau, name)
+        assert (a + 0.0).tobytes() == (b + 0.0).tobytes(), (s, tau, name, a, b)
 
 
 @pytest.mark.parametrize("params", [(0.7, 1.18, 6.7e-4, 0.0149, 0.0082, 0.13),  # a NeveRest on a flywheel
@@ -33,23 +43,12 @@ def test_one_state_steps_are_the_general_steps_bit_for_bit(gains):
                                     (0.7, 1.18, 1e-9, 0.0149, 0.0, 0.0)])  # L → 0: a very fast electrical mode
 def test_two_state_steps_are_the_matrix_steps_to_rounding(params):
     """The motor model's fractional steps in Python's complex numbers against the matrix form they write out."""
-    K, R, L, J, b, Tf = params
-    plant = motor_plant(K, R, L, J, b, Tf)
     taus = np.concatenate([[0.0, 1e-12], np.random.default_rng(3).uniform(0.0, 0.002, 100),
                            np.geomspace(1e-9, 1.0, 100)])
-    for s in (1, -1, 0):
-        modal = _Modal(plant, s)
-        assert modal.pair
-        for tau in taus:
-            fast = modal._discrete_pair(float(tau))
-            modal.pair = False
-            general = modal.discrete(float(tau))
-            modal.pair = True
-            # hv, hc are sums over the two modes of terms up to τ²/2·|row·pb| that cancel to O(τ³): rounding
-            # is relative to the terms, not to their sum
-            terms = {"hv": tau**2 / 2 * float(np.sum(np.abs(modal.row * modal.pb))),
-                     "hc": tau**2 / 2 * float(np.sum(np.abs(modal.row * modal.pc)))}
-            for name in ("ad", "bv", "c", "hx", "hv", "hc"):
-                a, b = np.asarray(getattr(fast, name)), np.asarray(getattr(general, name))
-                scale = max(float(np.max(np.abs(b))), terms.get(name, 0.0), 1e-300)
-                assert np.allclose(a, b, rtol=1e-12, atol=1e-12 * scale), (s, tau, name, a, b)
+    for modal, s, tau, name, a, b in _both_paths(motor_plant(*params), taus, "pair"):
+        # hv, hc are sums over the two modes of terms up to τ²/2·|row·pb| that cancel to O(τ³): rounding
+        # is relative to the terms, not to their sum
+        pulls = {"hv": modal.pb, "hc": modal.pc}
+        terms = tau**2 / 2 * float(np.sum(np.abs(modal.row * pulls[name]))) if name in pulls else 0.0
+        scale = max(float(np.max(np.abs(b))), terms, 1e-300)
+        assert np.allclose(a, b, rtol=1e-12, atol=1e-12 * scale), (s, tau, name, a, b)

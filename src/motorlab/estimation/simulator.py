@@ -25,15 +25,13 @@ simulated outputs do too, which finite-difference Jacobians need; no smoothing o
 
 from __future__ import annotations
 
-import cmath
-import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 from scipy import linalg
 
-from motorlab.model import HeldStep, phi_functions, propagate
+from motorlab.model import HeldStep, phi_functions, phi_of, propagate
 
 #: Steps propagated at once after an event (doubling while nothing happens): a propagation costs ~70 µs of calls
 #: whatever its length, and its samples ~5 ns each, so a long first chunk wastes less than short ones cost
@@ -163,8 +161,8 @@ class _Modal:
         2 × 2 arrays that made it 80 µs (a fit locates hundreds of friction events and switches, each a few
         fractional steps)."""
         (l0, l1), ((v00, v01), (v10, v11)), ((i00, i01), (i10, i11)), (b0, b1), (c0, c1), (r0, r1) = self._lists
-        e0, f0, g0 = _phi(l0 * tau)
-        e1, f1, g1 = _phi(l1 * tau)
+        e0, f0, g0 = phi_of(l0 * tau)
+        e1, f1, g1 = phi_of(l1 * tau)
         f0, f1 = tau * f0, tau * f1
         g0, g1 = tau * tau * g0, tau * tau * g1
         ad = np.array([[(v00 * e0 * i00 + v01 * e1 * i10).real, (v00 * e0 * i01 + v01 * e1 * i11).real],
@@ -200,18 +198,6 @@ class _Modal:
         moving = 1.0 if self.s != 0 else 0.0
         return HeldStep(np.array([[e]]), np.array([phi1 * pb]), np.array([phi1 * pc]), np.array([moving * phi1]),
                         moving * (phi2 * pb), moving * (phi2 * pc))
-
-
-def _phi(z: complex) -> tuple[complex, complex, complex]:
-    """e^z, φ₁(z), φ₂(z) of one complex number (:func:`motorlab.model.phi_functions`, the same forms and series)."""
-    e = cmath.exp(z)
-    if abs(z) < 1e-3:
-        return e, 1.0 + z / 2.0 + z * z / 6.0 + z**3 / 24.0, 0.5 + z / 6.0 + z * z / 24.0 + z**3 / 120.0
-    x, y = z.real, z.imag
-    # e^z − 1 without the cancellation near 0: (e^x − 1)·cos y − 2·sin²(y/2) + i·e^x·sin y
-    em1 = complex(math.expm1(x) * math.cos(y) - 2.0 * math.sin(0.5 * y) ** 2, math.exp(x) * math.sin(y)) if y \
-        else complex(math.expm1(x))
-    return e, em1 / z, (em1 - z) / (z * z)
 
 
 #: Decompositions of the plants simulated lately, by regime and exact matrices: a fit simulates one
