@@ -15,8 +15,6 @@ from motorlab import progress
 #: less than this: the point is then within 0.1 standard errors of the minimum, jointly in all parameters (a
 #: further Jacobian, a full simulation per parameter, would move the estimates by less than that).
 CHI2_TOLERANCE = 1e-2
-#: At most this many Broyden updates of the Jacobian in a row before it is computed again.
-BROYDEN_STEPS = 4
 
 
 def _gauss_newton_decrease(h: np.ndarray, g: np.ndarray) -> float:
@@ -55,7 +53,6 @@ def levenberg_marquardt(
     max_iterations: int = 60,
     ftol: float = 1e-7,
     chi2_tol: float = CHI2_TOLERANCE,
-    broyden: bool = True,
 ) -> Solution:
     """Bounded Levenberg–Marquardt on the normal equations (p × p), steps projected onto the bounds.
 
@@ -66,19 +63,12 @@ def levenberg_marquardt(
     point reached would lower it by less than ``chi2_tol`` (:data:`CHI2_TOLERANCE`; residuals in units of
     their noise: the point is then within √chi2_tol standard errors of the minimum, jointly), without
     taking that step.
-
-    With ``broyden``, the Jacobian after an accepted step is the last one corrected by Broyden's rank-one update
-    (J + (Δr − J·Δx)·Δxᵀ/‖Δx‖²: what the step showed of the residuals' change) instead of ``jac`` again (a
-    simulation per parameter); ``jac`` is asked again when no step with the updated one lowers the cost, after
-    :data:`BROYDEN_STEPS` updates in a row, and always before stopping: the tests of convergence and the
-    returned Jacobian (the covariance's) are the exact ones.
     """
     x = np.clip(x0, lower, upper)
     r = fun(x)
     cost = float(r @ r)
     nfev = 1
     j = jac(x)
-    exact, updates = True, 0
     mu = 1e-3
     message = "maximum number of iterations reached"
     success = False
@@ -92,11 +82,7 @@ def levenberg_marquardt(
             # Parameters held at a bound by the gradient stay there (active set): a step computed for all
             # and then clipped would crawl along the bound (a switch on its sample instant, f = 1).
             free = ~(((x <= lower) & (g > 0)) | ((x >= upper) & (g < 0)))
-            near = _gauss_newton_decrease(h[np.ix_(free, free)], g[free]) < chi2_tol
-            if near or (not exact and updates >= BROYDEN_STEPS):
-                if not exact:  # judged with the exact Jacobian only
-                    j, exact, updates = jac(x), True, 0
-                    continue
+            if _gauss_newton_decrease(h[np.ix_(free, free)], g[free]) < chi2_tol:
                 message = "within the tolerance of the minimum (the next step would lower χ² by less than " \
                           f"{chi2_tol:g})"
                 success = True
@@ -118,21 +104,12 @@ def levenberg_marquardt(
                     break
                 mu *= 4.0
             if not accepted:
-                if not exact:  # the updated Jacobian misled the step: the exact one, and the damping it had
-                    j, exact, updates = jac(x), True, 0
-                    mu = 1e-3
-                    continue
                 message = "no step lowers the cost"
                 success = True  # at a (local) minimum to the precision of the simulation
                 break
             drop = (cost - cost_new) / max(cost, 1e-300)
-            moved = x_new - x
-            if broyden and drop >= ftol:
-                j = j + np.outer(r_new - r - j @ moved, moved) / float(moved @ moved)
-                exact, updates = False, updates + 1
             x, r, cost = x_new, r_new, cost_new
-            if not broyden or drop < ftol:
-                j, exact, updates = jac(x), True, 0
+            j = jac(x)
             mu = max(mu / 3.0, 1e-9)
             if drop < ftol:
                 message = "relative cost reduction below tolerance"
