@@ -305,9 +305,11 @@ def phi_functions(z: np.ndarray | complex | float) -> tuple[np.ndarray, np.ndarr
         return np.exp(z), em1 / z, (em1 - z) / (z * z)
     zs = np.where(small, 1.0, z)
     em1 = np.expm1(zs)
-    series1, series2 = _phi_series(z)
-    phi1 = np.where(small, series1, em1 / zs)
-    phi2 = np.where(small, series2, (em1 - zs) / (zs * zs))
+    phi1, phi2 = em1 / zs, (em1 - zs) / (zs * zs)
+    if phi1.ndim == 0:
+        series1, series2 = _phi_series(z)
+        return np.exp(z), np.where(small, series1, phi1), np.where(small, series2, phi2)
+    phi1[small], phi2[small] = _phi_series(z[small])  # the series where they are needed only (z³ costs)
     return np.exp(z), phi1, phi2
 
 

@@ -207,34 +207,43 @@ def stall_response(
     z1 = float(winv[0, 0] * (winding - ta) + winv[0, 1] * (tc0 - ta))
     z2 = float(winv[1, 0] * (winding - ta) + winv[1, 1] * (tc0 - ta))
     t_arr = np.asarray(time, dtype=float)
+    n = t_arr.size
     h_arr = np.diff(t_arr)
     e1, e2 = np.exp(lam1 * h_arr), np.exp(lam2 * h_arr)
-    steps = zip(h_arr.tolist(), e1.tolist(), e2.tolist(), ((e1 - 1.0) / lam1 * g[0]).tolist(),
-                ((e2 - 1.0) / lam2 * g[1]).tolist(), strict=True)
-    v = np.asarray(voltage, dtype=float).tolist()
-    n = t_arr.size
-    cur, tws, tcs = [0.0] * n, [0.0] * n, [0.0] * n
-    limit = math.inf if current_limit is None else float(current_limit)
+    # In the modal coordinates z the resistance is affine, R = r0 + q1·z1 + q2·z2, and so is the winding's flow to
+    # the case, (T_w − T_c)/R_wc = d1·z1 + d2·z2; R at the predicted midpoint is R + (∂R/∂T_w)·ΔT_w.
     r25, tref, rs = float(resistance), REFERENCE_TEMPERATURE, float(series_resistance)
-    for k in range(n):
-        tw = ta + w00 * z1 + w01 * z2
-        tc = ta + w10 * z1 + w11 * z2
-        r = r25 * (1.0 + alpha * (tw - tref)) + rs
-        i = v[k] / r
+    slope = r25 * alpha
+    r0 = r25 * (1.0 + alpha * (ta - tref)) + rs
+    q1, q2 = slope * w00, slope * w01
+    d1, d2 = (w00 - w10) / rwc, (w01 - w11) / rwc
+    steps = zip(np.asarray(voltage, dtype=float)[: max(n - 1, 0)].tolist(), (0.5 * slope / cw * h_arr).tolist(),
+                e1.tolist(), e2.tolist(), ((e1 - 1.0) / lam1 * g[0]).tolist(), ((e2 - 1.0) / lam2 * g[1]).tolist(),
+                strict=True)
+    limit = math.inf if current_limit is None else float(current_limit)
+    zs1, zs2, cur = [z1], [z2], []
+    for vk, half, a1, a2, b1, b2 in steps:
+        r = r0 + q1 * z1 + q2 * z2
+        i = vk / r
         if i > limit:
             i = limit
-        cur[k], tws[k], tcs[k] = i, tw, tc
-        if k == n - 1:
-            break
-        h, a1, a2, b1, b2 = next(steps)
-        tw_mid = tw + 0.5 * h * (i * i * r - (tw - tc) / rwc) / cw
-        r_mid = r25 * (1.0 + alpha * (tw_mid - tref)) + rs
-        i_mid = v[k] / r_mid
+        cur.append(i)
+        r_mid = r + half * (i * i * r - d1 * z1 - d2 * z2)
+        i_mid = vk / r_mid
         if i_mid > limit:
             i_mid = limit
         p = i_mid * i_mid * r_mid
         z1 = a1 * z1 + b1 * p
         z2 = a2 * z2 + b2 * p
+        zs1.append(z1)
+        zs2.append(z2)
+    if n:
+        i = float(voltage[n - 1]) / (r0 + q1 * z1 + q2 * z2)
+        cur.append(min(i, limit))
+    else:
+        zs1, zs2 = [], []
+    m1, m2 = np.asarray(zs1), np.asarray(zs2)
+    tws, tcs = ta + w00 * m1 + w01 * m2, ta + w10 * m1 + w11 * m2
     return StallRun(t_arr, np.asarray(cur), np.asarray(tws), np.asarray(tcs))
 
 
