@@ -76,15 +76,34 @@ def _ff_advance(
 class _FeedforwardPlant:
     def __init__(self, ff: Feedforward):
         self.ff = ff
+        self._decay: tuple[float, float] = (math.nan, math.nan)
 
-    def run(self, state: tuple[float, float, float], volts: float, period: float, substeps: int) -> np.ndarray:
-        """States (position, speed, current=nan) at the ``substeps`` points after ``state``."""
+    def run(self, state: tuple[float, float, float], volts: float, period: float,
+            substeps: int) -> list[tuple[float, float, float]]:
+        """States (position, speed, current=nan) at the ``substeps`` points after ``state``.
+
+        A substep that moves on without stopping is :func:`_ff_advance`'s last branch written out, with its
+        e^(−h/τ) computed once per run (the same numbers); a stop, a start or a standstill goes through it.
+        """
         x, v, _ = state
-        out = np.empty((substeps, 3))
+        kS, kV, kA = self.ff.kS, self.ff.kV, self.ff.kA
         h = period / substeps
-        for j in range(substeps):
-            x, v = _ff_advance(x, v, volts, h, self.ff.kS, self.ff.kV, self.ff.kA)
-            out[j] = x, v, math.nan
+        tau = kA / kV
+        if self._decay[0] != h:
+            self._decay = (h, math.exp(-h / tau))
+        e = self._decay[1]
+        out = []
+        for _ in range(substeps):
+            if v != 0.0:
+                s = 1.0 if v > 0 else -1.0
+                v_inf = (volts - kS * s) / kV
+                if not (v_inf * s < 0 or v_inf == 0.0):
+                    x += v_inf * h + (v - v_inf) * tau * (1 - e)
+                    v = v_inf + (v - v_inf) * e
+                    out.append((x, v, math.nan))
+                    continue
+            x, v = _ff_advance(x, v, volts, h, kS, kV, kA)
+            out.append((x, v, math.nan))
         return out
 
 
@@ -92,14 +111,15 @@ class _MotorPlant:
     def __init__(self, params: MotorParams):
         self.params = params
 
-    def run(self, state: tuple[float, float, float], volts: float, period: float, substeps: int) -> np.ndarray:
+    def run(self, state: tuple[float, float, float], volts: float, period: float,
+            substeps: int) -> list[tuple[float, float, float]]:
         from motorlab.model.simulate import State, VoltageDrive, simulate
 
         x, v, i = state
         sim = simulate(
             self.params, VoltageDrive(volts), duration=period, dt=period / substeps, initial=State(i, v, x)
         )
-        return np.column_stack([sim.position[1:], sim.speed[1:], sim.current[1:]])
+        return list(zip(sim.position[1:].tolist(), sim.speed[1:].tolist(), sim.current[1:].tolist(), strict=True))
 
 
 def _plant_for(plant: MotorParams | Feedforward) -> _FeedforwardPlant | _MotorPlant:
@@ -483,22 +503,24 @@ def _run_controller(
     n = n_periods * substeps
     h = period / substeps
     time = np.arange(n + 1) * h
-    states = np.empty((n + 1, 3))
-    states[0] = 0.0, 0.0, 0.0
-    volts = np.empty(n + 1)
+    # the dense grid in Python lists (the loop reads and writes one point at a time; numpy's scalars cost more)
+    states: list[tuple[float, float, float]] = [(0.0, 0.0, 0.0)]
+    volts: list[float] = []
     counts_per_rad = None if cpr is None else cpr / (2 * math.pi)
 
     def measured(t: float) -> tuple[float, float]:
         """(position, speed) seen by the controller for the instant t (already delayed)."""
         if t <= 0:
-            x, v = float(states[0, 0]), float(states[0, 1])
+            x, v = states[0][0], states[0][1]
         else:
             # Linear interpolation on the dense grid; t never lies beyond the last filled point.
+            filled = len(states) - 1
             u = min(t / h, float(filled))
             j = min(int(u), max(filled - 1, 0))
             w = u - j
-            x = float((1 - w) * states[j, 0] + w * states[j + 1, 0])
-            v = float((1 - w) * states[j, 1] + w * states[j + 1, 1])
+            (x0, v0, _), (x1, v1, _) = states[j], states[j + 1]
+            x = (1 - w) * x0 + w * x1
+            v = (1 - w) * v0 + w * v1
         if counts_per_rad is not None:
             x = math.floor(x * counts_per_rad + 1e-9) / counts_per_rad
         return x, v
@@ -506,8 +528,8 @@ def _run_controller(
     loop = gains.loop
     integral = 0.0
     prev_error: float | None = None
-    filled = 0
     prev_pos = measured(-delay)[0]
+    k_s, k_v, k_a = feedforward.kS, feedforward.kV, feedforward.kA
     for k in range(n_periods):
         t_k = k * period
         pos_m, vel_m = measured(t_k - delay)
@@ -518,25 +540,20 @@ def _run_controller(
         if law == "roadrunner":
             u = min(max(_roadrunner_volts(gains, feedforward, (r_pos, r_vel, r_acc), pos_m, vel_m), -voltage),
                     voltage)
-            block = sim.run(tuple(states[filled]), u, period, substeps)
-            states[filled + 1 : filled + 1 + substeps] = block
-            volts[filled : filled + substeps] = u
-            filled += substeps
-            continue
-        error = (r_vel - vel_m) if loop == "velocity" else (r_pos - pos_m)
-        derivative = 0.0 if prev_error is None else (error - prev_error) / period
-        prev_error = error
-        ff = feedforward.kS * np.sign(r_vel) + feedforward.kV * r_vel + feedforward.kA * r_acc
-        unclamped = ff + gains.kP * error + gains.kI * (integral + error * period) + gains.kD * derivative
-        u = min(max(unclamped, -voltage), voltage)
-        if u == unclamped or (unclamped > voltage) != (error > 0):
-            integral += error * period
-        block = sim.run(tuple(states[filled]), u, period, substeps)
-        states[filled + 1 : filled + 1 + substeps] = block
-        volts[filled : filled + substeps] = u
-        filled += substeps
-    volts[-1] = volts[-2] if n > 0 else 0.0
-    return time, states, volts
+        else:
+            error = (r_vel - vel_m) if loop == "velocity" else (r_pos - pos_m)
+            derivative = 0.0 if prev_error is None else (error - prev_error) / period
+            prev_error = error
+            sign = (r_vel > 0) - (r_vel < 0) if r_vel == r_vel else math.nan  # np.sign's, NaN kept
+            ff = k_s * sign + k_v * r_vel + k_a * r_acc
+            unclamped = ff + gains.kP * error + gains.kI * (integral + error * period) + gains.kD * derivative
+            u = min(max(unclamped, -voltage), voltage)
+            if u == unclamped or (unclamped > voltage) != (error > 0):
+                integral += error * period
+        states += sim.run(states[-1], u, period, substeps)
+        volts += [u] * substeps
+    volts.append(volts[-1] if n > 0 else 0.0)
+    return time, np.array(states, dtype=float).reshape(n + 1, 3), np.array(volts, dtype=float)
 
 
 def _roadrunner_volts(gains: Gains, ff: Feedforward, ref: tuple[float, float, float], position: float,
