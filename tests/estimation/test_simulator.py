@@ -52,3 +52,27 @@ def test_two_state_steps_are_the_matrix_steps_to_rounding(params):
         terms = tau**2 / 2 * float(np.sum(np.abs(modal.row * pulls[name]))) if name in pulls else 0.0
         scale = max(float(np.max(np.abs(b))), terms, 1e-300)
         assert np.allclose(a, b, rtol=1e-12, atol=1e-12 * scale), (s, tau, name, a, b)
+
+
+@pytest.mark.parametrize("params", [(0.7, 1.18, 6.7e-4, 0.0149, 0.0082, 0.13), (0.02, 0.09, 5e-5, 1e-5, 1e-6, 1e-3),
+                                    (0.7, 1.18, 1e-9, 0.0149, 0.0, 0.0)])
+def test_an_events_function_is_the_stepped_state_to_rounding(params):
+    """What an event's location asks at each fraction of a step (the speed moving, the drive's margin stuck), from
+    the modes directly, against the same number from the step's matrices."""
+    from motorlab.estimation.simulator import _flow, _Regimes
+
+    plant = motor_plant(*params)
+    reg = _Regimes(plant, 1e-3)
+    rng = np.random.default_rng(11)
+    for mode in (1, -1, 0):
+        for _ in range(40):
+            x = rng.normal(size=2) * [2.0, 30.0]
+            if mode == 0:
+                x[1] = 0.0
+            v, tau = float(rng.uniform(-12, 12)), float(rng.choice([1e-3, 2.5e-4, 1e-7]))
+            fast = reg.event_function(mode, x, v, tau)
+            for frac in (0.0, 1e-9, 0.3, 0.77, 1.0):
+                xm, _ = _flow(reg.modal(mode).discrete(frac * tau), x, v)
+                exact = float(xm[1]) if mode else abs(float(reg.drive(xm, v))) - reg.f_level
+                scale = float(np.max(np.abs(reg.modal(mode).vec))) * (np.sum(np.abs(x)) + abs(v) * tau * 1e4) + 1.0
+                assert fast(frac) == pytest.approx(exact, rel=1e-10, abs=1e-11 * scale), (mode, frac, x, v, tau)

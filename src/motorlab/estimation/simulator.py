@@ -178,6 +178,27 @@ class _Modal:
         hc = (r0 * g0 * c0 + r1 * g1 * c1).real
         return HeldStep(ad, bv, c, hx, hv, hc)
 
+    def along(self, x: np.ndarray, v: float, weights: np.ndarray) -> Callable[[float], float] | None:
+        """τ ↦ weights·x(τ), the state reached from ``x`` after τ [s] of the held input ``v``, for a two-state plant
+        (None otherwise): the sum over the two modes of (weights·p_i)·(e^{λ_i τ}·z_i + τφ₁(λ_i τ)·(b_i·v + c_i)),
+        z = P⁻¹·x, in Python's complex numbers. The same number as ``weights @ _flow(discrete(τ), x, v)[0]`` to
+        rounding, without a step's matrices: an event's location asks for it up to ten times a step."""
+        if not self.pair:
+            return None
+        (l0, l1), ((v00, v01), (v10, v11)), ((i00, i01), (i10, i11)), (b0, b1), (c0, c1), _ = self._lists
+        w0, w1 = float(weights[0]), float(weights[1])
+        x0, x1 = float(x[0]), float(x[1])
+        a0, a1 = w0 * v00 + w1 * v10, w0 * v01 + w1 * v11  # weights·p_i
+        z0, z1 = i00 * x0 + i01 * x1, i10 * x0 + i11 * x1
+        q0, q1 = b0 * v + c0, b1 * v + c1
+
+        def value(tau: float) -> float:
+            e0, f0, _ = phi_of(l0 * tau)
+            e1, f1, _ = phi_of(l1 * tau)
+            return (a0 * (e0 * z0 + tau * f0 * q0) + a1 * (e1 * z1 + tau * f1 * q1)).real
+
+        return value
+
     def _discrete_scalar(self, tau: float) -> HeldStep:
         """:meth:`discrete` of a one-state plant in floats: the same operations on the same numbers (numpy's exp,
         expm1 and power, then correctly rounded sums, products and quotients in the same order), so the same numbers
@@ -311,6 +332,28 @@ class _Regimes:
         acc = xs @ plant.a[w] - (xs[..., w] * plant.a[w, w]) + plant.b_drive[w] * v
         return acc
 
+    def event_function(self, mode: int, x: np.ndarray, v: float, tau: float) -> Callable[[float], float]:
+        """frac ↦ the event function after frac·τ of the held input v from x in regime ``mode``: the speed when
+        moving, the drive margin |drive| − F when stuck (what :func:`_locate` finds the zero of)."""
+        w, f_level, modal = self.w, self.f_level, self.modal(mode)
+        if mode != 0:
+            weights, offset = np.eye(self.plant.n)[w], 0.0
+        else:  # drive(x, v): row w of A·x without the ω term, plus b_V·v
+            weights = self.plant.a[w].copy()
+            weights[w] = 0.0
+            offset = float(self.plant.b_drive[w]) * v
+        fast = modal.along(x, v, weights)
+        if fast is not None:
+            if mode != 0:
+                return lambda frac: fast(frac * tau)
+            return lambda frac: abs(fast(frac * tau) + offset) - f_level
+
+        def event_value(frac: float) -> float:
+            xm, _ = _flow(modal.discrete(frac * tau), x, v)
+            return float(xm[w]) if mode != 0 else abs(float(self.drive(xm, v))) - f_level
+
+        return event_value
+
     def new_mode(self, xs: np.ndarray, v: float) -> int:
         """Regime a shaft at rest enters: stuck while the drive does not exceed the friction level."""
         acc = float(self.drive(xs, v))
@@ -425,15 +468,8 @@ def _event_step(reg: _Regimes, x: np.ndarray, mode: int, vk: float, f0: float,
     when moving, the drive margin |drive| − F when stuck. Returns the state at the step's end, the
     angle increment over the step and the new regime.
     """
-    dt, w, f_level = reg.dt, reg.w, reg.f_level
-    x_start = x
-
-    def event_value(frac: float, _mode: int = mode, _x: np.ndarray = x_start, _v: float = vk) -> float:
-        xm, _ = _flow(reg.modal(_mode).discrete(frac * dt), _x, _v)
-        if _mode != 0:
-            return float(xm[w])
-        return abs(float(reg.drive(xm, _v))) - f_level
-
+    dt, w = reg.dt, reg.w
+    event_value = reg.event_function(mode, x, vk, dt)
     if mode != 0:
         frac = _locate(event_value, f0, f1)
     else:
@@ -473,11 +509,7 @@ def _advance(reg: _Regimes, x: np.ndarray, mode: int, v: float, tau: float) -> t
             return x1, d1, 0
         f0 = abs(float(reg.drive(x, v))) - f_level
 
-    def event_value(frac: float) -> float:
-        xm, _ = _flow(reg.modal(mode).discrete(frac * tau), x, v)
-        return float(xm[w]) if mode != 0 else abs(float(reg.drive(xm, v))) - f_level
-
-    frac = _locate(event_value, f0, f1)
+    frac = _locate(reg.event_function(mode, x, v, tau), f0, f1)
     x_mid, d_mid = _flow(reg.modal(mode).discrete(frac * tau), x, v) if frac > 0 else (x, 0.0)
     if mode != 0:
         x_mid = x_mid.copy()
