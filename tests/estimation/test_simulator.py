@@ -76,3 +76,23 @@ def test_an_events_function_is_the_stepped_state_to_rounding(params):
                 exact = float(xm[1]) if mode else abs(float(reg.drive(xm, v))) - reg.f_level
                 scale = float(np.max(np.abs(reg.modal(mode).vec))) * (np.sum(np.abs(x)) + abs(v) * tau * 1e4) + 1.0
                 assert fast(frac) == pytest.approx(exact, rel=1e-10, abs=1e-11 * scale), (mode, frac, x, v, tau)
+
+
+@pytest.mark.parametrize("params", [(0.7, 1.18, 6.7e-4, 0.0149, 0.0082, 0.13), (0.02, 0.09, 5e-5, 1e-5, 1e-6, 1e-3),
+                                    (0.7, 1.18, 1e-9, 0.0149, 0.0, 0.0)])
+def test_a_part_of_a_step_from_the_modes_is_the_matrix_step_to_rounding(params):
+    """A drive switch's or an event's part of a step (state and angle) from the modes, against the step's matrices."""
+    from motorlab.estimation.simulator import _flow
+
+    rng = np.random.default_rng(5)
+    for s in (1, -1, 0):
+        modal = _Modal(motor_plant(*params), s)
+        for tau in np.concatenate([[0.0, 1e-12], rng.uniform(0.0, 2e-3, 60), np.geomspace(1e-9, 1.0, 30)]):
+            x, v = rng.normal(size=2) * [2.0, 30.0], float(rng.uniform(-12, 12))
+            got, turned = modal.flow(x, v, float(tau))
+            step = modal.discrete(float(tau))
+            want, angle = _flow(step, x, v)
+            size = np.abs(modal.vec) @ (np.abs(modal.inv) @ np.abs(x) + tau * np.abs(modal.pb * v + modal.pc))
+            assert np.allclose(got, want, rtol=1e-11, atol=1e-11 * float(np.max(size))), (s, tau, got, want)
+            terms = float(np.sum(np.abs(modal.row) * (tau * np.abs(modal.inv @ x) + tau**2 * np.abs(modal.pb * v))))
+            assert turned == pytest.approx(angle, rel=1e-10, abs=1e-11 * terms + 1e-300), (s, tau, turned, angle)

@@ -178,6 +178,24 @@ class _Modal:
         hc = (r0 * g0 * c0 + r1 * g1 * c1).real
         return HeldStep(ad, bv, c, hx, hv, hc)
 
+    def flow(self, x: np.ndarray, v: float, tau: float) -> tuple[np.ndarray, float]:
+        """``_flow(discrete(τ), x, v)``: the state and the angle's increment after τ [s] of the held input v. For a
+        two-state plant from the modes directly, x(τ) = Σ_i p_i·(e^{λ_i τ}·z_i + τφ₁(λ_i τ)·q_i) and
+        Δθ = Σ_i r_i·(τφ₁·z_i + τ²φ₂·q_i), z = P⁻¹·x, q = P⁻¹·(b_V·v + c), r = P's speed row (the same numbers
+        to rounding, without the step's matrices: a drive switch inside a step and an event take a few)."""
+        if not self.pair:
+            return _flow(self.discrete(tau), x, v)
+        (l0, l1), ((v00, v01), (v10, v11)), ((i00, i01), (i10, i11)), (b0, b1), (c0, c1), (r0, r1) = self._lists
+        x0, x1 = float(x[0]), float(x[1])
+        z0, z1 = i00 * x0 + i01 * x1, i10 * x0 + i11 * x1
+        q0, q1 = b0 * v + c0, b1 * v + c1
+        e0, f0, g0 = phi_of(l0 * tau)
+        e1, f1, g1 = phi_of(l1 * tau)
+        m0, m1 = e0 * z0 + tau * f0 * q0, e1 * z1 + tau * f1 * q1
+        dth = (r0 * (tau * f0 * z0 + tau * tau * g0 * q0) + r1 * (tau * f1 * z1 + tau * tau * g1 * q1)).real \
+            if self.s != 0 else 0.0
+        return np.array([(v00 * m0 + v01 * m1).real, (v10 * m0 + v11 * m1).real]), dth
+
     def along(self, x: np.ndarray, v: float, weights: np.ndarray) -> Callable[[float], float] | None:
         """τ ↦ weights·x(τ), the state reached from ``x`` after τ [s] of the held input ``v``, for a two-state plant
         (None otherwise): the sum over the two modes of (weights·p_i)·(e^{λ_i τ}·z_i + τφ₁(λ_i τ)·(b_i·v + c_i)),
@@ -475,7 +493,7 @@ def _event_step(reg: _Regimes, x: np.ndarray, mode: int, vk: float, f0: float,
     else:
         frac = 0.0 if f0 > 0 else _locate(event_value, f0, f1)
     frac = min(max(frac, 0.0), 1.0)
-    x_mid, dth_mid = _flow(reg.modal(mode).discrete(frac * dt), x, vk) if frac > 0 else (x, 0.0)
+    x_mid, dth_mid = reg.modal(mode).flow(x, vk, frac * dt) if frac > 0 else (x, 0.0)
     if mode != 0:
         x_mid = x_mid.copy()
         x_mid[w] = 0.0
@@ -485,7 +503,7 @@ def _event_step(reg: _Regimes, x: np.ndarray, mode: int, vk: float, f0: float,
         nxt = reg.new_mode(x_mid, vk)
     if nxt == mode:  # interpolation put the event at the very end: finish the step in the old regime
         nxt = 0 if mode != 0 else nxt
-    x_end, dth_end = _flow(reg.modal(nxt).discrete((1.0 - frac) * dt), x_mid, vk) if frac < 1 else (x_mid, 0.0)
+    x_end, dth_end = reg.modal(nxt).flow(x_mid, vk, (1.0 - frac) * dt) if frac < 1 else (x_mid, 0.0)
     if nxt != 0 and nxt * x_end[w] < 0:  # broke away and stopped again within the step
         x_end, dth_end, nxt = _stuck_rest(reg, x_mid, vk, (1.0 - frac) * dt)
     return np.asarray(x_end, dtype=float).copy(), dth_mid + dth_end, nxt
@@ -498,7 +516,7 @@ def _advance(reg: _Regimes, x: np.ndarray, mode: int, v: float, tau: float) -> t
         return x, 0.0, mode
     if mode == 0 and abs(float(reg.drive(x, v))) > f_level:  # break-away at once (the drive just changed)
         mode = 1 if float(reg.drive(x, v)) > 0 else -1
-    x1, d1 = _flow(reg.modal(mode).discrete(tau), x, v)
+    x1, d1 = reg.modal(mode).flow(x, v, tau)
     if mode != 0:
         if mode * x1[w] > 0:
             return x1, d1, mode
@@ -510,14 +528,14 @@ def _advance(reg: _Regimes, x: np.ndarray, mode: int, v: float, tau: float) -> t
         f0 = abs(float(reg.drive(x, v))) - f_level
 
     frac = _locate(reg.event_function(mode, x, v, tau), f0, f1)
-    x_mid, d_mid = _flow(reg.modal(mode).discrete(frac * tau), x, v) if frac > 0 else (x, 0.0)
+    x_mid, d_mid = reg.modal(mode).flow(x, v, frac * tau) if frac > 0 else (x, 0.0)
     if mode != 0:
         x_mid = x_mid.copy()
         x_mid[w] = 0.0
         nxt = reg.new_mode(x_mid, v)
     else:
         nxt = 1 if float(reg.drive(x_mid, v)) > 0 else -1
-    x_end, d_end = _flow(reg.modal(nxt).discrete((1.0 - frac) * tau), x_mid, v) if frac < 1 else (x_mid, 0.0)
+    x_end, d_end = reg.modal(nxt).flow(x_mid, v, (1.0 - frac) * tau) if frac < 1 else (x_mid, 0.0)
     if nxt != 0 and nxt * x_end[w] < 0:  # broke away and stopped again within the part
         x_end, d_end, nxt = _stuck_rest(reg, x_mid, v, (1.0 - frac) * tau)
     return np.asarray(x_end, dtype=float), d_mid + d_end, nxt
@@ -536,5 +554,5 @@ def _stuck_rest(reg: _Regimes, x: np.ndarray, v: float, tau: float) -> tuple[np.
     """
     x = np.array(x, dtype=float)
     x[reg.w] = 0.0
-    x_end, _ = _flow(reg.modal(0).discrete(tau), x, v)
+    x_end, _ = reg.modal(0).flow(x, v, tau)
     return x_end, 0.0, 0
