@@ -183,7 +183,7 @@ def map_in_processes(fn: Callable[[Any], Any], items: Sequence[Any], *, processe
         while len(found) < len(items):
             _relay(messages, on_message)
             try:
-                index, result = pending.next(timeout=0.1)
+                index, result = pending.next(timeout=0.02)
             except multiprocessing.TimeoutError:
                 continue
             found[index] = result

@@ -29,6 +29,9 @@ import sys
 
 def preload() -> None:
     """Import what the app's commands use (the parser, the analyses, the report's plotting)."""
+    import importlib
+    import pkgutil
+
     import matplotlib
 
     matplotlib.use("Agg")
@@ -54,6 +57,8 @@ def preload() -> None:
     import motorlab.ui.worker
 
     motorlab.cli.build_parser()  # imports every sub-command's module and the experiment descriptions
+    for module in pkgutil.iter_modules(motorlab.analyses.__path__):  # the analyses their commands import when run
+        importlib.import_module(f"motorlab.analyses.{module.name}")  # (once here, not once per session's unit)
     from motorlab.units import registry
 
     registry()  # pint's unit registry: parsing its definitions takes longer than most analyses
