@@ -104,7 +104,9 @@ def test_session_zip_and_loose_files(page: Any, sim_session: Path, truth: dict[s
     page.wait_text("all chosen")
     page.click("Run the session")
     page.wait_text("Each unit's parameters", 180)
-    table = page.d.find_element("xpath", "//table[caption[contains(., \"Each unit's parameters\")]]").text
+    # read in one step, found again if the view was redrawn in between (the report arriving after the table)
+    table = page.wait(lambda: page.text(page.d.find_element("xpath", "//table[caption[contains(., \"Each unit's "
+                                                             "parameters\")]]")), "the units' table")
     assert "ok" in table
     page.check()
     page.d.set_window_size(*browser.LAPTOP)
