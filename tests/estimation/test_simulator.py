@@ -96,3 +96,30 @@ def test_a_part_of_a_step_from_the_modes_is_the_matrix_step_to_rounding(params):
             assert np.allclose(got, want, rtol=1e-11, atol=1e-11 * float(np.max(size))), (s, tau, got, want)
             terms = float(np.sum(np.abs(modal.row) * (tau * np.abs(modal.inv @ x) + tau**2 * np.abs(modal.pb * v))))
             assert turned == pytest.approx(angle, rel=1e-10, abs=1e-11 * terms + 1e-300), (s, tau, turned, angle)
+
+
+def test_each_regimes_decomposition_gives_the_matrix_exponentials_steps():
+    """The closed-form 2 × 2 decomposition (stiff, complex, slow and stuck regimes) against scipy's expm of the same
+    regime's augmented matrix: every matrix of a step, to rounding."""
+    from motorlab.estimation.simulator import _discretise_expm, _eig2
+
+    rng = np.random.default_rng(17)
+    plants = [motor_plant(0.7, 1.18, 6.7e-4, 0.0149, 0.0082, 0.13), motor_plant(0.02, 0.09, 5e-5, 1e-5, 1e-6, 1e-3),
+              motor_plant(0.7, 1.18, 1e-6, 0.0149, 0.0, 0.0), motor_plant(0.37, 1.16, 6.6e-4, 1.2e-4, 2.5e-5, 0.011)]
+    ranges = np.log([(0.005, 2), (0.05, 20), (1e-6, 1e-2), (1e-6, 0.1), (1e-7, 1e-2), (1e-4, 0.5)])
+    plants += [motor_plant(*np.exp(rng.uniform(ranges[:, 0], ranges[:, 1]))) for _ in range(30)]
+    for plant in plants:
+        for s in (1, -1, 0):
+            modal = _Modal(plant, s)
+            lam, vec = _eig2(modal.a)
+            for j in range(2):  # A·v = λ·v to rounding of A·v's terms
+                size = float(np.abs(modal.a).max() * np.abs(vec[:, j]).max())
+                assert np.abs(modal.a @ vec[:, j] - lam[j] * vec[:, j]).max() <= 1e-13 * size, (plant, s, lam, vec)
+            if not modal.ok:
+                continue
+            for tau in (1e-3, 2.7e-4, 1e-6):
+                fast, exact = modal.discrete(tau), _discretise_expm(plant, s, tau)
+                for name in FIELDS:
+                    a, b = np.asarray(getattr(fast, name)), np.asarray(getattr(exact, name))
+                    assert np.allclose(a, b, rtol=1e-8, atol=1e-9 * max(float(np.max(np.abs(b))), 1e-300)), \
+                        (plant, s, tau, name, a, b)
