@@ -205,6 +205,12 @@ class _Modal:
         hc = (r0 * g0 * c0 + r1 * g1 * c1).real
         return HeldStep(ad, bv, c, hx, hv, hc)
 
+    def _coordinates(self, x: np.ndarray, v: float) -> tuple[complex, complex, complex, complex]:
+        """(z₀, z₁, q₀, q₁): the state and the held input's effect in the modes, z = P⁻¹·x, q = P⁻¹·(b_V·v + c)."""
+        _, _, ((i00, i01), (i10, i11)), (b0, b1), (c0, c1), _ = self._lists
+        x0, x1 = float(x[0]), float(x[1])
+        return i00 * x0 + i01 * x1, i10 * x0 + i11 * x1, b0 * v + c0, b1 * v + c1
+
     def flow(self, x: np.ndarray, v: float, tau: float) -> tuple[np.ndarray, float]:
         """``_flow(discrete(τ), x, v)``: the state and the angle's increment after τ [s] of the held input v. For a
         two-state plant from the modes directly, x(τ) = Σ_i p_i·(e^{λ_i τ}·z_i + τφ₁(λ_i τ)·q_i) and
@@ -212,10 +218,8 @@ class _Modal:
         to rounding, without the step's matrices: a drive switch inside a step and an event take a few)."""
         if not self.pair:
             return _flow(self.discrete(tau), x, v)
-        (l0, l1), ((v00, v01), (v10, v11)), ((i00, i01), (i10, i11)), (b0, b1), (c0, c1), (r0, r1) = self._lists
-        x0, x1 = float(x[0]), float(x[1])
-        z0, z1 = i00 * x0 + i01 * x1, i10 * x0 + i11 * x1
-        q0, q1 = b0 * v + c0, b1 * v + c1
+        (l0, l1), ((v00, v01), (v10, v11)), _, _, _, (r0, r1) = self._lists
+        z0, z1, q0, q1 = self._coordinates(x, v)
         e0, f0, g0 = phi_of(l0 * tau)
         e1, f1, g1 = phi_of(l1 * tau)
         m0, m1 = e0 * z0 + tau * f0 * q0, e1 * z1 + tau * f1 * q1
@@ -230,12 +234,10 @@ class _Modal:
         rounding, without a step's matrices: an event's location asks for it up to ten times a step."""
         if not self.pair:
             return None
-        (l0, l1), ((v00, v01), (v10, v11)), ((i00, i01), (i10, i11)), (b0, b1), (c0, c1), _ = self._lists
+        (l0, l1), ((v00, v01), (v10, v11)), _, _, _, _ = self._lists
         w0, w1 = float(weights[0]), float(weights[1])
-        x0, x1 = float(x[0]), float(x[1])
         a0, a1 = w0 * v00 + w1 * v10, w0 * v01 + w1 * v11  # weights·p_i
-        z0, z1 = i00 * x0 + i01 * x1, i10 * x0 + i11 * x1
-        q0, q1 = b0 * v + c0, b1 * v + c1
+        z0, z1, q0, q1 = self._coordinates(x, v)
 
         def value(tau: float) -> float:
             e0, f0, _ = phi_of(l0 * tau)
