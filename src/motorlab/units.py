@@ -241,3 +241,29 @@ def format_percent(fraction: float, spec: str = ".2f") -> str:
 def format_unit(unit: str) -> str:
     """A unit string as printed for people: ``"N*m*s/rad"`` -> ``"N·m·s/rad"``."""
     return unit.replace("**", "^").replace("*", "·").replace("^2", "²").replace("ohm", "Ω")
+
+
+def format_value(value: float, stderr: float, *, scale: float = 1.0) -> str:
+    """``"0.3712 ± 0.0021"``: the value to the precision of its standard error (2 significant digits).
+
+    Parameters
+    ----------
+    value, stderr
+        In SI.
+    scale
+        Display scale (1e6 for µH).
+    """
+    if not math.isfinite(value):
+        return "—"
+    v = value * scale
+    if not (math.isfinite(stderr) and stderr > 0):
+        return f"{v:.4g}"
+    s = stderr * scale
+    exponent = math.floor(math.log10(abs(s))) - 1
+    decimals = max(-exponent, 0)
+    if abs(v) >= 1e5 or decimals > 6:
+        # Scientific notation, the mantissa's digits set by the error: 7.865(11)e-5.
+        e = math.floor(math.log10(abs(v))) if v != 0 else 0
+        digits = max(e - exponent, 1)
+        return f"{v / 10**e:.{digits}f}({s / 10**exponent:.0f})e{e:+d}".replace("e+", "e")
+    return f"{v:.{decimals}f} ± {s:.{decimals}f}"

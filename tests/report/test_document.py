@@ -10,10 +10,11 @@ from pathlib import Path
 
 import pytest
 
-from motorlab.report.document import format_value, image_sources, render_report, write_report
+from motorlab.report.document import image_sources, render_report, write_report
 from motorlab.session.characterize import characterize
 from motorlab.session.simulated import write_simulated_session
 from motorlab.session.spec import load_session
+from motorlab.units import format_value
 
 ROOT = Path(__file__).resolve().parents[2]
 CHROMIUM = shutil.which("chromium") or ("/usr/bin/chromium" if Path("/usr/bin/chromium").exists() else None)

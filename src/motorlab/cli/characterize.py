@@ -146,8 +146,9 @@ def print_table(result: Any, *, truth: bool = True) -> None:
     from rich.console import Console
     from rich.table import Table
 
-    from motorlab.report.document import DISPLAY_UNITS, format_value
+    from motorlab.report.document import DISPLAY_UNITS
     from motorlab.session.characterize import table_parameters
+    from motorlab.units import format_value
 
     console = Console()
     table = Table(title=result.session.title)

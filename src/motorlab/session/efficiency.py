@@ -18,6 +18,7 @@ from typing import Any
 
 from motorlab.gearbox import efficiency_estimate
 from motorlab.results import Estimate, FitResult
+from motorlab.units import format_value
 
 #: Gearbox figures per unit (output shaft), when a back-EMF K and a torque test are both there.
 GEARBOX_PARAMETERS = ("efficiency", "loss_torque")
@@ -145,8 +146,8 @@ def gearbox_answer(torque_fit: Any, k: Any, efficiency: Any, *, ratio: float | N
     if not (kt.determined and ke.determined and eta.determined):
         return None
 
-    def pm(value: float, stderr: float) -> str:
-        return f"{value:.4g} ± {stderr:.2g}" if math.isfinite(stderr) else f"{value:.4g} ± ?"
+    def pm(value: float, stderr: float) -> str:  # to its standard error's two digits, as every table of the report
+        return format_value(value, stderr) if math.isfinite(stderr) else f"{value:.4g} ± ?"
 
     diff = ke.value - kt.value
     sigma = math.hypot(ke.stderr, kt.stderr)
@@ -170,7 +171,7 @@ def gearbox_answer(torque_fit: Any, k: Any, efficiency: Any, *, ratio: float | N
         "kt": pm(kt.value, kt.stderr),
         "eta": pm(eta.value, eta.stderr),
         "loss": pm(loss, loss_se) if math.isfinite(loss) else "—",
-        "mismatch": f"{z:+.1f}",
+        "mismatch": f"{z:+.0f}" if abs(z) >= 10 else f"{z:+.1f}",  # a z-score is itself uncertain by about 1
         "verdict": verdict,
     }
 
