@@ -103,9 +103,18 @@ def _residuals_zoom_with_their_fit(page: Any) -> None:
                        "the residuals zoomed with their fit", 10)
     start, end = zoomed[0]
     assert 0 < end - start, zoomed
-    ActionChains(page.d).double_click(area).perform()
-    page.wait(lambda: (lambda r: r[0] == r[1] and r[2] is True)(page.d.execute_script(ranges)),
-              "the residuals zoomed back with their fit", 10)
+    # Plotly takes two clicks as a double click when the second comes within 300 ms of the first (its
+    # doubleClickDelay); on a loaded machine WebDriver's two clicks can be further apart, and a person
+    # whose double click was too slow does it again: so does the test, up to three times.
+    back = lambda: (lambda r: r[0] == r[1] and r[2] is True)(page.d.execute_script(ranges))  # noqa: E731
+    for _ in range(3):
+        ActionChains(page.d).double_click(area).perform()
+        deadline = time.monotonic() + 3
+        while time.monotonic() < deadline and not back():
+            time.sleep(0.1)
+        if back():
+            break
+    page.wait(back, "the residuals zoomed back with their fit", 4)
 
 
 def test_a_session_table_at_1366_and_its_report_on_a_phone(page: Any, sim_session: Path, tmp_path: Path) -> None:
