@@ -133,10 +133,10 @@ def shooter(real_dir: Path) -> Path:
 
 
 @pytest.fixture(scope="session")
-def chromium(tmp_path_factory: pytest.TempPathFactory) -> Iterator[browser.Chromium]:
+def chromium() -> Iterator[browser.Chromium]:
     """One headless Chromium per test process (each xdist worker), lent to one test module at a time: starting
     one and loading the page's scripts into a new profile cost seconds a module."""
-    lender = browser.Chromium(tmp_path_factory.mktemp("chromium"))
+    lender = browser.Chromium()
     yield lender
     lender.quit()
 
