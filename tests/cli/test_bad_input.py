@@ -944,6 +944,12 @@ def test_one_bad_unit_does_not_stop_the_others(session_dir: Path, tmp_path: Path
 # ---- the last-resort handler -------------------------------------------------------------------
 
 
+def _built_afresh(monkeypatch: pytest.MonkeyPatch) -> None:
+    """``main``'s parsers built for this test (a parser built before holds the command's ``run`` it was built with,
+    not the one the test put in its place)."""
+    monkeypatch.setattr(cli, "build_parser", cli.build_parser.__wrapped__)
+
+
 def test_unexpected_exception_is_one_line_exit_1(monkeypatch: pytest.MonkeyPatch, capsys) -> None:
     """A genuine bug prints one line asking for a report and exits 1, not a traceback."""
     import motorlab.cli.motors as motors
@@ -952,6 +958,7 @@ def test_unexpected_exception_is_one_line_exit_1(monkeypatch: pytest.MonkeyPatch
         raise ZeroDivisionError("float division by zero")
 
     monkeypatch.setattr(motors, "run", broken)
+    _built_afresh(monkeypatch)
     code, _, err = run(capsys, ["motors"])
     assert code == 1
     assert_one_line(err, mentions="internal error")
@@ -970,6 +977,7 @@ def test_python_warnings_are_one_line_each(monkeypatch: pytest.MonkeyPatch, caps
         return 0
 
     monkeypatch.setattr(motors, "run", noisy)
+    _built_afresh(monkeypatch)
     with warnings.catch_warnings():
         warnings.simplefilter("always")  # the suite turns warnings into errors; a user's Python does not
         code, _, err = run(capsys, ["motors"])
@@ -1016,6 +1024,7 @@ def test_a_refusal_is_one_line_even_after_numpy_warned(monkeypatch: pytest.Monke
         raise OptionError("the lever arm (--arm) must lie between 0.0001 and 100 [m], got 1e+308")
 
     monkeypatch.setattr(motors, "run", overflow_then_refuse)
+    _built_afresh(monkeypatch)
     with warnings.catch_warnings():
         warnings.simplefilter("always")
         code, _, err = run(capsys, ["motors"])

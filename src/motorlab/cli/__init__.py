@@ -31,10 +31,17 @@ from motorlab.errors import MotorlabError  # noqa: E402
 COMMANDS = ("demo", "motors", "plan", "simulate", "analyze", "tune", "characterize", "acquire", "robot", "ui")
 
 
+@functools.cache
 def build_parser(command: str | None = None) -> Parser:
     """The top-level parser with every sub-command registered, or only ``command`` when it is one of
     :data:`COMMANDS` (``main`` passes the one given: the others' modules, such as ``tune``'s controller
-    design, cost a few tenths of a second to import)."""
+    design, cost a few tenths of a second to import).
+
+    Built once per process and command: a parser keeps nothing of a parse (every value is in the
+    namespace it returns), and building one took 25–35 ms of every command (``analyze``'s thirteen
+    experiments' options), paid again by each command the app forks from its fork server (which
+    builds them all, :func:`motorlab.ui.warm.preload`) and by each in-process call of :func:`main`.
+    """
     from motorlab import __version__
 
     parser = Parser(prog="motorlab", description="Characterize brushed DC gearmotors from measurements.")

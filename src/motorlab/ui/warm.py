@@ -57,6 +57,8 @@ def preload() -> None:
     import motorlab.ui.worker
 
     motorlab.cli.build_parser()  # imports every sub-command's module and the experiment descriptions
+    for command in motorlab.cli.COMMANDS:  # each command's parser, as main builds it, ready in every forked child
+        motorlab.cli.build_parser(command)
     for module in pkgutil.iter_modules(motorlab.analyses.__path__):  # the analyses their commands import when run
         importlib.import_module(f"motorlab.analyses.{module.name}")  # (once here, not once per session's unit)
     from motorlab.units import registry
