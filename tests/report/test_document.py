@@ -17,7 +17,8 @@ from motorlab.session.spec import load_session
 from motorlab.units import format_value
 
 ROOT = Path(__file__).resolve().parents[2]
-CHROMIUM = shutil.which("chromium") or ("/usr/bin/chromium" if Path("/usr/bin/chromium").exists() else None)
+CHROMIUM = (shutil.which("chromium-headless-shell") or shutil.which("chromium")
+            or ("/usr/bin/chromium" if Path("/usr/bin/chromium").exists() else None))
 
 
 @pytest.fixture(scope="module")
