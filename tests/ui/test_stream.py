@@ -330,3 +330,26 @@ def test_one_resident_worker_whatever_the_event_loops() -> None:
     assert first.poll() is None
     runner.resident().close()
     assert first.poll() is not None
+
+
+@pytest.mark.skipif(not runner.FORKING, reason="commands are forked on Linux only")
+def test_the_resident_worker_is_forked_by_the_fork_server(tmp_path: Path, forking: None) -> None:
+    """Its imports are the fork server's (a Python of its own imported everything again: seconds of CPU at every
+    start of the app); it is no command (the commands forked are counted apart) and answers as a fresh command."""
+    runner.resident().close()
+    forks, started = runner.POOL.forks, runner.POOL.started
+
+    async def answer() -> tuple[Any, runner.Outcome]:
+        await runner.resident().start()
+        proc = runner.resident().proc
+        return proc, await runner.run_cli(["tune", "velocity", "--kv=0.12", "--ka=0.01", "--json"], cwd=str(tmp_path))
+
+    jobs = runner.resident().jobs
+    proc, outcome = asyncio.run(answer())
+    assert isinstance(proc, runner.Forked)
+    assert (runner.POOL.forks, runner.POOL.started) == (forks, started + 1)
+    assert runner.resident().jobs == jobs + 1
+    assert outcome.code == 0
+    assert json.loads(outcome.stdout)["feedforward"]["kV"] == pytest.approx(0.12)
+    runner.resident().close()
+    assert proc.poll() is not None  # ended, and its end reported by the fork server

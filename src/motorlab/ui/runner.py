@@ -150,17 +150,16 @@ def _warm_enabled() -> bool:
 
 
 class Forked:
-    """A command forked by the fork server, seen as a :class:`subprocess.Popen` is (``pid``, ``stdout``,
+    """A command forked by the fork server, seen as a :class:`subprocess.Popen` is (``pid``, ``stdin``, ``stdout``,
     ``stderr``, ``poll``, ``wait``, ``kill``, ``returncode``); its exit code comes from the server, which reaps it."""
 
-    stdin = None
-
-    def __init__(self, stdout: int, stderr: int, server: socket.socket) -> None:
+    def __init__(self, stdout: int, stderr: int | None, server: socket.socket, stdin: int | None = None) -> None:
         self.pid = 0
         self.returncode: int | None = None
         self.server = server  # the fork server's socket: it reports this command's end
         self.stdout: IO[bytes] = os.fdopen(stdout, "rb")
-        self.stderr: IO[bytes] = os.fdopen(stderr, "rb")
+        self.stderr: IO[bytes] | None = os.fdopen(stderr, "rb") if stderr is not None else None
+        self.stdin: IO[bytes] | None = os.fdopen(stdin, "wb") if stdin is not None else None
         self.forked = threading.Event()
         self._ended = threading.Event()
 
@@ -184,9 +183,10 @@ class Forked:
 
     def close(self) -> None:
         """Close this side's pipes."""
-        for pipe in (self.stdout, self.stderr):
-            with contextlib.suppress(OSError):
-                pipe.close()
+        for pipe in (self.stdin, self.stdout, self.stderr):
+            if pipe is not None:
+                with contextlib.suppress(OSError):
+                    pipe.close()
 
 
 #: A command's process: a fresh Python, or one forked by the fork server.
@@ -281,17 +281,28 @@ class Pool:
             sock.close()
         server.wait()
 
-    def fork(self, module: str, argv: Sequence[str], cwd: str, env: Mapping[str, str]) -> Forked | None:
-        """The command forked by the server, or None when it is not ready (the caller starts a fresh Python)."""
+    def fork(self, module: str, argv: Sequence[str], cwd: str, env: Mapping[str, str], *,
+             resident: bool = False) -> Forked | None:
+        """The command forked by the server, or None when it is not ready (the caller starts a fresh Python).
+
+        ``resident``: the resident worker (``motorlab.ui.warm --serve``), which reads its jobs from a pipe
+        (:attr:`Forked.stdin`) and writes nothing to stderr that anyone reads (it goes to the null device); it
+        counts among the processes :attr:`started`, not among the commands :attr:`forks`."""
         job = {"module": module, "argv": list(argv), "cwd": cwd, "env": dict(env)}
         with self._lock:
             sock = self._socket if self.ready and FORKING else None
         if sock is None:
             return None
         out_r, out_w = os.pipe()
-        err_r, err_w = os.pipe()
-        passed = [out_w, err_w]
-        forked, ident = Forked(out_r, err_r, sock), next(self._ids)
+        if resident:
+            in_r, in_w = os.pipe()
+            err_r, err_w = None, os.open(os.devnull, os.O_WRONLY)
+            passed = [out_w, err_w, in_r]
+        else:
+            in_w = None
+            err_r, err_w = os.pipe()
+            passed = [out_w, err_w]
+        forked, ident = Forked(out_r, err_r, sock, in_w), next(self._ids)
         self._jobs[ident] = forked
         try:
             with self._send:
@@ -307,7 +318,10 @@ class Pool:
             self._jobs.pop(ident, None)
             forked.close()
             return None
-        self.forks += 1
+        if resident:
+            self.started += 1
+        else:
+            self.forks += 1
         return forked
 
     def spare(self, module: str, argv: Sequence[str], cwd: str, env: Mapping[str, str]) -> Child | None:
@@ -389,18 +403,39 @@ class Resident:
         self.proc: Child | None = None
         self.ready = False
         self.busy = False
+        self.starting = False  # a thread is getting the process (waiting for the fork server to be ready)
+        self._closes = 0  # times closed: a process got for an earlier start, after a close, is ended at once
         self.jobs = 0  # jobs run so far (for tests and benchmarks)
 
     def start_soon(self) -> None:
-        """Start the process (when none runs); it is ready once its imports are done (a thread waits for it)."""
+        """Start the process (when none runs or is starting): forked by the fork server once that is ready, its
+        imports already done there; a Python of its own where commands are not forked or the server cannot be had.
+        It is ready once it says so (a thread waits for it)."""
         if not _warm_enabled():
             return
         with self._lock:
-            if self.busy or (self.proc is not None and self.proc.poll() is None):
+            if self.busy or self.starting or (self.proc is not None and self.proc.poll() is None):
                 return
-            self.proc, self.ready = POOL.spawn("--serve"), False
-            proc = self.proc
-        threading.Thread(target=self._wait_ready, args=(proc,), daemon=True).start()
+            self.starting, self.ready, closes = True, False, self._closes
+        threading.Thread(target=self._start, args=(closes,), daemon=True).start()
+
+    def _start(self, closes: int) -> None:
+        proc: Child | None = None
+        try:
+            if FORKING and POOL.wait_ready():
+                proc = POOL.fork("motorlab.ui.warm", ["--serve"], tempfile.gettempdir(), {}, resident=True)
+            if proc is None:
+                proc = POOL.spawn("--serve")
+        finally:
+            with self._lock:
+                self.starting = False
+                late = proc is not None and self._closes != closes
+                if proc is not None and not late:
+                    self.proc = proc
+        if late:  # closed meanwhile (the app ending, a test): this one is not wanted
+            _close_child(proc)
+        elif proc is not None:
+            self._wait_ready(proc)
 
     def _wait_ready(self, proc: Child) -> None:
         assert proc.stdout is not None
@@ -413,7 +448,7 @@ class Resident:
     async def start(self) -> None:
         """:meth:`start_soon`, then wait until the process is ready (or has ended)."""
         self.start_soon()
-        while self.proc is not None and not self.ready and self.proc.poll() is None:
+        while self.starting or (self.proc is not None and not self.ready and self.proc.poll() is None):
             await asyncio.sleep(0.05)
 
     def _take(self) -> Child | None:
@@ -458,17 +493,23 @@ class Resident:
             self.busy = False
 
     def close(self) -> None:
-        """End the process."""
+        """End the process (and one being started)."""
         with self._lock:
             proc, self.proc, self.ready = self.proc, None, False
+            self._closes += 1
         if proc is not None:
-            end(proc)
-            with contextlib.suppress(subprocess.TimeoutExpired):
-                proc.wait(timeout=10)
-            for pipe in (proc.stdin, proc.stdout, proc.stderr):
-                if pipe is not None:
-                    with contextlib.suppress(OSError):
-                        pipe.close()
+            _close_child(proc)
+
+
+def _close_child(proc: Child) -> None:
+    """End a child process, wait for its end (10 s at most) and close its pipes."""
+    end(proc)
+    with contextlib.suppress(subprocess.TimeoutExpired):
+        proc.wait(timeout=10)
+    for pipe in (proc.stdin, proc.stdout, proc.stderr):
+        if pipe is not None:
+            with contextlib.suppress(OSError):
+                pipe.close()
 
 
 RESIDENT = Resident()

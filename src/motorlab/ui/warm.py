@@ -13,7 +13,10 @@ time limit, a client that went away). A fork costs milliseconds; a new Python im
 seconds of CPU (about 3 s on this project's 2-core build machine).
 
 ``--serve`` is the resident worker (:class:`motorlab.ui.runner.Resident`): jobs one after another in one
-process, for the gains. Without arguments, where commands are not forked (:data:`motorlab.ui.runner.FORKING`:
+process, for the gains. The fork server forks it too, as the job ``{"module": "motorlab.ui.warm", "argv":
+["--serve"]}`` with a third file descriptor, the read end of its stdin pipe: its imports are the server's, done
+once for both (a second Python importing them took seconds of CPU at every start of the app). Without
+arguments, where commands are not forked (:data:`motorlab.ui.runner.FORKING`:
 not Linux), a spare: one job read from stdin, run, exit.
 
 ``-P`` keeps the folder the process starts in off ``sys.path``, so that an uploaded file named like
@@ -26,9 +29,15 @@ import json
 import os
 import sys
 
+#: Whether :func:`preload` has run in this process (a resident forked from the fork server has its imports).
+_preloaded = False
+
 
 def preload() -> None:
-    """Import what the app's commands use (the parser, the analyses, the report's plotting)."""
+    """Import what the app's commands use (the parser, the analyses, the report's plotting); once a process."""
+    global _preloaded
+    if _preloaded:
+        return
     import importlib
     import pkgutil
 
@@ -68,6 +77,7 @@ def preload() -> None:
 
     list_motors()  # the catalogue parsed once here (0.12–0.16 s of pint), not in every session naming its motor
     _draw()
+    _preloaded = True
 
 
 def _draw() -> None:
@@ -101,6 +111,8 @@ def run(job: dict[str, object]) -> int:
             from motorlab.ui.worker import main as worker_main
 
             return int(worker_main(argv) or 0)
+        if module == "motorlab.ui.warm" and argv == ["--serve"]:  # the resident worker, forked by the fork server
+            return serve()
         print(f"motorlab: error: warm worker: unknown module {module!r}", file=sys.stderr)
         return 2
     except SystemExit as exc:  # argparse's --help and its one-line errors
@@ -146,7 +158,8 @@ def serve() -> int:
 
 
 def _forked(job: dict[str, object], fds: list[int], inherited: list[int]) -> None:
-    """In the forked child: a session of its own, the command's pipes as stdout and stderr, run, exit."""
+    """In the forked child: a session of its own, the command's pipes as stdout and stderr (and stdin when a third
+    descriptor came with the job, else nothing to read), run, exit."""
     import contextlib
     import signal
 
@@ -157,7 +170,8 @@ def _forked(job: dict[str, object], fds: list[int], inherited: list[int]) -> Non
         for fd in inherited:
             os.close(fd)
         os.setsid()  # a process group of its own: ending the command ends what it started
-        for target, fd in enumerate([os.open(os.devnull, os.O_RDONLY), *fds]):
+        stdin = fds[2] if len(fds) > 2 else os.open(os.devnull, os.O_RDONLY)
+        for target, fd in enumerate([stdin, fds[0], fds[1]]):
             os.dup2(fd, target)
             os.close(fd)
         code = run(job)
@@ -196,7 +210,7 @@ def fork_server(fd: int) -> int:
             if key.fileobj is not sock:
                 os.read(wake_r, 4096)
                 continue
-            message, fds, _, _ = socket.recv_fds(sock, 1 << 20, 2)
+            message, fds, _, _ = socket.recv_fds(sock, 1 << 20, 3)
             if not message:  # the app closed its end: its commands were ended by it
                 return 0
             job = json.loads(message)
