@@ -243,8 +243,19 @@ def format_unit(unit: str) -> str:
     return unit.replace("**", "^").replace("*", "·").replace("^2", "²").replace("ohm", "Ω")
 
 
+#: Digits and minus sign as superscripts, for powers of ten written as people write them (× 10⁻⁵).
+SUPERSCRIPT = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
+
+
+def power_of_ten(exponent: int) -> str:
+    """``"10⁻⁵"`` for -5."""
+    return "10" + str(int(exponent)).translate(SUPERSCRIPT)
+
+
 def format_value(value: float, stderr: float, *, scale: float = 1.0) -> str:
-    """``"0.3712 ± 0.0021"``: the value to the precision of its standard error (2 significant digits).
+    """``"0.3712 ± 0.0021"``: the value to the precision of its standard error (2 significant digits); one power of
+    ten for both where fixed decimals would take more than six (``"(1.44627 ± 0.00015) × 10⁻²"``, as the app writes
+    it).
 
     Parameters
     ----------
@@ -262,8 +273,8 @@ def format_value(value: float, stderr: float, *, scale: float = 1.0) -> str:
     exponent = math.floor(math.log10(abs(s))) - 1
     decimals = max(-exponent, 0)
     if abs(v) >= 1e5 or decimals > 6:
-        # Scientific notation, the mantissa's digits set by the error: 7.865(11)e-5.
-        e = math.floor(math.log10(abs(v))) if v != 0 else 0
+        # One power of ten, the mantissa's digits set by the error: (7.865 ± 0.011) × 10⁻⁵.
+        e = math.floor(math.log10(abs(v))) if v != 0 else exponent + 1  # zero: the error's power
         digits = max(e - exponent, 1)
-        return f"{v / 10**e:.{digits}f}({s / 10**exponent:.0f})e{e:+d}".replace("e+", "e")
+        return f"({v / 10**e:.{digits}f} ± {s / 10**e:.{digits}f}) × {power_of_ten(e)}"
     return f"{v:.{decimals}f} ± {s:.{decimals}f}"

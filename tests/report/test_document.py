@@ -91,7 +91,10 @@ def test_text_only_report_and_formatting(result, tmp_path: Path) -> None:  # typ
     assert list(image_sources(path.read_text())) == []
     assert format_value(0.68371, 0.00095) == "0.68371 ± 0.00095"
     assert format_value(690e-6, 9.8e-6, scale=1e6) == "690.0 ± 9.8"
-    assert format_value(1.5e-6, 2e-8) == "1.500(20)e-6"
+    assert format_value(1.5e-6, 2e-8) == "(1.500 ± 0.020) × 10⁻⁶"
+    assert format_value(0.0144627, 1.5e-6) == "(1.44627 ± 0.00015) × 10⁻²"  # a flywheel's J, as the app writes it
+    assert format_value(123456.0, 12.0) == "(1.23456 ± 0.00012) × 10⁵"
+    assert format_value(0.0, 1e-9) == "(0.0 ± 1.0) × 10⁻⁹"
     assert format_value(float("nan"), 1.0) == "—"
 
 

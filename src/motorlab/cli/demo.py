@@ -61,7 +61,7 @@ def experiment_rows(result: Any) -> list[tuple[str, str, str, list[str]]]:
     import json
     import math
 
-    from motorlab.units import format_unit
+    from motorlab.units import format_unit, format_value
 
     expected: dict[str, dict[str, dict[str, float]]] = {}  # unit -> experiment -> parameter -> truth
     for unit in result.units.values():
@@ -87,7 +87,7 @@ def experiment_rows(result: Any) -> list[tuple[str, str, str, list[str]]]:
             if est is None or not est.determined:
                 cells.append("—" if est is None else "not determined")
                 continue
-            cell = f"{est.value:.5g} ± {est.stderr:.2g}" if math.isfinite(est.stderr) else f"{est.value:.5g} ± ?"
+            cell = format_value(est.value, est.stderr) if math.isfinite(est.stderr) else f"{est.value:.5g} ± ?"
             truth = expected.get(unit.name, {}).get(exp, {}).get(par)
             if isinstance(truth, int | float) and math.isfinite(est.stderr) and est.stderr > 0:
                 cell += f" ({(est.value - truth) / est.stderr:+.1f}σ)"
@@ -126,6 +126,7 @@ def print_gearbox_table(result: Any) -> None:
     from motorlab.catalog import Motor
     from motorlab.gearbox import OutputCurves
     from motorlab.report.document import unit_params
+    from motorlab.units import format_value
 
     motor = Motor.from_catalog(result.session.motor.catalog) if result.session.motor.catalog else None
     voltage = motor.nominal_voltage if motor is not None else 12.0
@@ -140,7 +141,7 @@ def print_gearbox_table(result: Any) -> None:
                 cells.append("not determined")
                 continue
             e = c.estimate
-            text = f"{e.value:.4g} ± {e.stderr:.2g}"
+            text = format_value(e.value, e.stderr)
             t = unit.truth.get(name)
             if t is not None and e.stderr > 0:
                 text += f" (truth {t:.4g}, {(e.value - t) / e.stderr:+.1f}σ)"

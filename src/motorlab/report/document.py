@@ -33,7 +33,7 @@ from matplotlib.figure import Figure
 
 from motorlab.report.thermal import thermal_section
 from motorlab.results import Estimate, FitResult
-from motorlab.units import format_unit, format_value
+from motorlab.units import format_unit, format_value, power_of_ten
 
 if TYPE_CHECKING:
     from motorlab.session.characterize import Characterization, UnitResult
@@ -599,11 +599,8 @@ def _with_unit(name: str, value: float) -> str:
     text = f"{shown:.4g}"
     if shown != 0 and not 1e-3 <= abs(shown) < 1e6:  # 2.5 × 10⁻⁵, as the page writes it
         mantissa, exponent = f"{shown:.3e}".split("e")
-        text = f"{float(mantissa):g} × 10{str(int(exponent)).translate(_SUPERSCRIPT)}"
+        text = f"{float(mantissa):g} × {power_of_ten(int(exponent))}"
     return f"{name} = {text} {unit}".rstrip()
-
-
-_SUPERSCRIPT = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
 
 
 def gains_figure(result: Characterization) -> Figure | None:
