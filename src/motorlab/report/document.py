@@ -299,7 +299,7 @@ def _final_table(result: Characterization) -> str:
                     if combined is not None and combined.estimate.determined:
                         est = combined.estimate
                         if math.isfinite(est.stderr) and est.stderr > 0:
-                            text += f" ({(est.value - t) / est.stderr:+.1f} σ)"
+                            text += f" ({(est.value - t) / est.stderr:+.1f}\u00a0σ)"  # σ never alone on a line
                 truth_cells.append(f"<td>{_e(text)}</td>")
             rows.append(f'<tr class="truth"><td class="name">truth</td>{"".join(truth_cells)}<td></td></tr>')
     sources = sorted({c.source for u in result.units.values() for c in u.parameters.values()})
