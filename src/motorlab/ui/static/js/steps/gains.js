@@ -196,10 +196,13 @@ function tuneForm(ctx, list, model, { emit } = {}) {
 
 const tuneFields = (ctx) => ctx.app.schema.tune.fields.filter((f) => !f.positional && !OWN.includes(f.name) && f.kind !== "file");
 
+// Four significant digits, as every number of the page without an uncertainty: kS, kV and kA are measured to a
+// fraction of a percent at best, and a gain closer than that changes nothing a robot does; the code to paste
+// below keeps every digit the design gave.
 function gainsTable(d) {
   const u = d.units || {};
   const row = (k, v) => el("tr", { "data-gain": k }, el("th", { scope: "row" }, GAIN_WORDS[k] ? GAIN_WORDS[k].replace(new RegExp(` ${k}$`), "") : k, el("span", { class: "symbol", text: ` ${k}` })),
-    el("td", { class: "num", text: `${number(v, 6)} ${prettyUnit(u[k] || "")}`.trim() }));
+    el("td", { class: "num", text: `${number(v)} ${prettyUnit(u[k] || "")}`.trim() }));
   const r = d.response || {};
   const unitOf = u.steady_state_error || "";
   return el("table", { class: "params", id: "gains-table" }, el("caption", { text: `Gains for ${targetLabel(d.target)}` }),
