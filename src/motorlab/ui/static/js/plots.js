@@ -151,7 +151,9 @@ export function response(host, curves, targetUnit) {
     ];
     const layout = { ...base(narrow() ? 300 : 340), xaxis: { title: { text: "time in s" } },
       yaxis: { title: { text: `${curves.loop === "velocity" ? "speed" : "position"} in ${unit}` } },
-      yaxis2: { title: { text: "voltage in V" }, overlaying: "y", side: "right", showgrid: false } };
+      // ticks of its own (round volts): an overlaying axis otherwise takes the left axis's grid (Plotly's "sync"),
+      // 6.07, 7.67, 9.28, 10.89 V
+      yaxis2: { title: { text: "voltage in V" }, overlaying: "y", side: "right", showgrid: false, tickmode: "auto" } };
     layout.margin.r = 50;
     figure(host, title, traces, layout);
   }
