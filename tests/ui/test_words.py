@@ -108,7 +108,9 @@ def test_numbers_are_rounded_to_their_uncertainty_with_a_unit(page: Any) -> None
         f.quantity(0.018967894, 1.3e-9, 'm'), f.quantity(0.125318, 0.0000153, 'V*s/rad'),
         f.quantity(9.6123e-5, 1.2e-7, 'V*s/tick'), f.quantity(0.00069, 0.00001, 'H'),
         f.overshoot(4.11e-4), f.overshoot(9.489), f.overshoot(null),
-        f.quantity(0, null, '1/s'), f.prettyUnit('hub/(tick/s)'), f.prettyUnit('hub')]));""")
+        f.quantity(0, null, '1/s'), f.prettyUnit('hub/(tick/s)'), f.prettyUnit('hub'),
+        f.settledError(-4.568e-6, 54.0, 'rot/s'), f.settledError(-0.6, 54.0, 'rot/s'),
+        f.settledError(null, 54.0, 'rad')]));""")
     assert shown == [
         "18.968 mm (uncertainty below 0.01 %)",  # not (1.8967894 ± 0.0000013) × 10⁻²
         "0.125318 ± 0.000015 V·s/rad",
@@ -117,4 +119,5 @@ def test_numbers_are_rounded_to_their_uncertainty_with_a_unit(page: Any) -> None
         "no overshoot", "9.5 %", "no overshoot",  # not "4.11 × 10⁻⁴ %"
         "0 s⁻¹",  # not "0 1/s"
         "output/(tick/s)", "output",  # the controller's output, not "hub" as a unit
+        "none (below 0.1 % of the step)", "-0.6 rot/s", "not determined",  # not "-4.568 × 10⁻⁶ rot/s"
     ]

@@ -85,3 +85,11 @@ export function overshoot(percent) {
   if (percent === null || percent === undefined || !Number.isFinite(percent) || percent < 0.1) return "no overshoot";
   return `${number(percent, 2)} %`;
 }
+
+// The error a simulated step leaves once settled, for people: "none" below 0.1 % of the step (the simulation's
+// rounding, -4.568 × 10⁻⁶ rot/s after a 54 rot/s step, nothing a plot or a robot shows), else with its unit.
+export function settledError(error, step, unit) {
+  if (typeof error === "number" && Number.isFinite(error) && typeof step === "number" && step !== 0
+      && Math.abs(error) < 1e-3 * Math.abs(step)) return "none (below 0.1 % of the step)";
+  return quantity(error, null, unit);
+}

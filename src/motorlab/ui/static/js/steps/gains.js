@@ -7,7 +7,7 @@ import { commandBox, debounce, el, uid } from "../dom.js";
 import { post, run as runRequest, isAbort } from "../api.js";
 import { save, settings } from "../store.js";
 import { argvOf, appendValues, field, isShared } from "../fields.js";
-import { duration, number, overshoot, prettyUnit, quantity } from "../format.js";
+import { duration, number, overshoot, prettyUnit, settledError } from "../format.js";
 import { GAIN_WORDS, MEASURED_BY, fieldWords, parameterWords, plain, targetLabel } from "../words.js";
 import * as plots from "../plots.js";
 import { addFiles, groups, runAll, staleness } from "./fit.js";
@@ -210,7 +210,7 @@ function gainsTable(d) {
       el("tr", {}, el("th", { scope: "row", text: "Rise time (10 to 90 %)" }), el("td", { class: "num", text: duration(r.rise_time) })),
       el("tr", {}, el("th", { scope: "row", text: "Overshoot" }), el("td", { class: "num", text: overshoot(r.overshoot) })),
       el("tr", {}, el("th", { scope: "row", text: "Settling time" }), el("td", { class: "num", text: duration(r.settling_time) })),
-      el("tr", {}, el("th", { scope: "row", text: "Error left after settling" }), el("td", { class: "num", text: quantity(r.steady_state_error, null, unitOf) }))));
+      el("tr", {}, el("th", { scope: "row", text: "Error left after settling" }), el("td", { class: "num", text: settledError(r.steady_state_error, (d.step || {}).size, unitOf) }))));
 }
 
 function snippetBox(code, language) {
