@@ -13,13 +13,14 @@ export function prettyUnit(unit) {
     .replace(/\bdeg\b/g, "°");
 }
 
-function sig(x, digits) {
+// x to `digits` significant digits; `zeros`: trailing zeros kept (0.67500 says five digits are known, 0.675 three).
+function sig(x, digits, zeros = false) {
   if (x === 0) return "0";
   const s = Number(x.toPrecision(digits));
   const abs = Math.abs(s);
-  if (abs >= 1e-3 && abs < 1e6) return String(s);
+  if (abs >= 1e-3 && abs < 1e6) return zeros ? s.toPrecision(digits) : String(s);
   const [m, e] = s.toExponential(digits - 1).split("e");
-  return `${Number(m)} × 10${[...String(Number(e))].map((c) => SUPERSCRIPT[c]).join("")}`;
+  return `${zeros ? m : Number(m)} × 10${[...String(Number(e))].map((c) => SUPERSCRIPT[c]).join("")}`;
 }
 
 // The scale (power of 1000) that puts |x| in [1, 1000) for a prefixable unit.
@@ -51,7 +52,7 @@ export function quantity(value, stderr, unit) {
   if (stderr === null || stderr === undefined || !Number.isFinite(stderr) || stderr <= 0) return `${sig(v, 4)} ${u}`.trim();
   const e = stderr / f;
   // an uncertainty below 0.01 % is the file's rounding or the model's, not the measurement's: no digits for it
-  if (v !== 0 && e / Math.abs(v) < FINEST) return `${sig(v, 5)} ${u} (uncertainty below 0.01 %)`.replace(/\s+\(/, " (");
+  if (v !== 0 && e / Math.abs(v) < FINEST) return `${sig(v, 5, true)} ${u} (uncertainty below 0.01 %)`.replace(/\s+\(/, " (");
   // the uncertainty to 2 significant digits, the value to the same decimal place
   const place = Math.floor(Math.log10(e)) - 1;
   const dec = Math.max(0, -place);
