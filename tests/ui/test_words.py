@@ -111,7 +111,8 @@ def test_numbers_are_rounded_to_their_uncertainty_with_a_unit(page: Any) -> None
         f.quantity(0, null, '1/s'), f.prettyUnit('hub/(tick/s)'), f.prettyUnit('hub'),
         f.settledError(-4.568e-6, 54.0, 'rot/s'), f.settledError(-0.6, 54.0, 'rot/s'),
         f.settledError(null, 54.0, 'rad'), f.quantity(0.675, 1e-6, 'V*s/rad'),
-        f.quantity(0.0127900, 1e-7, 'kg*m^2')]));""")
+        f.quantity(0.0127900, 1e-7, 'kg*m^2'), f.share(0.9999996), f.share(0.98764), f.share(null),
+        f.correlation(-0.99961), f.correlation(0.5)]));""")
     assert shown == [
         "18.968 mm (uncertainty below 0.01 %)",  # not (1.8967894 ± 0.0000013) × 10⁻²
         "0.125318 ± 0.000015 V·s/rad",
@@ -123,4 +124,6 @@ def test_numbers_are_rounded_to_their_uncertainty_with_a_unit(page: Any) -> None
         "none (below 0.1 % of the step)", "-0.6 rot/s", "not determined",  # not "-4.568 × 10⁻⁶ rot/s"
         "0.67500 V·s/rad (uncertainty below 0.01 %)",  # five digits known, not "0.675"
         "0.012790 kg·m² (uncertainty below 0.01 %)",
+        "above 0.9999", "0.9876", "not determined",  # R², not "1"
+        "−1.00", "0.50",  # a correlation, not "-1"
     ]

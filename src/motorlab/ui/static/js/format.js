@@ -87,6 +87,17 @@ export function overshoot(percent) {
   return `${number(percent, 2)} %`;
 }
 
+// R² for people: four decimals, "above 0.9999" where they would round to 1 (a fit is never exactly perfect).
+export function share(r2) {
+  if (typeof r2 !== "number" || !Number.isFinite(r2)) return "not determined";
+  return r2 >= 0.99995 ? "above 0.9999" : r2.toFixed(4).replace("-", "−");
+}
+
+// A correlation for people: two decimals with a true minus sign (−1.00, not -1).
+export function correlation(c) {
+  return c.toFixed(2).replace("-", "−");
+}
+
 // The error a simulated step leaves once settled, for people: "none" below 0.1 % of the step (the simulation's
 // rounding, -4.568 × 10⁻⁶ rot/s after a 54 rot/s step, nothing a plot or a robot shows), else with its unit.
 export function settledError(error, step, unit) {

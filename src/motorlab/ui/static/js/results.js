@@ -1,6 +1,6 @@
 // One analysis result for people: parameters in words with symbols, value ± uncertainty in one human-scaled unit.
 import { el } from "./dom.js";
-import { number, prettyUnit, quantity } from "./format.js";
+import { correlation, number, prettyUnit, quantity, share } from "./format.js";
 import { fieldLabel, parameterWords, plain } from "./words.js";
 
 export function parameterTable(parameters, shaft) {
@@ -23,13 +23,13 @@ export function diagnostics(fit) {
   if (!fit) return null;
   const rows = [
     ["How far the data are from the model (RMS)", fit.rmse === null || fit.rmse === undefined ? "not determined" : `${number(fit.rmse, 3)} ${prettyUnit(fit.rmse_unit)}`],
-    ["Share of the variation the model explains (R²)", fit.r2 === null || fit.r2 === undefined ? "not determined" : number(fit.r2, 6)],
+    ["Share of the variation the model explains (R²)", share(fit.r2)],
     ["Points used", fit.n_points === undefined ? "not determined" : String(fit.n_points)],
   ];
   if (fit.correlation) {
     const { names, matrix } = fit.correlation;
     const pairs = [];
-    names.forEach((a, i) => names.forEach((b, j) => { if (j > i && Math.abs(matrix[i][j]) >= 0.5) pairs.push(`${parameterWords(a)[1] || a} and ${parameterWords(b)[1] || b}: ${number(matrix[i][j], 2)}`); }));
+    names.forEach((a, i) => names.forEach((b, j) => { if (j > i && Math.abs(matrix[i][j]) >= 0.5) pairs.push(`${parameterWords(a)[1] || a} and ${parameterWords(b)[1] || b}: ${correlation(matrix[i][j])}`); }));
     rows.push(["Parameters the data tell apart poorly (correlation ≥ 0.5)", pairs.join("; ") || "none"]);
   }
   return el("table", { class: "diagnostics" }, el("caption", { text: "How well the model fits" }),
