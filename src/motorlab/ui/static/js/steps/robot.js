@@ -6,7 +6,7 @@ import { quantity } from "../format.js";
 import { save, state, task as taskState } from "../store.js";
 import { registerStep, registerTask } from "../tasks.js";
 import { addFiles } from "./fit.js";
-import { fieldWords } from "../words.js";
+import { fieldWords, targetLabel } from "../words.js";
 
 registerTask({
   key: "robot",
@@ -237,7 +237,7 @@ registerStep("robot-push", {
       robotFields());
     const kept = state.shared.robotFit;
     const fit = el("input", { type: "file", id: "robot-fit", accept: ".json" });
-    const target = el("select", { id: "robot-target" }, ...["roadrunner", "pedro", "ftc-pidf"].map((t) => el("option", { value: t, text: t })));
+    const target = el("select", { id: "robot-target" }, ...["roadrunner", "pedro", "ftc-pidf"].map((t) => el("option", { value: t, text: targetLabel(t) })));
     const cpr = el("input", { id: "robot-push-cpr", value: (kept && kept.cpr) || taskState("robot").settings.cpr || "", inputmode: "decimal" });
     const radius = el("input", { id: "robot-radius", value: taskState("robot").settings["wheel-radius"] || "" });
     const out = el("div", {});
@@ -286,7 +286,7 @@ registerStep("robot-push", {
               } }));
           } catch (e) { fail(e); }
         } });
-        out.replaceChildren(el("table", {}, el("thead", {}, el("tr", {}, el("th", { text: "field" }), el("th", { text: "on the robot" }), el("th", { text: "new" }))), el("tbody", {}, rows)),
+        out.replaceChildren(el("table", {}, el("thead", {}, el("tr", {}, el("th", { text: "Field" }), el("th", { text: "On the robot now" }), el("th", { text: "New" }))), el("tbody", {}, rows)),
           plan.running ? el("p", { class: "error", text: `${plan.running} is running on the robot.` }) : "", el("p", {}, write));
       } catch (e) { out.replaceChildren(); fail(e); }
     } });
