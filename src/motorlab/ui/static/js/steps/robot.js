@@ -105,10 +105,11 @@ function watch({ live, bar, status, onStopped }) {
   stopPolling();
   const tick = async () => {
     const s = await getJson("api/robot/record");
-    // the robot's last value of each key, a number to 4 significant digits (its telemetry sends 22.721094103127637)
+    // the robot's last value of each key: a count as it is, another number to 4 significant digits (its telemetry
+    // sends 22.721094103127637)
     const last = (k) => { const v = s.series[k] && s.series[k].length ? s.series[k][s.series[k].length - 1] : "";
       const n = typeof v === "string" && v.trim() !== "" ? Number(v) : v;
-      return typeof n === "number" && Number.isFinite(n) ? number(n) : v; };
+      return typeof n === "number" && Number.isFinite(n) && !Number.isInteger(n) ? number(n) : v; };
     live.textContent = s.state === "idle" ? "" : `${s.opmode}: ${s.state}, ${s.rows} packets\n` + (s.keys || []).map((k) => `${k} = ${last(k)}`).join("\n");
     if (s.state === "stopped" || s.state === "idle") { stopPolling(); bar.running(""); if (s.state === "stopped") await onStopped(s); } else bar.running(s.opmode);
   };
