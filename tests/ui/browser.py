@@ -19,10 +19,21 @@ from typing import Any
 
 import pytest
 
+
+def _headless_shell() -> str | None:
+    """Debian's ``chromium-headless-shell``: the program itself. ``/usr/bin``'s is a shell script that runs it without
+    ``exec``, so chromedriver's quit ended the script and left the browser running, with its renderers: one browser
+    left behind by every test process (a machine that ran the suite a few dozen times had 300 of their processes)."""
+    program = Path("/usr/lib/chromium/chromium-headless-shell")
+    if program.is_file() and os.access(program, os.X_OK):
+        return str(program)
+    return shutil.which("chromium-headless-shell")
+
+
 #: The browser: Debian's ``chromium-headless-shell`` where installed (Chromium's headless mode as a program of its own:
 #: the same Blink, V8 and version as ``chromium``, without the browser's windowing layers; the browser tests take a
 #: fifth less CPU in it, 131 s against 167 s), else ``chromium --headless``; ``MOTORLAB_TEST_CHROMIUM`` names another.
-CHROMIUM = (os.environ.get("MOTORLAB_TEST_CHROMIUM") or shutil.which("chromium-headless-shell")
+CHROMIUM = (os.environ.get("MOTORLAB_TEST_CHROMIUM") or _headless_shell()
             or shutil.which("chromium") or shutil.which("chromium-browser"))
 CHROMEDRIVER = shutil.which("chromedriver")
 needs_browser = pytest.mark.skipif(
