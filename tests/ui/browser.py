@@ -275,11 +275,8 @@ def foreground(page: Page) -> None:
 BROWSER_NICENESS = -5
 
 
-def _foreground(root: int) -> None:
-    """Give chromedriver's Chromium (every process under ``root``, the page's renderer among them)
-    :data:`BROWSER_NICENESS` where this process may (root on Linux); else leave it."""
-    if not Path("/proc/self/stat").is_file():
-        return
+def process_tree(root: int) -> list[int]:
+    """``root`` and every process under it, from Linux's /proc (``[root]`` alone elsewhere)."""
     parents: dict[int, list[int]] = {}
     for stat in Path("/proc").glob("[0-9]*/stat"):
         try:
@@ -291,7 +288,15 @@ def _foreground(root: int) -> None:
     while k < len(tree):
         tree += parents.get(tree[k], [])
         k += 1
-    for pid in tree:
+    return tree
+
+
+def _foreground(root: int) -> None:
+    """Give chromedriver's Chromium (every process under ``root``, the page's renderer among them)
+    :data:`BROWSER_NICENESS` where this process may (root on Linux); else leave it."""
+    if not Path("/proc/self/stat").is_file():
+        return
+    for pid in process_tree(root):
         try:
             os.setpriority(os.PRIO_PROCESS, pid, BROWSER_NICENESS)
         except (PermissionError, ProcessLookupError):

@@ -11,23 +11,6 @@ import pytest
 import ui_browser as browser
 
 
-def _tree(root: int) -> set[int]:
-    """``root``'s descendants, from /proc."""
-    parents: dict[int, list[int]] = {}
-    for stat in Path("/proc").glob("[0-9]*/stat"):
-        try:
-            ppid = int(stat.read_text().rsplit(")", 1)[1].split()[1])
-        except (OSError, IndexError, ValueError):
-            continue
-        parents.setdefault(ppid, []).append(int(stat.parent.name))
-    found, todo = set(), [root]
-    while todo:
-        for child in parents.get(todo.pop(), []):
-            found.add(child)
-            todo.append(child)
-    return found
-
-
 def _running(pid: int) -> bool:
     """Alive and not a zombie waiting to be reaped."""
     try:
@@ -41,7 +24,7 @@ def _running(pid: int) -> bool:
 def test_quitting_the_browser_ends_every_process_of_it() -> None:
     driver = browser.make_driver()
     driver.get("data:text/html,<p>motorlab</p>")
-    processes = _tree(driver.service.process.pid)
+    processes = browser.process_tree(driver.service.process.pid)[1:]  # the driver's descendants
     assert len(processes) >= 2, "the browser's processes were not found"  # the browser and its renderer at least
     driver.quit()
     deadline = time.monotonic() + 10
