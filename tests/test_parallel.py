@@ -33,3 +33,18 @@ def test_a_forked_childs_answer_and_failures_reach_the_parent():
         parallel.Forked(_fails, "raise").result()
     with pytest.raises(ChildProcessError, match="code 3"):
         parallel.Forked(_fails, "exit").result()
+
+
+def test_with_a_thread_running_the_children_come_from_the_fork_server(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A process running a thread (a progress bar, a test runner) may not fork: its pools' children are forked by
+    multiprocessing's fork server (its imports done once), not spawned (each importing everything again). Each
+    child's parent is that server, and the answers are those of the work done here."""
+    from pathlib import Path
+
+    monkeypatch.setattr(parallel, "_fork_safe", lambda: False)
+    assert parallel._context().get_start_method() == "forkserver"
+    stats = parallel.map_in_processes(Path.read_text, [Path("/proc/self/stat")] * 2, processes=2)
+    parents = {int(stat.rsplit(")", 1)[1].split()[1]) for stat in stats}
+    assert os.getpid() not in parents
+    assert len(parents) == 1  # one fork server forked both
+    assert parallel.map_in_processes(abs, [-1, 2, -3], processes=2) == [1, 2, 3]

@@ -6,9 +6,12 @@ independently; numpy releases the GIL too seldom in those loops for threads to h
 back in the order of the items.
 
 The children are forked (Linux, and this process runs no other Python thread): they start at once
-with every module and the work already in memory. Elsewhere (or with a thread running, whose locks a
-fork would copy in any state) they are spawned, which costs each child Python's start and the imports
-(a second or two) and pickles the work to it. A child ignores Ctrl+C (the parent ends the pool); a
+with every module and the work already in memory. With a thread running (a progress bar's, a test
+runner's), whose locks a fork would copy in any state, they are forked by multiprocessing's fork
+server instead: a single-threaded process started once per process, which imports
+:data:`FORKSERVER_PRELOAD` once, so each child starts with the imports done and only the work is
+pickled to it. Where there is no fork server (Windows) they are spawned, which costs each child
+Python's start and the imports (a second or two). A child ignores Ctrl+C (the parent ends the pool); a
 front end that must be able to stop everything ends the process group (:mod:`motorlab.ui.runner`).
 
 Messages: a piece of work may call :func:`tell` (``tell(("unit B", "spindown"))``); the parent hands
@@ -26,6 +29,11 @@ import warnings
 from collections.abc import Callable, Sequence
 from multiprocessing.context import BaseContext
 from typing import Any
+
+#: What the fork server imports once, before it forks any child: the modules of the work handed to
+#: :func:`map_in_processes` (a session's units, a report's sections) and what they draw and fit with.
+FORKSERVER_PRELOAD = ("motorlab.session.characterize", "motorlab.report.document", "motorlab.plot",
+                      "matplotlib.backends.backend_agg", "scipy.optimize")
 
 #: Default number of processes: two on a machine with two CPUs or more (the work of a front end that
 #: is also serving other requests should not take every core of a bigger machine).
@@ -96,8 +104,13 @@ def _forked(fn: Callable[[Any], Any], item: Any, sender: Any) -> None:
 
 
 def _context() -> BaseContext:
+    """Fork where it is safe; else the fork server (its imports done once); else spawn."""
     if _fork_safe():
         return multiprocessing.get_context("fork")
+    if "forkserver" in multiprocessing.get_all_start_methods():
+        context = multiprocessing.get_context("forkserver")
+        context.set_forkserver_preload(list(FORKSERVER_PRELOAD))  # read when the server starts, at first use
+        return context
     return multiprocessing.get_context("spawn")
 
 
@@ -142,9 +155,10 @@ def map_in_processes(fn: Callable[[Any], Any], items: Sequence[Any], *, processe
     Parameters
     ----------
     fn
-        A module-level function (a spawned child imports it by name).
+        A module-level function (a child of the fork server, or a spawned one, imports it by name).
     items
-        The pieces of work (pickled to spawned children; forked children have them already).
+        The pieces of work (pickled to the fork server's or spawned children; forked children have them
+        already).
     processes
         At most this many children; 1 (or a single item) runs everything here, in this process.
     on_message
