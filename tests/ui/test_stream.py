@@ -169,8 +169,10 @@ def test_a_forked_command_answers_as_a_fresh_process(sim_session: Path, tmp_path
 
 def test_where_commands_are_not_forked_a_spare_answers_as_a_fresh_process(sim_session: Path, tmp_path: Path,
                                                                          monkeypatch: pytest.MonkeyPatch) -> None:
-    """Not Linux (``runner.FORKING`` false): spare Pythons started ahead, one taken per command."""
+    """Not Linux (``runner.FORKING`` false): spare Pythons started ahead, one taken per command (one spare here:
+    each does the imports of a fork server, seconds of CPU)."""
     monkeypatch.setattr(runner, "FORKING", False)
+    monkeypatch.setattr(runner, "SPARES", 1)
     (tmp_path / "lcr.csv").write_bytes((sim_session / "A" / "lcr.csv").read_bytes())
     argv = ["analyze", "lcr", "lcr.csv", "--json"]
     runner.POOL.fill()
