@@ -113,6 +113,27 @@ class _BoundedRegistry(pint.UnitRegistry):  # type: ignore[misc]
         return super().parse_units_as_container(input_string, *args, **kwargs)
 
 
+def _cache_folder() -> Any:
+    """Where pint keeps its parsed definitions for motorlab: the user's cache folder, one per pint version."""
+    import platformdirs
+
+    return platformdirs.user_cache_path("motorlab", appauthor=False) / f"pint-{pint.__version__}"
+
+
+def _new_registry() -> _BoundedRegistry:
+    """pint's registry with its definitions parsed once and kept on disk (pint's ``cache_folder``): 0.05 s to set
+    up instead of 0.5 s, a quarter of a short command's start. A cache that cannot be written or read (a read-only
+    home; two processes writing it at once) is removed and the registry built from pint's own files."""
+    folder = _cache_folder()
+    try:
+        return _BoundedRegistry(cache_folder=folder)
+    except Exception:  # a cache, whatever went wrong with it: pickle's, the system's or pint's errors
+        import shutil
+
+        shutil.rmtree(folder, ignore_errors=True)
+        return _BoundedRegistry()
+
+
 @lru_cache(maxsize=1)
 def registry() -> pint.UnitRegistry:
     """The one pint registry motorlab uses (created on first use).
@@ -120,7 +141,7 @@ def registry() -> pint.UnitRegistry:
     Every text it parses after its set-up, wherever it comes from (an option, a session file, a
     log's unit metadata, an environment variable), passes :func:`check_expression` first.
     """
-    ureg = _BoundedRegistry()
+    ureg = _new_registry()
     ureg.define("count = [] = counts = ct")
     ureg.define("rotation = revolution")  # WPILib/SysId write "Rotations"
     ureg.guarded = True
