@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 import re
 from functools import lru_cache
+from pathlib import Path
 from typing import Any
 
 import pint
@@ -113,7 +114,7 @@ class _BoundedRegistry(pint.UnitRegistry):  # type: ignore[misc]
         return super().parse_units_as_container(input_string, *args, **kwargs)
 
 
-def _cache_folder() -> Any:
+def _cache_folder() -> Path:
     """Where pint keeps its parsed definitions for motorlab: the user's cache folder, one per pint version."""
     import platformdirs
 
@@ -122,7 +123,7 @@ def _cache_folder() -> Any:
 
 def _new_registry() -> _BoundedRegistry:
     """pint's registry with its definitions parsed once and kept on disk (pint's ``cache_folder``): 0.05 s to set
-    up instead of 0.5 s, a quarter of a short command's start. A cache that cannot be written or read (a read-only
+    up instead of 0.5 s, a third of a short command's start. A cache that cannot be written or read (a read-only
     home; two processes writing it at once) is removed and the registry built from pint's own files."""
     folder = _cache_folder()
     try:
