@@ -6,7 +6,17 @@ from collections.abc import Iterator
 import numpy as np
 import pytest
 
-from motorlab.estimation.simulator import _Modal, feedforward_plant, motor_plant
+from motorlab.estimation.simulator import (
+    EVENT,
+    RUN,
+    SWITCH,
+    Perturbed,
+    _Modal,
+    feedforward_plant,
+    motor_plant,
+    sensitivities,
+    simulate,
+)
 
 FIELDS = ("ad", "bv", "c", "hx", "hv", "hc")
 
@@ -123,3 +133,41 @@ def test_each_regimes_decomposition_gives_the_matrix_exponentials_steps():
                     a, b = np.asarray(getattr(fast, name)), np.asarray(getattr(exact, name))
                     assert np.allclose(a, b, rtol=1e-8, atol=1e-9 * max(float(np.max(np.abs(b))), 1e-300)), \
                         (plant, s, tau, name, a, b)
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_sensitivities_are_the_forward_differences_of_whole_simulations(seed):
+    """:func:`sensitivities` of a motor-model run with drive switches inside steps, stops, stiction and break-aways
+    gives, for a change of each plant parameter, of one held level, of one switch instant and of the initial
+    state, what simulating the changed run gives (within 1e-4 of the change's size; the forward difference's own
+    truncation is ~1e-6; or to rounding where the change is lost at a stop): the Jacobian of a fit costs one pass,
+    not one simulation per parameter."""
+    rng = np.random.default_rng(seed)
+    params = np.array([0.0123, 1.3, 0.0021, 2.4e-5, 3e-6, 2.2e-3])  # K, R, L, J, b, Tf (SI)
+    dt, n = 1e-3, 3000
+    voltage = np.repeat(rng.choice([-6.0, -0.4, 0.0, 0.3, 5.0], 30), n // 30)  # levels below breaking away too
+    steps = np.sort(rng.choice(np.arange(1, n, 100), 12, replace=False))
+    switches = (steps, rng.uniform(0.1, 0.9, steps.size), voltage[steps - 1])
+    x0 = np.array([0.1, 50.0])  # spinning at the start
+    trace: list = []
+    states, theta = simulate(motor_plant(*params), voltage, dt, x0=x0, switches=switches, trace=trace)
+    assert {op[3] for op in trace} == {RUN, SWITCH, EVENT}  # every kind of step is there
+    columns = []
+    for j in range(params.size):
+        moved = params.copy()
+        moved[j] *= 1.0 + 1e-6
+        columns.append(Perturbed(motor_plant(*moved), voltage, x0, switches))
+    level = voltage.copy()
+    level[1500:1600] += 1e-6  # one held level
+    columns.append(Perturbed(motor_plant(*params), level, x0, switches))
+    instant = (steps, switches[1] + np.where(np.arange(steps.size) == 5, 1e-6, 0.0), switches[2])
+    columns.append(Perturbed(motor_plant(*params), voltage, x0, instant))  # one switch instant
+    columns.append(Perturbed(motor_plant(*params), voltage, x0 + np.array([0.0, 5e-5]), switches))  # the initial speed
+    found = sensitivities(motor_plant(*params), voltage, dt, states, theta, trace, switches, columns)
+    assert found is not None
+    for c, col in enumerate(columns):
+        s1, t1 = simulate(col.plant, col.voltage, dt, x0=col.x0, switches=col.switches)
+        pairs = [(found[0][:, :, c], s1 - states, states), (found[1][:, c], t1 - theta, theta)]
+        for estimate, difference, run in pairs:
+            floor = 1e-12 * np.linalg.norm(run)  # the rounding of two simulations (a change lost at a stop)
+            assert np.linalg.norm(estimate - difference) <= 1e-4 * np.linalg.norm(difference) + floor, c

@@ -17,7 +17,7 @@ import numpy as np
 from motorlab.estimation.covariance import hac_meat, scaled_gram_inverse
 from motorlab.estimation.levenberg_marquardt import Solution, levenberg_marquardt
 from motorlab.estimation.noise import input_noise_bias, noise_propagation_covariance
-from motorlab.estimation.simulator import StatePlant, simulate
+from motorlab.estimation.simulator import Perturbed, StatePlant, sensitivities, simulate
 
 # --------------------------------------------------------------------------------------------------
 # Output-error fitting engine shared by identify and feedforward
@@ -225,11 +225,8 @@ class OEModel:
         return np.zeros(0)
 
     def local_start(self, j: int) -> tuple[int, int] | None:
-        """(run, first grid step) of the only stretch parameter j affects, or None (it affects everything).
-
-        Its Jacobian column is then simulated from that step on, restarted from the state the
-        current simulation has there (full-model state (i, ω) on a uniform grid only).
-        """
+        """(run, first grid step) of the only stretch parameter j affects, or None (it affects everything: a global
+        parameter, which :func:`smoothness` probes)."""
         return None
 
     def plant(self, p: np.ndarray) -> StatePlant:  # pragma: no cover - abstract
@@ -243,13 +240,35 @@ class OEModel:
         raise NotImplementedError
 
 
-def _simulate_log(model: OEModel, p: np.ndarray, log: Log, speed0: float, offset: float) -> dict[str, np.ndarray]:
-    plant = model.plant(p)
-    states, theta = simulate(plant, model.drive(p, log), log.dt, x0=model.initial(p, log, speed0), theta0=0.0,
-                             switches=model.switches(p, log))
+@dataclass
+class _Run:
+    """A simulation of one log on its grid: its inputs, its states and angle, and its trace (for sensitivities)."""
+
+    inputs: Perturbed
+    states: np.ndarray
+    theta: np.ndarray
+    trace: list[tuple[int, int, int, int]]
+
+
+def _inputs(model: OEModel, p: np.ndarray, log: Log, speed0: float) -> Perturbed:
+    return Perturbed(model.plant(p), model.drive(p, log), model.initial(p, log, speed0), model.switches(p, log))
+
+
+def _run_log(model: OEModel, p: np.ndarray, log: Log, speed0: float) -> _Run:
+    inputs = _inputs(model, p, log, speed0)
+    trace: list[tuple[int, int, int, int]] = []
+    states, theta = simulate(inputs.plant, inputs.voltage, log.dt, x0=inputs.x0, theta0=0.0,
+                             switches=inputs.switches, trace=trace)
+    return _Run(inputs, states, theta, trace)
+
+
+def _outputs(model: OEModel, log: Log, states: np.ndarray, theta: np.ndarray, offset: float,
+             w: int) -> dict[str, np.ndarray]:
+    """The simulated signals at the log's samples from the grid's states and angle (or their changes, offset 0;
+    ``w``: the speed's index in the state)."""
     out = {
         "position": log.at_samples(theta) + offset,
-        "speed": log.at_samples(states[:, plant.w]),
+        "speed": log.at_samples(states[:, w]),
     }
     if model.lag:
         out["position"] = out["position"] - model.lag * out["speed"]
@@ -258,61 +277,19 @@ def _simulate_log(model: OEModel, p: np.ndarray, log: Log, speed0: float, offset
     return out
 
 
-#: A perturbed run has settled back onto the baseline when its current and speed differ from the
-#: baseline's by less than this fraction of the largest difference seen.
-SETTLED = 1e-9
+def _same_inputs(a: Perturbed, b: Perturbed) -> bool:
+    """Whether two simulations of a log have the same inputs (a parameter of another stretch or run moved)."""
+    same_switches = (a.switches is None and b.switches is None) or (
+        a.switches is not None and b.switches is not None
+        and all(np.array_equal(u, v) for u, v in zip(a.switches, b.switches, strict=True)))
+    return (same_switches and np.array_equal(a.x0, b.x0) and np.array_equal(a.plant.a, b.plant.a)
+            and np.array_equal(a.plant.b_drive, b.plant.b_drive)
+            and np.array_equal(a.plant.b_friction, b.plant.b_friction) and np.array_equal(a.voltage, b.voltage))
 
 
-def _settled_simulation(model: OEModel, p: np.ndarray, p_base: np.ndarray, log: Log, sim0: dict[str, np.ndarray],
-                        k0: int, sw: tuple[np.ndarray, np.ndarray, np.ndarray] | None, x0: np.ndarray,
-                        theta0: float) -> tuple[np.ndarray, np.ndarray]:
-    """States and angle from grid step ``k0`` with parameters ``p`` that change the drive locally.
-
-    A held level or a switch instant changes the drive over one segment only. Once the segment is
-    over and the current and speed are back on the baseline run ``sim0`` (within :data:`SETTLED` of
-    the largest difference: the electrical and mechanical transients have decayed), the rest of the
-    run is the baseline's with the angle shifted by a constant: simulated in doubling chunks up to
-    there, the column of a nuisance parameter costs its segment, not the rest of the log (a 50 000-sample
-    log with 170 switches: minutes otherwise).
-    """
-    drive = model.drive(p, log)
-    plant = model.plant(p)
-    changed = np.flatnonzero(drive[k0:] != model.drive(p_base, log)[k0:])
-    last = k0 + (int(changed[-1]) + 1 if changed.size else 0)
-    base_sw = model.switches(p_base, log)
-    if sw is not None and base_sw is not None:
-        keep = base_sw[0] >= k0
-        moved = np.flatnonzero((sw[1] != base_sw[1][keep]) | (sw[2] != base_sw[2][keep]))
-        if moved.size:
-            last = max(last, k0 + int(sw[0][moved[-1]]) + 1)
-    n = drive.size  # steps; grid points n + 1
-    out_states, out_theta = [np.asarray([x0])], [np.asarray([theta0])]
-    start, chunk, peak = k0, 256, np.zeros(2)
-    while start < n:
-        stop = min(n, max(start + chunk, last + 1))
-        part = None
-        if sw is not None:
-            inside = (sw[0] + k0 >= start) & (sw[0] + k0 < stop)
-            part = (sw[0][inside] + k0 - start, sw[1][inside], sw[2][inside])
-        states, theta = simulate(plant, drive[start:stop], log.dt, x0=out_states[-1][-1],
-                                 theta0=float(out_theta[-1][-1]), switches=part)
-        out_states.append(states[1:])
-        out_theta.append(theta[1:])
-        base = np.column_stack([sim0["current"][start:stop + 1], sim0["speed"][start:stop + 1]])
-        delta = np.abs(states[:, :2] - base)
-        peak = np.maximum(peak, delta.max(axis=0))
-        start, chunk = stop, 2 * chunk
-        if stop >= last and np.all(delta[-1] <= SETTLED * peak):
-            break
-    states, theta = np.concatenate(out_states), np.concatenate(out_theta)
-    if start < n:  # settled: the baseline's run from here on, the angle shifted by what the change left
-        shift = theta[-1] - sim0["position"][start]
-        tail = np.column_stack([sim0["current"][start + 1:], sim0["speed"][start + 1:]])
-        if states.shape[1] > 2:
-            tail = np.column_stack([tail, np.zeros((tail.shape[0], states.shape[1] - 2))])
-        states = np.concatenate([states, tail])
-        theta = np.concatenate([theta, sim0["position"][start + 1:] + shift])
-    return states, theta
+def _simulate_log(model: OEModel, p: np.ndarray, log: Log, speed0: float, offset: float) -> dict[str, np.ndarray]:
+    run = _run_log(model, p, log, speed0)
+    return _outputs(model, log, run.states, run.theta, offset, run.inputs.plant.w)
 
 
 class _Problem:
@@ -356,28 +333,39 @@ class _Problem:
         """Initial speed of run k (0 for a run that starts at rest) [rad/s]."""
         return float(speeds[self.speed_logs.index(k)]) if k in self.speed_logs else 0.0
 
-    def residual_parts(self, p: np.ndarray, offsets: np.ndarray, speeds: np.ndarray) -> tuple[np.ndarray, list]:
-        """Weighted residuals (per run: angle, then current) and the simulations."""
+    def residual_parts(self, p: np.ndarray, offsets: np.ndarray, speeds: np.ndarray, *,
+                       runs: list[_Run] | None = None) -> tuple[np.ndarray, list]:
+        """Weighted residuals (per run: angle, then current) and the simulations (their grid runs appended to
+        ``runs`` when given)."""
         parts = []
         sims = []
         for k in range(len(self.logs)):
-            part, sim = self.log_residuals(k, p, offsets, speeds)
+            part, sim = self.log_residuals(k, p, offsets, speeds, runs=runs)
             parts += part
             sims.append(sim)
         parts.append(self.model.extra_residuals(p))
         return np.concatenate(parts), sims
 
     def log_residuals(
-        self, k: int, p: np.ndarray, offsets: np.ndarray, speeds: np.ndarray
+        self, k: int, p: np.ndarray, offsets: np.ndarray, speeds: np.ndarray, *, runs: list[_Run] | None = None
     ) -> tuple[list[np.ndarray], dict[str, np.ndarray]]:
         """Weighted residuals of run k (angle, then current) and its simulation."""
         model, log = self.model, self.logs[k]
-        sim = _simulate_log(model, p, log, self.speed_of(k, speeds), float(offsets[k]))
-        parts = [(sim["position"] - log.position) * self.factors[k]]
-        if model.uses_current:
+        run = _run_log(model, p, log, self.speed_of(k, speeds))
+        if runs is not None:
+            runs.append(run)
+        sim = _outputs(model, log, run.states, run.theta, float(offsets[k]), run.inputs.plant.w)
+        return self.weighted(k, sim), sim
+
+    def weighted(self, k: int, sim: dict[str, np.ndarray], *, change: bool = False) -> list[np.ndarray]:
+        """Run k's weighted residuals of a simulation, or (``change``) how they change with a change of the
+        simulation."""
+        log = self.logs[k]
+        parts = [(sim["position"] - (0.0 if change else log.position)) * self.factors[k]]
+        if self.model.uses_current:
             assert log.current is not None
-            parts.append((sim["current"] - log.current) / self.sigma["current"])
-        return parts, sim
+            parts.append((sim["current"] - (0.0 if change else log.current)) / self.sigma["current"])
+        return parts
 
     def fun(self, z: np.ndarray) -> np.ndarray:
         """Weighted residuals at z."""
@@ -386,39 +374,22 @@ class _Problem:
         if "z" in last and np.array_equal(last["z"], z):
             return last["r"]
         p, offsets, speeds = self.unpack(z)
-        r, sims = self.residual_parts(p, offsets, speeds)
+        runs: list[_Run] = []
+        r, sims = self.residual_parts(p, offsets, speeds, runs=runs)
         last["z"] = z.copy()
         last["r"] = r
         last["sims"] = sims
-        return r
-
-    def local_column(self, zj: np.ndarray, k: int, k0: int, r0: np.ndarray) -> np.ndarray:
-        """Residuals with log k re-simulated from grid step k0 (the parameter changed acts from there)."""
-        model, sigma, row_starts = self.model, self.sigma, self.row_starts
-        p, offsets, _ = self.unpack(zj)
-        log = self.logs[k]
-        sim0 = self._last["sims"][k]
-        sw = model.switches(p, log)
-        if sw is not None:
-            keep = sw[0] >= k0
-            sw = (sw[0][keep] - k0, sw[1][keep], sw[2][keep])
-        x0 = np.array([sim0["current"][k0], sim0["speed"][k0]])
-        states, theta = _settled_simulation(model, p, self.unpack(self._last["z"])[0], log, sim0, k0, sw, x0,
-                                            float(sim0["position"][k0] - offsets[k]))
-        r = r0.copy()
-        rs, m = int(row_starts[k]), log.time.size
-        assert log.current is not None
-        r[rs + k0 : rs + m] = (theta + offsets[k] - log.position[k0:]) * self.factors[k][k0:]
-        r[rs + m + k0 : rs + 2 * m] = (states[:, 0] - log.current[k0:]) / sigma["current"]
-        r[int(row_starts[-1]) :] = model.extra_residuals(p)
+        last["runs"] = runs
         return r
 
     def jac(self, z: np.ndarray) -> np.ndarray:
-        """Jacobian of the weighted residuals in z: forward differences (an initial speed re-simulates its own
-        run only), the angle offsets' columns analytic."""
-        model, logs, n_model = self.model, self.logs, self.n_model
+        """Jacobian of the weighted residuals in z: forward differences of 1e-6 in the scaled unknowns, the
+        simulations' changes from their sensitivities (:meth:`sensitivity_columns`), the angle offsets' columns
+        analytic."""
+        logs, n_model = self.logs, self.n_model
         r0 = self.fun(z)
         cols = np.empty((r0.size, z.size))
+        moved: dict[int, tuple[float, np.ndarray]] = {}
         for j in range(z.size):
             if n_model <= j < n_model + len(logs):
                 continue
@@ -427,18 +398,8 @@ class _Problem:
                 h = -h
             zj = z.copy()
             zj[j] += h
-            loc = model.local_start(j) if j < n_model else None
-            if loc is not None and logs[loc[0]].uniform and model.uses_current and not model.lag:
-                cols[:, j] = (self.local_column(zj, loc[0], loc[1], r0) - r0) / h
-                continue
-            p, offsets, speeds = self.unpack(zj)
-            if j >= n_model + len(logs):  # run k's initial speed: only run k's residuals change
-                k = self.speed_logs[j - n_model - len(logs)]
-                rows = slice(int(self.row_starts[k]), int(self.row_starts[k + 1]))
-                cols[:, j] = 0.0
-                cols[rows, j] = (np.concatenate(self.log_residuals(k, p, offsets, speeds)[0]) - r0[rows]) / h
-                continue
-            cols[:, j] = (self.residual_parts(p, offsets, speeds)[0] - r0) / h
+            moved[j] = (h, zj)
+        self.sensitivity_columns(moved, r0, cols)
         # angle offsets: residual of log k's angle rises 1/σ per unit offset
         start = 0
         for k, log in enumerate(logs):
@@ -448,6 +409,43 @@ class _Problem:
             cols[:, n_model + k] = col
             start += m * len(self.signals)
         return cols
+
+    def sensitivity_columns(self, moved: dict[int, tuple[float, np.ndarray]], r0: np.ndarray,
+                            cols: np.ndarray) -> None:
+        """Fill ``cols[:, j]`` = (r(z_j) − r0)/h for each ``j: (h, z_j)`` of ``moved``: per log, the changes of its
+        run from :func:`motorlab.estimation.simulator.sensitivities` (all columns in one pass; a column that
+        changes the run's sequence of regimes is simulated), the extra residuals computed."""
+        model, n_model, n_logs = self.model, self.n_model, len(self.logs)
+        runs: list[_Run] = self._last["runs"]
+        extra = slice(int(self.row_starts[-1]), r0.size)
+        for j, (h, zj) in moved.items():
+            cols[:, j] = 0.0
+            if j < n_model:
+                cols[extra, j] = (model.extra_residuals(self.unpack(zj)[0]) - r0[extra]) / h
+        for k, log in enumerate(self.logs):
+            rows = slice(int(self.row_starts[k]), int(self.row_starts[k + 1]))
+            run = runs[k]
+            columns: dict[int, Perturbed] = {}
+            for j, (_, zj) in moved.items():
+                if j >= n_model + n_logs and self.speed_logs[j - n_model - n_logs] != k:
+                    continue  # another run's initial speed
+                p, _, speeds = self.unpack(zj)
+                inputs = _inputs(model, p, log, self.speed_of(k, speeds))
+                if not _same_inputs(inputs, run.inputs):
+                    columns[j] = inputs
+            if not columns:
+                continue
+            found = sensitivities(run.inputs.plant, run.inputs.voltage, log.dt, run.states, run.theta, run.trace,
+                                  run.inputs.switches, list(columns.values()))
+            for c, j in enumerate(columns):
+                h, zj = moved[j]
+                if found is None:
+                    p, offsets, speeds = self.unpack(zj)
+                    change = np.concatenate(self.log_residuals(k, p, offsets, speeds)[0]) - r0[rows]
+                else:
+                    sim = _outputs(model, log, found[0][:, :, c], found[1][:, c], 0.0, run.inputs.plant.w)
+                    change = np.concatenate(self.weighted(k, sim, change=True))
+                cols[rows, j] = change / h
 
     def blocks(self) -> list[tuple[int, int]]:
         """Residual series per log, as (first row, samples) of its (time, signal) block."""
@@ -504,7 +502,8 @@ def fit_output_error(
     Notes
     -----
     Residuals are (simulated − measured)/σ per signal. The Jacobian of the model parameters is by
-    forward differences of the simulation; the angle offsets enter linearly (analytic column).
+    forward differences, the simulations' changes from their sensitivities (one pass for all the parameters); the
+    angle offsets enter linearly (analytic column).
     Covariance: see :func:`output_error_covariance`.
     """
     problem = _Problem(model, logs, p0, lower=lower, upper=upper, scale=scale, sigma=sigma)

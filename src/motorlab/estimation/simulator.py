@@ -33,7 +33,10 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import linalg
 
-from motorlab.model import HeldStep, phi_functions, phi_of, propagate
+from motorlab.model import HeldStep, phi_functions, phi_of, propagate, recursion
+
+#: Kinds of the pieces of a simulation's trace (:func:`simulate`, :func:`sensitivities`).
+RUN, SWITCH, EVENT = 0, 1, 2
 
 #: Steps propagated at once after an event (doubling while nothing happens): a propagation costs ~70 µs of calls
 #: whatever its length, and its samples ~5 ns each, so a long first chunk wastes less than short ones cost
@@ -415,6 +418,7 @@ def simulate(
     x0: np.ndarray | None = None,
     theta0: float = 0.0,
     switches: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
+    trace: list[tuple[int, int, int, int]] | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Simulate the plant on a uniform grid.
 
@@ -434,6 +438,10 @@ def simulate(
         Drive switches inside steps: (step indices k, increasing; fractions f in [0, 1]; voltage
         before). Step k holds the voltage before for f·dt, then ``voltage[k]`` (a drive switching
         between the logger's samples); each such step is propagated exactly in two parts.
+    trace
+        A list that receives the run's structure, for :func:`sensitivities`: ``(k0, k1, mode, kind)`` for steps k0 to
+        k1 propagated in regime ``mode``, ``kind`` :data:`RUN`, or one step k0 (k1 = k0 + 1) that starts in
+        ``mode`` and is a drive switch (:data:`SWITCH`) or the step of a friction event (:data:`EVENT`).
 
     Returns
     -------
@@ -459,6 +467,8 @@ def simulate(
         while sw < len(sw_steps) and sw_steps[sw] < k:
             sw += 1
         if sw < len(sw_steps) and sw_steps[sw] == k:
+            if trace is not None:
+                trace.append((k, k + 1, mode, SWITCH))
             x, dth_step, mode = _switch_step(reg, x, mode, float(sw_before[sw]), float(voltage[k]), float(sw_frac[sw]))
         else:
             # Propagate a chunk in the current regime; stop at the first step where the regime ends
@@ -474,6 +484,8 @@ def simulate(
                 margins = (np.abs(reg.drive(xs[:-1], v)) - reg.f_level, np.abs(reg.drive(xs[1:], v)) - reg.f_level)
                 bad = np.flatnonzero((margins[0] > 0) | (margins[1] > 0))
             if bad.size == 0:
+                if trace is not None:
+                    _traced_run(trace, k, stop, mode)
                 states[k + 1 : stop + 1] = xs[1:]
                 theta[k + 1 : stop + 1] = th + np.cumsum(dth)
                 th = float(theta[stop])
@@ -487,6 +499,10 @@ def simulate(
                 theta[k + 1 : k + j + 1] = th + np.cumsum(dth[:j])
                 th = float(theta[k + j])
                 x = xs[j].copy()
+            if trace is not None:
+                if j:
+                    _traced_run(trace, k, k + j, mode)
+                trace.append((k + j, k + j + 1, mode, EVENT))
             k += j
             ends = (float(x[w]), float(xs[j + 1, w])) if margins is None else (margins[0][j], margins[1][j])
             x, dth_step, mode = _event_step(reg, x, mode, float(voltage[k]), float(ends[0]), float(ends[1]))
@@ -496,6 +512,13 @@ def simulate(
         theta[k] = th
         chunk = _MIN_CHUNK
     return states, theta
+
+
+def _traced_run(trace: list[tuple[int, int, int, int]], k0: int, k1: int, mode: int) -> None:
+    """Add steps k0 to k1 propagated in ``mode`` to a trace, as one stretch with the one before when it continues it."""
+    if trace and trace[-1][3] == RUN and trace[-1][1] == k0 and trace[-1][2] == mode:
+        k0 = trace.pop()[0]
+    trace.append((k0, k1, mode, RUN))
 
 
 def _switch_step(reg: _Regimes, x: np.ndarray, mode: int, v_before: float, v_after: float,
@@ -585,3 +608,151 @@ def _stuck_rest(reg: _Regimes, x: np.ndarray, v: float, tau: float) -> tuple[np.
     x[reg.w] = 0.0
     x_end, _ = reg.modal(0).flow(x, v, tau)
     return x_end, 0.0, 0
+
+
+@dataclass(frozen=True)
+class Perturbed:
+    """A simulation's inputs with the parameters moved a little (one column of a Jacobian)."""
+
+    plant: StatePlant
+    voltage: np.ndarray
+    x0: np.ndarray
+    switches: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+
+
+def _step_of(reg: _Regimes, x: np.ndarray, mode: int, kind: int, vk: float,
+             switch: tuple[float, float] | None) -> tuple[np.ndarray, float, int]:
+    """One step of a trace that is not a plain propagation (a drive switch, a friction event), from state x."""
+    if kind == SWITCH:
+        assert switch is not None
+        return _switch_step(reg, x, mode, switch[1], vk, switch[0])
+    x1, _ = _flow(reg.discrete(mode), x, vk)
+    if mode != 0:
+        f0, f1 = float(x[reg.w]), float(x1[reg.w])
+    else:
+        f0, f1 = (abs(float(reg.drive(x, vk))) - reg.f_level, abs(float(reg.drive(x1, vk))) - reg.f_level)
+    return _event_step(reg, x, mode, vk, f0, f1)
+
+
+def sensitivities(plant: StatePlant, voltage: np.ndarray, dt: float, states: np.ndarray, theta: np.ndarray,
+                  trace: list[tuple[int, int, int, int]], switches: tuple[np.ndarray, np.ndarray, np.ndarray] | None,
+                  columns: list[Perturbed]) -> tuple[np.ndarray, np.ndarray] | None:
+    """How a simulation's states and angle change when its inputs change a little: C columns at once.
+
+    ``states``, ``theta`` and ``trace`` are what :func:`simulate` gave for ``plant``, ``voltage`` and ``switches``
+    (from ``states[0]``, angle 0); each column moves the plant, the voltage, the initial state or the switch
+    instants a little. Along the stretches the trace propagated, the changes follow the nominal run's recursion
+    δx⁺ = Ad·δx + ΔAd·x + Δb_V·v + b_V·Δv + Δc (the product of two changes dropped), all columns in one filter. A
+    switch's or a friction event's step is linearised: its derivative in the state it starts from by differences of
+    1e-7 (the event relocated each time), plus the step taken again with the column's plant, voltage or switch where
+    the column moves them. A Jacobian then costs about one simulation, not one per parameter.
+
+    Returns
+    -------
+    (dstates, dtheta) of shapes (N + 1, n, C) and (N + 1, C), or None when a column changes the run's sequence
+    of regimes (it starts in another, moves a switch to another step, or leaves an event's step in another):
+    then only simulating it says how.
+    """
+    n, count, w = plant.n, len(columns), plant.w
+    dstates = np.empty((voltage.size + 1, n, count))
+    dtheta = np.empty((voltage.size + 1, count))
+    dstates[0] = np.stack([col.x0 for col in columns], axis=1) - states[0][:, None]
+    dtheta[0] = 0.0
+    reg = _Regimes(plant, dt)
+    regs = [_Regimes(col.plant, dt) for col in columns]  # each regime built on first use
+    for col, col_reg in zip(columns, regs, strict=True):
+        start = int(np.sign(col.x0[w])) if col.x0[w] != 0 else col_reg.new_mode(col.x0, float(col.voltage[0]))
+        if trace and start != trace[0][2]:
+            return None
+    if switches is not None and any(col.switches is None or not np.array_equal(col.switches[0], switches[0])
+                                    for col in columns):
+        return None
+    dvolt = np.stack([col.voltage for col in columns], axis=1) - voltage[:, None]  # (N, C)
+    plant_moved = np.array([not (np.array_equal(col.plant.a, plant.a)
+                                 and np.array_equal(col.plant.b_drive, plant.b_drive)
+                                 and np.array_equal(col.plant.b_friction, plant.b_friction)) for col in columns])
+    special = _SpecialSteps(reg, regs, voltage, columns, switches, np.maximum(np.abs(states).max(axis=0), 1e-300))
+    for k0, k1, mode, kind in trace:
+        if kind != RUN:
+            again = plant_moved | (dvolt[k0] != 0.0)
+            if not special.take(k0, mode, kind, states[k0], again, dstates, dtheta):
+                return None
+            continue
+        step = reg.discrete(mode)
+        # the changes of the step's matrices (none for a column that moves only the drive or the start)
+        d_ad, d_bv, d_c = np.zeros((count, n, n)), np.zeros((n, count)), np.zeros((n, count))
+        d_hx, d_hv, d_hc = np.zeros((n, count)), np.zeros(count), np.zeros(count)
+        for c in np.flatnonzero(plant_moved):
+            moved_step = regs[c].discrete(mode)
+            d_ad[c] = moved_step.ad - step.ad
+            d_bv[:, c] = moved_step.bv - step.bv
+            d_c[:, c] = moved_step.c - step.c
+            d_hx[:, c] = moved_step.hx - step.hx
+            d_hv[c] = moved_step.hv - step.hv
+            d_hc[c] = moved_step.hc - step.hc
+        x = states[k0:k1]  # (m, n)
+        v = voltage[k0:k1]
+        dv = dvolt[k0:k1]  # (m, C)
+        # e_k = ΔAd·x_k + Δb_V·v_k + b_V·Δv_k + Δc, laid out (n, C, m)
+        e = (np.einsum("cij,kj->ick", d_ad, x) + d_bv[:, :, None] * v + step.bv[:, None, None] * dv.T[None]
+             + d_c[:, :, None])
+        xs = recursion(step.ad, dstates[k0], e)  # (n, C, m + 1)
+        dstates[k0 + 1 : k1 + 1] = np.moveaxis(xs[:, :, 1:], 2, 0)
+        increments = (np.einsum("i,ick->kc", step.hx, xs[:, :, :-1]) + x @ d_hx + np.outer(v, d_hv) + step.hv * dv
+                      + d_hc)
+        dtheta[k0 + 1 : k1 + 1] = dtheta[k0] + np.cumsum(increments, axis=0)
+    return dstates, dtheta
+
+
+class _SpecialSteps:
+    """The linearised switch and event steps of :func:`sensitivities`."""
+
+    def __init__(self, reg: _Regimes, regs: list[_Regimes], voltage: np.ndarray, columns: list[Perturbed],
+                 switches: tuple[np.ndarray, np.ndarray, np.ndarray] | None, scale: np.ndarray):
+        self.reg, self.regs, self.voltage, self.columns, self.scale = reg, regs, voltage, columns, scale
+        self.switches = switches
+        self.index = {int(k): i for i, k in enumerate(switches[0])} if switches is not None else {}
+
+    def _switch(self, k: int, inputs: tuple[np.ndarray, np.ndarray, np.ndarray] | None) -> tuple[float, float] | None:
+        if k not in self.index:
+            return None
+        assert inputs is not None
+        i = self.index[k]
+        return float(inputs[1][i]), float(inputs[2][i])
+
+    def take(self, k: int, mode: int, kind: int, x: np.ndarray, again: np.ndarray, dstates: np.ndarray,
+             dtheta: np.ndarray) -> bool:
+        """Carry the changes over step k (starting in ``mode`` from the nominal state x); False where a change
+        leaves the step in another regime. ``again``: the columns whose plant or voltage change the step."""
+        nominal = self._switch(k, self.switches)
+        vk = float(self.voltage[k])
+        x_end, dth, after = _step_of(self.reg, x, mode, kind, vk, nominal)
+        # the step's derivative in the state it starts from (forward differences, else backward) ...
+        jac_x = np.empty((x.size, x.size))
+        grad_x = np.empty(x.size)
+        for j in range(x.size):
+            for sign in (1.0, -1.0):
+                eps = sign * 1e-7 * max(abs(float(x[j])), float(self.scale[j]))
+                xj = x.copy()
+                xj[j] += eps
+                x1, dth1, mode1 = _step_of(self.reg, xj, mode, kind, vk, nominal)
+                if mode1 == after:
+                    break
+            else:
+                return False
+            jac_x[:, j] = (x1 - x_end) / eps
+            grad_x[j] = (dth1 - dth) / eps
+        dx = dstates[k]
+        dstates[k + 1] = jac_x @ dx
+        dtheta[k + 1] = dtheta[k] + grad_x @ dx
+        # ... and the step taken again where a column moves its plant, its voltage or its switch
+        for c, col in enumerate(self.columns):
+            moved = self._switch(k, col.switches)
+            if not again[c] and moved == nominal:
+                continue
+            xc, dthc, mode_c = _step_of(self.regs[c], x, mode, kind, float(col.voltage[k]), moved)
+            if mode_c != after:
+                return False
+            dstates[k + 1, :, c] += xc - x_end
+            dtheta[k + 1, c] += dthc - dth
+        return True

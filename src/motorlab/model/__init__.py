@@ -368,47 +368,49 @@ def first_order(a: float, u: np.ndarray) -> np.ndarray:
     return x.reshape(y.shape, order="F")
 
 
+def recursion(ad: np.ndarray, x0: np.ndarray, e: np.ndarray) -> np.ndarray:
+    """x_0 = x0 and x_(k+1) = Ad·x_k + e_k for k < M, for several sequences at once (one or two states).
+
+    ``x0`` is (n, C) and ``e`` (n, C, M), time last: C sequences of the same recursion (a simulation, or the
+    sensitivities of one to C parameters). Returns x (n, C, M + 1). Run as a rational filter in z⁻¹ (one or two
+    poles); the initial state enters as an input at step −1, so every sequence starts exactly at its x0. ``e`` is
+    overwritten.
+    """
+    n, m = e.shape[0], e.shape[-1]
+    if n == 1:
+        u = np.empty((m + 1, e.shape[1]))
+        u[0] = x0[0]
+        u[1:] = e[0].T
+        return first_order(float(ad[0, 0]), u).T[None]  # lfilter([0, 1], [1, −a], e)[1:]
+    from scipy import signal
+
+    (a11, a12), (a21, a22) = ad.tolist()
+    den = [1.0, -(a11 + a22), a11 * a22 - a12 * a21]
+    # X0 = z⁻¹[(1 − a22 z⁻¹)E0 + a12 z⁻¹ E1]/det,  X1 = z⁻¹[a21 z⁻¹ E0 + (1 − a11 z⁻¹)E1]/det with
+    # E = (x0, e_0, …, e_(M−1), 0): both rows in one array, one lfilter call
+    u = np.zeros((2, e.shape[1], m + 2))
+    u[:, :, 1] = x0
+    u[:, :, 2:] = e
+    if m:
+        e0, e1 = e  # the E's kept in front: E[k − 1] beside E[k]
+        p0 = u[0, :, 1:-1]
+        p1 = u[1, :, 1:-1]
+        e0 += -a22 * p0 + a12 * p1
+        e1 += -a11 * p1 + a21 * p0
+        u[:, :, 2:] = e
+    return signal.lfilter([1.0], den, u, axis=-1)[:, :, 1:]
+
+
 def propagate(step: HeldStep, x0: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """States x_0..x_M and angle increments for held inputs v_0..v_{M-1}, starting from x0: the one
     propagator of the motor equation (both simulators).
 
-    The recursion x⁺ = Ad·x + e with e = bv·v + c is run as a rational filter in z⁻¹ (one or two
-    poles); the initial state enters as an input at step −1, so every call starts exactly at x0.
+    The recursion x⁺ = Ad·x + e with e = bv·v + c is :func:`recursion`.
     """
-    n = x0.size
-    m = v.size
-    if n == 1:
-        e = np.empty(m + 1)
-        e[0] = x0[0]
-        e[1:] = step.bv[0] * v + step.c[0]
-        x = first_order(float(step.ad[0, 0]), e)[:, None]  # lfilter([0, 1], [1, −a], e)[1:]
-    else:
-        from scipy import signal
-
-        (a11, a12), (a21, a22) = step.ad.tolist()
-        den = [1.0, -(a11 + a22), a11 * a22 - a12 * a21]
-        (bv0, bv1), (c0, c1) = step.bv.tolist(), step.c.tolist()
-        # X0 = z⁻¹[(1 − a22 z⁻¹)E0 + a12 z⁻¹ E1]/det,  X1 = z⁻¹[a21 z⁻¹ E0 + (1 − a11 z⁻¹)E1]/det with
-        # E = (x0, bv·v_0 + c, …, bv·v_(M−1) + c, 0): both rows in one array, one lfilter call
-        u = np.zeros((2, m + 2))
-        u0, u1 = u
-        u0[1] = x0[0]
-        u1[1] = x0[1]
-        e0 = u0[2:]  # E0[1 : m + 1], written in place, then the a·E terms added from the E's kept in front
-        e1 = u1[2:]
-        np.multiply(v, bv0, out=e0)
-        e0 += c0
-        np.multiply(v, bv1, out=e1)
-        e1 += c1
-        if m:
-            p0 = np.empty(m)
-            p0[0] = x0[0]
-            p0[1:] = e0[:-1]
-            p1 = np.empty(m)
-            p1[0] = x0[1]
-            p1[1:] = e1[:-1]
-            e0 += -a22 * p0 + a12 * p1
-            e1 += -a11 * p1 + a21 * p0
-        x = np.ascontiguousarray(signal.lfilter([1.0], den, u, axis=1)[:, 1:].T)
+    e = np.empty((x0.size, 1, v.size))
+    for row, (bv, c) in enumerate(zip(step.bv.tolist(), step.c.tolist(), strict=True)):
+        np.multiply(v, bv, out=e[row, 0])
+        e[row, 0] += c
+    x = np.ascontiguousarray(recursion(step.ad, x0[:, None], e)[:, 0].T)
     dtheta = x[:-1] @ step.hx + step.hv * v + step.hc
     return x, dtheta
