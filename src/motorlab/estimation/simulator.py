@@ -467,8 +467,7 @@ def simulate(
         while sw < len(sw_steps) and sw_steps[sw] < k:
             sw += 1
         if sw < len(sw_steps) and sw_steps[sw] == k:
-            if trace is not None:
-                trace.append((k, k + 1, mode, SWITCH))
+            _traced(trace, k, k + 1, mode, SWITCH)
             x, dth_step, mode = _switch_step(reg, x, mode, float(sw_before[sw]), float(voltage[k]), float(sw_frac[sw]))
         else:
             # Propagate a chunk in the current regime; stop at the first step where the regime ends
@@ -484,8 +483,7 @@ def simulate(
                 margins = (np.abs(reg.drive(xs[:-1], v)) - reg.f_level, np.abs(reg.drive(xs[1:], v)) - reg.f_level)
                 bad = np.flatnonzero((margins[0] > 0) | (margins[1] > 0))
             if bad.size == 0:
-                if trace is not None:
-                    _traced_run(trace, k, stop, mode)
+                _traced(trace, k, stop, mode, RUN)
                 states[k + 1 : stop + 1] = xs[1:]
                 theta[k + 1 : stop + 1] = th + np.cumsum(dth)
                 th = float(theta[stop])
@@ -499,10 +497,8 @@ def simulate(
                 theta[k + 1 : k + j + 1] = th + np.cumsum(dth[:j])
                 th = float(theta[k + j])
                 x = xs[j].copy()
-            if trace is not None:
-                if j:
-                    _traced_run(trace, k, k + j, mode)
-                trace.append((k + j, k + j + 1, mode, EVENT))
+            _traced(trace, k, k + j, mode, RUN)
+            _traced(trace, k + j, k + j + 1, mode, EVENT)
             k += j
             ends = (float(x[w]), float(xs[j + 1, w])) if margins is None else (margins[0][j], margins[1][j])
             x, dth_step, mode = _event_step(reg, x, mode, float(voltage[k]), float(ends[0]), float(ends[1]))
@@ -514,11 +510,14 @@ def simulate(
     return states, theta
 
 
-def _traced_run(trace: list[tuple[int, int, int, int]], k0: int, k1: int, mode: int) -> None:
-    """Add steps k0 to k1 propagated in ``mode`` to a trace, as one stretch with the one before when it continues it."""
-    if trace and trace[-1][3] == RUN and trace[-1][1] == k0 and trace[-1][2] == mode:
+def _traced(trace: list[tuple[int, int, int, int]] | None, k0: int, k1: int, mode: int, kind: int) -> None:
+    """Add steps k0 to k1 of ``kind`` starting in ``mode`` to a trace (if any); a propagated stretch joins the one
+    before when it continues it."""
+    if trace is None or k1 == k0:
+        return
+    if kind == RUN and trace and trace[-1][3] == RUN and trace[-1][1] == k0 and trace[-1][2] == mode:
         k0 = trace.pop()[0]
-    trace.append((k0, k1, mode, RUN))
+    trace.append((k0, k1, mode, kind))
 
 
 def _switch_step(reg: _Regimes, x: np.ndarray, mode: int, v_before: float, v_after: float,
