@@ -446,11 +446,8 @@ def test_cli_arm_on_a_distance_is_one_line_error(tmp_path, capsys):
     assert lift["fit"]["rmse_unit"] == "m"
 
 
-def test_the_jacobian_from_sensitivities_is_the_forward_difference_of_whole_simulations():
-    """The fit's Jacobian, every run's changes computed in one pass from the simulation's sensitivities
-    (:func:`motorlab.estimation.simulator.sensitivities`), is the forward difference of re-simulating every run
-    (within 1e-4 of each column's size: the difference's own truncation is ~1e-5), on a team's real SysId runs with
-    stiction events and two runs that start moving; a run's initial speed moves that run's residuals only."""
+def _real_sysid_problem():  # type: ignore[no-untyped-def]
+    """The motor-model fit's problem on a team's real SysId runs (stiction events; two runs start moving)."""
     from motorlab.analyses.feedforward import (
         FeedforwardModel,
         _bounds,
@@ -475,11 +472,20 @@ def test_the_jacobian_from_sensitivities_is_the_forward_difference_of_whole_simu
     problem = _oe._Problem(FeedforwardModel("simple", lag=0.5 * period), logs, np.clip(p0, lower, upper),
                            lower=lower, upper=upper, scale=scale, sigma=noise_levels(logs, with_current=False))
     assert len(problem.speed_logs) == 2  # the two steps start spinning: there are such columns
+    return problem
+
+
+def test_the_jacobian_from_sensitivities_is_the_forward_difference_of_whole_simulations():
+    """The fit's Jacobian, every run's changes computed in one pass from the simulation's sensitivities
+    (:func:`motorlab.estimation.simulator.sensitivities`), is the forward difference of re-simulating every run
+    (within 1e-4 of each column's size: the difference's own truncation is ~1e-5), on a team's real SysId runs with
+    stiction events and two runs that start moving; a run's initial speed moves that run's residuals only."""
+    problem = _real_sysid_problem()
     z = problem.z0
     jac = problem.jac(z)
     r0 = problem.fun(z)
     assert sum(op[3] == 2 for run in problem._last["runs"] for op in run.trace) > 0  # friction events happen
-    first = problem.n_model + len(logs)
+    first = problem.n_model + len(problem.logs)
     for j in [*range(problem.n_model), *range(first, z.size)]:
         h = 1e-6 * max(abs(z[j]), 1.0)
         zj = z.copy()
@@ -491,3 +497,21 @@ def test_the_jacobian_from_sensitivities_is_the_forward_difference_of_whole_simu
             others = np.ones(r0.size, bool)
             others[int(problem.row_starts[k]) : int(problem.row_starts[k + 1])] = False
             assert not np.any(jac[others, j])
+
+
+def test_a_run_whose_regimes_a_column_changes_is_simulated_again(monkeypatch):  # type: ignore[no-untyped-def]
+    """Where the sensitivities cannot carry a column (it changes the run's sequence of regimes: here every run is
+    made to say so), the Jacobian's columns are the forward differences of re-simulating, to the bit."""
+    from motorlab.estimation import output_error as _oe
+
+    problem = _real_sysid_problem()
+    monkeypatch.setattr(_oe, "sensitivities", lambda *args: None)
+    z = problem.z0
+    jac = problem.jac(z)
+    r0 = problem.fun(z)
+    first = problem.n_model + len(problem.logs)
+    for j in [*range(problem.n_model), *range(first, z.size)]:
+        h = 1e-6 * max(abs(z[j]), 1.0)
+        zj = z.copy()
+        zj[j] += h
+        np.testing.assert_array_equal(jac[:, j], (problem.residual_parts(*problem.unpack(zj))[0] - r0) / h)
