@@ -489,10 +489,11 @@ def _per_run(runs: Sequence[tuple[StallData, np.ndarray]], beta: float,
         if x.size < 4:
             out.append((float(np.mean(run.current)), float(np.sum(x * y) / np.sum(x * x)), math.nan))
             continue
-        fit = fit_linear(x[:, None], y, ["K"], covariance="hac")
         drift = _drift(run.current, t, x, y)
-        k, se = (drift[0], drift[1]) if drift is not None else (float(fit.values[0]), float(fit.stderr[0]))
-        out.append((float(np.mean(run.current)), k, se))
+        if drift is None:
+            fit = fit_linear(x[:, None], y, ["K"], covariance="hac")
+            drift = (float(fit.values[0]), float(fit.stderr[0]), 0.0)
+        out.append((float(np.mean(run.current)), drift[0], drift[1]))
     return out
 
 
