@@ -160,6 +160,29 @@ def reference_run(runs: Sequence[StallData]) -> int:
     return int(np.argmin(r0))
 
 
+class _RelativeMisses:
+    """The runs' relative misses of the current, (model − measured)/measured, for the shared figures and initial
+    temperatures. Each run's is kept for the figures it was made with: a difference of the Jacobian in one run's
+    initial temperature moves that run only, and the others' are those of the point it is taken at."""
+
+    def __init__(self, runs: Sequence[StallData], magnet: float, ambient: float):
+        self.runs, self.magnet, self.ambient = runs, magnet, ambient
+        self.made: dict[tuple[int, bytes, float], np.ndarray] = {}
+
+    def __call__(self, shared: Sequence[float], initial: Sequence[float]) -> np.ndarray:
+        figures = np.asarray(shared, dtype=float).tobytes()
+        parts = []
+        for j, (run, t0) in enumerate(zip(self.runs, initial, strict=True)):
+            key = (j, figures, t0)
+            if key not in self.made:
+                if len(self.made) >= 4 * len(self.runs):
+                    self.made.clear()
+                model = simulate_runs(shared, [t0], [run], self.magnet, self.ambient)[0][0]
+                self.made[key] = (model - run.current) / run.current
+            parts.append(self.made[key])
+        return np.concatenate(parts)
+
+
 def fit_heating(runs: Sequence[StallData], *, magnet: float, ambient: float, winding_prior: bool = False,
                 network: Sequence[float] | None = None) -> HeatFit:
     """Fit R₂₅, the thermal network and each run's initial temperature to the runs' currents.
@@ -190,7 +213,6 @@ def fit_heating(runs: Sequence[StallData], *, magnet: float, ambient: float, win
     held = np.asarray(x0, dtype=float)
     picks = [decimate(r.time) for r in runs]
     thin = [StallData(r.source, r.time[p], r.voltage[p], r.current[p], None) for r, p in zip(runs, picks, strict=True)]
-    meas = [r.current for r in thin]
     groups = np.concatenate([np.full(r.time.size, j) for j, r in enumerate(thin)])
 
     def whole(xa: np.ndarray) -> np.ndarray:
@@ -204,22 +226,11 @@ def fit_heating(runs: Sequence[StallData], *, magnet: float, ambient: float, win
             t0[j] = float(x[len(SHARED) + k])
         return t0
 
-    # Each run's simulation, kept for the parameters it was made with: a difference of the Jacobian in one run's
-    # initial temperature moves that run only, and the others' are those of the point it is taken at.
-    made: dict[tuple[int, bytes, float], np.ndarray] = {}
+    relative = _RelativeMisses(thin, magnet, ambient)
 
     def residual(xa: np.ndarray) -> np.ndarray:
         x = whole(xa)
-        shared = np.exp(x[: len(SHARED)])
-        parts = []
-        for j, (run, t0, m) in enumerate(zip(thin, initial_of(x), meas, strict=True)):
-            key = (j, shared.tobytes(), t0)
-            if key not in made:
-                if len(made) >= 4 * len(thin):
-                    made.clear()
-                made[key] = (simulate_runs(shared, [t0], [run], magnet, ambient)[0][0] - m) / m
-            parts.append(made[key])
-        return np.concatenate(parts)
+        return relative(np.exp(x[: len(SHARED)]), initial_of(x))
 
     if groups.size <= len(active):
         raise FitError(f"{groups.size} healthy samples cannot determine {len(active)} parameters")
