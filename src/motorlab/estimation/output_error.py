@@ -367,6 +367,19 @@ class _Problem:
             parts.append((sim["current"] - (0.0 if change else log.current)) / self.sigma["current"])
         return parts
 
+    def last_simulations(self) -> list[dict[str, np.ndarray]]:
+        """The simulations of the point :meth:`fun` evaluated last."""
+        return list(self._last["sims"])
+
+    def restore(self, kept: dict[str, Any], z: np.ndarray) -> None:
+        """Make z the point :meth:`fun` evaluated last: from ``kept`` (a copy of its cache) when that was z's, else
+        by simulating it."""
+        if "z" in kept and np.array_equal(kept["z"], z):
+            self._last.clear()
+            self._last.update(kept)
+        else:
+            self.fun(z)
+
     def fun(self, z: np.ndarray) -> np.ndarray:
         """Weighted residuals at z."""
         last = self._last
@@ -509,8 +522,8 @@ def fit_output_error(
     problem = _Problem(model, logs, p0, lower=lower, upper=upper, scale=scale, sigma=sigma)
     x_scale = problem.x_scale
     sol, not_minimum = _converged(problem, max_nfev)
-    p, offsets, speeds = problem.unpack(sol.x)
-    res, sims = problem.residual_parts(p, offsets, speeds)
+    p = problem.unpack(sol.x)[0]
+    res, sims = problem.fun(sol.x), problem.last_simulations()  # the end point's, kept by _converged
     jx = sol.jac / x_scale  # d residual / d parameter (SI)
     # residual series per log, as (time, signal) blocks for the long-run covariance
     blocks = problem.blocks()
@@ -596,6 +609,7 @@ def smoothness(problem: _Problem, sol: Solution) -> tuple[str, np.ndarray | None
         other side of a cliff), else None.
     """
     z, r, j = sol.x, sol.fun, sol.jac
+    kept = dict(problem._last)  # the end point's simulations, when the fit's last step evaluated it
     cost = float(r @ r)
     n_model = problem.n_model
     glob = [k for k in range(n_model) if problem.model.local_start(k) is None]
@@ -627,7 +641,7 @@ def smoothness(problem: _Problem, sol: Solution) -> tuple[str, np.ndarray | None
                 across = zk if across is None else across
             if ck < best_cost * (1.0 - 1e-9):
                 best, best_cost = zk, ck
-    problem.fun(z)  # leave the problem's cache at the end point
+    problem.restore(kept, z)  # leave the problem's cache at the end point
     reason = ""
     if problems:
         reason = ("the cost is not smooth around the end point (a stiction decision or a clipped input flips "
