@@ -515,3 +515,14 @@ def test_a_run_whose_regimes_a_column_changes_is_simulated_again(monkeypatch):  
         zj = z.copy()
         zj[j] += h
         np.testing.assert_array_equal(jac[:, j], (problem.residual_parts(*problem.unpack(zj))[0] - r0) / h)
+
+
+def test_the_sensitivities_in_batches_give_the_same_jacobian(monkeypatch):  # type: ignore[no-untyped-def]
+    """A fit with more columns than :data:`SENSITIVITY_BATCH` (hundreds of held levels and switches on a long log)
+    carries them in batches, to bound the memory: the same Jacobian, to the bit, as one pass."""
+    from motorlab.estimation import output_error as _oe
+
+    problem = _real_sysid_problem()
+    whole = problem.jac(problem.z0)
+    monkeypatch.setattr(_oe, "SENSITIVITY_BATCH", 2)
+    np.testing.assert_array_equal(problem.jac(problem.z0), whole)

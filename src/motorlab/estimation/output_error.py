@@ -292,6 +292,11 @@ def _simulate_log(model: OEModel, p: np.ndarray, log: Log, speed0: float, offset
     return _outputs(model, log, run.states, run.theta, offset, run.inputs.plant.w)
 
 
+#: Columns carried through one pass of :func:`sensitivities` (a log of 50,000 samples holds 0.8 MB of changes per
+#: column, each pass a few times that: a held-level fit with hundreds of switches is done in batches).
+SENSITIVITY_BATCH = 32
+
+
 class _Problem:
     """The weighted residuals of :func:`fit_output_error` and their Jacobian, in scaled unknowns.
 
@@ -446,19 +451,20 @@ class _Problem:
                 inputs = _inputs(model, p, log, self.speed_of(k, speeds))
                 if not _same_inputs(inputs, run.inputs):
                     columns[j] = inputs
-            if not columns:
-                continue
-            found = sensitivities(run.inputs.plant, run.inputs.voltage, log.dt, run.states, run.theta, run.trace,
-                                  run.inputs.switches, list(columns.values()))
-            for c, j in enumerate(columns):
-                h, zj = moved[j]
-                if found is None:
-                    p, offsets, speeds = self.unpack(zj)
-                    change = np.concatenate(self.log_residuals(k, p, offsets, speeds)[0]) - r0[rows]
-                else:
-                    sim = _outputs(model, log, found[0][:, :, c], found[1][:, c], 0.0, run.inputs.plant.w)
-                    change = np.concatenate(self.weighted(k, sim, change=True))
-                cols[rows, j] = change / h
+            names = list(columns)
+            for first in range(0, len(names), SENSITIVITY_BATCH):
+                batch = names[first : first + SENSITIVITY_BATCH]
+                found = sensitivities(run.inputs.plant, run.inputs.voltage, log.dt, run.states, run.theta, run.trace,
+                                      run.inputs.switches, [columns[j] for j in batch])
+                for c, j in enumerate(batch):
+                    h, zj = moved[j]
+                    if found is None:
+                        p, offsets, speeds = self.unpack(zj)
+                        change = np.concatenate(self.log_residuals(k, p, offsets, speeds)[0]) - r0[rows]
+                    else:
+                        sim = _outputs(model, log, found[0][:, :, c], found[1][:, c], 0.0, run.inputs.plant.w)
+                        change = np.concatenate(self.weighted(k, sim, change=True))
+                    cols[rows, j] = change / h
 
     def blocks(self) -> list[tuple[int, int]]:
         """Residual series per log, as (first row, samples) of its (time, signal) block."""
