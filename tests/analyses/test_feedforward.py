@@ -505,7 +505,7 @@ def test_a_run_whose_regimes_a_column_changes_is_simulated_again(monkeypatch):  
     from motorlab.estimation import output_error as _oe
 
     problem = _real_sysid_problem()
-    monkeypatch.setattr(_oe, "sensitivities", lambda *args: None)
+    monkeypatch.setattr(_oe, "sensitivities", lambda *args, **kwargs: None)
     z = problem.z0
     jac = problem.jac(z)
     r0 = problem.fun(z)

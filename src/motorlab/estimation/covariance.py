@@ -328,3 +328,41 @@ def scaled_gram_inverse(jac: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     null = (np.abs(null_dirs) > NULL_LOADING).any(axis=0) if null_dirs.size else np.zeros(p, dtype=bool)
     inv_eig = np.where(keep, 1.0 / np.where(keep, eig, 1.0), 0.0)
     return ((vec * inv_eig) @ vec.T) / np.outer(col, col), null
+
+
+def output_error_covariance(
+    jac: np.ndarray, res: np.ndarray, blocks: list[tuple[int, int]], n_signals: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+    """Covariance of the parameters that allows for correlated residuals (Newey–West).
+
+    cov = H⁻¹·S·H⁻¹·n/(n − p) with H = JᵀJ and S the long-run covariance of the score
+    g_t = Σ_signals J_tᵀ·r_t of each instant t, by the one rule of every fit
+    (:func:`motorlab.estimation.covariance.hac_meat`: VAR(1) prewhitening, Andrews' bandwidth, Bartlett weights),
+    no lag crossing from one run to the next. Residuals after the runs' (logged voltage samples
+    against held levels) are white: each is a run of its own. For white residuals it is the usual
+    s²·(JᵀJ)⁻¹.
+
+    Returns
+    -------
+    cov, cov_white, null, bandwidth
+        Newey–West covariance, the plain one, the parameters on a null direction, the bandwidth [samples].
+    """
+    n, p = jac.shape
+    h_inv, null = scaled_gram_inverse(jac)
+    cov_white = h_inv * float(res @ res) / max(n - p, 1)
+    scores, groups = [], []
+    end = 0
+    for k, (start, m) in enumerate(blocks):
+        g = np.zeros((m, p))
+        for sgl in range(n_signals):
+            sl = slice(start + sgl * m, start + (sgl + 1) * m)
+            g += jac[sl] * res[sl, None]
+        scores.append(g)
+        groups.append(np.full(m, k))
+        end = start + n_signals * m
+    extra = n - end
+    scores.append(jac[end:] * res[end:, None])
+    groups.append(len(blocks) + np.arange(extra))
+    meat, bandwidth = hac_meat(np.concatenate(scores), groups=np.concatenate(groups))
+    cov = h_inv @ meat @ h_inv * (n / max(n - p, 1))
+    return cov, cov_white, null, bandwidth

@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from motorlab.estimation.covariance import hac_meat, scaled_gram_inverse
+from motorlab.estimation.covariance import output_error_covariance
 from motorlab.estimation.levenberg_marquardt import Solution, levenberg_marquardt
 from motorlab.estimation.noise import input_noise_bias, noise_propagation_covariance
 from motorlab.estimation.simulator import Perturbed, StatePlant, sensitivities, simulate
@@ -226,7 +226,12 @@ class OEModel:
 
     def local_start(self, j: int) -> tuple[int, int] | None:
         """(run, first grid step) of the only stretch parameter j affects, or None (it affects everything: a global
-        parameter, which :func:`smoothness` probes)."""
+        parameter, which :func:`smoothness` probes).
+
+        Its Jacobian column is then simulated from that step on, restarted from the state the current simulation
+        has there (full-model state (i, ω) on a uniform grid only): hundreds of held levels and switch instants cost
+        their own stretches, not a pass of the whole log each.
+        """
         return None
 
     def plant(self, p: np.ndarray) -> StatePlant:  # pragma: no cover - abstract
@@ -290,6 +295,63 @@ def _same_inputs(a: Perturbed, b: Perturbed) -> bool:
 def _simulate_log(model: OEModel, p: np.ndarray, log: Log, speed0: float, offset: float) -> dict[str, np.ndarray]:
     run = _run_log(model, p, log, speed0)
     return _outputs(model, log, run.states, run.theta, offset, run.inputs.plant.w)
+
+
+#: A perturbed run has settled back onto the baseline when its current and speed differ from the
+#: baseline's by less than this fraction of the largest difference seen.
+SETTLED = 1e-9
+
+
+def _settled_simulation(model: OEModel, p: np.ndarray, p_base: np.ndarray, log: Log, sim0: dict[str, np.ndarray],
+                        k0: int, sw: tuple[np.ndarray, np.ndarray, np.ndarray] | None, x0: np.ndarray,
+                        theta0: float) -> tuple[np.ndarray, np.ndarray]:
+    """States and angle from grid step ``k0`` with parameters ``p`` that change the drive locally.
+
+    A held level or a switch instant changes the drive over one segment only. Once the segment is
+    over and the current and speed are back on the baseline run ``sim0`` (within :data:`SETTLED` of
+    the largest difference: the electrical and mechanical transients have decayed), the rest of the
+    run is the baseline's with the angle shifted by a constant: simulated in doubling chunks up to
+    there, the column of a nuisance parameter costs its segment, not the rest of the log (a 50 000-sample
+    log with 170 switches: minutes otherwise).
+    """
+    drive = model.drive(p, log)
+    plant = model.plant(p)
+    changed = np.flatnonzero(drive[k0:] != model.drive(p_base, log)[k0:])
+    last = k0 + (int(changed[-1]) + 1 if changed.size else 0)
+    base_sw = model.switches(p_base, log)
+    if sw is not None and base_sw is not None:
+        keep = base_sw[0] >= k0
+        moved = np.flatnonzero((sw[1] != base_sw[1][keep]) | (sw[2] != base_sw[2][keep]))
+        if moved.size:
+            last = max(last, k0 + int(sw[0][moved[-1]]) + 1)
+    n = drive.size  # steps; grid points n + 1
+    out_states, out_theta = [np.asarray([x0])], [np.asarray([theta0])]
+    start, chunk, peak = k0, 256, np.zeros(2)
+    while start < n:
+        stop = min(n, max(start + chunk, last + 1))
+        part = None
+        if sw is not None:
+            inside = (sw[0] + k0 >= start) & (sw[0] + k0 < stop)
+            part = (sw[0][inside] + k0 - start, sw[1][inside], sw[2][inside])
+        states, theta = simulate(plant, drive[start:stop], log.dt, x0=out_states[-1][-1],
+                                 theta0=float(out_theta[-1][-1]), switches=part)
+        out_states.append(states[1:])
+        out_theta.append(theta[1:])
+        base = np.column_stack([sim0["current"][start:stop + 1], sim0["speed"][start:stop + 1]])
+        delta = np.abs(states[:, :2] - base)
+        peak = np.maximum(peak, delta.max(axis=0))
+        start, chunk = stop, 2 * chunk
+        if stop >= last and np.all(delta[-1] <= SETTLED * peak):
+            break
+    states, theta = np.concatenate(out_states), np.concatenate(out_theta)
+    if start < n:  # settled: the baseline's run from here on, the angle shifted by what the change left
+        shift = theta[-1] - sim0["position"][start]
+        tail = np.column_stack([sim0["current"][start + 1:], sim0["speed"][start + 1:]])
+        if states.shape[1] > 2:
+            tail = np.column_stack([tail, np.zeros((tail.shape[0], states.shape[1] - 2))])
+        states = np.concatenate([states, tail])
+        theta = np.concatenate([theta, sim0["position"][start + 1:] + shift])
+    return states, theta
 
 
 #: Columns carried through one pass of :func:`sensitivities` (a log of 50,000 samples holds 0.8 MB of changes per
@@ -400,9 +462,31 @@ class _Problem:
         last["runs"] = runs
         return r
 
+    def local_column(self, zj: np.ndarray, k: int, k0: int, r0: np.ndarray) -> np.ndarray:
+        """Residuals with log k re-simulated from grid step k0 (the parameter changed acts from there)."""
+        model, sigma, row_starts = self.model, self.sigma, self.row_starts
+        p, offsets, _ = self.unpack(zj)
+        log = self.logs[k]
+        sim0 = self._last["sims"][k]
+        sw = model.switches(p, log)
+        if sw is not None:
+            keep = sw[0] >= k0
+            sw = (sw[0][keep] - k0, sw[1][keep], sw[2][keep])
+        x0 = np.array([sim0["current"][k0], sim0["speed"][k0]])
+        states, theta = _settled_simulation(model, p, self.unpack(self._last["z"])[0], log, sim0, k0, sw, x0,
+                                            float(sim0["position"][k0] - offsets[k]))
+        r = r0.copy()
+        rs, m = int(row_starts[k]), log.time.size
+        assert log.current is not None
+        r[rs + k0 : rs + m] = (theta + offsets[k] - log.position[k0:]) * self.factors[k][k0:]
+        r[rs + m + k0 : rs + 2 * m] = (states[:, 0] - log.current[k0:]) / sigma["current"]
+        r[int(row_starts[-1]) :] = model.extra_residuals(p)
+        return r
+
     def jac(self, z: np.ndarray) -> np.ndarray:
         """Jacobian of the weighted residuals in z: forward differences of 1e-6 in the scaled unknowns, the
-        simulations' changes from their sensitivities (:meth:`sensitivity_columns`), the angle offsets' columns
+        simulations' changes from their sensitivities (:meth:`sensitivity_columns`; a held level or a switch instant,
+        which acts on a stretch, re-simulates that stretch alone, :meth:`local_column`), the angle offsets' columns
         analytic."""
         logs, n_model = self.logs, self.n_model
         r0 = self.fun(z)
@@ -416,6 +500,10 @@ class _Problem:
                 h = -h
             zj = z.copy()
             zj[j] += h
+            loc = self.model.local_start(j) if j < n_model else None
+            if loc is not None and logs[loc[0]].uniform and self.model.uses_current and not self.model.lag:
+                cols[:, j] = (self.local_column(zj, loc[0], loc[1], r0) - r0) / h
+                continue
             moved[j] = (h, zj)
         self.sensitivity_columns(moved, r0, cols)
         # angle offsets: residual of log k's angle rises 1/σ per unit offset
@@ -452,10 +540,11 @@ class _Problem:
                 if not _same_inputs(inputs, run.inputs):
                     columns[j] = inputs
             names = list(columns)
+            memo: dict[int, Any] = {}  # the run's switch and event steps, differentiated once for every batch
             for first in range(0, len(names), SENSITIVITY_BATCH):
                 batch = names[first : first + SENSITIVITY_BATCH]
                 found = sensitivities(run.inputs.plant, run.inputs.voltage, log.dt, run.states, run.theta, run.trace,
-                                      run.inputs.switches, [columns[j] for j in batch])
+                                      run.inputs.switches, [columns[j] for j in batch], memo=memo)
                 for c, j in enumerate(batch):
                     h, zj = moved[j]
                     if found is None:
@@ -523,7 +612,7 @@ def fit_output_error(
     Residuals are (simulated − measured)/σ per signal. The Jacobian of the model parameters is by
     forward differences, the simulations' changes from their sensitivities (one pass for all the parameters); the
     angle offsets enter linearly (analytic column).
-    Covariance: see :func:`output_error_covariance`.
+    Covariance: see :func:`motorlab.estimation.covariance.output_error_covariance`.
     """
     problem = _Problem(model, logs, p0, lower=lower, upper=upper, scale=scale, sigma=sigma)
     x_scale = problem.x_scale
@@ -699,41 +788,3 @@ def _both_sides(problem: _Problem, sol: Solution) -> list[np.ndarray]:
         z[glob] = np.clip(z[glob] * (1.0 + sign * 0.05), problem.lower_z[glob], problem.upper_z[glob])
         starts.append(z)
     return starts
-
-
-def output_error_covariance(
-    jac: np.ndarray, res: np.ndarray, blocks: list[tuple[int, int]], n_signals: int
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
-    """Covariance of the parameters that allows for correlated residuals (Newey–West).
-
-    cov = H⁻¹·S·H⁻¹·n/(n − p) with H = JᵀJ and S the long-run covariance of the score
-    g_t = Σ_signals J_tᵀ·r_t of each instant t, by the one rule of every fit
-    (:func:`motorlab.estimation.covariance.hac_meat`: VAR(1) prewhitening, Andrews' bandwidth, Bartlett weights),
-    no lag crossing from one run to the next. Residuals after the runs' (logged voltage samples
-    against held levels) are white: each is a run of its own. For white residuals it is the usual
-    s²·(JᵀJ)⁻¹.
-
-    Returns
-    -------
-    cov, cov_white, null, bandwidth
-        Newey–West covariance, the plain one, the parameters on a null direction, the bandwidth [samples].
-    """
-    n, p = jac.shape
-    h_inv, null = scaled_gram_inverse(jac)
-    cov_white = h_inv * float(res @ res) / max(n - p, 1)
-    scores, groups = [], []
-    end = 0
-    for k, (start, m) in enumerate(blocks):
-        g = np.zeros((m, p))
-        for sgl in range(n_signals):
-            sl = slice(start + sgl * m, start + (sgl + 1) * m)
-            g += jac[sl] * res[sl, None]
-        scores.append(g)
-        groups.append(np.full(m, k))
-        end = start + n_signals * m
-    extra = n - end
-    scores.append(jac[end:] * res[end:, None])
-    groups.append(len(blocks) + np.arange(extra))
-    meat, bandwidth = hac_meat(np.concatenate(scores), groups=np.concatenate(groups))
-    cov = h_inv @ meat @ h_inv * (n / max(n - p, 1))
-    return cov, cov_white, null, bandwidth

@@ -29,6 +29,7 @@ import cmath
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from scipy import linalg
@@ -635,7 +636,8 @@ def _step_of(reg: _Regimes, x: np.ndarray, mode: int, kind: int, vk: float,
 
 def sensitivities(plant: StatePlant, voltage: np.ndarray, dt: float, states: np.ndarray, theta: np.ndarray,
                   trace: list[tuple[int, int, int, int]], switches: tuple[np.ndarray, np.ndarray, np.ndarray] | None,
-                  columns: list[Perturbed]) -> tuple[np.ndarray, np.ndarray] | None:
+                  columns: list[Perturbed], *, memo: dict[int, Any] | None = None,
+                  ) -> tuple[np.ndarray, np.ndarray] | None:
     """How a simulation's states and angle change when its inputs change a little: C columns at once.
 
     ``states``, ``theta`` and ``trace`` are what :func:`simulate` gave for ``plant``, ``voltage`` and ``switches``
@@ -644,7 +646,8 @@ def sensitivities(plant: StatePlant, voltage: np.ndarray, dt: float, states: np.
     δx⁺ = Ad·δx + ΔAd·x + Δb_V·v + b_V·Δv + Δc (the product of two changes dropped), all columns in one filter. A
     switch's or a friction event's step is linearised: its derivative in the state it starts from by differences of
     1e-7 (the event relocated each time), plus the step taken again with the column's plant, voltage or switch where
-    the column moves them. A Jacobian then costs about one simulation, not one per parameter.
+    the column moves them. A Jacobian then costs about one simulation, not one per parameter. ``memo`` (a dict kept
+    for the same run) keeps the steps' own derivatives for the next batch of columns.
 
     Returns
     -------
@@ -670,7 +673,8 @@ def sensitivities(plant: StatePlant, voltage: np.ndarray, dt: float, states: np.
     plant_moved = np.array([not (np.array_equal(col.plant.a, plant.a)
                                  and np.array_equal(col.plant.b_drive, plant.b_drive)
                                  and np.array_equal(col.plant.b_friction, plant.b_friction)) for col in columns])
-    special = _SpecialSteps(reg, regs, voltage, columns, switches, np.maximum(np.abs(states).max(axis=0), 1e-300))
+    special = _SpecialSteps(reg, regs, voltage, columns, switches, np.maximum(np.abs(states).max(axis=0), 1e-300),
+                            {} if memo is None else memo)
     for k0, k1, mode, kind in trace:
         if kind != RUN:
             again = plant_moved | (dvolt[k0] != 0.0)
@@ -707,8 +711,9 @@ class _SpecialSteps:
     """The linearised switch and event steps of :func:`sensitivities`."""
 
     def __init__(self, reg: _Regimes, regs: list[_Regimes], voltage: np.ndarray, columns: list[Perturbed],
-                 switches: tuple[np.ndarray, np.ndarray, np.ndarray] | None, scale: np.ndarray):
+                 switches: tuple[np.ndarray, np.ndarray, np.ndarray] | None, scale: np.ndarray, memo: dict[int, Any]):
         self.reg, self.regs, self.voltage, self.columns, self.scale = reg, regs, voltage, columns, scale
+        self.memo = memo
         self.switches = switches
         self.index = {int(k): i for i, k in enumerate(switches[0])} if switches is not None else {}
 
@@ -719,14 +724,12 @@ class _SpecialSteps:
         i = self.index[k]
         return float(inputs[1][i]), float(inputs[2][i])
 
-    def take(self, k: int, mode: int, kind: int, x: np.ndarray, again: np.ndarray, dstates: np.ndarray,
-             dtheta: np.ndarray) -> bool:
-        """Carry the changes over step k (starting in ``mode`` from the nominal state x); False where a change
-        leaves the step in another regime. ``again``: the columns whose plant or voltage change the step."""
-        nominal = self._switch(k, self.switches)
+    def _own(self, k: int, mode: int, kind: int, x: np.ndarray,
+             nominal: tuple[float, float] | None) -> tuple[np.ndarray, float, int, np.ndarray, np.ndarray] | None:
+        """The step from x (its end state, angle and regime) and its derivative in x (forward differences, else
+        backward; None where both leave the step in another regime)."""
         vk = float(self.voltage[k])
         x_end, dth, after = _step_of(self.reg, x, mode, kind, vk, nominal)
-        # the step's derivative in the state it starts from (forward differences, else backward) ...
         jac_x = np.empty((x.size, x.size))
         grad_x = np.empty(x.size)
         for j in range(x.size):
@@ -738,9 +741,21 @@ class _SpecialSteps:
                 if mode1 == after:
                     break
             else:
-                return False
+                return None
             jac_x[:, j] = (x1 - x_end) / eps
             grad_x[j] = (dth1 - dth) / eps
+        return x_end, dth, after, jac_x, grad_x
+
+    def take(self, k: int, mode: int, kind: int, x: np.ndarray, again: np.ndarray, dstates: np.ndarray,
+             dtheta: np.ndarray) -> bool:
+        """Carry the changes over step k (starting in ``mode`` from the nominal state x); False where a change
+        leaves the step in another regime. ``again``: the columns whose plant or voltage change the step."""
+        nominal = self._switch(k, self.switches)
+        if k not in self.memo:
+            self.memo[k] = self._own(k, mode, kind, x, nominal)
+        if self.memo[k] is None:
+            return False
+        x_end, dth, after, jac_x, grad_x = self.memo[k]
         dx = dstates[k]
         dstates[k + 1] = jac_x @ dx
         dtheta[k + 1] = dtheta[k] + grad_x @ dx
