@@ -423,3 +423,19 @@ def test_long_log_with_switches_inside_blocks_is_windowed_not_blurred():
     held = Recording(np.arange(1200) * 1e-3, {"voltage": np.repeat([1.0, 2.0, -1.0], 400), "counts": np.zeros(1200)})
     assert "window" not in driven_log(held, max_points=600).metadata["decimation"]  # held over every block
     assert len(block_mean(held, max_points=600)) == 600
+
+
+def test_held_levels_by_their_stretches_or_in_the_one_pass_give_the_same_fit(monkeypatch):
+    """A held-level fit with more columns than one pass of the sensitivities holds simulates each level's and switch
+    instant's stretch (``_Problem.local_column``); with fewer, they join the pass. Either way the same fit: the
+    parameters to 1e-6, their standard errors to 1e-3 (the Jacobians differ by a forward difference's truncation)."""
+    from motorlab.estimation import output_error
+
+    rec = random_steps(5, duration=1.0, dt=1e-3, hold=0.1)
+    one_pass = identify(rec)
+    assert one_pass.details["input_model"]["segments"] > 4  # held levels were fitted as nuisance parameters
+    monkeypatch.setattr(output_error, "SENSITIVITY_BATCH", 4)
+    stretches = identify(rec)
+    for name in ("K", "R", "L", "J", "b", "Tf"):
+        assert stretches[name].value == pytest.approx(one_pass[name].value, rel=1e-6), name
+        assert stretches[name].stderr == pytest.approx(one_pass[name].stderr, rel=1e-3), name

@@ -485,13 +485,15 @@ class _Problem:
 
     def jac(self, z: np.ndarray) -> np.ndarray:
         """Jacobian of the weighted residuals in z: forward differences of 1e-6 in the scaled unknowns, the
-        simulations' changes from their sensitivities (:meth:`sensitivity_columns`; a held level or a switch instant,
-        which acts on a stretch, re-simulates that stretch alone, :meth:`local_column`), the angle offsets' columns
-        analytic."""
+        simulations' changes from their sensitivities (:meth:`sensitivity_columns`; when the columns are more than
+        one pass holds, a held level or a switch instant, which acts on a stretch, re-simulates that stretch alone,
+        :meth:`local_column`), the angle offsets' columns analytic."""
         logs, n_model = self.logs, self.n_model
         r0 = self.fun(z)
         cols = np.empty((r0.size, z.size))
         moved: dict[int, tuple[float, np.ndarray]] = {}
+        # held levels and switch instants join the one pass while it holds every column; beyond, each costs its stretch
+        stretches = z.size - len(logs) > SENSITIVITY_BATCH
         for j in range(z.size):
             if n_model <= j < n_model + len(logs):
                 continue
@@ -501,7 +503,8 @@ class _Problem:
             zj = z.copy()
             zj[j] += h
             loc = self.model.local_start(j) if j < n_model else None
-            if loc is not None and logs[loc[0]].uniform and self.model.uses_current and not self.model.lag:
+            if (stretches and loc is not None and logs[loc[0]].uniform and self.model.uses_current
+                    and not self.model.lag):
                 cols[:, j] = (self.local_column(zj, loc[0], loc[1], r0) - r0) / h
                 continue
             moved[j] = (h, zj)
