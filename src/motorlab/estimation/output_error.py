@@ -287,9 +287,8 @@ def _same_inputs(a: Perturbed, b: Perturbed) -> bool:
     same_switches = (a.switches is None and b.switches is None) or (
         a.switches is not None and b.switches is not None
         and all(np.array_equal(u, v) for u, v in zip(a.switches, b.switches, strict=True)))
-    return (same_switches and np.array_equal(a.x0, b.x0) and np.array_equal(a.plant.a, b.plant.a)
-            and np.array_equal(a.plant.b_drive, b.plant.b_drive)
-            and np.array_equal(a.plant.b_friction, b.plant.b_friction) and np.array_equal(a.voltage, b.voltage))
+    return (same_switches and np.array_equal(a.x0, b.x0) and a.plant.same_as(b.plant)
+            and np.array_equal(a.voltage, b.voltage))
 
 
 def _simulate_log(model: OEModel, p: np.ndarray, log: Log, speed0: float, offset: float) -> dict[str, np.ndarray]:

@@ -74,6 +74,11 @@ class StatePlant:
     def friction(self) -> float:
         return float(-self.b_friction[self.w])
 
+    def same_as(self, other: StatePlant) -> bool:
+        """Whether ``other`` has the same matrices (a parameter of a drive, not of the plant, was moved)."""
+        return (self.w == other.w and np.array_equal(self.a, other.a) and np.array_equal(self.b_drive, other.b_drive)
+                and np.array_equal(self.b_friction, other.b_friction))
+
 
 def motor_plant(K: float, R: float, L: float, J: float, b: float, Tf: float) -> StatePlant:
     """The full model ``L·di/dt = V − R·i − K·ω``, ``J·dω/dt = K·i − b·ω − Tf·sgn(ω)``; state (i, ω)."""
@@ -670,9 +675,7 @@ def sensitivities(plant: StatePlant, voltage: np.ndarray, dt: float, states: np.
                                     for col in columns):
         return None
     dvolt = np.stack([col.voltage for col in columns], axis=1) - voltage[:, None]  # (N, C)
-    plant_moved = np.array([not (np.array_equal(col.plant.a, plant.a)
-                                 and np.array_equal(col.plant.b_drive, plant.b_drive)
-                                 and np.array_equal(col.plant.b_friction, plant.b_friction)) for col in columns])
+    plant_moved = np.array([not col.plant.same_as(plant) for col in columns])
     special = _SpecialSteps(reg, regs, voltage, columns, switches, np.maximum(np.abs(states).max(axis=0), 1e-300),
                             {} if memo is None else memo)
     for k0, k1, mode, kind in trace:
