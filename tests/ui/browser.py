@@ -86,6 +86,19 @@ _WORDS = r"""(e) => e.innerText.replace(/ *\t[\t ]*/g, ' ').replace(/\u00a0/g, '
   .filter(Boolean).join('\n')"""
 
 
+#: Keeps the words of every status line shown (``window.__statusShown``), at each change of the page.
+_WATCH = """
+window.__statusShown = [];
+const keep = () => {
+  for (const e of document.querySelectorAll('[role=status]')) {
+    const words = e.textContent.trim();
+    if (words && e.getClientRects().length && !window.__statusShown.includes(words)) window.__statusShown.push(words);
+  }
+};
+new MutationObserver(keep).observe(document.body, { subtree: true, childList: true, characterData: true });
+"""
+
+
 @functools.cache
 def _visible_script() -> str:
     """A script giving the elements an XPath finds that WebDriver's own ``is_displayed`` script calls shown."""
@@ -137,6 +150,18 @@ class Page:
 
     def wait_text(self, words: str, seconds: float = 240) -> None:
         self.wait(lambda: words in self.text(), f"the words {words!r}", seconds)
+
+    def watch_status(self) -> None:
+        """From now on, keep every words the page's status lines (``role=status``) show while shown, however
+        briefly: a step that a fast machine ends between two looks of ``wait`` is still seen (``shown``)."""
+        self.d.execute_script(_WATCH)
+
+    def shown(self, pattern: re.Pattern[str], what: str, seconds: float = 240) -> str:
+        """The first words a status line showed since ``watch_status`` that ``pattern`` finds."""
+        def seen() -> str | None:
+            said = self.d.execute_script("return window.__statusShown || []")
+            return next((words for words in said if pattern.search(words)), None)
+        return str(self.wait(seen, what, seconds))
 
     def _visible(self, xpath: str) -> list[Any]:
         """The elements ``xpath`` finds that WebDriver's ``is_displayed`` calls shown (its own script, run once for
