@@ -26,15 +26,16 @@ lint: install
 # written even where PYTHONDONTWRITEBYTECODE is set (uv installs none): otherwise every Python process
 # the suite starts (workers, commands) compiles numpy, scipy, matplotlib and motorlab again, 8 s of CPU
 # for one import of the CLI and the engine against 3 s (docs/ARCHITECTURE.md). The tests marked
-# realtime (an emulated robot or meter on the wall clock: 2 min of waiting, 20 s of CPU) run in a
-# process of their own beside the workers, and mypy (30 s of one CPU from a fresh clone) checks the
-# types there too, in the moments the workers wait for a browser. make test fails when any of the three
-# fails, and prints their reports after the workers' own.
+# realtime (an emulated robot or meter on the wall clock: 2 min of waiting, 20 s of CPU) run in two
+# processes of their own beside the workers (1 min 20 s on the wall clock; in one, 2 min 30 s, longer
+# than the workers), and mypy (30 s of one CPU from a fresh clone) checks the types there too, in the
+# moments the workers wait for a browser. make test fails when any of the three fails, and prints their
+# reports after the workers' own.
 PYTEST_ENV := MPLBACKEND=Agg OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 PYTHONDONTWRITEBYTECODE=
 test: install
 	$(BIN)/ruff check src tests benchmarks
 	@mkdir -p out; $(BIN)/mypy > out/mypy.txt 2>&1 & typing=$$!; \
-	$(PYTEST_ENV) $(BIN)/pytest -p no:xdist -m realtime --durations=10 > out/realtime-tests.txt 2>&1 & waiting=$$!; \
+	$(PYTEST_ENV) $(BIN)/pytest -n 2 --dist worksteal -m realtime --durations=10 > out/realtime-tests.txt 2>&1 & waiting=$$!; \
 	$(PYTEST_ENV) $(BIN)/pytest -n auto --dist worksteal -m "not realtime" --durations=30; tests=$$?; \
 	wait $$waiting; timed=$$?; echo "tests on the wall clock: $$(tail -n 1 out/realtime-tests.txt)"; \
 	if [ $$timed -ne 0 ]; then cat out/realtime-tests.txt; fi; \
