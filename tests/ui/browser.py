@@ -148,6 +148,14 @@ class Page:
         ``.text`` walks the page in a script of its own, over a second on a page of plots."""
         return str(self.d.execute_script(f"return ({_WORDS})(arguments[0] || document.querySelector('main'))", element))
 
+    def words_of(self, css: str, *, hidden: bool = False) -> str:
+        """The words shown in the first element ``css`` finds (as :meth:`text`; with ``hidden``, its whole
+        ``textContent``, shown or not: a code box in a closed section), found and read in one script: a page that
+        draws the element again meanwhile (a result's plots arriving) leaves no stale reference."""
+        read = "(e) => e.textContent" if hidden else _WORDS
+        return str(self.wait(lambda: self.d.execute_script(
+            f"const e = document.querySelector(arguments[0]); return e && ({read})(e)", css), f"the words of {css}"))
+
     def wait_text(self, words: str, seconds: float = 240) -> None:
         self.wait(lambda: words in self.text(), f"the words {words!r}", seconds)
 

@@ -175,7 +175,7 @@ def test_a_stretch_of_a_long_log_left_out_on_the_plot(page: Any, ramp: tuple[Pat
     _on_a_phone(page, "ui-leave-out-phone.png")
     page.click("and fit again")
     page.wait_text("time span left out)")
-    said = page.d.find_element("css selector", ".left-out").text
+    said = page.words_of(".left-out")
     assert re.match(r"1 time span left out, [0-9.]+ s, \d+ samples", said), said
     kv, err = _kv(page)
     assert abs(kv - true_kv) < 3 * err + 0.0005, (kv, err, true_kv)

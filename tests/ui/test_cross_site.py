@@ -214,8 +214,8 @@ def foreign_site(server: Any, robot: EmulatedRobot) -> Iterator[str]:
 def test_cross_site_browser(page: Any, foreign_site: str, robot: EmulatedRobot, server: Any) -> None:
     page.d.get(foreign_site)
     # The form's answer replaces the foreign page: the app's refusal, in words.
-    page.wait(lambda: "only the motorlab page" in page.d.find_element("tag name", "body").text, "the refusal")
-    assert "127.0.0.1:" in page.d.find_element("tag name", "body").text
+    page.wait(lambda: "only the motorlab page" in page.words_of("body"), "the refusal")
+    assert "127.0.0.1:" in page.words_of("body")
     time.sleep(0.5)  # anything the app had started would have reached the robot by now
     assert robot.received == [], robot.received  # the emulated robot heard nothing: no INIT, no START
     assert robot.status == "INIT"

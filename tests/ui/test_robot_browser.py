@@ -118,7 +118,7 @@ def test_tune_and_prove_it(page: Any, fresh_robot: EmulatedRobot, size: tuple[in
         page.wait_text(f"The check {label} writing is done", seconds=30)
         assert [m["type"] for m in robot.received].count("START_OP_MODE") == started + 1  # one click, one run
     page.wait_text("times better")
-    words = page.d.find_element("css selector", ".check-words").text
+    words = page.words_of(".check-words")
     before, after = (float(x) for x in re.findall(r"RMS tracking error ([\d.]+) ticks/s", words))
     assert before > 10 * after, words
     assert len(page.d.find_elements("css selector", ".plot-area .main-svg")) >= 2  # both plots drawn

@@ -70,7 +70,7 @@ def test_ramp_then_shooter_then_the_first_gains_again(page: Any, ramp: tuple[Pat
     page.click("Run the fit")
     page.wait_text("Result from ramp.json")
     page.click("How this result was made")  # the record: the file with its SHA-256, the settings
-    made = page.d.find_element("css selector", "details.record").text
+    made = page.words_of("details.record")
     assert re.search(r"ramp\.json \d+ bytes, SHA-256 [0-9a-f]{16}…", made), made
     assert "encoder counts per revolution 8192" in page.text()
     page.click("Gains for your code")

@@ -57,7 +57,7 @@ def test_a_feet_file_gives_wpilib_gains_per_foot(page: Any, real_dir: Path) -> N
     assert Select(page.field("Length unit")).first_selected_option.text.startswith("feet")
     assert "the file's own unit is feet" in page.text()
     assert "not used: the file logs distances" in page.text()  # no wheel radius turns feet into anything
-    code = page.d.find_element("css selector", "details.command code").get_attribute("textContent")
+    code = page.words_of("details.command code", hidden=True)
     assert "--units=ft" in code, code
     assert "wheel-radius" not in code, code
     page.check()
@@ -67,7 +67,7 @@ def test_a_feet_file_gives_wpilib_gains_per_foot(page: Any, real_dir: Path) -> N
     page.d.get(address)
     page.wait(lambda: page.d.find_element("tag name", "body").get_attribute("data-ready") == "true", "the page")
     page.wait_text("Gains for WPILib")
-    assert re.search(r"\bkV\s+\S+\s+V·s/ft", page.d.find_element("css selector", "#gains-table").text)
+    assert re.search(r"\bkV\s+\S+\s+V·s/ft", page.words_of("#gains-table"))
     page.wait(lambda: page.d.execute_script("return document.documentElement.scrollWidth <= window.innerWidth"),
               "the figures drawn to the phone's width")  # Plotly follows its box's size a moment after drawing
     page.check()
@@ -91,7 +91,7 @@ def test_the_pull_lists_what_it_could_not_bring(page: Any, robot: EmulatedRobot)
     browser.pull_from(page, robot)
     page.wait_text("1 file brought back. 1 could not be brought back")
     page.wait_text("Road Runner ramp log")  # the file it brought, still shown
-    box = page.d.find_element("css selector", "section.not-pulled").text
+    box = page.words_of("section.not-pulled")
     assert "Not brought back (1)" in box
     assert "2026_11_25__10_42_00_000__Two Words.log" in box
     assert "its name holds a space, & or =, which Road Runner's file server cannot be asked for: not pulled" in box
