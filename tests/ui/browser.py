@@ -160,8 +160,8 @@ class Page:
         self.wait(lambda: words in self.text(), f"the words {words!r}", seconds)
 
     def watch_status(self) -> None:
-        """From now on, keep every words the page's status lines (``role=status``) show while shown, however
-        briefly: a step that a fast machine ends between two looks of ``wait`` is still seen (``shown``)."""
+        """From now on, keep the words of every status line (``role=status``) the page shows, however briefly: a
+        step that a fast machine ends between two looks of ``wait`` is still seen (``shown``)."""
         self.d.execute_script(_WATCH)
 
     def shown(self, pattern: re.Pattern[str], what: str, seconds: float = 240) -> str:
